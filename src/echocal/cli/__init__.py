@@ -1,0 +1,38 @@
+"""The ``echocal`` command: a thin layer over library calls.
+
+Every command lives in its own module of this package and exposes
+``register(app)``; this module only assembles them.  Everything a command does
+is doable from Python through the public API.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import typer
+
+from echocal.cli._common import run_cli
+
+app = typer.Typer(
+    name="echocal",
+    help="Ultrasonic immersion simulator and transducer-orientation calibration.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+# Command modules, in the order their commands appear in --help.
+_COMMAND_MODULES = (
+    "echocal.cli.info",
+)
+
+for _name in _COMMAND_MODULES:
+    importlib.import_module(_name).register(app)
+
+
+def main() -> None:
+    """Entry point of the ``echocal`` console script."""
+    run_cli(app)
+
+
+__all__ = ["app", "main"]

@@ -1,0 +1,5 @@
+"""``python -m echocal.cli``."""
+
+from echocal.cli import main
+
+main()

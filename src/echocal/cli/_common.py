@@ -1,0 +1,91 @@
+"""Helpers shared by the CLI commands (private): error display, pose parsing, output."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import typer
+from rich.console import Console
+
+from echocal.errors import EchocalError
+from echocal.geometry import Pose
+from echocal.units import parse_angle, parse_length
+
+console = Console(stderr=True)
+"""Console for human-oriented messages (stderr, so stdout stays clean for --json)."""
+
+
+def run_cli(app: typer.Typer) -> None:
+    """Run ``app``; echocal errors become one red line and exit code 2, not a traceback."""
+    try:
+        app(standalone_mode=False)
+    except EchocalError as exc:
+        console.print(f"[bold red]error:[/] {exc}")
+        sys.exit(2)
+    except typer.Abort:
+        console.print("[yellow]aborted[/]")
+        sys.exit(130)
+    except Exception as exc:  # click usage errors carry their own exit code
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            sys.exit(exc.exit_code)
+        if isinstance(exc, click.exceptions.Exit):
+            sys.exit(exc.exit_code)
+        raise
+
+
+def parse_pose(text: str, option: str = "--pose") -> Pose:
+    """Parse ``"X,Y,Z,AZ,COEL"``; lengths in mm unless a unit is given, angles in degrees.
+
+    ``"0,0,20"`` is a pose 20 mm above the origin pointing straight down;
+    ``"-10mm,0,22mm,0,5"`` adds 5° of co-elevation.
+    """
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) not in (3, 5):
+        raise typer.BadParameter(
+            f"{option} takes X,Y,Z or X,Y,Z,AZIMUTH,COELEVATION "
+            f"(lengths in mm unless a unit is given, angles in degrees); got {text!r}"
+        )
+    x, y, z = (parse_length(f"{option} {n}", v) for n, v in zip("xyz", parts[:3], strict=True))
+    az, coel = (
+        (parse_angle(f"{option} azimuth", parts[3]), parse_angle(f"{option} coelevation", parts[4]))
+        if len(parts) == 5
+        else (0.0, 0.0)
+    )
+    return Pose(x, y, z, az, coel)
+
+
+def parse_pair(text: str, option: str) -> tuple[float, float]:
+    """Parse ``"A,B"`` as two angles in degrees."""
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 2:
+        raise typer.BadParameter(f"{option} takes two angles A,B in degrees; got {text!r}")
+    return parse_angle(f"{option}[0]", parts[0]), parse_angle(f"{option}[1]", parts[1])
+
+
+def write_json(data: dict[str, Any], path: Path | None = None) -> None:
+    """Print ``data`` as one JSON object on stdout, or write it atomically to ``path``."""
+    text = json.dumps(data, indent=None if path is None else 2, default=_json_default)
+    if path is None:
+        sys.stdout.write(text + "\n")
+        return
+    from echocal.io import atomic_write_text
+
+    atomic_write_text(path, text + "\n")
+
+
+def _json_default(value: Any) -> Any:
+    import numpy as np
+
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"not JSON serializable: {type(value).__name__}")

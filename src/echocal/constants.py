@@ -1,0 +1,18 @@
+"""Physical defaults of echocal, in SI units."""
+
+from __future__ import annotations
+
+SOUND_SPEED_WATER = 1480.0
+"""Speed of sound in water at about 20 °C [m/s] (thesis default c₀)."""
+
+DEFAULT_CENTER_FREQUENCY = 5.0e6
+"""Centre frequency of the default probe [Hz]."""
+
+DEFAULT_SAMPLING_FREQUENCY = 100.0e6
+"""Sampling frequency of the default receiver [Hz]."""
+
+MM = 1.0e-3
+"""One millimetre [m], for readable literals: ``20 * MM``."""
+
+US = 1.0e-6
+"""One microsecond [s]."""

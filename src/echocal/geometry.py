@@ -1,0 +1,261 @@
+"""Frames, orientations and poses — the conventions of echocal in one place.
+
+Conventions (see DESIGN.md):
+
+* SI units: positions in metres.  Angles are **degrees** in every public
+  function here; radians appear only inside.
+* World frame: z up; the specimen lies around z = 0, the transducer above it.
+* Orientation (azimuth φ, co-elevation θ), thesis eq. (8)::
+
+      n = [sin θ cos φ, sin θ sin φ, cos θ]
+
+  The beam travels along **−n**, so θ = 0 fires straight down.  Signed θ is
+  allowed: (φ, −θ) is the same beam as (φ + 180°, θ).  At θ = 0 the azimuth
+  has no effect (the pole).
+* The pole-free alternative, as on a gimbal positioner: tilt α about the
+  world x axis, then tilt β about the world y axis, applied to the up vector::
+
+      n = R_y(β) R_x(α) ẑ = [sin β cos α, −sin α, cos β cos α]
+
+  (α, β) = (0, 0) fires straight down; the map is smooth there.  Conversions
+  between the two are exact (up to floating point) both ways.
+* The transducer frame (thesis eqs. 9–10) has columns ``[x', y', n]`` with
+  ``y' = [−sin φ, cos φ, 0]`` and ``x' = y' × n``; it is right-handed and
+  orthonormal for every orientation.
+
+All functions broadcast over leading axes: angles of shape ``(...)`` give
+vectors of shape ``(..., 3)`` and frames of shape ``(..., 3, 3)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal._validate import finite_array, finite_float
+from echocal.errors import GeometryError
+
+__all__ = [
+    "Pose",
+    "angle_between",
+    "beam_direction",
+    "normal_to_orientation",
+    "normal_to_tilt",
+    "orientation_frame",
+    "orientation_normal",
+    "orientation_to_tilt",
+    "poses_to_arrays",
+    "tilt_frame",
+    "tilt_normal",
+    "tilt_to_orientation",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+def orientation_normal(azimuth: ArrayLike, coelevation: ArrayLike) -> FloatArray:
+    """Unit normal n of an orientation, thesis eq. (8).
+
+    Parameters
+    ----------
+    azimuth, coelevation : [deg], broadcastable shapes ``(...)``
+
+    Returns
+    -------
+    n : shape ``(..., 3)``; the beam travels along ``-n``.
+    """
+    phi = np.deg2rad(np.asarray(azimuth, dtype=np.float64))
+    theta = np.deg2rad(np.asarray(coelevation, dtype=np.float64))
+    phi, theta = np.broadcast_arrays(phi, theta)
+    sin_t = np.sin(theta)
+    return np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+def beam_direction(azimuth: ArrayLike, coelevation: ArrayLike) -> FloatArray:
+    """Unit direction the beam travels, ``-n``; shape ``(..., 3)``."""
+    return -orientation_normal(azimuth, coelevation)
+
+
+def orientation_frame(azimuth: ArrayLike, coelevation: ArrayLike) -> FloatArray:
+    """Transducer frame ``[x', y', n]`` as columns, thesis eqs. (8)–(10).
+
+    Returns
+    -------
+    frame : shape ``(..., 3, 3)``; ``frame[..., :, 0]`` is x', ``[..., :, 1]`` is
+        y', ``[..., :, 2]`` is n.  Orthonormal and right-handed.
+    """
+    phi = np.deg2rad(np.asarray(azimuth, dtype=np.float64))
+    theta = np.deg2rad(np.asarray(coelevation, dtype=np.float64))
+    phi, theta = np.broadcast_arrays(phi, theta)
+    cp, sp, ct, st = np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta)
+    zero = np.zeros_like(phi)
+    x_axis = np.stack([ct * cp, ct * sp, -st], axis=-1)  # y' × n
+    y_axis = np.stack([-sp, cp, zero], axis=-1)
+    normal = np.stack([st * cp, st * sp, ct], axis=-1)
+    return np.stack([x_axis, y_axis, normal], axis=-1)
+
+
+def tilt_normal(tilt_x: ArrayLike, tilt_y: ArrayLike) -> FloatArray:
+    """Unit normal for gimbal tilts: ``n = R_y(tilt_y) R_x(tilt_x) ẑ``; shape ``(..., 3)``.
+
+    Parameters
+    ----------
+    tilt_x, tilt_y : [deg] rotations about the world x axis, then the world y axis.
+    """
+    return tilt_frame(tilt_x, tilt_y)[..., :, 2]
+
+
+def tilt_frame(tilt_x: ArrayLike, tilt_y: ArrayLike) -> FloatArray:
+    """Gimbal frame ``R_y(tilt_y) R_x(tilt_x)`` as a ``(..., 3, 3)`` rotation matrix.
+
+    Its columns are the images of the world x, y, z axes; column 2 is n.
+    """
+    a = np.deg2rad(np.asarray(tilt_x, dtype=np.float64))
+    b = np.deg2rad(np.asarray(tilt_y, dtype=np.float64))
+    a, b = np.broadcast_arrays(a, b)
+    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+    zero = np.zeros_like(a)
+    col_x = np.stack([cb, zero, -sb], axis=-1)
+    col_y = np.stack([sb * sa, ca, cb * sa], axis=-1)
+    col_z = np.stack([sb * ca, -sa, cb * ca], axis=-1)
+    return np.stack([col_x, col_y, col_z], axis=-1)
+
+
+def _unit(name: str, vectors: ArrayLike) -> FloatArray:
+    v = finite_array(name, vectors, shape_tail=(3,))
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    if np.any(norm == 0.0):
+        raise GeometryError(f"{name} must be non-zero vectors; got a zero vector")
+    return v / norm
+
+
+def normal_to_orientation(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Inverse of :func:`orientation_normal` with θ ∈ [0, 180] and φ ∈ (−180, 180].
+
+    At the pole (θ = 0 or 180) the azimuth is undefined and returned as 0.
+
+    Returns
+    -------
+    azimuth, coelevation : [deg], shape ``(...)``
+    """
+    n = _unit("normal", normal)
+    horizontal = np.hypot(n[..., 0], n[..., 1])
+    coelevation = np.rad2deg(np.arctan2(horizontal, n[..., 2]))
+    azimuth = np.rad2deg(np.arctan2(n[..., 1], n[..., 0]))
+    azimuth = np.where(horizontal > 1e-15, azimuth, 0.0)
+    azimuth = np.where(azimuth <= -180.0, azimuth + 360.0, azimuth)
+    return azimuth, coelevation
+
+
+def normal_to_tilt(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Inverse of :func:`tilt_normal`: tilts with tilt_x ∈ [−90, 90], tilt_y ∈ (−180, 180].
+
+    Returns
+    -------
+    tilt_x, tilt_y : [deg], shape ``(...)``
+    """
+    n = _unit("normal", normal)
+    tilt_x = np.rad2deg(np.arcsin(np.clip(-n[..., 1], -1.0, 1.0)))
+    tilt_y = np.rad2deg(np.arctan2(n[..., 0], n[..., 2]))
+    return tilt_x, tilt_y
+
+
+def orientation_to_tilt(azimuth: ArrayLike, coelevation: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """(azimuth, co-elevation) [deg] → (tilt_x, tilt_y) [deg] of the same beam."""
+    return normal_to_tilt(orientation_normal(azimuth, coelevation))
+
+
+def tilt_to_orientation(tilt_x: ArrayLike, tilt_y: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """(tilt_x, tilt_y) [deg] → canonical (azimuth, co-elevation) [deg] of the same beam."""
+    return normal_to_orientation(tilt_normal(tilt_x, tilt_y))
+
+
+def angle_between(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """Angle between vectors [deg], accurate for tiny angles (atan2 form); shape ``(...)``."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    cross = np.linalg.norm(np.cross(a, b), axis=-1)
+    dot = np.sum(a * b, axis=-1)
+    return np.rad2deg(np.arctan2(cross, dot))
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    """Where the transducer is and where it points.
+
+    Attributes
+    ----------
+    x, y, z : [m] position of the centre of the transducer's imaging plane.
+    azimuth, coelevation : [deg] orientation, thesis eq. (8); the beam travels
+        along ``-n``.  Signed co-elevation is allowed.
+    """
+
+    x: float
+    y: float
+    z: float
+    azimuth: float = 0.0
+    coelevation: float = 0.0
+
+    def __post_init__(self) -> None:
+        for field in ("x", "y", "z", "azimuth", "coelevation"):
+            object.__setattr__(self, field, finite_float(f"pose.{field}", getattr(self, field)))
+
+    @classmethod
+    def from_tilt(cls, x: float, y: float, z: float, tilt_x: float, tilt_y: float) -> Pose:
+        """Pose from gimbal tilts [deg] about the world x then y axes."""
+        tx = finite_float("pose.tilt_x", tilt_x)
+        ty = finite_float("pose.tilt_y", tilt_y)
+        azimuth, coelevation = tilt_to_orientation(tx, ty)
+        return cls(x, y, z, float(azimuth), float(coelevation))
+
+    @property
+    def position(self) -> FloatArray:
+        """[m] position as an array of shape ``(3,)``."""
+        return np.array([self.x, self.y, self.z])
+
+    @property
+    def normal(self) -> FloatArray:
+        """Unit normal n, shape ``(3,)``."""
+        return orientation_normal(self.azimuth, self.coelevation)
+
+    @property
+    def beam_direction(self) -> FloatArray:
+        """Unit direction the beam travels (``-n``), shape ``(3,)``."""
+        return -self.normal
+
+    @property
+    def frame(self) -> FloatArray:
+        """Transducer frame ``[x', y', n]`` as columns, shape ``(3, 3)``."""
+        return orientation_frame(self.azimuth, self.coelevation)
+
+    @property
+    def tilt(self) -> tuple[float, float]:
+        """(tilt_x, tilt_y) [deg] of the same beam."""
+        tx, ty = orientation_to_tilt(self.azimuth, self.coelevation)
+        return float(tx), float(ty)
+
+    def with_orientation(self, azimuth: float, coelevation: float) -> Pose:
+        """The same position with another orientation [deg]."""
+        return Pose(self.x, self.y, self.z, azimuth, coelevation)
+
+    def with_tilt(self, tilt_x: float, tilt_y: float) -> Pose:
+        """The same position with another orientation given as gimbal tilts [deg]."""
+        return Pose.from_tilt(self.x, self.y, self.z, tilt_x, tilt_y)
+
+    def as_array(self) -> FloatArray:
+        """``[x, y, z, azimuth, coelevation]`` ([m] and [deg]), shape ``(5,)``."""
+        return np.array([self.x, self.y, self.z, self.azimuth, self.coelevation])
+
+    @classmethod
+    def from_array(cls, values: ArrayLike) -> Pose:
+        """Inverse of :meth:`as_array`."""
+        v = finite_array("pose", values, shape_tail=(5,))
+        return cls(*(float(c) for c in v))
+
+
+def poses_to_arrays(poses: list[Pose] | tuple[Pose, ...]) -> tuple[FloatArray, FloatArray]:
+    """Stack poses into positions ``(P, 3)`` [m] and frames ``(P, 3, 3)``."""
+    values = np.array([p.as_array() for p in poses]).reshape(-1, 5)
+    return values[:, :3], orientation_frame(values[:, 3], values[:, 4])

@@ -1,0 +1,28 @@
+"""Unit parsing at the user boundary."""
+
+from __future__ import annotations
+
+import pytest
+
+from echocal import EchocalValueError
+from echocal.units import parse_angle, parse_length, parse_quantity
+
+
+@pytest.mark.parametrize(
+    ("text", "metres"),
+    [("20", 0.02), ("20mm", 0.02), ("12.7 mm", 0.0127), ("0.5in", 0.0127), ("1e-3 m", 1e-3),
+     (3, 0.003)],
+)
+def test_lengths(text, metres):
+    assert parse_length("z", text) == pytest.approx(metres)
+
+
+def test_frequency_and_angle():
+    assert parse_quantity("f", "5MHz", "frequency", "Hz") == pytest.approx(5e6)
+    assert parse_angle("a", "0.5rad") == pytest.approx(28.6478897565)
+
+
+@pytest.mark.parametrize("text", ["20 MHz", "abc", "nan mm", "1e400 mm"])
+def test_bad_lengths_name_the_field(text):
+    with pytest.raises(EchocalValueError, match="transducer.width"):
+        parse_length("transducer.width", text)
