@@ -84,10 +84,12 @@ def test_orientation_round_trip_through_tilt(az, coel):
 
 def test_tilt_axes_meaning():
     # Tilting about +x by α rotates ẑ towards −y; about +y by β towards +x.
-    assert_allclose(tilt_normal(10.0, 0.0), [0, -np.sin(np.deg2rad(10)), np.cos(np.deg2rad(10))],
-                    atol=TOL)
-    assert_allclose(tilt_normal(0.0, 10.0), [np.sin(np.deg2rad(10)), 0, np.cos(np.deg2rad(10))],
-                    atol=TOL)
+    assert_allclose(
+        tilt_normal(10.0, 0.0), [0, -np.sin(np.deg2rad(10)), np.cos(np.deg2rad(10))], atol=TOL
+    )
+    assert_allclose(
+        tilt_normal(0.0, 10.0), [np.sin(np.deg2rad(10)), 0, np.cos(np.deg2rad(10))], atol=TOL
+    )
 
 
 def test_pole_has_zero_azimuth():

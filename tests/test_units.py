@@ -10,8 +10,14 @@ from echocal.units import parse_angle, parse_length, parse_quantity
 
 @pytest.mark.parametrize(
     ("text", "metres"),
-    [("20", 0.02), ("20mm", 0.02), ("12.7 mm", 0.0127), ("0.5in", 0.0127), ("1e-3 m", 1e-3),
-     (3, 0.003)],
+    [
+        ("20", 0.02),
+        ("20mm", 0.02),
+        ("12.7 mm", 0.0127),
+        ("0.5in", 0.0127),
+        ("1e-3 m", 1e-3),
+        (3, 0.003),
+    ],
 )
 def test_lengths(text, metres):
     assert parse_length("z", text) == pytest.approx(metres)

@@ -65,7 +65,9 @@ def in_range(name: str, value: Any, low: float, high: float) -> float:
     return out
 
 
-def finite_array(name: str, value: ArrayLike, *, shape_tail: tuple[int, ...] = ()) -> NDArray[np.float64]:
+def finite_array(
+    name: str, value: ArrayLike, *, shape_tail: tuple[int, ...] = ()
+) -> NDArray[np.float64]:
     """Return ``value`` as a float64 array with all entries finite.
 
     ``shape_tail`` fixes the trailing axes, e.g. ``(3,)`` for arrays of points.

@@ -162,7 +162,9 @@ def normal_to_tilt(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return tilt_x, tilt_y
 
 
-def orientation_to_tilt(azimuth: ArrayLike, coelevation: ArrayLike) -> tuple[FloatArray, FloatArray]:
+def orientation_to_tilt(
+    azimuth: ArrayLike, coelevation: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
     """(azimuth, co-elevation) [deg] → (tilt_x, tilt_y) [deg] of the same beam."""
     return normal_to_tilt(orientation_normal(azimuth, coelevation))
 
