@@ -1,0 +1,309 @@
+"""An emulated rig: any measurement source served over the instrument line protocol.
+
+:class:`InstrumentServer` listens on TCP (loopback by default) and answers the
+commands of :mod:`echocal.measurement.protocol` from a
+:class:`~echocal.measurement.base.MeasurementSource` — usually the simulator —
+so the whole hardware path (:class:`~echocal.measurement.hardware.HardwareSource`
+over :class:`~echocal.measurement.hardware.TcpInstrument`) runs for real over a
+socket.  The emulated positioner is perfect (it reaches the requested pose) and
+optionally slow (``move_time`` [s] per ``MOVE``); ``ACQ?`` measures the source at
+the current pose.  :class:`Faults` injects the failures a real rig shows.
+
+One instrument, several connections: each connection is served by its own
+thread, and commands are executed one at a time under a lock, as a real
+instrument would.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import socketserver
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from echocal._validate import nonnegative_float, one_of, positive_int
+from echocal.errors import EchocalError, LimitError
+from echocal.geometry import Pose
+from echocal.measurement import protocol
+from echocal.measurement.base import MeasurementSource
+
+__all__ = ["MALFORMED_KINDS", "Faults", "InstrumentServer", "serve_forever"]
+
+MALFORMED_KINDS = ("count", "number", "base64", "nan", "reply")
+"""Ways to garble an A-scan: header announces one sample more than sent (``count``), a
+header that is not a number (``number``), a payload that is not base64 (``base64``), a NaN
+sample (``nan``), an unknown reply line instead of the header (``reply``)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Faults:
+    """Failures to inject, each happening once (for tests and demos).
+
+    Attributes
+    ----------
+    drop_after : after this many commands (counted over all connections), the next
+        command is not answered: the connection is closed under the client.
+    drop_forever : with ``drop_after``, the instrument then stays gone — every later
+        connection is closed at once (the client's retries run out).
+    late_acquisition : the k-th ``ACQ?`` (1-based) is answered ``late_delay`` late.
+    late_delay : [s] delay of that late answer (make it longer than the client timeout).
+    malformed_acquisition : the k-th ``ACQ?`` (1-based) gets a malformed answer.
+    malformed_kind : how it is malformed, one of :data:`MALFORMED_KINDS`.
+    """
+
+    drop_after: int | None = None
+    drop_forever: bool = False
+    late_acquisition: int | None = None
+    late_delay: float = 1.0
+    malformed_acquisition: int | None = None
+    malformed_kind: str = "count"
+
+    def __post_init__(self) -> None:
+        for name in ("drop_after", "late_acquisition", "malformed_acquisition"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, positive_int(f"faults.{name}", value))
+        object.__setattr__(self, "late_delay", nonnegative_float("late_delay", self.late_delay))
+        one_of("faults.malformed_kind", self.malformed_kind, MALFORMED_KINDS)
+
+
+class _Handler(socketserver.StreamRequestHandler):
+    server: _TcpServer
+
+    def handle(self) -> None:
+        owner = self.server.owner
+        owner._connections.add(self.request)
+        try:
+            while True:
+                raw = self.rfile.readline(protocol.MAX_LINE_BYTES + 1)
+                if not raw or owner._gone:
+                    return
+                reply = owner._dispatch(raw)
+                if reply is None:  # injected drop
+                    return
+                lines, delay, close_after = reply
+                if delay:
+                    time.sleep(delay)
+                self.wfile.write(b"".join(lines))
+                self.wfile.flush()
+                if close_after:
+                    return
+        except OSError:
+            return
+        finally:
+            owner._connections.discard(self.request)
+            with contextlib.suppress(OSError):
+                self.request.shutdown(socket.SHUT_RDWR)
+
+
+class _TcpServer(socketserver.ThreadingTCPServer):
+    daemon_threads = True
+    allow_reuse_address = True
+    owner: InstrumentServer
+
+
+class InstrumentServer:
+    """Serve ``source`` as an instrument over TCP, in a background thread.
+
+    Parameters
+    ----------
+    source : any measurement source (the caller keeps ownership; it is not closed here).
+    host, port : where to listen; ``port=0`` picks a free port (see :attr:`address`).
+    move_time : [s] each ``MOVE`` takes (the instrument is busy meanwhile).
+    faults : failures to inject (default: none).
+    initial_pose : where the positioner starts (default: the origin clipped to the limits).
+
+    Use as a context manager: ``with InstrumentServer(src) as server: ...server.address``.
+    """
+
+    def __init__(
+        self,
+        source: MeasurementSource,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        move_time: float = 0.0,
+        faults: Faults | None = None,
+        initial_pose: Pose | None = None,
+    ) -> None:
+        self.source = source
+        self.move_time = nonnegative_float("move_time", move_time)
+        self.faults = faults or Faults()
+        self.pose = initial_pose or source.limits.clip(Pose(0.0, 0.0, 0.0))
+        self.n_commands = 0
+        """Commands received so far (all connections)."""
+        self.n_acquisitions = 0
+        """``ACQ?`` commands received so far."""
+        self._lock = threading.Lock()
+        self._gone = False
+        self._fired: set[str] = set()
+        self._connections: set[socket.socket] = set()
+        self._thread: threading.Thread | None = None
+        self._server = _TcpServer((host, int(port)), _Handler, bind_and_activate=True)
+        self._server.owner = self
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """(host, port) the server listens on."""
+        host, port = self._server.server_address[:2]
+        return str(host), int(port)
+
+    def start(self) -> InstrumentServer:
+        """Serve in a daemon thread; returns self."""
+        if self._thread is None:
+            self._thread = threading.Thread(
+                target=self._server.serve_forever,
+                kwargs={"poll_interval": 0.05},
+                name="echocal-instrument-server",
+                daemon=True,
+            )
+            self._thread.start()
+        return self
+
+    def serve_forever(self) -> None:
+        """Serve in the calling thread until :meth:`close` or KeyboardInterrupt."""
+        try:
+            self._server.serve_forever(poll_interval=0.1)
+        finally:
+            self._server.server_close()
+
+    def close(self) -> None:
+        """Stop serving and close every open connection."""
+        if self._thread is not None:
+            self._server.shutdown()
+            self._thread.join(timeout=5.0)
+            self._thread = None
+        self._server.server_close()
+        for conn in list(self._connections):
+            with contextlib.suppress(OSError):
+                conn.shutdown(socket.SHUT_RDWR)
+
+    def __enter__(self) -> InstrumentServer:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- command execution ------------------------------------------------------------------
+    def _once(self, name: str, due: bool) -> bool:
+        if due and name not in self._fired:
+            self._fired.add(name)
+            return True
+        return False
+
+    def _dispatch(self, raw: bytes) -> tuple[list[bytes], float, bool] | None:
+        """Execute one command line: (reply lines, delay [s], close after) or None to drop."""
+        with self._lock:
+            self.n_commands += 1
+            f = self.faults
+            if self._once("drop", f.drop_after is not None and self.n_commands > f.drop_after):
+                self._gone = f.drop_forever
+                return None
+            try:
+                text = raw.decode(protocol.ENCODING).strip()
+            except UnicodeDecodeError:
+                return [_err("SYNTAX", "command is not UTF-8 text")], 0.0, False
+            name, _, args = text.partition(" ")
+            handler = self._COMMANDS.get(name)
+            if handler is None:
+                return (
+                    [
+                        _err(
+                            "SYNTAX",
+                            f"unknown command {name!r}; known: {' '.join(protocol.COMMANDS)}",
+                        )
+                    ],
+                    0.0,
+                    False,
+                )
+            try:
+                return handler(self, args)
+            except LimitError as exc:
+                return [_err("LIMIT", str(exc))], 0.0, False
+            except protocol.ProtocolError as exc:
+                return [_err("SYNTAX", str(exc))], 0.0, False
+            except EchocalError as exc:
+                return [_err("FAULT", f"{type(exc).__name__}: {exc}")], 0.0, False
+
+    def _idn(self, args: str) -> tuple[list[bytes], float, bool]:
+        description = " ".join(self.source.description.split())
+        return [protocol.encode_line(f"echocal,instrument-server,{description}")], 0.0, False
+
+    def _move(self, args: str) -> tuple[list[bytes], float, bool]:
+        pose = protocol.decode_pose(args, "MOVE arguments")
+        self.source.limits.check(pose)
+        if self.move_time:
+            time.sleep(self.move_time)
+        self.pose = pose
+        return [protocol.encode_line("OK")], 0.0, False
+
+    def _pos(self, args: str) -> tuple[list[bytes], float, bool]:
+        return [protocol.encode_line(protocol.encode_pose(self.pose))], 0.0, False
+
+    def _limits(self, args: str) -> tuple[list[bytes], float, bool]:
+        return [protocol.encode_line(protocol.encode_limits(self.source.limits))], 0.0, False
+
+    def _bye(self, args: str) -> tuple[list[bytes], float, bool]:
+        return [protocol.encode_line("OK")], 0.0, True
+
+    def _acq(self, args: str) -> tuple[list[bytes], float, bool]:
+        self.n_acquisitions += 1
+        k, f = self.n_acquisitions, self.faults
+        ascan = self.source.measure(self.pose)
+        header, payload = protocol.encode_ascan(ascan.samples, ascan.fs, ascan.start_time)
+        if self._once("malformed", f.malformed_acquisition == k):
+            header, payload = _garble(f.malformed_kind, header, payload, ascan.samples)
+        delay = f.late_delay if self._once("late", f.late_acquisition == k) else 0.0
+        return [protocol.encode_line(header), protocol.encode_line(payload)], delay, False
+
+    _COMMANDS: ClassVar[dict[str, Callable[[Any, str], tuple[list[bytes], float, bool]]]] = {
+        "*IDN?": _idn,
+        "MOVE": _move,
+        "POS?": _pos,
+        "ACQ?": _acq,
+        "LIMITS?": _limits,
+        "BYE": _bye,
+    }
+
+
+def _err(code: str, message: str) -> bytes:
+    return protocol.encode_line("ERR", code, " ".join(message.split()))
+
+
+def _garble(kind: str, header: str, payload: str, samples: Any) -> tuple[str, str]:
+    _, fs, start, n = header.split()
+    if kind == "count":
+        return f"ASCAN {fs} {start} {int(n) + 1}", payload
+    if kind == "number":
+        return f"ASCAN fs=? {start} {n}", payload
+    if kind == "base64":
+        return header, "!!not-base64!!" + payload[14:]
+    if kind == "nan":
+        bad = samples.copy()
+        bad[len(bad) // 2] = float("nan")
+        return header, protocol.encode_ascan(bad, 1.0, 0.0)[1]
+    return "HELLO 42", payload  # "reply": an unknown reply
+
+
+def serve_forever(
+    source: MeasurementSource,
+    host: str = "127.0.0.1",
+    port: int = 5025,
+    move_time: float = 0.0,
+    *,
+    on_ready: Callable[[tuple[str, int]], None] | None = None,
+) -> None:
+    """Serve ``source`` on ``host:port`` until interrupted (Ctrl-C); for the CLI.
+
+    ``on_ready(address)`` is called once the socket listens (e.g. to print the address).
+    Port 5025 is the customary port of SCPI instruments.
+    """
+    server = InstrumentServer(source, host=host, port=port, move_time=move_time)
+    if on_ready is not None:
+        on_ready(server.address)
+    with contextlib.suppress(KeyboardInterrupt):
+        server.serve_forever()
