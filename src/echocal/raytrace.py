@@ -1,0 +1,129 @@
+"""Closest-hit casting of a ray bundle against a specimen.
+
+:func:`cast` is the one entry point: rays with any leading batch axes
+``(..., N, 3)`` go in, a :class:`Hits` of the same batch shape comes out.
+It is vectorized over rays; the only Python loop runs over the (few) shapes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal._validate import finite_array
+from echocal.errors import EchocalValueError
+from echocal.specimen.base import FloatArray, Shape
+from echocal.specimen.specimen import Specimen
+
+__all__ = ["Hits", "cast"]
+
+
+@dataclass(frozen=True, slots=True)
+class Hits:
+    """Closest hit of every ray of a bundle.
+
+    Attributes
+    ----------
+    distance : [m], shape ``(..., N)``; distance t′ along the (unit) ray, ``inf`` for a miss.
+    point : [m], shape ``(..., N, 3)``; hit point ``s + t′ d``, ``inf`` for a miss.
+    normal : shape ``(..., N, 3)``; unit surface normal facing the ray
+        (``n · d <= 0``), zeros for a miss.
+    shape_index : shape ``(..., N)``, int; index into ``specimen.shapes``, −1 for a miss.
+    """
+
+    distance: FloatArray
+    point: FloatArray
+    normal: FloatArray
+    shape_index: NDArray[np.int64]
+
+    @property
+    def hit(self) -> NDArray[np.bool_]:
+        """True where the ray hit something, shape ``(..., N)``."""
+        return self.shape_index >= 0
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Batch shape ``(..., N)``."""
+        return self.distance.shape
+
+    def reshape(self, *shape: int) -> Hits:
+        """The same hits with the ray axes reshaped to ``shape``."""
+        shp = tuple(shape[0]) if len(shape) == 1 and isinstance(shape[0], tuple) else shape
+        return Hits(
+            distance=self.distance.reshape(shp),
+            point=self.point.reshape((*shp, 3)),
+            normal=self.normal.reshape((*shp, 3)),
+            shape_index=self.shape_index.reshape(shp),
+        )
+
+
+def _as_shapes(specimen: Specimen | Shape | Iterable[Shape]) -> tuple[Shape, ...]:
+    if isinstance(specimen, Specimen):
+        return specimen.shapes
+    if isinstance(specimen, Shape):
+        return (specimen,)
+    try:
+        return Specimen(specimen).shapes
+    except TypeError:
+        raise EchocalValueError(
+            f"specimen must be a Specimen, a Shape or shapes; got {type(specimen).__name__}"
+        ) from None
+
+
+def cast(
+    specimen: Specimen | Shape | Iterable[Shape], origins: ArrayLike, directions: ArrayLike
+) -> Hits:
+    """Closest hit of each ray over all shapes of ``specimen``.
+
+    Parameters
+    ----------
+    specimen : a :class:`~echocal.specimen.Specimen`, one shape, or shapes.
+    origins : [m], shape ``(..., N, 3)``
+    directions : shape ``(..., N, 3)``, broadcastable with ``origins`` (e.g. one
+        origin for all rays); normalized here, so distances are in metres.
+
+    Returns
+    -------
+    Hits with batch shape ``(..., N)``.  Ties between shapes go to the shape
+    listed first.
+    """
+    shapes = _as_shapes(specimen)
+    o = finite_array("origins", origins, shape_tail=(3,))
+    d = finite_array("directions", directions, shape_tail=(3,))
+    try:
+        o, d = np.broadcast_arrays(o, d)
+    except ValueError:
+        raise EchocalValueError(
+            f"origins and directions must broadcast; got shapes {o.shape} and {d.shape}"
+        ) from None
+    batch = o.shape[:-1]
+    o = np.ascontiguousarray(o.reshape(-1, 3))
+    d = d.reshape(-1, 3)
+    norm = np.sqrt(np.einsum("ij,ij->i", d, d))
+    if np.any(norm == 0.0):
+        raise EchocalValueError("directions must be non-zero vectors; got a zero vector")
+    d = d / norm[:, None]
+    m = len(o)
+    best_t = np.full(m, np.inf)
+    best_n = np.zeros((m, 3))
+    best_i = np.full(m, -1, dtype=np.int64)
+    for index, shape in enumerate(shapes):
+        t, n = shape._intersect(o, d)
+        closer = t < best_t
+        if index == 0:
+            best_t, best_n = t, n
+        else:
+            best_t = np.where(closer, t, best_t)
+            best_n = np.where(closer[:, None], n, best_n)
+        best_i[closer] = index
+    hit = best_i >= 0
+    point = np.where(hit[:, None], o + np.where(hit, best_t, 0.0)[:, None] * d, np.inf)
+    return Hits(
+        distance=best_t.reshape(batch),
+        point=point.reshape((*batch, 3)),
+        normal=best_n.reshape((*batch, 3)),
+        shape_index=best_i.reshape(batch),
+    )
