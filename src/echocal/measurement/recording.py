@@ -1,0 +1,383 @@
+"""Record a replay file from any measurement source, resumably.
+
+:func:`record` measures every pose of a :class:`RecordingGrid` ``repeats``
+times and writes the replay file read by
+:class:`~echocal.measurement.replay.ReplaySource`.
+
+Interruption-safe: measurements go first to a sidecar directory
+``<path>.partial/`` — chunk files ``chunk-<start>.npy`` of shape
+``(count, n_samples)`` plus ``manifest.json`` listing the finished chunks, each
+written atomically.  On an interruption (Ctrl-C, a source error) the
+measurements already taken are flushed there before the exception propagates.
+Running the same :func:`record` call again resumes after the last saved
+measurement, never measuring a saved one again; it refuses to resume (clear
+:class:`~echocal.errors.DataFileError`) if the partial recording was made with
+another grid, repeat count or source description.  Only when everything is
+measured is the final file written — atomically, so it is never half-written —
+and the sidecar removed.
+
+Measurement order: positions, then azimuths, then co-elevations, then repeats
+(C order of ``(position, azimuth, coelevation, repeat)``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal._validate import finite_array, positive_int
+from echocal.ascan import AScan
+from echocal.errors import DataFileError, EchocalValueError, LimitError
+from echocal.geometry import Pose
+from echocal.io import atomic_path, atomic_write_text
+from echocal.measurement.base import MeasurementSource
+from echocal.measurement.replay import DIMS, FORMAT
+
+__all__ = ["PARTIAL_FORMAT", "RecordingGrid", "partial_path", "record", "recording_dataset"]
+
+PARTIAL_FORMAT = "replay-partial/1"
+"""Format name in the manifest of a partial recording."""
+
+
+def _axis(name: str, values: ArrayLike) -> tuple[float, ...]:
+    arr = finite_array(name, np.atleast_1d(values))
+    if arr.ndim != 1 or arr.size == 0:
+        raise EchocalValueError(f"{name} must be a non-empty 1-D list of values; got {arr.shape}")
+    if np.any(np.diff(arr) <= 0):
+        raise EchocalValueError(f"{name} must be strictly increasing; got {arr.tolist()}")
+    return tuple(float(v) for v in arr)
+
+
+@dataclass(frozen=True, slots=True)
+class RecordingGrid:
+    """The poses of a recording: every (azimuth, co-elevation) pair at every position.
+
+    Attributes
+    ----------
+    azimuth : [deg], strictly increasing, shape ``(n_azimuth,)``.
+    coelevation : [deg], strictly increasing, shape ``(n_coelevation,)``.
+    positions : [m], shape ``(n_positions, 3)``.
+    """
+
+    azimuth: tuple[float, ...]
+    coelevation: tuple[float, ...]
+    positions: tuple[tuple[float, float, float], ...]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "azimuth", _axis("grid.azimuth", self.azimuth))
+        object.__setattr__(self, "coelevation", _axis("grid.coelevation", self.coelevation))
+        pos = finite_array("grid.positions", self.positions, shape_tail=(3,)).reshape(-1, 3)
+        if pos.shape[0] == 0:
+            raise EchocalValueError("grid.positions must hold at least one (x, y, z) [m]")
+        object.__setattr__(self, "positions", tuple(tuple(float(c) for c in p) for p in pos))
+
+    @classmethod
+    def regular(
+        cls,
+        *,
+        azimuth: tuple[float, float, int],
+        coelevation: tuple[float, float, int],
+        positions: Sequence[Sequence[float]],
+    ) -> RecordingGrid:
+        """Evenly spaced angles: ``azimuth=(first, last, count)`` [deg], likewise co-elevation."""
+        axes = []
+        for name, (first, last, count) in (("azimuth", azimuth), ("coelevation", coelevation)):
+            n = positive_int(f"grid.{name} count", count)
+            axes.append(np.linspace(float(first), float(last), n))
+        return cls(azimuth=axes[0], coelevation=axes[1], positions=positions)  # type: ignore[arg-type]
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """(n_positions, n_azimuth, n_coelevation)."""
+        return len(self.positions), len(self.azimuth), len(self.coelevation)
+
+    def pose(self, p: int, a: int, c: int) -> Pose:
+        """The pose at position index ``p``, azimuth index ``a``, co-elevation index ``c``."""
+        return Pose(*self.positions[p], self.azimuth[a], self.coelevation[c])
+
+    def poses(self) -> list[Pose]:
+        """All poses in recording order (position, azimuth, co-elevation)."""
+        n_p, n_a, n_c = self.shape
+        return [self.pose(p, a, c) for p in range(n_p) for a in range(n_a) for c in range(n_c)]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (JSON-ready)."""
+        return {
+            "azimuth": list(self.azimuth),
+            "coelevation": list(self.coelevation),
+            "positions": [list(p) for p in self.positions],
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> RecordingGrid:
+        """Inverse of :meth:`to_dict`."""
+        return cls(
+            azimuth=data["azimuth"], coelevation=data["coelevation"], positions=data["positions"]
+        )
+
+
+def partial_path(path: str | os.PathLike[str]) -> Path:
+    """The sidecar directory of an unfinished recording of ``path``."""
+    target = Path(path)
+    return target.with_name(target.name + ".partial")
+
+
+def _json_safe(value: Any) -> Any:
+    """Replace non-finite floats (unlimited axes) by None so the JSON is strict."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def recording_dataset(
+    samples: NDArray[np.float64],
+    grid: RecordingGrid,
+    *,
+    fs: float,
+    start_time: float,
+    source_info: Mapping[str, Any],
+) -> Any:
+    """Build the replay ``xarray.Dataset``.
+
+    Parameters
+    ----------
+    samples : shape ``(n_positions, n_azimuth, n_coelevation, n_repeats, n_samples)``.
+    fs : [Hz]; start_time : [s].
+    source_info : JSON-ready description of the source (stored in attribute ``source``).
+    """
+    import xarray as xr
+
+    import echocal
+
+    positions = np.asarray(grid.positions)
+    n_samples = samples.shape[-1]
+    coords = {
+        "azimuth": ("azimuth", np.asarray(grid.azimuth), {"units": "deg"}),
+        "coelevation": ("coelevation", np.asarray(grid.coelevation), {"units": "deg"}),
+        "repeat": ("repeat", np.arange(samples.shape[3])),
+        "time": ("time", start_time + np.arange(n_samples) / fs, {"units": "s"}),
+    }
+    for i, c in enumerate("xyz"):
+        coords[f"position_{c}"] = ("position", positions[:, i], {"units": "m"})
+    return xr.Dataset(
+        {"samples": (DIMS, samples, {"units": "1", "long_name": "received amplitude"})},
+        coords=coords,
+        attrs={
+            "echocal_format": FORMAT,
+            "fs": float(fs),
+            "start_time": float(start_time),
+            "source": json.dumps(_json_safe(dict(source_info))),
+            "grid": json.dumps(grid.to_dict()),
+            "echocal_version": echocal.__version__,
+            "comment": "fs in Hz, start_time in s; samples dims "
+            "(position, azimuth, coelevation, repeat, time)",
+        },
+    )
+
+
+class _Partial:
+    """The sidecar directory: chunk files plus a manifest (private)."""
+
+    def __init__(self, directory: Path, fingerprint: dict[str, Any]) -> None:
+        self.dir = directory
+        self.manifest_path = directory / "manifest.json"
+        if self.manifest_path.exists():
+            try:
+                self.manifest = json.loads(self.manifest_path.read_text(encoding="utf-8"))
+                old = self.manifest["fingerprint"]
+            except (OSError, ValueError, KeyError) as exc:
+                raise DataFileError(
+                    f"partial recording {directory} is unreadable ({exc}); delete it to start over"
+                ) from None
+            differ = sorted(
+                k for k in fingerprint.keys() | old.keys() if fingerprint.get(k) != old.get(k)
+            )
+            if differ:
+                recorded = ", ".join(f"{k}={old.get(k)!r}" for k in differ)
+                raise DataFileError(
+                    f"cannot resume: partial recording {directory} was made with a different "
+                    f"{', '.join(differ)} (recorded {recorded}); "
+                    "record to another path or delete the partial directory"
+                )
+        else:
+            directory.mkdir(parents=True, exist_ok=True)
+            self.manifest = {"format": PARTIAL_FORMAT, "fingerprint": fingerprint, "chunks": []}
+            self._save()
+
+    @property
+    def n_done(self) -> int:
+        return sum(int(c["count"]) for c in self.manifest["chunks"])
+
+    def _save(self) -> None:
+        atomic_write_text(self.manifest_path, json.dumps(self.manifest, indent=1))
+
+    def check_format(self, ascan: AScan, index: int) -> None:
+        fmt = {"fs": ascan.fs, "start_time": ascan.start_time, "n_samples": ascan.n_samples}
+        known = self.manifest.get("ascan")
+        if known is None:
+            self.manifest["ascan"] = fmt
+        elif known != fmt:
+            raise EchocalValueError(
+                f"measurement {index} has fs/start_time/n_samples {fmt}; earlier ones had "
+                f"{known} — a recording needs one sampling format"
+            )
+
+    def write_chunk(self, start: int, rows: list[NDArray[np.float64]]) -> None:
+        name = f"chunk-{start:09d}.npy"
+        with atomic_path(self.dir / name) as tmp, tmp.open("wb") as fh:
+            np.save(fh, np.stack(rows))
+        self.manifest["chunks"].append({"file": name, "start": start, "count": len(rows)})
+        self._save()
+
+    def load(self, total: int) -> NDArray[np.float64]:
+        parts, expected = [], 0
+        for chunk in self.manifest["chunks"]:
+            if int(chunk["start"]) != expected:
+                raise DataFileError(f"partial recording {self.dir}: chunks are not contiguous")
+            try:
+                arr = np.load(self.dir / chunk["file"])
+            except (OSError, ValueError) as exc:
+                raise DataFileError(
+                    f"partial recording {self.dir}: {chunk['file']}: {exc}"
+                ) from None
+            parts.append(arr)
+            expected += int(chunk["count"])
+        if expected != total:
+            raise DataFileError(f"partial recording {self.dir} holds {expected} of {total} A-scans")
+        return np.concatenate(parts, axis=0)
+
+
+def record(
+    source: MeasurementSource,
+    grid: RecordingGrid,
+    path: str | os.PathLike[str],
+    *,
+    repeats: int = 1,
+    progress: bool = True,
+    batch_size: int = 1,
+    chunk_size: int = 256,
+    setup: Mapping[str, Any] | None = None,
+    overwrite: bool = False,
+) -> Path:
+    """Measure ``grid`` with ``source`` and write a replay file to ``path``; resumable.
+
+    Parameters
+    ----------
+    source : any measurement source (simulator, rig, even another replay).
+    grid : the poses to record; all must lie within ``source.limits``.
+    path : the final NetCDF file (``.nc``).
+    repeats : A-scans per grid pose (>= 1), taken one after the other.
+    progress : show a rich progress bar on stderr.
+    batch_size : poses handed to ``source.measure_many`` at once (>= 1).  With 1 every
+        finished measurement survives an interruption; with more, an interruption inside
+        a batch loses (and later re-measures) that batch.
+    chunk_size : measurements per chunk file in the sidecar directory.
+    setup : JSON-ready description of the setup, stored with the source description.
+    overwrite : replace an existing final file (otherwise that is an error).
+
+    Returns
+    -------
+    The path of the final file.
+
+    Raises
+    ------
+    DataFileError : the final file exists (without ``overwrite``) or a partial recording
+        there was made with a different grid/repeats/source.
+    LimitError : a grid pose lies outside ``source.limits`` (nothing is measured).
+    """
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
+    target = Path(path)
+    repeats = positive_int("repeats", repeats)
+    batch_size = positive_int("batch_size", batch_size)
+    chunk_size = positive_int("chunk_size", chunk_size)
+    sidecar = partial_path(target)
+    if target.exists() and not sidecar.exists() and not overwrite:
+        raise DataFileError(f"{target} already exists; pass overwrite=True to record it again")
+    poses = grid.poses()
+    bad = [(i, v) for i, p in enumerate(poses) if (v := source.limits.violations(p))]
+    if bad:
+        i, v = bad[0]
+        raise LimitError(
+            f"{len(bad)} grid pose(s) lie outside the source's limits, e.g. #{i}: {'; '.join(v)}"
+        )
+    fingerprint = {
+        "grid": grid.to_dict(),
+        "repeats": repeats,
+        "source": source.description,
+        "format": FORMAT,
+    }
+    partial = _Partial(sidecar, fingerprint)
+    total = len(poses) * repeats
+    done = partial.n_done
+
+    rows: list[NDArray[np.float64]] = []
+    row_start = done
+    columns = (
+        TextColumn(f"recording {target.name}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=Console(stderr=True), disable=not progress) as bar:
+        task = bar.add_task("record", total=total, completed=done)
+        try:
+            index = done
+            while index < total:
+                batch = list(range(index, min(index + batch_size, total)))
+                batch_poses = [poses[i // repeats] for i in batch]
+                if len(batch) == 1:
+                    ascans = [source.measure(batch_poses[0])]
+                else:
+                    ascans = list(source.measure_many(batch_poses))
+                for i, ascan in zip(batch, ascans, strict=True):
+                    partial.check_format(ascan, i)
+                    rows.append(ascan.samples)
+                index = batch[-1] + 1
+                bar.update(task, completed=index)
+                if len(rows) >= chunk_size:
+                    partial.write_chunk(row_start, rows)
+                    row_start, rows = index, []
+        finally:
+            if rows:  # keep what was measured, also on KeyboardInterrupt or a source error
+                partial.write_chunk(row_start, rows)
+
+    data = partial.load(total)
+    n_p, n_a, n_c = grid.shape
+    fmt = partial.manifest["ascan"]
+    dataset = recording_dataset(
+        data.reshape(n_p, n_a, n_c, repeats, -1),
+        grid,
+        fs=fmt["fs"],
+        start_time=fmt["start_time"],
+        source_info={
+            "description": source.description,
+            "limits": source.limits.as_dict(),
+            "setup": dict(setup) if setup is not None else None,
+            "repeats": repeats,
+        },
+    )
+    with atomic_path(target) as tmp:
+        dataset.to_netcdf(tmp, engine="h5netcdf")
+    shutil.rmtree(sidecar)
+    return target

@@ -1,0 +1,371 @@
+"""Recorded A-scans replayed as a measurement source.
+
+A replay file (written by :func:`echocal.measurement.recording.record`) is a
+NetCDF-4 file (xarray, h5netcdf engine) holding A-scans recorded on a grid of
+orientations at one or more positions, with repeats per point:
+
+* variable ``samples``, dims ``(position, azimuth, coelevation, repeat, time)``;
+* coordinates ``azimuth`` and ``coelevation`` [deg] (strictly increasing),
+  ``position_x``, ``position_y``, ``position_z`` [m] along ``position``,
+  ``repeat`` (index) and ``time`` [s]; each with a ``units`` attribute;
+* attributes ``echocal_format = "replay/1"``, ``fs`` [Hz], ``start_time`` [s],
+  ``source`` (JSON: the recorded source's description, limits and setup) and
+  ``grid`` (JSON: the recording grid).
+
+How :meth:`ReplaySource.measure` answers a pose (the ``mode``):
+
+``"nearest"``
+    The recording at the nearest recorded position and nearest grid orientation,
+    repeat 0 (deterministic).
+``"random-repeat"``
+    As ``"nearest"``, but one of the repeats drawn uniformly with ``rng`` (seeded:
+    reproducible), so replaying shows the recorded noise.
+``"interpolate"``
+    Bilinear interpolation, in (azimuth, co-elevation), of the repeat-averaged
+    A-scans of the 4 grid orientations around the pose (nearest position).  This
+    interpolates *samples*: between grid points two echoes with different arrival
+    times blend into a double echo and the phase is blurred, and averaging the
+    repeats lowers the noise by sqrt(n_repeats).  For a scalar objective,
+    :meth:`ReplaySource.interpolated_metric` — the metric computed on every grid
+    A-scan (averaged over repeats), then interpolated bilinearly — is usually the
+    better choice.
+
+Tolerance: a pose may lie outside the recorded grid by at most half a grid step
+(of the end step of that axis; for an axis with a single value, 1e-9 deg) in
+``"nearest"`` and ``"random-repeat"`` modes, and not at all (beyond 1e-9 deg) in
+``"interpolate"`` mode; farther raises :class:`~echocal.errors.LimitError`.  An
+azimuth is also tried shifted by ±360°.  The position must lie within
+``position_tolerance`` [m] of a recorded position (default: half the smallest
+distance between recorded positions, or 1 µm if there is only one).  ``limits``
+is the recorded grid's extent.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable, Hashable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from echocal._rng import RngLike, as_generator
+from echocal._validate import one_of, positive_float
+from echocal.ascan import AScan
+from echocal.errors import DataFileError, LimitError
+from echocal.geometry import Pose
+from echocal.measurement.base import BaseSource
+from echocal.measurement.limits import PositionerLimits
+
+__all__ = ["DIMS", "FORMAT", "MODES", "REQUIRED_COORDS", "ReplaySource"]
+
+FORMAT = "replay/1"
+"""Value of the ``echocal_format`` attribute of a replay file."""
+
+DIMS = ("position", "azimuth", "coelevation", "repeat", "time")
+"""Dimensions of the ``samples`` variable, in this order."""
+
+REQUIRED_COORDS = {
+    "azimuth": "deg",
+    "coelevation": "deg",
+    "time": "s",
+    "position_x": "m",
+    "position_y": "m",
+    "position_z": "m",
+}
+"""Coordinates a replay file must have, with the ``units`` attribute each must carry."""
+
+REQUIRED_ATTRS = ("fs", "start_time", "source")
+
+MODES = ("nearest", "random-repeat", "interpolate")
+"""How :meth:`ReplaySource.measure` answers a pose; see the module docstring."""
+
+_EXACT = 1e-9  # [deg] / relative slack for floating-point round-off at the grid's edge
+
+
+def _axis_index(values: NDArray[np.float64], value: float, name: str, *, exact: bool) -> float:
+    """Fractional index of ``value`` on the sorted axis ``values``; LimitError beyond tolerance."""
+    n = values.size
+    if n == 1:
+        low_tol = high_tol = 0.0
+    elif exact:
+        low_tol = high_tol = 0.0
+    else:
+        low_tol = 0.5 * (values[1] - values[0])
+        high_tol = 0.5 * (values[-1] - values[-2])
+    slack = _EXACT * max(1.0, abs(value))
+    if not values[0] - low_tol - slack <= value <= values[-1] + high_tol + slack:
+        raise LimitError(
+            f"{name}={value:g} is outside the recorded grid [{values[0]:g}, {values[-1]:g}]"
+            + (f" by more than the tolerance ({max(low_tol, high_tol):g})" if not exact else "")
+        )
+    if n == 1:
+        return 0.0
+    return float(np.interp(value, values, np.arange(n, dtype=np.float64)))
+
+
+class ReplaySource(BaseSource):
+    """A recorded dataset replayed through the measurement interface.
+
+    Open one with :meth:`open`.  See the module docstring for the file format,
+    the modes and the tolerances.
+
+    Attributes
+    ----------
+    path : the replay file.
+    mode : one of :data:`MODES`.
+    azimuths : [deg], shape ``(n_azimuth,)``.
+    coelevations : [deg], shape ``(n_coelevation,)``.
+    positions : [m], shape ``(n_positions, 3)``.
+    n_repeats : repeats recorded per grid point.
+    fs : [Hz]; start_time : [s]; n_samples : samples per A-scan.
+    source_info : the recorded source's description, limits and setup (from the file).
+    """
+
+    def __init__(
+        self,
+        dataset: Any,
+        *,
+        path: Path,
+        mode: str = "nearest",
+        rng: RngLike = None,
+        position_tolerance: float | None = None,
+    ) -> None:
+        self.path = path
+        self.mode = one_of("mode", mode, MODES)
+        self._rng = as_generator(rng)
+        self._ds = dataset
+        self._samples = dataset["samples"]
+        self.azimuths = np.asarray(dataset["azimuth"].values, dtype=np.float64)
+        self.coelevations = np.asarray(dataset["coelevation"].values, dtype=np.float64)
+        self.positions = np.stack(
+            [np.asarray(dataset[f"position_{c}"].values, dtype=np.float64) for c in "xyz"], axis=-1
+        )
+        self.n_repeats = int(dataset.sizes["repeat"])
+        self.n_samples = int(dataset.sizes["time"])
+        self.fs = float(dataset.attrs["fs"])
+        self.start_time = float(dataset.attrs["start_time"])
+        self.source_info: dict[str, Any] = json.loads(dataset.attrs["source"])
+        if position_tolerance is None:
+            if len(self.positions) > 1:
+                d = np.linalg.norm(self.positions[:, None] - self.positions[None], axis=-1)
+                position_tolerance = 0.5 * float(np.min(d[np.triu_indices(len(d), 1)]))
+            else:
+                position_tolerance = 1e-6
+        self.position_tolerance = positive_float("position_tolerance", position_tolerance)
+        low, high = self.positions.min(axis=0), self.positions.max(axis=0)
+        self.limits = PositionerLimits(
+            x=(low[0], high[0]),
+            y=(low[1], high[1]),
+            z=(low[2], high[2]),
+            azimuth=(self.azimuths[0], self.azimuths[-1]),
+            coelevation=(self.coelevations[0], self.coelevations[-1]),
+        )
+        recorded = self.source_info.get("description", "unknown source")
+        self.description = f"replay of {path.name} ({mode}): {recorded}"
+        self._metric_cache: dict[tuple[Hashable, int], NDArray[np.float64]] = {}
+        self._closed = False
+
+    # -- opening ----------------------------------------------------------------------------
+    @classmethod
+    def open(
+        cls,
+        path: str | os.PathLike[str],
+        mode: str = "nearest",
+        rng: RngLike = None,
+        *,
+        position_tolerance: float | None = None,
+    ) -> ReplaySource:
+        """Open a replay file; see the module docstring for ``mode`` and the tolerances.
+
+        Raises
+        ------
+        DataFileError : the file is missing, unreadable, not an echocal replay recording,
+            or lacks a variable, coordinate, ``units`` attribute or attribute (named).
+        """
+        import xarray as xr
+
+        one_of("mode", mode, MODES)
+        file = Path(path)
+        if not file.is_file():
+            raise DataFileError(f"replay file not found: {file}")
+        try:
+            ds = xr.open_dataset(file, engine="h5netcdf")
+        except Exception as exc:  # any reader failure means "not readable as NetCDF-4"
+            raise DataFileError(
+                f"cannot read replay file {file} as NetCDF-4/HDF5: {type(exc).__name__}: {exc}"
+            ) from None
+        try:
+            _validate(ds, file)
+            return cls(ds, path=file, mode=mode, rng=rng, position_tolerance=position_tolerance)
+        except BaseException:
+            ds.close()
+            raise
+
+    # -- lookup -----------------------------------------------------------------------------
+    def _position_index(self, pose: Pose) -> int:
+        d = np.linalg.norm(self.positions - pose.position, axis=-1)
+        p = int(np.argmin(d))
+        if d[p] > self.position_tolerance:
+            raise LimitError(
+                f"position ({pose.x:g}, {pose.y:g}, {pose.z:g}) m is {d[p]:.3g} m from the "
+                f"nearest recorded position; tolerance is {self.position_tolerance:.3g} m"
+            )
+        return p
+
+    def _fractional(self, pose: Pose, *, exact: bool) -> tuple[float, float]:
+        """Fractional (azimuth, coelevation) grid indices of ``pose``."""
+        ci = _axis_index(self.coelevations, pose.coelevation, "coelevation", exact=exact)
+        error: LimitError | None = None
+        for shift in (0.0, -360.0, 360.0):
+            try:
+                ai = _axis_index(self.azimuths, pose.azimuth + shift, "azimuth", exact=exact)
+            except LimitError as exc:
+                error = error or exc
+                continue
+            return ai, ci
+        assert error is not None
+        raise error
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise DataFileError(f"replay source {self.path} is closed")
+
+    def _grid_pose(self, p: int, a: int, c: int) -> Pose:
+        x, y, z = self.positions[p]
+        return Pose(x, y, z, self.azimuths[a], self.coelevations[c])
+
+    def measure(self, pose: Pose) -> AScan:
+        """The recorded (or interpolated) A-scan for ``pose``; see the module docstring."""
+        self._check_open()
+        p = self._position_index(pose)
+        if self.mode == "interpolate":
+            ai, ci = self._fractional(pose, exact=True)
+            corners, weights = _bilinear(ai, ci, self.azimuths.size, self.coelevations.size)
+            block = np.asarray(
+                self._samples[
+                    p, corners[0][0] : corners[1][0] + 1, corners[0][1] : corners[2][1] + 1
+                ]
+                .mean("repeat")
+                .values
+            )
+            a0, c0 = corners[0]
+            samples = sum(
+                w * block[a - a0, c - c0] for (a, c), w in zip(corners, weights, strict=True)
+            )
+            reached = Pose(*self.positions[p], pose.azimuth, pose.coelevation)
+            meta = {"mode": self.mode, "position_index": p, "grid_index": (ai, ci)}
+            return AScan(samples, self.fs, self.start_time, reached, {"source": "replay", **meta})
+        ai, ci = self._fractional(pose, exact=False)
+        a, c = round(ai), round(ci)
+        r = int(self._rng.integers(self.n_repeats)) if self.mode == "random-repeat" else 0
+        samples = np.asarray(self._samples[p, a, c, r].values, dtype=np.float64)
+        meta = {"source": "replay", "mode": self.mode, "grid_index": (p, a, c), "repeat": r}
+        return AScan(samples, self.fs, self.start_time, self._grid_pose(p, a, c), meta)
+
+    # -- metrics ----------------------------------------------------------------------------
+    def metric_grid(
+        self, metric: Callable[[AScan], float], position: int = 0
+    ) -> NDArray[np.float64]:
+        """``metric`` of each recorded A-scan at position index ``position``, repeat-averaged.
+
+        Returns
+        -------
+        values : shape ``(n_azimuth, n_coelevation)``; cached per (metric, position).
+        """
+        self._check_open()
+        key = (metric, position)
+        if key not in self._metric_cache:
+            block = np.asarray(self._samples[position].values, dtype=np.float64)
+            out = np.empty(block.shape[:2])
+            for a in range(block.shape[0]):
+                for c in range(block.shape[1]):
+                    pose = self._grid_pose(position, a, c)
+                    out[a, c] = np.mean(
+                        [
+                            float(metric(AScan(block[a, c, r], self.fs, self.start_time, pose)))
+                            for r in range(block.shape[2])
+                        ]
+                    )
+            self._metric_cache[key] = out
+        return self._metric_cache[key]
+
+    def interpolated_metric(self, pose: Pose, metric: Callable[[AScan], float]) -> float:
+        """Bilinear interpolation at ``pose`` of :meth:`metric_grid` (nearest position).
+
+        The pose must lie within the recorded grid (no extrapolation); this does
+        not count as a measurement and is the same in every ``mode``.
+        """
+        self._check_open()
+        p = self._position_index(pose)
+        ai, ci = self._fractional(pose, exact=True)
+        grid = self.metric_grid(metric, p)
+        corners, weights = _bilinear(ai, ci, self.azimuths.size, self.coelevations.size)
+        return float(sum(w * grid[a, c] for (a, c), w in zip(corners, weights, strict=True)))
+
+    def close(self) -> None:
+        """Close the file; further measurements raise :class:`DataFileError`."""
+        if not self._closed:
+            self._closed = True
+            self._ds.close()
+
+
+def _bilinear(
+    ai: float, ci: float, n_a: int, n_c: int
+) -> tuple[list[tuple[int, int]], list[float]]:
+    """Corners (a0,c0), (a1,c0), (a0,c1), (a1,c1) and their bilinear weights."""
+    a0 = min(int(np.floor(ai)), max(n_a - 2, 0))
+    c0 = min(int(np.floor(ci)), max(n_c - 2, 0))
+    a1, c1 = min(a0 + 1, n_a - 1), min(c0 + 1, n_c - 1)
+    u, v = float(np.clip(ai - a0, 0, 1)), float(np.clip(ci - c0, 0, 1))
+    corners = [(a0, c0), (a1, c0), (a0, c1), (a1, c1)]
+    weights = [(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v]
+    return corners, weights
+
+
+def _validate(ds: Any, file: Path) -> None:
+    """Check that ``ds`` is an echocal replay recording; DataFileError naming what is wrong."""
+    fmt = ds.attrs.get("echocal_format")
+    if fmt is None:
+        raise DataFileError(
+            f"{file} is not an echocal replay recording: attribute 'echocal_format' is missing"
+        )
+    if fmt != FORMAT:
+        raise DataFileError(
+            f"{file}: unsupported echocal_format {fmt!r}; this version reads {FORMAT!r}"
+        )
+    if "samples" not in ds.variables:
+        raise DataFileError(f"{file}: variable 'samples' is missing")
+    if tuple(ds["samples"].dims) != DIMS:
+        raise DataFileError(
+            f"{file}: variable 'samples' must have dims {DIMS}; got {tuple(ds['samples'].dims)}"
+        )
+    for name, unit in REQUIRED_COORDS.items():
+        if name not in ds.variables:
+            raise DataFileError(f"{file}: coordinate {name!r} is missing")
+        got = ds[name].attrs.get("units")
+        if got is None:
+            raise DataFileError(f"{file}: coordinate {name!r} has no 'units' attribute")
+        if got != unit:
+            raise DataFileError(f"{file}: coordinate {name!r} must be in {unit!r}; got {got!r}")
+    for name in REQUIRED_ATTRS:
+        if name not in ds.attrs:
+            raise DataFileError(f"{file}: attribute {name!r} is missing")
+    try:
+        fs = float(ds.attrs["fs"])
+        float(ds.attrs["start_time"])
+        json.loads(ds.attrs["source"])
+    except (TypeError, ValueError) as exc:
+        raise DataFileError(
+            f"{file}: malformed attribute (fs, start_time or source): {exc}"
+        ) from None
+    if not fs > 0:
+        raise DataFileError(f"{file}: attribute 'fs' must be > 0 [Hz]; got {fs}")
+    for axis in ("azimuth", "coelevation"):
+        values = np.asarray(ds[axis].values, dtype=np.float64)
+        if values.size == 0 or np.any(np.diff(values) <= 0) or not np.all(np.isfinite(values)):
+            raise DataFileError(
+                f"{file}: coordinate {axis!r} must be finite and strictly increasing"
+            )
