@@ -1,0 +1,185 @@
+"""Acquisition phase for poor first guesses: find the echo, then hand over to a local method.
+
+When the start lies at the noise floor, every local method wanders on noise.
+:class:`Acquisition` first measures x0 and a hexagonal lattice outward from
+it, ring by ring (ring k: radius k·``spacing``, 6k points), in batches of at
+most ``batch`` points, until a value is *clearly above noise*:
+
+    max(values) − median(values) > ``threshold`` · σ,
+
+with σ the objective's known noise level (``noise_sigma``, e.g. from the
+source's SNR) or else a robust estimate 1.4826 · MAD of the values measured
+so far (noise points are the majority while searching).  At least the first 7
+points (x0 and ring 1) are measured before deciding.  Then the local method
+starts at the best point; if it accepts a warm start (``history``, the
+model-based method does) it receives every acquisition measurement, so none is
+wasted.  If the search passes ``max_radius`` without finding the echo, the
+run stops with status 4 ("acquisition failed").
+
+Acquisition batches are not counted as iterations.
+"""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from echocal._rng import RngLike
+from echocal._validate import nonnegative_float, positive_float, positive_int
+from echocal.calibrate._fd import FloatArray
+from echocal.calibrate.base import Optimizer
+from echocal.calibrate.registry import get_method, register_method
+
+__all__ = ["Acquisition", "hex_spiral"]
+
+
+def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatArray]:
+    """Rings of a hexagonal lattice around ``center`` [deg]: ring 0 (1 point), ring k (6k).
+
+    Returns a list of arrays of shape (6k, 2) (ring 0: (1, 2)), ordered by angle.
+    """
+    rings = [center[None, :].copy()]
+    corners = np.array([[np.cos(a), np.sin(a)] for a in np.arange(7) * np.pi / 3.0])
+    for k in range(1, n_rings + 1):
+        pts = []
+        for side in range(6):
+            a, b = corners[side] * k, corners[side + 1] * k
+            for j in range(k):
+                pts.append(a + (b - a) * j / k)
+        rings.append(center[None, :] + spacing * np.array(pts))
+    return rings
+
+
+@register_method("acquisition")
+class Acquisition(Optimizer):
+    """Outward hexagonal search until the echo is clearly above noise, then a local method.
+
+    Parameters
+    ----------
+    local : name of the local method (default ``"model-based"``).
+    local_options : options for the local method.
+    spacing : [deg] lattice spacing (≈ the peak width: a peak of width w stays
+        detectable up to ~1.7 w from its centre at 30 dB with threshold 6).
+    max_radius : [deg] give up beyond this distance from x0.
+    threshold : detection threshold in units of σ.
+    noise_sigma : [energy units] known noise σ (None: estimated from the data).
+    batch : maximum points per acquisition ask (1 = stop at the first detection).
+    """
+
+    def __init__(
+        self,
+        x0: ArrayLike,
+        *,
+        local: str = "model-based",
+        local_options: dict[str, Any] | None = None,
+        spacing: float = 1.0,
+        max_radius: float = 20.0,
+        threshold: float = 6.0,
+        noise_sigma: float | None = None,
+        batch: int = 6,
+        bounds: ArrayLike | None = None,
+        rng: RngLike = None,
+        normalize: str = "none",
+    ) -> None:
+        super().__init__(x0, bounds=bounds, rng=rng, normalize="none")
+        self._local_cls = get_method(local)
+        if self._local_cls is Acquisition or issubclass(self._local_cls, Acquisition):
+            from echocal.errors import EchocalValueError
+
+            raise EchocalValueError(f"local must be a local method, not {local!r}")
+        self.local_name = local
+        self.local_options = dict(local_options or {})
+        self._local_normalize = normalize
+        self.spacing = positive_float("spacing", spacing)
+        self.max_radius = positive_float("max_radius", max_radius)
+        self.threshold = positive_float("threshold", threshold)
+        self.noise_sigma = (
+            None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
+        )
+        self.batch = positive_int("batch", batch)
+        n_rings = max(1, int(np.ceil(self.max_radius / self.spacing)))
+        pts = np.vstack(hex_spiral(self.x0, self.spacing, n_rings))
+        inside = np.all((pts >= self.bounds[:, 0]) & (pts <= self.bounds[:, 1]), axis=1)
+        self._queue = pts[inside]
+        self._next = 0
+        self._x = np.zeros((0, 2))
+        self._y = np.zeros(0)
+        self.local: Optimizer | None = None
+        """The local optimizer once the echo has been found."""
+        self.found_at: int | None = None
+        """Measurements spent by the acquisition phase (None while searching)."""
+
+    @property
+    def batch_size(self) -> int:  # type: ignore[override]
+        return self.local.batch_size if self.local is not None else 1
+
+    @property
+    def min_budget(self) -> int:
+        return min(7, len(self._queue)) if len(self._queue) else 1
+
+    def _detected(self) -> bool:
+        y = self._y
+        if len(y) < min(7, len(self._queue)) or len(y) == 0:
+            return False
+        med = float(np.median(y))
+        sigma = self.noise_sigma
+        if sigma is None:
+            sigma = 1.4826 * float(np.median(np.abs(y - med)))
+        return float(y.max()) - med > self.threshold * sigma
+
+    def _start_local(self) -> None:
+        best = self._x[int(np.argmax(self._y))]
+        opts = dict(self.local_options)
+        params = inspect.signature(self._local_cls.__init__).parameters
+        if "history" in params:
+            opts.setdefault("history", (self._x.copy(), self._y.copy()))
+            if "radius" in params:
+                opts.setdefault("radius", self.spacing)
+        self.local = self._local_cls(
+            best, bounds=self.bounds, rng=self.rng, normalize=self._local_normalize, **opts
+        )
+        self._iterate = best.copy()
+        self.found_at = self.n_told
+
+    def _ask(self) -> FloatArray:
+        if self.local is not None:
+            return self.local.ask()
+        n = self.batch
+        if self._next == 0:
+            n = max(n, min(7, len(self._queue)))
+        out = self._queue[self._next : self._next + n]
+        return out
+
+    def _tell(self, points: FloatArray, values: FloatArray) -> bool:
+        if self.local is not None:
+            done = self.local.tell(np.where(self.last_nan, np.nan, values))
+            self._iterate = self.local.iterate
+            if self.local.finished:
+                self.finished, self.finish_status = True, self.local.finish_status
+            return done
+        self._next += len(points)
+        ok = ~self.last_nan
+        self._x = np.vstack([self._x, points[ok]])
+        self._y = np.concatenate([self._y, values[ok]])
+        if self._detected():
+            self._start_local()
+        elif self._next >= len(self._queue):
+            self.finished, self.finish_status = True, 4
+            if len(self._y):
+                self._iterate = self._x[int(np.argmax(self._y))]
+        return False
+
+    def _recommend(self) -> FloatArray:
+        if self.local is not None:
+            return self.local.recommend()
+        return self._iterate
+
+    def recommend_value(self) -> float | None:
+        return self.local.recommend_value() if self.local is not None else None
+
+    @property
+    def iterate(self) -> FloatArray:
+        return self.local.iterate if self.local is not None else self._iterate.copy()

@@ -1,0 +1,258 @@
+"""The calibration driver: loop ask → measure → tell with every stopping rule, return a result."""
+
+from __future__ import annotations
+
+import inspect
+import time
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from echocal._rng import RngLike, as_generator
+from echocal._validate import nonnegative_float, positive_int
+from echocal.calibrate._fd import FloatArray
+from echocal.calibrate.acquisition import Acquisition
+from echocal.calibrate.base import Optimizer
+from echocal.calibrate.objective import Objective
+from echocal.calibrate.presets import method_options, presets
+from echocal.calibrate.registry import get_method
+from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, CalibrationResult
+from echocal.errors import BudgetExhaustedError, EchocalValueError
+
+__all__ = ["CalibrationState", "build_optimizer", "calibrate"]
+
+_RESERVED = {"self", "x0", "bounds", "rng"}
+
+
+@dataclass(frozen=True, slots=True)
+class CalibrationState:
+    """What a callback sees after each iteration.
+
+    iteration : completed iterations; n_measurements : measurements so far;
+    iterate, recommendation : [deg] (2,); points : [deg] (k, 2) and values (k,) of the last batch.
+    """
+
+    iteration: int
+    n_measurements: int
+    iterate: FloatArray
+    recommendation: FloatArray
+    points: FloatArray
+    values: FloatArray
+
+
+def _accepted(cls: type[Optimizer]) -> set[str]:
+    return set(inspect.signature(cls.__init__).parameters) - _RESERVED
+
+
+def _split(cls: type[Optimizer], options: Mapping[str, Any]) -> tuple[dict, list[str]]:
+    ok = _accepted(cls)
+    known = {k: v for k, v in options.items() if k in ok}
+    return known, sorted(set(options) - ok)
+
+
+def build_optimizer(
+    objective: Objective,
+    method: str,
+    x0: FloatArray,
+    *,
+    rng: np.random.Generator,
+    acquire: bool | Mapping[str, Any] = False,
+    options: Mapping[str, Any] | None = None,
+) -> tuple[Optimizer, dict[str, Any]]:
+    """Instantiate ``method`` (optionally behind an acquisition phase) for ``objective``.
+
+    Unknown options raise a warning naming them and are ignored.  Returns the
+    optimizer and the options actually used.
+    """
+    cls = get_method(method)
+    options = dict(options or {})
+    acq_opts = dict(acquire) if isinstance(acquire, Mapping) else {}
+    wrap = bool(acquire) and not issubclass(cls, Acquisition)
+    known, unknown = _split(cls, options)
+    if wrap:
+        aknown, aunknown = _split(Acquisition, acq_opts)
+        unknown += [f"acquire.{k}" for k in aunknown]
+    if unknown:
+        warnings.warn(
+            f"unknown option(s) for method {method!r} ignored: {', '.join(unknown)}; "
+            f"accepted: {', '.join(sorted(_accepted(cls)))}",
+            UserWarning,
+            stacklevel=3,
+        )
+    if wrap:
+        aknown.setdefault("noise_sigma", objective.noise_sigma)
+        if issubclass(cls, Acquisition):  # pragma: no cover - excluded above
+            raise AssertionError
+        used = {**known, "acquire": aknown}
+        opt = Acquisition(
+            x0, local=method, local_options=known, bounds=objective.bounds, rng=rng, **aknown
+        )
+        return opt, used
+    if issubclass(cls, Acquisition):
+        known.update({k: v for k, v in acq_opts.items() if k in _accepted(cls)})
+        known.setdefault("noise_sigma", objective.noise_sigma)
+    return cls(x0, bounds=objective.bounds, rng=rng, **known), known
+
+
+def calibrate(
+    objective: Objective,
+    method: str = "auto",
+    x0: ArrayLike = (0.0, 0.0),
+    *,
+    budget: int | None = None,
+    max_iter: int | None = None,
+    xtol: float | None = None,
+    rng: RngLike = None,
+    callback: Callable[[CalibrationState], bool | None] | None = None,
+    acquire: bool | Mapping[str, Any] = False,
+    preset: str | None = None,
+    final_check: int = 0,
+    **options: Any,
+) -> CalibrationResult:
+    """Find the orientation [deg] maximizing ``objective`` with ``method``.
+
+    Parameters
+    ----------
+    objective : the counted, bounded measurement (see :class:`Objective`).
+    method : a name from :func:`method_names` (default ``"auto"``).
+    x0 : [deg], shape (2,), inside the objective's bounds (else LimitError).
+    budget : maximum measurements for this run (also limited by the objective's own
+        budget); a budget below what the first iteration needs raises EchocalValueError
+        before measuring.  The run never exceeds it: it stops with status 2.
+    max_iter : iteration limit (default: the preset's, else 100).
+    xtol : [deg] stop when an iteration moves the estimate (or proposes a step) shorter
+        than this (after at least 2 iterations).
+    rng : seed or Generator (randomized methods; reproducible runs).
+    callback : called with a :class:`CalibrationState` after each iteration; True stops.
+    acquire : True (or a dict of :class:`Acquisition` options) puts an acquisition phase
+        in front of the method.
+    preset : take the method's options from a preset (``"thesis"``, ``"thesis-table-4"``,
+        ...); explicit ``options`` override them.
+    final_check : measure the estimate this many times at the end (counted) and report
+        their mean as ``fun``.
+    **options : method options; unknown names are warned about and ignored.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(objective, Objective):
+        raise EchocalValueError(
+            f"objective must be an echocal.calibrate.Objective; got {type(objective).__name__}"
+        )
+    x0 = objective.check_point("x0", x0)
+    gen = as_generator(rng)
+    opts: dict[str, Any] = {}
+    default_iter = 100
+    if preset is not None:
+        opts.update(method_options(method, preset))
+        default_iter = presets(preset).max_iter
+    opts.update(options)
+    max_iter = default_iter if max_iter is None else positive_int("max_iter", max_iter)
+    xtol = None if xtol is None else nonnegative_float("xtol", xtol)
+    final_check = int(final_check)
+    if final_check < 0:
+        raise EchocalValueError(f"final_check must be >= 0; got {final_check}")
+    opt, used = build_optimizer(objective, method, x0, rng=gen, acquire=acquire, options=opts)
+
+    limit = objective.remaining
+    if budget is not None:
+        budget = positive_int("budget", budget)
+        limit = budget if limit is None else min(limit, budget)
+    need = objective.cost(opt.min_budget)
+    if limit is not None and limit < need:
+        raise EchocalValueError(
+            f"budget={limit} is smaller than one iteration of method {method!r} needs "
+            f"({need} measurements); allowed: budget >= {need}"
+        )
+
+    start = objective.n_measurements
+    iterates = [x0.copy()]
+    counts = [0]
+    status = 1
+    prev = x0.copy()
+    while True:
+        if opt.n_iterations >= max_iter:
+            status = 1
+            break
+        if opt.finished:
+            status = opt.finish_status if opt.finish_status is not None else 5
+            break
+        pts = opt.ask()
+        used_so_far = objective.n_measurements - start
+        if limit is not None and used_so_far + objective.cost(len(pts)) > limit:
+            status = 2
+            break
+        try:
+            vals = objective(pts)
+        except BudgetExhaustedError:
+            status = 2
+            break
+        done = opt.tell(vals)
+        if not done:
+            continue
+        it = opt.iterate
+        iterates.append(it)
+        counts.append(objective.n_measurements - start)
+        moved = getattr(opt, "proposed_step", None)
+        moved = float(np.hypot(*(it - prev))) if moved is None else float(moved)
+        prev = it
+        if callback is not None:
+            state = CalibrationState(
+                iteration=opt.n_iterations,
+                n_measurements=objective.n_measurements - start,
+                iterate=it.copy(),
+                recommendation=opt.recommend(),
+                points=pts.copy(),
+                values=np.asarray(vals, dtype=np.float64).copy(),
+            )
+            if callback(state):
+                status = 3
+                break
+        if xtol is not None and opt.n_iterations >= 2 and moved < xtol:
+            status = 0
+            break
+
+    x = opt.recommend()
+    fun = opt.recommend_value()
+    log = objective.log
+    pts_all, vals_all, times = log.points[start:], log.values[start:], log.times[start:]
+    if final_check:
+        left = None if limit is None else limit - (objective.n_measurements - start)
+        if left is None or left >= objective.cost(final_check):
+            check = objective(np.repeat(x[None, :], final_check, axis=0))
+            good = check[np.isfinite(check)]
+            fun = float(good.mean()) if good.size else None
+            log = objective.log
+            pts_all, vals_all = log.points[start:], log.values[start:]
+            times = log.times[start:]
+    if fun is None:
+        at = np.all(np.isclose(pts_all, x, rtol=0.0, atol=1e-12), axis=1) & np.isfinite(vals_all)
+        fun = float(vals_all[at].mean()) if np.any(at) else None
+    if not np.any(np.isfinite(vals_all)) and len(vals_all):
+        status = 6
+    n_nan = int(np.count_nonzero(np.isnan(vals_all)))
+    message = STATUS_MESSAGES[status]
+    if n_nan:
+        message += f"; {n_nan} measurement(s) returned NaN (treated as the worst value seen)"
+    return CalibrationResult(
+        x=x,
+        fun=fun,
+        success=status in SUCCESS_STATUSES,
+        status=status,
+        message=message,
+        n_measurements=len(vals_all),
+        n_iterations=opt.n_iterations,
+        points=pts_all,
+        values=vals_all,
+        iterates=np.array(iterates).reshape(-1, 2),
+        iteration_measurements=np.array(counts, dtype=np.int64),
+        method=method,
+        options=used,
+        wall_time=time.perf_counter() - t0,
+        n_nan=n_nan,
+        parameterization=objective.parameterization,
+        names=objective.names,
+        times=times,
+    )

@@ -1,0 +1,348 @@
+"""Model-based trust-region ascent: a quadratic model of log-energy fitted to every measurement.
+
+Why log-energy: a beam's pseudo-energy is close to a Gaussian in the two
+angles near its peak, and the log of a Gaussian is *exactly* quadratic, so a
+quadratic model of log f is right over the whole peak, not only at its top.
+With additive noise of fixed σ, var(log y) ≈ σ²/y², so the weighted least
+squares fit uses weights ∝ y² (points at the noise floor weigh ~nothing and
+non-positive values are left out).  The weights are relative, so the method
+is independent of the energy unit; NaN measurements are left out of the fit.
+
+Algorithm (one measurement per iteration after a 7-point initial design):
+
+1. Design: x0 and a hexagon of radius ``radius`` around it (a rotatable
+   second-order design; skipped where a warm-start ``history`` already covers x0).
+2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to *all* points so far.
+3. Approach: if the model's maximum x* is not yet inside the trust region
+   around the incumbent (the measured point with the highest *model* value,
+   never the luckiest raw sample), measure the maximizer of m in the ball of
+   radius Δ.  Δ doubles after a successful step to the boundary and halves
+   when the measured value is below the incumbent's model value by more
+   than the estimated noise (2 σ̂ in log units) — noise-aware control.
+4. Refine: once x* is inside the trust region and supported by data, the
+   peak's location is best learned from points on its flanks, not its top
+   (the Fisher information of x* from a point at distance r is ∝ r² e^{−r²/w²},
+   largest at r ≈ w).  So new points go on an ellipse ``ring`` × (−H)^{−1/2}
+   around x*, at golden-angle steps in direction.
+5. ``recommend()`` returns x* (the model's maximum) when the model is
+   concave and supported, else the incumbent.
+
+``space="linear"`` fits f itself with equal weights instead (for objectives
+that can be negative).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from echocal._rng import RngLike
+from echocal._validate import one_of, positive_float
+from echocal.calibrate._fd import FloatArray
+from echocal.calibrate.base import Optimizer
+from echocal.calibrate.objective import as_points
+from echocal.calibrate.registry import register_method
+
+__all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
+
+_GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
+
+
+def hexagon(center: FloatArray, radius: float) -> FloatArray:
+    """``center`` and 6 points on a circle of ``radius`` [deg], shape (7, 2)."""
+    ang = np.arange(6) * np.pi / 3.0
+    ring = center[None, :] + radius * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    return np.vstack([center[None, :], ring])
+
+
+@dataclass(frozen=True, slots=True)
+class QuadraticModel:
+    """m(x) = c + bᵀ(x − center) + ½ (x − center)ᵀ H (x − center).
+
+    center : [deg] (2,); c : model value at centre; b : (2,); H : (2, 2).
+    space : ``"log"`` (m models log f) or ``"linear"``.
+    """
+
+    center: FloatArray
+    c: float
+    b: FloatArray
+    H: FloatArray
+    space: str
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        """Model values at points [deg], shape (k, 2) -> (k,)."""
+        d = np.atleast_2d(np.asarray(x, dtype=np.float64)) - self.center
+        return self.c + d @ self.b + 0.5 * np.einsum("ki,ij,kj->k", d, self.H, d)
+
+    @property
+    def concave(self) -> bool:
+        """True when H is negative definite."""
+        return bool(np.linalg.eigvalsh(self.H)[-1] < 0.0)
+
+    def argmax(self) -> FloatArray:
+        """Stationary point x* = centre − H⁻¹ b [deg] (the maximum when concave)."""
+        return self.center - np.linalg.solve(self.H, self.b)
+
+    def width(self) -> FloatArray:
+        """(−H)^{−1/2}, shape (2, 2) [deg]: the peak's 1-σ ellipse (log space, concave only)."""
+        eig, vec = np.linalg.eigh(-self.H)
+        return vec @ np.diag(1.0 / np.sqrt(eig)) @ vec.T
+
+    def energy(self, x: ArrayLike) -> FloatArray:
+        """Model of f itself at points (k, 2): exp(m) in log space."""
+        m = self(x)
+        return np.exp(np.minimum(m, 700.0)) if self.space == "log" else m
+
+
+def fit_quadratic(
+    points: FloatArray, values: FloatArray, center: FloatArray, *, space: str, scale: float
+) -> QuadraticModel | None:
+    """Weighted least-squares quadratic fit (see module docstring); None if underdetermined.
+
+    points : [deg] (n, 2); values : (n,) finite; scale : [deg] length for conditioning.
+    """
+    d = (points - center) / scale
+    if space == "log":
+        keep = values > 0.0
+        d, y = d[keep], values[keep]
+        if len(y) < 6:
+            return None
+        z = np.log(y)
+        w = (y / y.max()) ** 2
+    else:
+        if len(values) < 6:
+            return None
+        z, w = values, np.ones(len(values))
+    if np.count_nonzero(w > 1e-8) < 6:
+        return None
+    phi = np.stack(
+        [np.ones(len(z)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
+    )
+    sw = np.sqrt(w)
+    ridge = np.sqrt(1e-8 * w.sum()) * np.eye(6)[1:]
+    a = np.vstack([phi * sw[:, None], ridge])
+    rhs = np.concatenate([z * sw, np.zeros(5)])
+    coef, *_ = np.linalg.lstsq(a, rhs, rcond=None)
+    if not np.all(np.isfinite(coef)):
+        return None
+    b = coef[1:3] / scale
+    h = np.array([[2.0 * coef[3], coef[4]], [coef[4], 2.0 * coef[5]]]) / scale**2
+    return QuadraticModel(center=center.copy(), c=float(coef[0]), b=b, H=h, space=space)
+
+
+def trust_region_max(model: QuadraticModel, radius: float) -> FloatArray:
+    """Maximizer [deg] of ``model`` in the ball of ``radius`` around its centre (2-D, by
+    bisection on the Levenberg shift λ ≥ max(0, λ_max(H)))."""
+    h, b = model.H, model.b
+    eig = np.linalg.eigvalsh(h)
+    if eig[-1] < 0.0:
+        d = -np.linalg.solve(h, b)
+        if np.hypot(*d) <= radius:
+            return model.center + d
+    bnorm = float(np.hypot(*b))
+    if bnorm == 0.0:
+        vec = np.linalg.eigh(h)[1][:, -1]
+        return model.center + radius * vec
+    lo = max(eig[-1], 0.0)
+    hi = lo + bnorm / radius + float(np.abs(eig).max()) + 1e-12
+    for _ in range(100):
+        lam = 0.5 * (lo + hi)
+        d = -np.linalg.solve(h - lam * np.eye(2), b)
+        if np.hypot(*d) > radius:
+            lo = lam
+        else:
+            hi = lam
+    d = -np.linalg.solve(h - hi * np.eye(2), b)
+    return model.center + d
+
+
+@register_method("model-based")
+class ModelBased(Optimizer):
+    """Trust-region ascent on a log-quadratic model of all measurements (1 per iteration).
+
+    Parameters
+    ----------
+    radius : [deg] initial design radius and trust-region radius (≈ the expected peak width).
+    max_radius, min_radius : [deg] trust-region limits (default 4×radius, radius/100).
+    ring : flank distance of refinement points in units of the fitted peak width.
+    space : ``"log"`` (default) or ``"linear"``.
+    history : optional (points (n, 2) [deg], values (n,)) already measured (warm start),
+        e.g. by an acquisition phase; the initial design is skipped where these cover x0.
+    """
+
+    batch_size = 1
+
+    def __init__(
+        self,
+        x0: ArrayLike,
+        *,
+        radius: float = 1.0,
+        max_radius: float | None = None,
+        min_radius: float | None = None,
+        ring: float = 0.8,
+        space: str = "log",
+        history: tuple[ArrayLike, ArrayLike] | None = None,
+        bounds: ArrayLike | None = None,
+        rng: RngLike = None,
+        normalize: str = "none",
+    ) -> None:
+        super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
+        self.radius = positive_float("radius", radius)
+        self.max_radius = positive_float(
+            "max_radius", 4.0 * self.radius if max_radius is None else max_radius
+        )
+        self.min_radius = positive_float(
+            "min_radius", self.radius / 100.0 if min_radius is None else min_radius
+        )
+        self.ring = positive_float("ring", ring)
+        self.space = one_of("space", space, ("log", "linear"))
+        self._x = np.zeros((0, 2))
+        self._y = np.zeros(0)
+        if history is not None:
+            hp = as_points("history points", history[0])
+            hv = np.asarray(history[1], dtype=np.float64).reshape(-1)
+            if hv.shape != (len(hp),):
+                from echocal.errors import EchocalValueError
+
+                raise EchocalValueError(
+                    f"history values must have shape ({len(hp)},); got shape {hv.shape}"
+                )
+            ok = np.isfinite(hv)
+            self._x, self._y = hp[ok], hv[ok]
+        self._trust = self.radius
+        self._design = self._initial_design()
+        self._model: QuadraticModel | None = None
+        self._mode = "design"
+        self._n_ring = 0
+        self._sigma_log = 0.0
+        self._incumbent = self.x0.copy()
+        self._pred: tuple[float, float] | None = None  # (m(center), m(candidate))
+        self._step_len = 0.0
+
+    def _initial_design(self) -> FloatArray:
+        near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius if len(self._x) else []
+        if np.count_nonzero(near) >= 6:
+            return np.zeros((0, 2))
+        return self.clip(hexagon(self.x0, self.radius))
+
+    @property
+    def min_budget(self) -> int:
+        return max(len(self._design), 1)
+
+    @property
+    def model(self) -> QuadraticModel | None:
+        """The current fitted model (None before enough data)."""
+        return self._model
+
+    # -- internals --------------------------------------------------------------------
+    def _refit(self) -> None:
+        center = self._incumbent
+        model = fit_quadratic(self._x, self._y, center, space=self.space, scale=self.radius)
+        self._model = model
+        if model is None:
+            best = self._x[int(np.argmax(self._y))] if len(self._y) else self.x0
+            self._incumbent = best
+            return
+        pred = model(self._x)
+        if self.space == "log":
+            pos = self._y > 0
+            cand = np.flatnonzero(pos)
+            if cand.size:
+                self._incumbent = self._x[cand[int(np.argmax(pred[cand]))]]
+            e = model.energy(self._x)
+            top = e.max() if e.size else 0.0
+            near = e >= 0.3 * top
+            n = int(near.sum())
+            if n > 6 and top > 0:
+                sig = float(np.sqrt(np.sum((self._y[near] - e[near]) ** 2) / (n - 6)))
+                self._sigma_log = sig / max(
+                    float(model.energy(self._incumbent[None, :])[0]), 1e-300
+                )
+        else:
+            self._incumbent = self._x[int(np.argmax(pred))]
+            n = len(self._y)
+            if n > 6:
+                sig = float(np.sqrt(np.sum((self._y - pred) ** 2) / (n - 6)))
+                self._sigma_log = sig
+        # re-centre the model on the incumbent (same function, better numbers)
+        model = self._model
+        if model is not None:
+            d = self._incumbent - model.center
+            self._model = QuadraticModel(
+                center=self._incumbent.copy(),
+                c=float(model(self._incumbent[None, :])[0]),
+                b=model.b + model.H @ d,
+                H=model.H,
+                space=model.space,
+            )
+
+    def _supported_max(self) -> FloatArray | None:
+        m = self._model
+        if m is None or not m.concave:
+            return None
+        xs = m.argmax()
+        if not np.all(np.isfinite(xs)):
+            return None
+        dist = float(np.min(np.hypot(*(self._x - xs).T)))
+        return xs if dist <= self._trust else None
+
+    def _ask(self) -> FloatArray:
+        if len(self._design):
+            return self._design
+        m = self._model
+        xs = self._supported_max()
+        if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
+            self._mode = "refine"
+            self._n_ring += 1
+            ang = self._n_ring * _GOLDEN
+            u = np.array([np.cos(ang), np.sin(ang)])
+            off = self.ring * (m.width() @ u)
+            norm = float(np.hypot(*off))
+            if norm > self.max_radius:
+                off *= self.max_radius / norm
+            self._pred = None
+            return (xs + off)[None, :]
+        self._mode = "approach"
+        if m is not None:
+            cand = trust_region_max(m, self._trust)
+            self._pred = (m.c, float(m(cand[None, :])[0]))
+        else:
+            ang = self.rng.uniform(0.0, 2.0 * np.pi)
+            cand = self._incumbent + self._trust * np.array([np.cos(ang), np.sin(ang)])
+            self._pred = None
+        self._step_len = float(np.hypot(*(cand - self._incumbent)))
+        return cand[None, :]
+
+    def _tell(self, points: FloatArray, values: FloatArray) -> bool:
+        ok = ~self.last_nan
+        self._x = np.vstack([self._x, points[ok]])
+        self._y = np.concatenate([self._y, values[ok]])
+        self._design = np.zeros((0, 2))
+        if self._mode == "approach" and self._pred is not None and ok.all():
+            m_center, m_cand = self._pred
+            y = float(values[0])
+            actual = (np.log(y) if y > 0 else -np.inf) if self.space == "log" else y
+            predicted = m_cand - m_center
+            noise = 2.0 * self._sigma_log
+            if actual - m_center >= 0.25 * predicted - noise:
+                if self._step_len >= 0.9 * self._trust:
+                    self._trust = min(2.0 * self._trust, self.max_radius)
+            elif actual - m_center < -noise:
+                self._trust = max(0.5 * self._trust, self.min_radius)
+        self._refit()
+        return True
+
+    def _recommend(self) -> FloatArray:
+        xs = self._supported_max()
+        return xs if xs is not None else self._incumbent
+
+    def recommend_value(self) -> float | None:
+        if self._model is None:
+            return None
+        return float(self._model.energy(self.recommend()[None, :])[0]) * self._scale
+
+    @property
+    def iterate(self) -> FloatArray:
+        return self.recommend()

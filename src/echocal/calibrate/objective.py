@@ -1,0 +1,270 @@
+"""The calibration objective: measure values at orientation points, count and log everything.
+
+An :class:`Objective` wraps a vectorized "measure the pseudo-energy at these
+angles" function.  It is the single place where measurements are counted,
+logged, limited by a budget and kept inside the positioner's angle bounds, so
+optimizers never have to trust each other's bookkeeping.
+
+Subclasses override one method, :meth:`Objective._evaluate`.  Angles are
+degrees; the two axes are either (azimuth, co-elevation) or (tilt-x, tilt-y)
+— the optimizers do not care which.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal._rng import RngLike, as_generator
+from echocal._validate import finite_array, nonnegative_float, one_of, positive_int
+from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
+
+__all__ = [
+    "PARAMETERIZATIONS",
+    "FunctionObjective",
+    "MeasurementLog",
+    "Objective",
+    "as_bounds",
+    "as_points",
+]
+
+FloatArray = NDArray[np.float64]
+
+PARAMETERIZATIONS: dict[str, tuple[str, str]] = {
+    "azimuth-coelevation": ("azimuth", "coelevation"),
+    "tilt": ("tilt_x", "tilt_y"),
+}
+"""The two angle parameterizations and the names of their axes [deg]."""
+
+_UNBOUNDED = np.array([[-np.inf, np.inf], [-np.inf, np.inf]])
+
+
+def as_points(name: str, points: ArrayLike) -> FloatArray:
+    """Return ``points`` as a finite float array of shape ``(k, 2)`` [deg].
+
+    A single point of shape ``(2,)`` becomes ``(1, 2)``.
+    """
+    arr = finite_array(name, points)
+    if arr.ndim == 1 and arr.shape == (2,):
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise EchocalValueError(f"{name} must have shape (k, 2) [deg]; got shape {arr.shape}")
+    return arr
+
+
+def as_bounds(bounds: ArrayLike | None) -> FloatArray:
+    """Return angle bounds as shape ``(2, 2)`` ``[[lo0, hi0], [lo1, hi1]]`` [deg].
+
+    ``None`` means unbounded.  Infinite entries are allowed; NaN and lo > hi are not.
+    """
+    if bounds is None:
+        return _UNBOUNDED.copy()
+    try:
+        arr = np.asarray(bounds, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise EchocalValueError(f"bounds must be numeric; got {bounds!r}") from None
+    if arr.shape != (2, 2):
+        raise EchocalValueError(
+            f"bounds must have shape (2, 2) [[lo0, hi0], [lo1, hi1]] [deg]; got shape {arr.shape}"
+        )
+    if np.any(np.isnan(arr)) or np.any(arr[:, 0] > arr[:, 1]):
+        raise EchocalValueError(f"bounds must be intervals with lo <= hi and no NaN; got {arr}")
+    return arr
+
+
+@dataclass(frozen=True, slots=True)
+class MeasurementLog:
+    """Every measurement of an objective, in order.
+
+    Attributes
+    ----------
+    points : [deg], shape (n_measurements, 2) — the angles actually measured (after clipping).
+    values : [energy units], shape (n_measurements,) — raw values, NaN kept.
+    times : [s], shape (n_measurements,) — wall-clock time (``time.time()``) of each value.
+    """
+
+    points: FloatArray
+    values: FloatArray
+    times: FloatArray
+
+
+class Objective:
+    """Base class: a counted, logged, budgeted and bounded measurement of f(θ).
+
+    Parameters
+    ----------
+    bounds : [deg], shape (2, 2) ``[[lo0, hi0], [lo1, hi1]]``, or None (unbounded).
+    budget : maximum number of measurements (every repeat counts), or None.
+    out_of_bounds : ``"clip"`` (measure the nearest reachable point; the log holds
+        the clipped point) or ``"error"`` (raise :class:`~echocal.errors.LimitError`).
+    repeats : measure each point this many times and return the mean of the
+        finite repeats (NaN only if all repeats are NaN); each repeat is counted and logged.
+    parameterization : ``"azimuth-coelevation"`` or ``"tilt"``.
+    description : one line for logs and reports.
+    noise_sigma : [energy units] the standard deviation of the additive
+        measurement noise when known (used by the acquisition phase), else None.
+    """
+
+    def __init__(
+        self,
+        *,
+        bounds: ArrayLike | None = None,
+        budget: int | None = None,
+        out_of_bounds: str = "clip",
+        repeats: int = 1,
+        parameterization: str = "azimuth-coelevation",
+        description: str = "objective",
+        noise_sigma: float | None = None,
+    ) -> None:
+        self.bounds = as_bounds(bounds)
+        self.budget = None if budget is None else positive_int("budget", budget)
+        self.out_of_bounds = one_of("out_of_bounds", out_of_bounds, ("clip", "error"))
+        self.repeats = positive_int("repeats", repeats)
+        self.parameterization = one_of("parameterization", parameterization, PARAMETERIZATIONS)
+        self.names: tuple[str, str] = PARAMETERIZATIONS[self.parameterization]
+        self.description = str(description)
+        self.noise_sigma = (
+            None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
+        )
+        self._points: list[FloatArray] = []
+        self._values: list[FloatArray] = []
+        self._times: list[FloatArray] = []
+        self.n_measurements = 0
+        self.n_nan = 0
+
+    # -- to override -------------------------------------------------------------------
+    def _evaluate(self, points: FloatArray) -> ArrayLike:
+        """Measure f at ``points`` [deg], shape (k, 2); return values, shape (k,)."""
+        raise NotImplementedError
+
+    # -- public ------------------------------------------------------------------------
+    @property
+    def remaining(self) -> int | None:
+        """Measurements left in the budget (None when unlimited)."""
+        return None if self.budget is None else self.budget - self.n_measurements
+
+    @property
+    def log(self) -> MeasurementLog:
+        """All measurements so far as arrays (copies)."""
+        if not self._points:
+            return MeasurementLog(np.zeros((0, 2)), np.zeros(0), np.zeros(0))
+        return MeasurementLog(
+            np.concatenate(self._points), np.concatenate(self._values), np.concatenate(self._times)
+        )
+
+    def cost(self, n_points: int) -> int:
+        """Measurements needed to evaluate ``n_points`` points (``n_points * repeats``)."""
+        return int(n_points) * self.repeats
+
+    def check_point(self, name: str, point: ArrayLike) -> FloatArray:
+        """Return ``point`` (shape (2,)) if inside the bounds, else raise LimitError naming it."""
+        p = as_points(name, point)[0]
+        self._check_bounds(name, p[None, :])
+        return p
+
+    def _check_bounds(self, name: str, pts: FloatArray) -> None:
+        lo, hi = self.bounds[:, 0], self.bounds[:, 1]
+        bad = np.any((pts < lo) | (pts > hi), axis=1)
+        if np.any(bad):
+            p = pts[int(np.argmax(bad))]
+            raise LimitError(
+                f"{name} ({self.names[0]}={p[0]:g}, {self.names[1]}={p[1]:g}) deg is outside "
+                f"the bounds {self.names[0]} in [{lo[0]:g}, {hi[0]:g}], "
+                f"{self.names[1]} in [{lo[1]:g}, {hi[1]:g}]"
+            )
+
+    def __call__(self, points: ArrayLike) -> FloatArray:
+        """Measure f at ``points`` [deg], shape (k, 2) (or (2,)); return values, shape (k,).
+
+        Raises
+        ------
+        BudgetExhaustedError : if the batch does not fit in the remaining budget
+            (nothing of the batch is measured then).
+        LimitError : if a point is outside the bounds and ``out_of_bounds="error"``.
+        """
+        pts = as_points("points", points)
+        if self.out_of_bounds == "error":
+            self._check_bounds("point", pts)
+        else:
+            pts = np.clip(pts, self.bounds[:, 0], self.bounds[:, 1])
+        need = self.cost(len(pts))
+        if self.budget is not None and need > self.budget - self.n_measurements:
+            raise BudgetExhaustedError(
+                f"measurement budget exhausted: {len(pts)} point(s) x {self.repeats} repeat(s) "
+                f"need {need} measurements but only {self.budget - self.n_measurements} of "
+                f"budget={self.budget} remain"
+            )
+        reps = []
+        for _ in range(self.repeats):
+            vals = np.asarray(self._evaluate(pts.copy()), dtype=np.float64).reshape(-1)
+            if vals.shape != (len(pts),):
+                raise EchocalValueError(
+                    f"_evaluate must return shape ({len(pts)},); got shape {vals.shape}"
+                )
+            now = time.time()
+            self._points.append(pts.copy())
+            self._values.append(vals.copy())
+            self._times.append(np.full(len(pts), now))
+            self.n_measurements += len(pts)
+            self.n_nan += int(np.count_nonzero(np.isnan(vals)))
+            reps.append(vals)
+        stack = np.stack(reps)
+        finite = np.isfinite(stack)
+        counts = finite.sum(axis=0)
+        sums = np.where(finite, stack, 0.0).sum(axis=0)
+        out = np.full(len(pts), np.nan)
+        np.divide(sums, counts, out=out, where=counts > 0)
+        return out
+
+
+class FunctionObjective(Objective):
+    """An analytic objective f(θ) plus seeded Gaussian noise (for tests and studies).
+
+    Parameters
+    ----------
+    func : vectorized callable, points [deg] shape (k, 2) -> values shape (k,).
+    noise_sigma : [energy units] standard deviation of the additive noise (fixed,
+        so relative noise grows off-peak, as on a real instrument).
+    rng : seed or Generator for the noise.
+    optimum : [deg], shape (2,), the known maximizer if any (for error reports).
+    Other keywords as :class:`Objective`.
+    """
+
+    def __init__(
+        self,
+        func: Callable[[FloatArray], ArrayLike],
+        *,
+        bounds: ArrayLike | None = None,
+        budget: int | None = None,
+        noise_sigma: float = 0.0,
+        rng: RngLike = None,
+        out_of_bounds: str = "clip",
+        repeats: int = 1,
+        parameterization: str = "azimuth-coelevation",
+        description: str = "analytic function",
+        optimum: ArrayLike | None = None,
+    ) -> None:
+        if not callable(func):
+            raise EchocalValueError(f"func must be callable; got {type(func).__name__}")
+        super().__init__(
+            bounds=bounds,
+            budget=budget,
+            out_of_bounds=out_of_bounds,
+            repeats=repeats,
+            parameterization=parameterization,
+            description=description,
+            noise_sigma=noise_sigma,
+        )
+        self.func = func
+        self.rng = as_generator(rng)
+        self.optimum = None if optimum is None else as_points("optimum", optimum)[0]
+
+    def _evaluate(self, points: FloatArray) -> FloatArray:
+        vals = np.asarray(self.func(points), dtype=np.float64).reshape(-1)
+        if self.noise_sigma:
+            vals = vals + self.noise_sigma * self.rng.standard_normal(vals.shape)
+        return vals

@@ -1,0 +1,162 @@
+"""The result of a calibration run: plain data with the full history (scipy OptimizeResult-like)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from echocal.errors import DataFileError
+from echocal.io import atomic_write_text
+
+__all__ = ["STATUS_MESSAGES", "SUCCESS_STATUSES", "CalibrationResult"]
+
+FloatArray = NDArray[np.float64]
+
+STATUS_MESSAGES: dict[int, str] = {
+    0: "converged: the iterate moved less than xtol",
+    1: "iteration limit reached",
+    2: "measurement budget exhausted",
+    3: "stopped by the callback",
+    4: "acquisition failed: no echo clearly above the noise floor within the search radius",
+    5: "search complete",
+    6: "no finite measurement: every value was NaN",
+}
+"""The one status table: status code -> message."""
+
+SUCCESS_STATUSES = frozenset({0, 1, 2, 3, 5})
+"""Statuses after which ``x`` is a usable estimate (check ``status`` for why the run stopped)."""
+
+_ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Outcome of :func:`echocal.calibrate.calibrate`.
+
+    Attributes
+    ----------
+    x : [deg], shape (2,) — the estimate (the method's recommendation).
+    fun : [energy units] — model value at ``x`` if the method has a model, else the
+        mean of the values measured exactly at ``x``, else None.
+    success, status, message : why the run stopped (:data:`STATUS_MESSAGES`).
+    n_measurements : every measurement of this run (setup, repeats, acquisition, checks).
+    n_iterations : completed iterations.
+    points : [deg], shape (n_measurements, 2) — all measured points in order.
+    values : [energy units], shape (n_measurements,) — raw values, NaN kept.
+    iterates : [deg], shape (n_iterations + 1, 2) — x0 then the iterate after each iteration.
+    iteration_measurements : shape (n_iterations + 1,) — cumulative measurements at each iterate.
+    method, options : the method name and the options it ran with.
+    wall_time : [s] duration of the run.
+    n_nan : measurements that returned NaN (replaced by the worst value seen, at most 0).
+    parameterization, names : the angle convention of the objective.
+    times : [s], shape (n_measurements,) — wall-clock time of each measurement.
+    """
+
+    x: FloatArray
+    fun: float | None
+    success: bool
+    status: int
+    message: str
+    n_measurements: int
+    n_iterations: int
+    points: FloatArray
+    values: FloatArray
+    iterates: FloatArray
+    iteration_measurements: NDArray[np.int64]
+    method: str
+    options: dict[str, Any] = field(default_factory=dict)
+    wall_time: float = 0.0
+    n_nan: int = 0
+    parameterization: str = "azimuth-coelevation"
+    names: tuple[str, str] = ("azimuth", "coelevation")
+    times: FloatArray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def nfev(self) -> int:
+        """Alias of ``n_measurements`` (scipy's name)."""
+        return self.n_measurements
+
+    @property
+    def nit(self) -> int:
+        """Alias of ``n_iterations`` (scipy's name)."""
+        return self.n_iterations
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-ready dict (arrays as lists, NaN as None)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name in _ARRAYS:
+                arr = np.asarray(v)
+                v = (
+                    np.where(np.isnan(arr), None, arr).tolist()
+                    if arr.dtype.kind == "f"
+                    else (arr.tolist())
+                )
+            elif f.name == "names":
+                v = list(v)
+            elif f.name == "fun" and v is not None and not math.isfinite(v):
+                v = None
+            elif f.name == "options":
+                v = _jsonable(v)
+            out[f.name] = v
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CalibrationResult:
+        """Inverse of :meth:`to_dict`."""
+        kw = dict(data)
+        for name in _ARRAYS:
+            if name in kw:
+                raw = kw[name]
+                if name == "iteration_measurements":
+                    kw[name] = np.asarray(raw, dtype=np.int64)
+                else:
+                    arr = np.asarray(_none_to_nan(raw), dtype=np.float64)
+                    if name in ("points", "iterates"):
+                        arr = arr.reshape(-1, 2)
+                    kw[name] = arr
+        if "names" in kw:
+            kw["names"] = tuple(kw["names"])
+        return cls(**kw)
+
+    def save_json(self, path: str | os.PathLike[str]) -> None:
+        """Write the result as JSON, atomically."""
+        atomic_write_text(path, json.dumps(self.to_dict(), indent=1))
+
+    @classmethod
+    def load_json(cls, path: str | os.PathLike[str]) -> CalibrationResult:
+        """Read a result written by :meth:`save_json`."""
+        try:
+            with open(path, encoding="utf-8") as fh:
+                return cls.from_dict(json.load(fh))
+        except (OSError, json.JSONDecodeError, TypeError) as exc:
+            raise DataFileError(f"cannot read calibration result {str(path)!r}: {exc}") from exc
+
+
+def _none_to_nan(raw: Any) -> Any:
+    if isinstance(raw, list):
+        return [_none_to_nan(r) for r in raw]
+    return np.nan if raw is None else raw
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if v is None or isinstance(v, bool | int | float | str):
+        return v
+    return repr(v)
