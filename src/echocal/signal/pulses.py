@@ -286,9 +286,10 @@ class GaborPulse(Pulse):
     @property
     def highest_frequency(self) -> float:
         """[Hz] f_c + √(α ln 1000)/π: the −60 dB point of the positive-frequency lobe."""
-        return self.center_frequency + math.sqrt(
-            self.alpha * math.log(1.0 / HIGHEST_FREQUENCY_LEVEL)
-        ) / math.pi
+        return (
+            self.center_frequency
+            + math.sqrt(self.alpha * math.log(1.0 / HIGHEST_FREQUENCY_LEVEL)) / math.pi
+        )
 
     @property
     def _scan_limit(self) -> float:
@@ -326,10 +327,11 @@ windows of the same name (symmetric, ``fftbins=False``)."""
 
 @dataclass(frozen=True, kw_only=True)
 class SincPulse(Pulse):
-    """Windowed sinc pulse (thesis eqs. 29–31): w(t) = 2B·sinc(2Bt)·win(t/T)·cos(2πf_c t + φ).
+    """Windowed sinc pulse (thesis eqs. 29–31): w(t) = sinc(2Bt)·win(t/T)·cos(2πf_c t + φ).
 
-    The baseband sinc is the impulse response of the ideal low-pass P(f) = rect(f/2B)
-    (eq. 29); modulated, its passband is f_c ± B.  It is truncated to |t| ≤ T by the
+    The baseband sinc is the impulse response of the ideal low-pass P(f) = A'·rect(f/2B)
+    (eq. 29) with A' = 1/(2B), so that the pulse peaks at 1 like the others (sinc(x) =
+    sin(πx)/(πx)); modulated, its passband is f_c ± B with |W| ≈ 1/(4B) there.  It is truncated to |t| ≤ T by the
     named window.
 
     Attributes
@@ -383,7 +385,7 @@ class SincPulse(Pulse):
         zc = np.where(inside, z, 0.0)
         win = _WINDOWS[self.window](zc, self.kaiser_beta)
         carrier = np.cos(2 * np.pi * self.center_frequency * t + math.radians(self.phase))
-        return np.where(inside, 2 * b * np.sinc(2 * b * t) * win * carrier, 0.0)
+        return np.where(inside, np.sinc(2 * b * t) * win * carrier, 0.0)
 
     @property
     def support(self) -> float:

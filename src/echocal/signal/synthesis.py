@@ -170,14 +170,14 @@ def _plan(pulse: Pulse, fs: float, n_samples: int) -> _Plan:
     ratio = fs / (2.0 * pulse.highest_frequency)
     sigma = 1 if ratio >= 2.0 else 2
     width, beta = _kernel_parameters(sigma * ratio)
-    pad = math.ceil(pulse.support * fs) + 1
+    pad = math.ceil(pulse.support * fs) + width + 1
     n_fft = scipy.fft.next_fast_len(n_samples + 2 * pad, real=True)
     if sigma * n_fft % 2:  # keep the spreading grid even so its rfft holds bin N/2
         n_fft = scipy.fft.next_fast_len(n_fft + 1, real=True)
     k = np.arange(n_fft // 2 + 1)
     f = k * fs / n_fft
     phihat = _kernel_transform(k / (sigma * n_fft), width, beta)
-    transfer = fs * pulse.spectrum(f) / phihat
+    transfer = fs * math.exp(-beta) * pulse.spectrum(f) / phihat
     transfer.setflags(write=False)
     return _Plan(n_fft, sigma, width, beta, pad, transfer)
 
@@ -193,17 +193,23 @@ def _fast(
     with np.errstate(invalid="ignore"):
         keep = (taus > window.start - s) & (taus < window.end + s) & (amps != 0.0)
     a = np.where(keep, amps, 0.0)
+    # grid position of each impulse; the padding keeps every kernel point inside the grid
     u = np.where(keep, taus - t0, plan.pad / window.fs) * (plan.sigma * window.fs)
     half = 0.5 * plan.width
     j0 = np.ceil(u - half)
-    j = j0[..., None] + np.arange(plan.width)
-    z = (j - u[..., None]) * (1.0 / half)
-    phi = np.exp(plan.beta * (np.sqrt(np.maximum(1.0 - z * z, 0.0)) - 1.0))
-    phi *= a[..., None]
-    idx = j.astype(np.int64) % n_grid
+    z = ((j0 - u) * (1.0 / half))[..., None] + np.arange(plan.width) * (1.0 / half)
+    z *= z
+    np.subtract(1.0, z, out=z)
+    np.maximum(z, 0.0, out=z)
+    np.sqrt(z, out=z)
+    z *= plan.beta
+    np.exp(z, out=z)  # φ·e^β; e^−β is folded into the transfer function
+    z *= a[..., None]
+    first = j0.astype(np.int64)
     if n_batch > 1:
-        idx += (np.arange(n_batch) * n_grid)[:, None, None]
-    grid = np.bincount(idx.ravel(), phi.ravel(), minlength=n_batch * n_grid)
+        first += (np.arange(n_batch) * n_grid)[:, None]
+    idx = first[..., None] + np.arange(plan.width)
+    grid = np.bincount(idx.ravel(), z.ravel(), minlength=n_batch * n_grid)
     spec = scipy.fft.rfft(grid.reshape(n_batch, n_grid), axis=-1)[:, : plan.n_fft // 2 + 1]
     spec *= plan.transfer
     x = scipy.fft.irfft(spec, n=plan.n_fft, axis=-1)
