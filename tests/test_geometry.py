@@ -134,3 +134,26 @@ def test_pose_refuses_non_finite(field, bad):
 def test_zero_normal_is_a_geometry_error():
     with pytest.raises(GeometryError, match="non-zero"):
         normal_to_orientation([0.0, 0.0, 0.0])
+
+
+def test_gimbal_pose_frame_does_not_roll_near_pole():
+    # Two nearby tilts on either side of the pole have azimuths 180° apart, but the
+    # gimbal frame stays continuous: its x' axis hardly moves.
+    a = Pose.from_tilt(0, 0, 0.02, 0.0, 1e-3)
+    b = Pose.from_tilt(0, 0, 0.02, 0.0, -1e-3)
+    assert abs(a.azimuth - b.azimuth) == pytest.approx(180.0)
+    assert angle_between(a.frame[:, 0], b.frame[:, 0]) < 1e-2
+    assert_allclose(a.frame[:, 2], a.normal, atol=TOL)
+    _, frames = poses_to_arrays([a, Pose(0, 0, 0.02, 10.0, 3.0)])
+    assert_allclose(frames[0], a.frame, atol=TOL)
+    assert_allclose(frames[1], orientation_frame(10.0, 3.0), atol=TOL)
+
+
+@given(tilts, tilts)
+def test_pose_from_angles_round_trips_both_parameterizations(a, b):
+    from echocal.geometry import angles_of, convert_angles, pose_from_angles
+
+    pose = pose_from_angles([0, 0, 0.02], a, b, "tilt")
+    assert_allclose(angles_of(pose, "tilt"), [a, b], atol=1e-9)
+    az, coel = convert_angles(a, b, "tilt", "azimuth-coelevation")
+    assert_allclose([az, coel], [pose.azimuth, pose.coelevation], atol=1e-12)

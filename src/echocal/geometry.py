@@ -29,23 +29,28 @@ vectors of shape ``(..., 3)`` and frames of shape ``(..., 3, 3)``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from echocal._validate import finite_array, finite_float
+from echocal._validate import finite_array, finite_float, one_of
 from echocal.errors import GeometryError
 
 __all__ = [
+    "PARAMETERIZATIONS",
     "Pose",
     "angle_between",
+    "angles_of",
     "beam_direction",
+    "convert_angles",
     "normal_to_orientation",
     "normal_to_tilt",
     "orientation_frame",
     "orientation_normal",
     "orientation_to_tilt",
+    "pose_from_angles",
     "poses_to_arrays",
     "tilt_frame",
     "tilt_normal",
@@ -199,18 +204,25 @@ class Pose:
     z: float
     azimuth: float = 0.0
     coelevation: float = 0.0
+    gimbal: bool = False
 
     def __post_init__(self) -> None:
         for field in ("x", "y", "z", "azimuth", "coelevation"):
             object.__setattr__(self, field, finite_float(f"pose.{field}", getattr(self, field)))
+        object.__setattr__(self, "gimbal", bool(self.gimbal))
 
     @classmethod
     def from_tilt(cls, x: float, y: float, z: float, tilt_x: float, tilt_y: float) -> Pose:
-        """Pose from gimbal tilts [deg] about the world x then y axes."""
+        """Pose from gimbal tilts [deg] about the world x then y axes.
+
+        The pose is marked ``gimbal=True``: its frame is the gimbal's rotation
+        (:func:`tilt_frame`), so the probe does not roll about its axis as the
+        tilts pass near the pole — as on a real gimbal positioner.
+        """
         tx = finite_float("pose.tilt_x", tilt_x)
         ty = finite_float("pose.tilt_y", tilt_y)
         azimuth, coelevation = tilt_to_orientation(tx, ty)
-        return cls(x, y, z, float(azimuth), float(coelevation))
+        return cls(x, y, z, float(azimuth), float(coelevation), gimbal=True)
 
     @property
     def position(self) -> FloatArray:
@@ -229,7 +241,13 @@ class Pose:
 
     @property
     def frame(self) -> FloatArray:
-        """Transducer frame ``[x', y', n]`` as columns, shape ``(3, 3)``."""
+        """Transducer frame ``[x', y', n]`` as columns, shape ``(3, 3)``.
+
+        Thesis eqs. (9)–(10) for an azimuth/co-elevation positioner; the gimbal
+        rotation for poses made with :meth:`from_tilt`.  Column 2 is n either way.
+        """
+        if self.gimbal:
+            return tilt_frame(*self.tilt)
         return orientation_frame(self.azimuth, self.coelevation)
 
     @property
@@ -247,7 +265,7 @@ class Pose:
         return Pose.from_tilt(self.x, self.y, self.z, tilt_x, tilt_y)
 
     def as_array(self) -> FloatArray:
-        """``[x, y, z, azimuth, coelevation]`` ([m] and [deg]), shape ``(5,)``."""
+        """``[x, y, z, azimuth, coelevation]`` ([m], [deg]), shape ``(5,)``; no gimbal flag."""
         return np.array([self.x, self.y, self.z, self.azimuth, self.coelevation])
 
     @classmethod
@@ -257,7 +275,51 @@ class Pose:
         return cls(*(float(c) for c in v))
 
 
-def poses_to_arrays(poses: list[Pose] | tuple[Pose, ...]) -> tuple[FloatArray, FloatArray]:
+def poses_to_arrays(poses: Sequence[Pose]) -> tuple[FloatArray, FloatArray]:
     """Stack poses into positions ``(P, 3)`` [m] and frames ``(P, 3, 3)``."""
     values = np.array([p.as_array() for p in poses]).reshape(-1, 5)
-    return values[:, :3], orientation_frame(values[:, 3], values[:, 4])
+    frames = orientation_frame(values[:, 3], values[:, 4])
+    gimbal = np.array([p.gimbal for p in poses], dtype=bool)
+    if gimbal.any():
+        tx, ty = orientation_to_tilt(values[gimbal, 3], values[gimbal, 4])
+        frames[gimbal] = tilt_frame(tx, ty)
+    return values[:, :3], frames
+
+
+PARAMETERIZATIONS = ("azimuth-coelevation", "tilt")
+"""Names of the two orientation parameterizations: (azimuth, co-elevation) and gimbal tilts."""
+
+
+def pose_from_angles(position: ArrayLike, a: float, b: float, parameterization: str) -> Pose:
+    """Pose at ``position`` [m] whose orientation is ``(a, b)`` [deg] in ``parameterization``.
+
+    ``"azimuth-coelevation"``: (a, b) = (φ, θ); ``"tilt"``: (a, b) = (tilt_x, tilt_y).
+    """
+    x, y, z = (float(v) for v in finite_array("position", position, shape_tail=(3,)))
+    if parameterization == "tilt":
+        return Pose.from_tilt(x, y, z, a, b)
+    one_of("parameterization", parameterization, PARAMETERIZATIONS)
+    return Pose(x, y, z, a, b)
+
+
+def angles_of(pose: Pose, parameterization: str) -> tuple[float, float]:
+    """The orientation of ``pose`` as ``(a, b)`` [deg] in ``parameterization``."""
+    one_of("parameterization", parameterization, PARAMETERIZATIONS)
+    if parameterization == "tilt":
+        return pose.tilt
+    return pose.azimuth, pose.coelevation
+
+
+def convert_angles(
+    a: ArrayLike, b: ArrayLike, source: str, target: str
+) -> tuple[FloatArray, FloatArray]:
+    """Convert orientation angles [deg] between parameterizations (vectorized)."""
+    one_of("parameterization", source, PARAMETERIZATIONS)
+    one_of("parameterization", target, PARAMETERIZATIONS)
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if source == target:
+        return a, b
+    if source == "tilt":
+        return tilt_to_orientation(a, b)
+    return orientation_to_tilt(a, b)
