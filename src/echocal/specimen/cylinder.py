@@ -13,7 +13,9 @@ from echocal.specimen.base import (
     Shape,
     _angle,
     _check_name,
+    _dot,
     _point,
+    _signed_normals,
     _size,
 )
 
@@ -83,57 +85,55 @@ class Cylinder(Shape):
         ext = half + disc
         return np.stack([self.center - ext, self.center + ext])
 
-    def _intersect(
-        self, origins: FloatArray, directions: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
+    def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         a, r, half = self.axis, self.radius, 0.5 * self.length
         eps = self._eps
-        f = origins - self.center
-        fa = f @ a
-        da = directions @ a
-        f_perp = f - fa[:, None] * a
-        d_perp = directions - da[:, None] * a
-        aa = np.einsum("ij,ij->i", d_perp, d_perp)
-        bb = np.einsum("ij,ij->i", f_perp, d_perp)
-        cc = np.einsum("ij,ij->i", f_perp, f_perp) - r * r
-        cross_a = np.cross(f, directions) @ a
+        f = o - self.center[:, None]
+        fa = a[0] * f[0] + a[1] * f[1] + a[2] * f[2]
+        da = a[0] * d[0] + a[1] * d[1] + a[2] * d[2]
+        f_perp = f - a[:, None] * fa
+        d_perp = d - a[:, None] * da
+        aa = _dot(d_perp, d_perp)
+        bb = _dot(f_perp, d_perp)
+        cc = _dot(f_perp, f_perp) - r * r
+        # (f x d) . a, the signed area spanned in the plane normal to the axis
+        cross_a = (
+            a[0] * (f[1] * d[2] - f[2] * d[1])
+            + a[1] * (f[2] * d[0] - f[0] * d[2])
+            + a[2] * (f[0] * d[1] - f[1] * d[0])
+        )
         disc = aa * r * r - cross_a * cross_a
         ok = (aa > GRAZING_COS**2) & (disc >= 0.0)
         root = np.sqrt(np.where(ok, disc, 0.0))
         q = -(bb + np.where(bb >= 0.0, root, -root))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t1 = np.where(ok, q / np.where(ok, aa, 1.0), np.inf)
-            t2 = np.where(ok & (q != 0.0), cc / np.where(q != 0.0, q, 1.0), t1)
+        t1 = np.divide(q, aa, out=np.full_like(q, np.inf), where=ok)
+        t2 = np.divide(cc, q, out=t1.copy(), where=ok & (q != 0.0))
         # entering root (smaller) is the outer face, exiting root the inner face
         t_wall = np.minimum(t1, t2) if self.surface == "outside" else np.maximum(t1, t2)
-        t_wall = np.where(ok, t_wall, np.inf)
-        axial = fa + np.where(np.isfinite(t_wall), t_wall, 0.0) * da
-        t_wall = np.where((t_wall > eps) & (np.abs(axial) <= half), t_wall, np.inf)
-        best = t_wall
+        axial = fa + np.where(ok, t_wall, 0.0) * da
+        best = np.where(ok & (t_wall > eps) & (np.abs(axial) <= half), t_wall, np.inf)
         kind = np.zeros(len(best), dtype=np.int8)  # 0 wall, 1 cap at +half, 2 cap at -half
         if self.caps:
             cap_ok = np.abs(da) > GRAZING_COS
             safe_da = np.where(cap_ok, da, 1.0)
             for code, level, outward in ((1, half, 1.0), (2, -half, -1.0)):
                 t_cap = (level - fa) / safe_da
-                p = f_perp + t_cap[:, None] * d_perp
-                inside_disc = np.einsum("ij,ij->i", p, p) <= r * r
-                facing_in = outward * da < 0.0  # arriving on the outer face of this cap
-                side_ok = facing_in if self.surface == "outside" else ~facing_in
-                valid = cap_ok & (t_cap > eps) & inside_disc & side_ok
-                better = valid & (t_cap < best)
+                p = f_perp + t_cap * d_perp
+                inside_disc = _dot(p, p) <= r * r
+                from_outside = outward * da < 0.0  # arriving on the outer face of this cap
+                side_ok = from_outside if self.surface == "outside" else ~from_outside
+                better = cap_ok & (t_cap > eps) & inside_disc & side_ok & (t_cap < best)
                 best = np.where(better, t_cap, best)
                 kind = np.where(better, code, kind)
-        hit = np.isfinite(best)
-        t_safe = np.where(hit, best, 0.0)
-        radial = f_perp + t_safe[:, None] * d_perp
-        wall_normal = radial / r
-        cap_normal = np.where((kind == 1)[:, None], a, -a)
-        normal = np.where((kind == 0)[:, None], wall_normal, cap_normal)
-        normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]
-        facing = np.einsum("ij,ij->i", normal, directions) > 0.0
-        sign = np.where(hit, np.where(facing, -1.0, 1.0), 0.0)
-        return best, sign[:, None] * normal
+        hit = best < np.inf
+        radial = (f_perp + np.where(hit, best, 0.0) * d_perp) / r
+        radial /= np.maximum(np.sqrt(_dot(radial, radial)), 1e-300)
+        if self.caps:
+            cap_sign = np.where(kind == 1, 1.0, -1.0)
+            normal = np.where(kind == 0, radial, a[:, None] * cap_sign)
+        else:
+            normal = radial
+        return best, _signed_normals(normal, d, hit)
 
     def __repr__(self) -> str:
         c = ", ".join(f"{v:g}" for v in self.center)

@@ -17,11 +17,21 @@ from echocal.specimen.base import (
     FloatArray,
     Shape,
     _check_name,
+    _dot,
     _safe_inverse,
+    _signed_normals,
     _size,
     _slab_hits,
     _validate_rays,
 )
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Cross product of (3, K) component arrays."""
+    return np.stack(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
 
 __all__ = ["EMBREE_MIN_FACES", "MESH_ENGINES", "TriangleMesh", "embree_available"]
 
@@ -113,9 +123,10 @@ class TriangleMesh(Shape):
                 "(pip install embreex); use engine='numpy' or 'auto'"
             )
         tri = tri[good]
-        self._v0 = tri[:, 0].copy()
-        self._e1 = tri[:, 1] - tri[:, 0]
-        self._e2 = tri[:, 2] - tri[:, 0]
+        self._v0 = np.ascontiguousarray(tri[:, 0].T)  # (3, F)
+        self._e1 = np.ascontiguousarray((tri[:, 1] - tri[:, 0]).T)
+        self._e2 = np.ascontiguousarray((tri[:, 2] - tri[:, 0]).T)
+        self._normals_soa = np.ascontiguousarray(self.face_normals.T)
         self._det_tol = GRAZING_COS * double_area[good]
         self._eps = self.eps
         self._hierarchy = _build_hierarchy(tri, pad=1e-9 * max(scale, 1.0))
@@ -189,53 +200,45 @@ class TriangleMesh(Shape):
     ) -> tuple[FloatArray, NDArray[np.int64]]:
         """Closest hit distance [m] ``(M,)`` and face index ``(M,)`` (−1 for a miss)."""
         o, d = _validate_rays(origins, directions)
-        return self._cast(o, d)
+        return self._cast(np.ascontiguousarray(o.T), np.ascontiguousarray(d.T))
 
-    def _cast(
-        self, origins: FloatArray, directions: FloatArray
-    ) -> tuple[FloatArray, NDArray[np.int64]]:
+    def _cast(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Rays (3, M) -> distance (M,) [m] and face index (M,) (−1 for a miss)."""
         if self.resolved_engine == "embree":
-            return self._cast_embree(origins, directions)
-        return self._cast_numpy(origins, directions)
+            return self._cast_embree(o, d)
+        return self._cast_numpy(o, d)
 
-    def _intersect(
-        self, origins: FloatArray, directions: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
-        t, face = self._cast(origins, directions)
+    def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
+        t, face = self._cast(o, d)
         hit = face >= 0
-        normal = np.zeros((len(t), 3))
-        n = self.face_normals[face[hit]]
-        flip = np.einsum("ij,ij->i", n, directions[hit]) > 0.0
-        normal[hit] = np.where(flip[:, None], -n, n)
-        return t, normal
+        normal = self._normals_soa[:, np.where(hit, face, 0)]
+        return t, _signed_normals(normal, d, hit)
 
     # ---------------------------------------------------------------- engines
-    def _cast_numpy(
-        self, origins: FloatArray, directions: FloatArray, rows: NDArray[np.int64] | None = None
-    ) -> tuple[FloatArray, NDArray[np.int64]]:
+    def _cast_numpy(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         """Traverse the box hierarchy breadth-first, then Möller–Trumbore on leaf faces."""
-        m = len(origins)
+        m = o.shape[1]
         best_t = np.full(m, np.inf)
         best_face = np.full(m, -1, dtype=np.int64)
         if m == 0:
             return best_t, best_face
-        inv = _safe_inverse(directions)
+        inv = _safe_inverse(d)
         levels, order = self._hierarchy
         ray_chunk = max(1, _PAIR_CHUNK // (_LEAF * 32))
         for start in range(0, m, ray_chunk):
-            sl = slice(start, min(m, start + ray_chunk))
-            o, d, iv = origins[sl], directions[sl], inv[sl]
+            stop = min(m, start + ray_chunk)
+            oc, dc, ic = o[:, start:stop], d[:, start:stop], inv[:, start:stop]
             top_lo, top_hi = levels[-1]
-            hit = _slab_hits(o[:, None, :], iv[:, None, :], top_lo[None], top_hi[None])
+            hit = _slab_hits(oc[:, :, None], ic[:, :, None], top_lo[:, None, :], top_hi[:, None, :])
             ray_idx, node_idx = np.nonzero(hit)
             for depth in range(len(levels) - 2, -1, -1):
                 lo, hi = levels[depth]
                 child = node_idx[:, None] * _BRANCH + np.arange(_BRANCH)
                 ray_idx = np.broadcast_to(ray_idx[:, None], child.shape).ravel()
                 child = child.ravel()
-                keep = child < len(lo)
+                keep = child < lo.shape[1]
                 ray_idx, child = ray_idx[keep], child[keep]
-                ok = _slab_hits(o[ray_idx], iv[ray_idx], lo[child], hi[child])
+                ok = _slab_hits(oc[:, ray_idx], ic[:, ray_idx], lo[:, child], hi[:, child])
                 ray_idx, node_idx = ray_idx[ok], child[ok]
             # leaves -> faces
             slot = node_idx[:, None] * _LEAF + np.arange(_LEAF)
@@ -243,43 +246,39 @@ class TriangleMesh(Shape):
             ray_idx = np.broadcast_to(ray_idx[:, None], slot.shape).ravel()
             keep = face >= 0
             ray_idx, face = ray_idx[keep], face[keep]
-            t_chunk = best_t[sl]
-            f_chunk = best_face[sl]
+            t_chunk = best_t[start:stop]  # views: updated in place
+            f_chunk = best_face[start:stop]
             for p0 in range(0, len(face), _PAIR_CHUNK):
                 r_i = ray_idx[p0 : p0 + _PAIR_CHUNK]
                 f_i = face[p0 : p0 + _PAIR_CHUNK]
-                t = self._moller_trumbore(o[r_i], d[r_i], f_i)
-                good = np.isfinite(t)
+                t = self._moller_trumbore(oc[:, r_i], dc[:, r_i], f_i)
+                good = t < np.inf
                 r_i, f_i, t = r_i[good], f_i[good], t[good]
                 np.minimum.at(t_chunk, r_i, t)
                 winner = t == t_chunk[r_i]
                 f_chunk[r_i[winner]] = f_i[winner]
-            best_t[sl] = t_chunk
-            best_face[sl] = f_chunk
         return best_t, best_face
 
     def _moller_trumbore(
         self, o: FloatArray, d: FloatArray, face: NDArray[np.int64], *, bounded: bool = True
     ) -> FloatArray:
-        """Distance [m] of each ray row to its face row; ``inf`` if it misses (K,)."""
-        v0, e1, e2 = self._v0[face], self._e1[face], self._e2[face]
-        p = np.cross(d, e2)
-        det = np.einsum("ij,ij->i", e1, p)
+        """Distance [m] of each ray (3, K) to its face (K,); ``inf`` where it misses."""
+        v0, e1, e2 = self._v0[:, face], self._e1[:, face], self._e2[:, face]
+        p = _cross(d, e2)
+        det = _dot(e1, p)
         ok = np.abs(det) > self._det_tol[face]
         inv_det = np.divide(1.0, det, out=np.zeros_like(det), where=ok)
         s = o - v0
-        u = np.einsum("ij,ij->i", s, p) * inv_det
-        q = np.cross(s, e1)
-        v = np.einsum("ij,ij->i", d, q) * inv_det
-        t = np.einsum("ij,ij->i", e2, q) * inv_det
+        q = _cross(s, e1)
+        t = _dot(e2, q) * inv_det
         if bounded:
+            u = _dot(s, p) * inv_det
+            v = _dot(d, q) * inv_det
             ok &= (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0)
         ok &= t > self._eps
         return np.where(ok, t, np.inf)
 
-    def _cast_embree(
-        self, origins: FloatArray, directions: FloatArray
-    ) -> tuple[FloatArray, NDArray[np.int64]]:
+    def _cast_embree(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         """Embree finds the face (float32); its distance is recomputed in float64.
 
         Rays whose embree hit lies within embree's float32 tolerance of the
@@ -292,23 +291,22 @@ class TriangleMesh(Shape):
 
             tm = trimesh.Trimesh(self.vertices, self.faces, process=False)
             self._embree = RayMeshIntersector(tm)
-        m = len(origins)
+        m = o.shape[1]
         best_t = np.full(m, np.inf)
         best_face = np.full(m, -1, dtype=np.int64)
         if m == 0:
             return best_t, best_face
-        tri, ray = self._embree.intersects_id(origins, directions, multiple_hits=False)
+        tri, ray = self._embree.intersects_id(o.T, d.T, multiple_hits=False)
         tri = np.asarray(tri, dtype=np.int64)
         ray = np.asarray(ray, dtype=np.int64)
-        t = self._moller_trumbore(origins[ray], directions[ray], tri, bounded=False)
+        t = self._moller_trumbore(o[:, ray], d[:, ray], tri, bounded=False)
         best_t[ray] = t
-        best_face[ray] = np.where(np.isfinite(t), tri, -1)
+        best_face[ray] = np.where(t < np.inf, tri, -1)
         box = self.bounds()
         near = 1e-5 * max(float(np.linalg.norm(box[1] - box[0])), 1e-300)
-        redo = np.nonzero(best_t <= near)[0]
-        redo = np.union1d(redo, ray[~np.isfinite(t)])
+        redo = np.union1d(np.nonzero(best_t <= near)[0], ray[~(t < np.inf)])
         if len(redo):
-            t2, f2 = self._cast_numpy(origins[redo], directions[redo])
+            t2, f2 = self._cast_numpy(o[:, redo], d[:, redo])
             best_t[redo] = t2
             best_face[redo] = f2
         return best_t, best_face
@@ -325,7 +323,7 @@ def _build_hierarchy(
     Faces are ordered by recursive median splits of their centroids along the
     longest axis, so consecutive faces (and consecutive nodes) are close in
     space.  Returns the box levels (leaves first, each ``(lo, hi)`` of shape
-    ``(n_nodes, 3)``) and the face order padded with −1 to whole leaves.
+    ``(3, n_nodes)``) and the face order padded with −1 to whole leaves.
     """
     centroid = tri.mean(axis=1)
     order = np.arange(len(tri))
@@ -358,4 +356,5 @@ def _build_hierarchy(
         levels.append(
             (np.minimum.reduceat(lo, starts, axis=0), np.maximum.reduceat(hi, starts, axis=0))
         )
-    return levels, padded
+    soa = [(np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)) for lo, hi in levels]
+    return soa, padded

@@ -65,6 +65,8 @@ class FinitePlane(Shape):
         self.x_axis: FloatArray = frame[:, 0].copy()
         self.y_axis: FloatArray = frame[:, 1].copy()
         self.normal: FloatArray = frame[:, 2].copy()
+        self._frame_t = np.ascontiguousarray(frame.T)  # rows x', y', n
+        self._center_local = self._frame_t @ self.center
         self._eps = self.eps
 
     def corners(self) -> FloatArray:
@@ -79,25 +81,24 @@ class FinitePlane(Shape):
         hy = 0.5 * self.height * np.abs(self.y_axis)
         return np.stack([self.center - hx - hy, self.center + hx + hy])
 
-    def _intersect(
-        self, origins: FloatArray, directions: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
-        n = self.normal
-        n_dot_d = directions @ n
-        rel = self.center - origins  # p0 - s, (M, 3)
-        numer = rel @ n
+    def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
+        # local coordinates (x', y', n) of s - p0 and of d: rows of (3, M)
+        s_loc = self._frame_t @ o
+        s_loc -= self._center_local[:, None]
+        d_loc = self._frame_t @ d
+        n_dot_d = d_loc[2]
         ok = np.abs(n_dot_d) > GRAZING_COS
-        t = np.divide(numer, n_dot_d, out=np.full_like(numer, np.inf), where=ok)
+        # t' = n^T (p0 - s) / n^T d  (thesis eq. 21 with the text's numerator)
+        t = np.divide(s_loc[2], n_dot_d, out=np.zeros_like(n_dot_d), where=ok)
+        np.negative(t, out=t)
         ok &= t > self._eps
-        # local coordinates of the hit: m = T^T (s + t d - p0) = t T^T d - T^T (p0 - s)
-        t_safe = np.where(ok, t, 0.0)
-        a = t_safe * (directions @ self.x_axis) - rel @ self.x_axis
-        b = t_safe * (directions @ self.y_axis) - rel @ self.y_axis
-        ok &= (np.abs(a) <= 0.5 * self.width) & (np.abs(b) <= 0.5 * self.height)
+        # in-plane coordinates of the hit, m = T^T (s + t d - p0)  (eq. 23); |m| within w/2, h/2
+        ok &= np.abs(s_loc[0] + t * d_loc[0]) <= 0.5 * self.width
+        ok &= np.abs(s_loc[1] + t * d_loc[1]) <= 0.5 * self.height
         distance = np.where(ok, t, np.inf)
-        # normal facing the ray: -sign(n.d) n  (zero for misses)
-        sign = np.where(ok, -np.sign(n_dot_d), 0.0)
-        return distance, sign[:, None] * n
+        # normal facing the ray: -sign(n.d) n, zero for misses
+        sign = np.copysign(ok, -n_dot_d)
+        return distance, self.normal[:, None] * sign
 
     def __repr__(self) -> str:
         c = ", ".join(f"{v:g}" for v in self.center)

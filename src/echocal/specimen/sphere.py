@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from echocal.specimen.base import FloatArray, Shape, _check_name, _point, _size
+from echocal.specimen.base import (
+    FloatArray,
+    Shape,
+    _check_name,
+    _dot,
+    _point,
+    _signed_normals,
+    _size,
+)
 
 __all__ = ["Sphere"]
 
@@ -31,31 +39,27 @@ class Sphere(Shape):
     def bounds(self) -> FloatArray:
         return np.stack([self.center - self.radius, self.center + self.radius])
 
-    def _intersect(
-        self, origins: FloatArray, directions: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
-        f = origins - self.center
-        b = np.einsum("ij,ij->i", f, directions)
-        perp = f - b[:, None] * directions
-        disc = self.radius**2 - np.einsum("ij,ij->i", perp, perp)
+    def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
+        r = self.radius
+        f = o - self.center[:, None]
+        b = _dot(f, d)
+        perp = f - b * d
+        disc = r * r - _dot(perp, perp)
         ok = disc >= 0.0
         root = np.sqrt(np.where(ok, disc, 0.0))
-        c = np.einsum("ij,ij->i", f, f) - self.radius**2
-        q = -b - np.where(b >= 0.0, root, -root)  # |q| >= |b|, no cancellation
-        t1 = q
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t2 = np.where(q != 0.0, c / q, 0.0)
-        t_lo = np.minimum(t1, t2)
-        t_hi = np.maximum(t1, t2)
-        t = np.where(t_lo > self._eps, t_lo, np.where(t_hi > self._eps, t_hi, np.inf))
+        c = _dot(f, f) - r * r
+        q = -b - np.where(b >= 0.0, root, -root)  # |q| >= |b|: no cancellation
+        q_ok = q != 0.0
+        t2 = np.divide(c, q, out=np.zeros_like(q), where=q_ok)
+        t_lo = np.minimum(q, t2)
+        t_hi = np.maximum(q, t2)
+        eps = self._eps
+        t = np.where(t_lo > eps, t_lo, np.where(t_hi > eps, t_hi, np.inf))
         t = np.where(ok, t, np.inf)
-        hit = np.isfinite(t)
-        t_safe = np.where(hit, t, 0.0)
-        normal = (f + t_safe[:, None] * directions) / self.radius
-        normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]
-        facing = np.einsum("ij,ij->i", normal, directions) > 0.0
-        sign = np.where(hit, np.where(facing, -1.0, 1.0), 0.0)
-        return t, sign[:, None] * normal
+        hit = t < np.inf
+        normal = (f + np.where(hit, t, 0.0) * d) / r
+        normal /= np.maximum(np.sqrt(_dot(normal, normal)), 1e-300)
+        return t, _signed_normals(normal, d, hit)
 
     def __repr__(self) -> str:
         c = ", ".join(f"{v:g}" for v in self.center)
