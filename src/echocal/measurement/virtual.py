@@ -1,0 +1,337 @@
+"""``VirtualSetup``: the ray-traced simulator as a measurement source.
+
+Data flows one way (DESIGN.md)::
+
+    pose → transducer rays → closest hits → echoes (a·β, τ) → A-scan (eq. 28) → receiver
+
+The receiver's noise belongs to the instrument: its σ is fixed once, from the
+SNR of the noiseless reference echo at ``reference_position`` with the probe
+normal to the surface below it, and then applies to every measurement — so
+off-optimum orientations really have a lower SNR (DESIGN.md, thesis §12.2.1.3).
+
+The simulator also knows the truth — the orientation of maximum echo at a
+position (:meth:`VirtualSetup.true_optimum`) — but keeps it apart from
+:meth:`~VirtualSetup.measure`, so that an algorithm driven through the
+:class:`~echocal.measurement.MeasurementSource` interface cannot peek.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import scipy.optimize
+from numpy.typing import ArrayLike, NDArray
+
+from echocal._rng import RngLike, as_generator
+from echocal._validate import finite_array, lookup, positive_float
+from echocal.ascan import AScan
+from echocal.constants import SOUND_SPEED_WATER
+from echocal.echo import RayEchoes, ray_echoes, reflection_model_names
+from echocal.errors import EchocalValueError, GeometryError
+from echocal.geometry import (
+    Pose,
+    convert_angles,
+    orientation_frame,
+    pose_from_angles,
+    poses_to_arrays,
+)
+from echocal.measurement.base import BaseSource
+from echocal.measurement.limits import PositionerLimits
+from echocal.signal import (
+    SYNTHESIS_METHODS,
+    Pulse,
+    Receiver,
+    RecordingWindow,
+    get_metric,
+    noise_sigma_for_snr,
+    synthesize,
+)
+from echocal.specimen import Specimen
+from echocal.transducer import Transducer
+
+__all__ = ["ReceiverSettings", "VirtualSetup"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReceiverSettings:
+    """How the virtual receiver degrades the ideal A-scan.
+
+    Attributes
+    ----------
+    snr_db : [dB] SNR of the reference echo (normal incidence at the reference
+        position); ``None`` for a noiseless receiver.
+    adc_bits : ADC resolution, or None for no quantization.
+    full_scale : saturation level as a multiple of the reference echo's peak
+        (e.g. 2.0 clips at twice the best echo), or None for no limit.
+    """
+
+    snr_db: float | None = 30.0
+    adc_bits: int | None = None
+    full_scale: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.snr_db is not None:
+            snr = float(self.snr_db)
+            if not np.isfinite(snr):
+                raise EchocalValueError(f"noise.snr_db must be finite or None; got {snr}")
+            object.__setattr__(self, "snr_db", snr)
+        if self.full_scale is not None:
+            object.__setattr__(
+                self, "full_scale", positive_float("noise.full_scale", self.full_scale)
+            )
+        if self.adc_bits is not None and self.full_scale is None:
+            raise EchocalValueError("noise.adc_bits needs noise.full_scale (the ADC range)")
+
+
+@dataclass(eq=False, kw_only=True)
+class VirtualSetup(BaseSource):
+    """The simulator: specimen + transducer + pulse + recording window + receiver.
+
+    Parameters
+    ----------
+    specimen : the part under test.
+    transducer : the probe (pinhole model).
+    pulse : transmitted pulse w(t).
+    window : the receiver's recording window (fs [Hz], start [s], n_samples).
+    receiver : noise, ADC and saturation settings.
+    reference_position : [m] where the reference echo for the SNR is taken, shape (3,).
+    sound_speed : [m/s] c₀ of the medium.
+    reflection : reflection model, ``lambertian`` (thesis) or ``specular``.
+    synthesis : A-scan synthesis method, ``fast`` (default) or ``direct`` (reference).
+    limits : the virtual positioner's reachable poses.
+    rng : seed or Generator for the receiver noise (reproducible runs).
+    name : label for logs and reports.
+    """
+
+    specimen: Specimen
+    transducer: Transducer
+    pulse: Pulse
+    window: RecordingWindow
+    receiver: ReceiverSettings = field(default_factory=ReceiverSettings)
+    reference_position: ArrayLike = (0.0, 0.0, 0.02)
+    sound_speed: float = SOUND_SPEED_WATER
+    reflection: str = "lambertian"
+    synthesis: str = "fast"
+    limits: PositionerLimits = field(default_factory=PositionerLimits)
+    rng: RngLike = None
+    name: str = "virtual setup"
+
+    def __post_init__(self) -> None:
+        self.reference_position = finite_array(
+            "reference_position", self.reference_position, shape_tail=(3,)
+        ).reshape(3)
+        self.sound_speed = positive_float("sound_speed", self.sound_speed)
+        lookup("reflection model", self.reflection, dict.fromkeys(reflection_model_names()))
+        lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
+        self._generator = as_generator(self.rng)
+        self._closed = False
+        self._truth_cache: dict[tuple[Any, ...], tuple[float, float]] = {}
+
+    # ------------------------------------------------------------------ description
+    @property
+    def description(self) -> str:
+        """One line: what is simulated."""
+        snr = self.receiver.snr_db
+        noise = "noiseless" if snr is None else f"SNR {snr:g} dB"
+        return (
+            f"{self.name}: {self.specimen.name}, {self.transducer.n_rays} rays, "
+            f"{self.pulse.name} {self.pulse.center_frequency / 1e6:g} MHz, "
+            f"{self.reflection}, {noise}"
+        )
+
+    # ------------------------------------------------------------------ simulation
+    def echoes(self, positions: ArrayLike, frames: ArrayLike) -> RayEchoes:
+        """Amplitude and time of flight of every ray, shape ``(n_poses, n_rays)``."""
+        return ray_echoes(
+            self.transducer,
+            self.specimen,
+            np.asarray(positions, dtype=np.float64).reshape(-1, 3),
+            np.asarray(frames, dtype=np.float64).reshape(-1, 3, 3),
+            model=self.reflection,
+            sound_speed=self.sound_speed,
+        )
+
+    def ideal_samples(self, positions: ArrayLike, frames: ArrayLike) -> FloatArray:
+        """Noiseless A-scans, shape ``(n_poses, n_samples)``, normalized by the ray count."""
+        echoes = self.echoes(positions, frames)
+        return synthesize(
+            echoes.amplitude, echoes.tof, self.pulse, self.window, method=self.synthesis
+        )
+
+    def simulate(
+        self, poses: Sequence[Pose], *, noise: bool = True, rng: RngLike = None
+    ) -> FloatArray:
+        """A-scans of a batch of poses as one array ``(n_poses, n_samples)`` (no limit check).
+
+        ``noise=False`` gives the ideal A-scans.  Noise draws from ``rng`` if given,
+        else from the setup's own generator.
+        """
+        positions, frames = poses_to_arrays(list(poses))
+        samples = self.ideal_samples(positions, frames)
+        if noise:
+            generator = self._generator if rng is None else as_generator(rng)
+            samples = self._receiver.receive(samples, generator)
+        return samples
+
+    @cached_property
+    def reference_samples(self) -> FloatArray:
+        """The noiseless reference A-scan (normal incidence at ``reference_position``)."""
+        x, y, _ = self.reference_position
+        normal = self.specimen.surface_normal_below(x, y)
+        if not np.all(np.isfinite(normal)):
+            raise GeometryError(
+                f"reference_position ({x:g}, {y:g}) m is not above the specimen; "
+                "move it over the part"
+            )
+        azimuth, coelevation = self.specimen.optimal_orientation_below(x, y)
+        frame = orientation_frame(azimuth, coelevation)
+        samples = self.ideal_samples(self.reference_position[None], frame[None])[0]
+        if not np.any(samples):
+            raise GeometryError(
+                "the reference echo is silent: no ray returns within the recording window "
+                f"[{self.window.start:g}, {self.window.end:g}] s from reference_position"
+            )
+        return samples
+
+    @cached_property
+    def noise_sigma(self) -> float:
+        """[a.u.] the receiver's noise standard deviation (0 when noiseless)."""
+        if self.receiver.snr_db is None:
+            return 0.0
+        return float(
+            noise_sigma_for_snr(
+                self.reference_samples, self.receiver.snr_db, self.window, self.pulse
+            )
+        )
+
+    @cached_property
+    def _receiver(self) -> Receiver:
+        settings = self.receiver
+        full_scale = None
+        if settings.full_scale is not None:
+            full_scale = settings.full_scale * float(np.max(np.abs(self.reference_samples)))
+        return Receiver(
+            noise_sigma=self.noise_sigma, adc_bits=settings.adc_bits, full_scale=full_scale
+        )
+
+    # ------------------------------------------------------------------ source interface
+    def _check_open(self) -> None:
+        if self._closed:
+            raise EchocalValueError(f"{self.name} is closed; create a new setup to measure")
+
+    def measure(self, pose: Pose) -> AScan:
+        """Simulate one noisy A-scan at ``pose`` (must be within :attr:`limits`)."""
+        return self.measure_many([pose])[0]
+
+    def measure_many(self, poses: Sequence[Pose]) -> list[AScan]:
+        """Simulate several poses in one vectorized batch, in order."""
+        self._check_open()
+        poses = [self.limits.check(p) for p in poses]
+        if not poses:
+            return []
+        samples = self.simulate(poses)
+        metadata = {"source": "virtual", "setup": self.name, "snr_db": self.receiver.snr_db}
+        return [
+            AScan(
+                samples=row,
+                fs=self.window.fs,
+                start_time=self.window.start,
+                pose=pose,
+                metadata=metadata,
+            )
+            for row, pose in zip(samples, poses, strict=True)
+        ]
+
+    def close(self) -> None:
+        """Mark the setup closed; later measurements raise."""
+        self._closed = True
+
+    # ------------------------------------------------------------------ ground truth
+    def metric_values(
+        self,
+        position: ArrayLike,
+        a: ArrayLike,
+        b: ArrayLike,
+        *,
+        parameterization: str = "azimuth-coelevation",
+        metric: str = "pseudo-energy",
+        noise: bool = False,
+        rng: RngLike = None,
+    ) -> FloatArray:
+        """The metric at orientations ``(a, b)`` [deg] (broadcast shapes ``(...)``).
+
+        One batched simulation for all orientations — used for cost maps (thesis
+        Figs. 12–24 backgrounds) and for the ground truth.  Noiseless by default.
+        """
+        metric_fn = get_metric(metric)
+        a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
+        position = finite_array("position", position, shape_tail=(3,)).reshape(3)
+        poses = [
+            pose_from_angles(position, ai, bi, parameterization)
+            for ai, bi in zip(a.ravel(), b.ravel(), strict=True)
+        ]
+        out = np.empty(a.size)
+        chunk = max(1, 2_000_000 // max(self.transducer.n_rays, self.window.n_samples))
+        for start in range(0, len(poses), chunk):
+            samples = self.simulate(poses[start : start + chunk], noise=noise, rng=rng)
+            out[start : start + chunk] = metric_fn(samples, self.window, self.pulse)
+        return out.reshape(a.shape)
+
+    def true_optimum(
+        self,
+        position: ArrayLike,
+        *,
+        parameterization: str = "azimuth-coelevation",
+        metric: str = "pseudo-energy",
+    ) -> tuple[float, float]:
+        """Orientation (a, b) [deg] of maximum noiseless ``metric`` at ``position`` [m].
+
+        Found by a dense local search (Nelder–Mead to 1e-5°) started from the
+        surface normal below the position — the analytic optimum for a plane.
+        Kept apart from :meth:`measure`: an algorithm cannot peek.
+        """
+        position = finite_array("position", position, shape_tail=(3,)).reshape(3)
+        key = (*position.round(12), metric)
+        if key not in self._truth_cache:
+            self._truth_cache[key] = self._search_optimum(position, metric)
+        az, coel = self._truth_cache[key]
+        a, b = convert_angles(az, coel, "azimuth-coelevation", parameterization)
+        return float(a), float(b)
+
+    def _search_optimum(self, position: FloatArray, metric: str) -> tuple[float, float]:
+        azimuth, coelevation = self.specimen.optimal_orientation_below(position[0], position[1])
+        if not (np.isfinite(azimuth) and np.isfinite(coelevation)):
+            raise GeometryError(
+                f"no surface below position ({position[0]:g}, {position[1]:g}) m; "
+                "the optimum is undefined there"
+            )
+        # Search in gimbal tilts: smooth at the pole, where most optima lie.
+        start = np.array(convert_angles(azimuth, coelevation, "azimuth-coelevation", "tilt"))
+
+        def negative(v: FloatArray) -> float:
+            value = self.metric_values(position, v[0], v[1], parameterization="tilt", metric=metric)
+            return -float(value)
+
+        best = scipy.optimize.minimize(
+            negative,
+            start,
+            method="Nelder-Mead",
+            options={"xatol": 1e-5, "fatol": 0.0, "initial_simplex": _simplex(start, 0.5)},
+        )
+        az, coel = convert_angles(best.x[0], best.x[1], "tilt", "azimuth-coelevation")
+        return float(az), float(coel)
+
+    def true_pose(self, position: ArrayLike, **kwargs: str) -> Pose:
+        """The pose of maximum echo at ``position`` (see :meth:`true_optimum`)."""
+        az, coel = self.true_optimum(position, **kwargs)
+        return pose_from_angles(position, az, coel, "azimuth-coelevation")
+
+
+def _simplex(centre: FloatArray, size: float) -> FloatArray:
+    return centre + np.array([[0.0, 0.0], [size, 0.0], [0.0, size]])
