@@ -110,7 +110,8 @@ class ReplaySource(BaseSource):
     """A recorded dataset replayed through the measurement interface.
 
     Open one with :meth:`open`.  See the module docstring for the file format,
-    the modes and the tolerances.
+    the modes and the tolerances.  The A-scans of a position are read into
+    memory the first time that position is measured (one read per position).
 
     Attributes
     ----------
@@ -165,6 +166,7 @@ class ReplaySource(BaseSource):
         )
         recorded = self.source_info.get("description", "unknown source")
         self.description = f"replay of {path.name} ({mode}): {recorded}"
+        self._blocks: dict[int, NDArray[np.float64]] = {}
         self._metric_cache: dict[tuple[Hashable, int], NDArray[np.float64]] = {}
         self._closed = False
 
@@ -233,6 +235,17 @@ class ReplaySource(BaseSource):
         if self._closed:
             raise DataFileError(f"replay source {self.path} is closed")
 
+    def _block(self, p: int) -> NDArray[np.float64]:
+        """All A-scans at position ``p``, shape ``(n_azimuth, n_coelevation, n_repeats, n_time)``.
+
+        Read from the file on first use, then kept in memory (read-only).
+        """
+        if p not in self._blocks:
+            block = np.asarray(self._samples[p].values, dtype=np.float64)
+            block.setflags(write=False)
+            self._blocks[p] = block
+        return self._blocks[p]
+
     def _grid_pose(self, p: int, a: int, c: int) -> Pose:
         x, y, z = self.positions[p]
         return Pose(x, y, z, self.azimuths[a], self.coelevations[c])
@@ -244,16 +257,9 @@ class ReplaySource(BaseSource):
         if self.mode == "interpolate":
             ai, ci = self._fractional(pose, exact=True)
             corners, weights = _bilinear(ai, ci, self.azimuths.size, self.coelevations.size)
-            block = np.asarray(
-                self._samples[
-                    p, corners[0][0] : corners[1][0] + 1, corners[0][1] : corners[2][1] + 1
-                ]
-                .mean("repeat")
-                .values
-            )
-            a0, c0 = corners[0]
+            block = self._block(p)
             samples = sum(
-                w * block[a - a0, c - c0] for (a, c), w in zip(corners, weights, strict=True)
+                w * block[a, c].mean(axis=0) for (a, c), w in zip(corners, weights, strict=True)
             )
             reached = Pose(*self.positions[p], pose.azimuth, pose.coelevation)
             meta = {"mode": self.mode, "position_index": p, "grid_index": (ai, ci)}
@@ -261,7 +267,7 @@ class ReplaySource(BaseSource):
         ai, ci = self._fractional(pose, exact=False)
         a, c = round(ai), round(ci)
         r = int(self._rng.integers(self.n_repeats)) if self.mode == "random-repeat" else 0
-        samples = np.asarray(self._samples[p, a, c, r].values, dtype=np.float64)
+        samples = self._block(p)[a, c, r]
         meta = {"source": "replay", "mode": self.mode, "grid_index": (p, a, c), "repeat": r}
         return AScan(samples, self.fs, self.start_time, self._grid_pose(p, a, c), meta)
 
@@ -278,7 +284,7 @@ class ReplaySource(BaseSource):
         self._check_open()
         key = (metric, position)
         if key not in self._metric_cache:
-            block = np.asarray(self._samples[position].values, dtype=np.float64)
+            block = self._block(position)
             out = np.empty(block.shape[:2])
             for a in range(block.shape[0]):
                 for c in range(block.shape[1]):
