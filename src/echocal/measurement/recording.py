@@ -75,9 +75,9 @@ class RecordingGrid:
     def __post_init__(self) -> None:
         object.__setattr__(self, "azimuth", _axis("grid.azimuth", self.azimuth))
         object.__setattr__(self, "coelevation", _axis("grid.coelevation", self.coelevation))
-        pos = finite_array("grid.positions", self.positions, shape_tail=(3,)).reshape(-1, 3)
-        if pos.shape[0] == 0:
+        if len(self.positions) == 0:
             raise EchocalValueError("grid.positions must hold at least one (x, y, z) [m]")
+        pos = finite_array("grid.positions", self.positions, shape_tail=(3,)).reshape(-1, 3)
         object.__setattr__(self, "positions", tuple(tuple(float(c) for c in p) for p in pos))
 
     @classmethod
