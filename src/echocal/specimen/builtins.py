@@ -115,13 +115,17 @@ THESIS_BLOCK_FACETS = {
 def _side_facet(
     name: str, hinge_x: float, azimuth: float, coelevation: float, centre_x: float
 ) -> FinitePlane:
-    """A 40 × 40 mm facet through (hinge_x, 0, 0) whose centre lies above (centre_x, 0)."""
+    """A 60 × 50 mm facet through (hinge_x, 0, 0) whose centre lies above (centre_x, 0).
+
+    It reaches ~20 mm past its crease, where it passes below the centre plate,
+    so the closest hit shows the crease as the planes' intersection line.
+    """
     n = orientation_normal(azimuth, coelevation)
     z = -n[0] * (centre_x - hinge_x) / n[2]
     return FinitePlane(
         center=(centre_x, 0.0, z),
-        width=40 * MM,
-        height=40 * MM,
+        width=60 * MM,
+        height=50 * MM,
         azimuth=azimuth,
         coelevation=coelevation,
         name=name,
@@ -161,9 +165,11 @@ def thesis_block() -> Specimen:
     each point (the centre footprint just reaches the creases).
     """
     f = THESIS_BLOCK_FACETS
-    centre = FinitePlane(center=(0.0, 0.0, 0.0), width=80 * MM, height=40 * MM, name="centre facet")
-    left = _side_facet("left facet", f["left"]["hinge_x"], 20.0, 10.0, centre_x=-20 * MM)
-    right = _side_facet("right facet", f["right"]["hinge_x"], 165.0, 6.0, centre_x=20 * MM)
+    centre = FinitePlane(
+        center=(0.0, 0.0, 0.0), width=100 * MM, height=50 * MM, name="centre facet"
+    )
+    left = _side_facet("left facet", f["left"]["hinge_x"], 20.0, 10.0, centre_x=-15 * MM)
+    right = _side_facet("right facet", f["right"]["hinge_x"], 165.0, 6.0, centre_x=15 * MM)
     return Specimen(
         [centre, left, right],
         name="thesis-block",
