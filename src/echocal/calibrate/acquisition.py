@@ -3,9 +3,10 @@
 When the start lies at the noise floor, every local method wanders on noise.
 :class:`Acquisition` first measures x0 and a hexagonal lattice outward from
 it, ring by ring (ring k: radius k·``spacing``, 6k points), in batches of at
-most ``batch`` points, until a value is *clearly above noise*:
+most ``batch`` points (default 1: stop at the first detection; within a ring the
+points nearest to the strongest value so far come first), until a value is *clearly above noise*:
 
-    max(values) − median(values) > ``threshold`` · σ,
+    max(values) − median(values) > ``threshold`` · σ   (default 5),
 
 with σ the objective's known noise level (``noise_sigma``, e.g. from the
 source's SNR) or else a robust estimate 1.4826 · MAD of the values measured
@@ -77,9 +78,9 @@ class Acquisition(Optimizer):
         local_options: dict[str, Any] | None = None,
         spacing: float = 1.0,
         max_radius: float = 20.0,
-        threshold: float = 6.0,
+        threshold: float = 5.0,
         noise_sigma: float | None = None,
-        batch: int = 6,
+        batch: int = 1,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -104,6 +105,9 @@ class Acquisition(Optimizer):
         pts = np.vstack(hex_spiral(self.x0, self.spacing, n_rings))
         inside = np.all((pts >= self.bounds[:, 0]) & (pts <= self.bounds[:, 1]), axis=1)
         self._queue = pts[inside]
+        self._ring = np.concatenate(
+            [np.full(len(r), k) for k, r in enumerate(hex_spiral(self.x0, self.spacing, n_rings))]
+        )[inside]
         self._next = 0
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
@@ -164,6 +168,14 @@ class Acquisition(Optimizer):
         ok = ~self.last_nan
         self._x = np.vstack([self._x, points[ok]])
         self._y = np.concatenate([self._y, values[ok]])
+        if len(self._y) and self._next < len(self._queue):
+            # search first where the echo is strongest so far: within each ring, the points
+            # nearest to the best value come first
+            best = self._x[int(np.argmax(self._y))]
+            rest = self._queue[self._next :]
+            order = np.lexsort((np.hypot(*(rest - best).T), self._ring[self._next :]))
+            self._queue[self._next :] = rest[order]
+            self._ring[self._next :] = self._ring[self._next :][order]
         if self._detected():
             self._start_local()
         elif self._next >= len(self._queue):
