@@ -181,3 +181,14 @@ def test_bad_specimen():
         cast(["plate"], [[0, 0, 1]], [DOWN])  # type: ignore[list-item]
     with pytest.raises(EchocalValueError, match="specimen must be"):
         cast(3.0, [[0, 0, 1]], [DOWN])  # type: ignore[arg-type]
+
+
+def test_large_bundles_are_chunked_consistently():
+    """More rays than one kernel chunk (8192): same hits as casting the pieces separately."""
+    spec = builtin_specimen("thesis-block")
+    o, d = _random_rays(20_000, seed=9)
+    whole = cast(spec, o, d)
+    parts = [cast(spec, o[a : a + 5000], d[a : a + 5000]) for a in range(0, 20_000, 5000)]
+    np.testing.assert_array_equal(whole.distance, np.concatenate([p.distance for p in parts]))
+    np.testing.assert_array_equal(whole.normal, np.concatenate([p.normal for p in parts]))
+    np.testing.assert_array_equal(whole.shape_index, np.concatenate([p.shape_index for p in parts]))

@@ -73,6 +73,32 @@ def _as_shapes(specimen: Specimen | Shape | Iterable[Shape]) -> tuple[Shape, ...
         ) from None
 
 
+_CHUNK = 8192  # rays per kernel call
+
+
+def _closest(
+    shapes: tuple[Shape, ...], o: FloatArray, d: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.int64]]:
+    """Closest hit over ``shapes`` of rays (3, M): distance, point (3, M), normal (3, M), index."""
+    m = o.shape[1]
+    best_t = np.full(m, np.inf)
+    best_n = np.zeros((3, m))
+    best_i = np.full(m, -1, dtype=np.int64)
+    for index, shape in enumerate(shapes):
+        t, n = shape._intersect_soa(o, d)
+        closer = t < best_t
+        if index == 0:
+            best_t, best_n = t, n
+        else:
+            best_t = np.where(closer, t, best_t)
+            best_n = np.where(closer, n, best_n)
+        best_i[closer] = index
+    hit = best_i >= 0
+    point = o + np.where(hit, best_t, 0.0) * d
+    point[:, ~hit] = np.inf
+    return best_t, point, best_n, best_i
+
+
 def cast(
     specimen: Specimen | Shape | Iterable[Shape], origins: ArrayLike, directions: ArrayLike
 ) -> Hits:
@@ -109,26 +135,21 @@ def cast(
     if np.any(np.abs(norm - 1.0) > 1e-12):
         d_soa /= norm
     m = o_soa.shape[1]
-    best_t = np.full(m, np.inf)
-    best_n = np.zeros((3, m))
-    best_i = np.full(m, -1, dtype=np.int64)
-    for index, shape in enumerate(shapes):
-        t, n = shape._intersect_soa(o_soa, d_soa)
-        closer = t < best_t
-        if index == 0:
-            best_t, best_n = t, n
-        else:
-            best_t = np.where(closer, t, best_t)
-            best_n = np.where(closer, n, best_n)
-        best_i[closer] = index
-    hit = best_i >= 0
-    t_safe = np.where(hit, best_t, 0.0)
-    point = o_soa + t_safe * d_soa
-    point[:, ~hit] = np.inf
+    distance = np.empty(m)
+    point = np.empty((3, m))
+    normal = np.empty((3, m))
+    shape_index = np.empty(m, dtype=np.int64)
+    # chunks keep the kernels' temporaries in cache for large batches
+    for lo in range(0, max(m, 1), _CHUNK):
+        hi = min(m, lo + _CHUNK)
+        sl = slice(lo, hi)
+        distance[sl], point[:, sl], normal[:, sl], shape_index[sl] = _closest(
+            shapes, o_soa[:, sl], d_soa[:, sl]
+        )
     # (3, M) -> (..., N, 3) as transposed views (no copy)
     return Hits(
-        distance=best_t.reshape(batch),
+        distance=distance.reshape(batch),
         point=point.T.reshape((*batch, 3)),
-        normal=best_n.T.reshape((*batch, 3)),
-        shape_index=best_i.reshape(batch),
+        normal=normal.T.reshape((*batch, 3)),
+        shape_index=shape_index.reshape(batch),
     )

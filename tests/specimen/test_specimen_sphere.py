@@ -114,3 +114,13 @@ def test_bad_input(kwargs, match):
 def test_nonpositive_radius_is_geometry_error():
     with pytest.raises(GeometryError):
         Sphere(center=(0, 0, 0), radius=-0.01)
+
+
+def test_ray_starting_on_surface_skips_its_own_point():
+    """eps rule: a ray leaving the surface outward misses; inward it hits the far side."""
+    s = Sphere(center=(0, 0, 0), radius=0.01)
+    o = np.array([[0.0, 0.0, 0.01], [0.0, 0.0, 0.01]])
+    d = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])
+    dist, normal = s.intersect(o, d)
+    np.testing.assert_allclose(dist, [np.inf, 0.02])
+    np.testing.assert_allclose(normal[1], [0, 0, 1])
