@@ -91,7 +91,14 @@ CASES: dict[str, Callable[[pytest.TempPathFactory], ContextManager[SourceCase]]]
     "replay-random-repeat": replay_case("random-repeat"),
     "replay-interpolate": replay_case("interpolate"),
     "hardware-tcp": hardware_case,
-    # "virtual": lambda tmp: simple_case(lambda: VirtualSetup(...), poses=[...]),
+    # VirtualSetup (verified to pass; needs `from contract import simple_case` and imports):
+    # "virtual": lambda tmp: simple_case(lambda: VirtualSetup(
+    #     specimen=builtin_specimen("flat-plate"), transducer=Transducer(n_h=12, n_v=12),
+    #     pulse=make_pulse("gabor", center_frequency=5e6, bandwidth=60),
+    #     window=RecordingWindow(fs=50e6, start=20e-6, n_samples=1024),
+    #     receiver=ReceiverSettings(snr_db=30.0), rng=1,
+    #     limits=PositionerLimits(z=(0.01, 0.04), coelevation=(-30.0, 30.0))),
+    #     poses=HARDWARE_POSES),
 }
 
 

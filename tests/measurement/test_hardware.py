@@ -33,7 +33,9 @@ POSES = [
     Pose(0.0, 0.0, 0.018, 0.0, 0.0),
     Pose(-0.004, 0.0, 0.02, 90.0, 12.0),
 ]
-FAST = {"timeout": 0.3, "retries": 2, "backoff": 0.01}
+# timeout 1 s: generous against a loaded CI machine (a spurious timeout would show up as an
+# extra reconnect), yet well below the 2 s late answers injected below
+FAST = {"timeout": 1.0, "retries": 2, "backoff": 0.01}
 
 
 def truth(pose: Pose) -> np.ndarray:
@@ -93,8 +95,8 @@ def test_instrument_gone_raises_after_retries_and_keeps_earlier_results() -> Non
 
 
 def test_late_answer_is_retried() -> None:
-    # the 2nd ACQ? answers 1 s late, beyond the 0.3 s timeout: the client reconnects and asks again
-    faults = Faults(late_acquisition=2, late_delay=1.0)
+    # the 2nd ACQ? answers 2 s late, beyond the 1 s timeout: the client reconnects and asks again
+    faults = Faults(late_acquisition=2, late_delay=2.0)
     with InstrumentServer(GaussianEchoSource(), faults=faults) as server:
         source = HardwareSource.connect(*server.address, **FAST)
         scans = [source.measure(p) for p in POSES[:3]]
@@ -106,9 +108,9 @@ def test_late_answer_is_retried() -> None:
 
 
 def test_late_answer_without_retries_is_a_timeout_error() -> None:
-    faults = Faults(late_acquisition=1, late_delay=1.0)
+    faults = Faults(late_acquisition=1, late_delay=2.0)
     with InstrumentServer(GaussianEchoSource(), faults=faults) as server:
-        source = HardwareSource.connect(*server.address, timeout=0.3, retries=0)
+        source = HardwareSource.connect(*server.address, timeout=1.0, retries=0)
         with pytest.raises(InstrumentError, match=r"ACQ\?.*timed out"):
             source.measure(POSES[0])
         source.close()
@@ -193,7 +195,7 @@ def test_connection_refused_names_the_command() -> None:
     port = probe.getsockname()[1]
     probe.close()  # nothing listens there now
     with pytest.raises(InstrumentError, match=r"\*IDN\?.*failed after 2 attempts"):
-        HardwareSource.connect("127.0.0.1", port, timeout=0.3, retries=1, backoff=0.0)
+        HardwareSource.connect("127.0.0.1", port, timeout=1.0, retries=1, backoff=0.0)
 
 
 def test_invalid_client_settings() -> None:
