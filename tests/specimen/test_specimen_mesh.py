@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from echocal.errors import DataFileError, EchocalValueError, GeometryError, UnknownNameError
 from echocal.specimen import FinitePlane, TriangleMesh, embree_available, wavy_surface_mesh
+from echocal.specimen.mesh import EMBREE_MIN_FACES
 
 coords = st.floats(-0.05, 0.05)
 vertex = st.tuples(coords, coords, coords)
@@ -160,6 +161,9 @@ def test_auto_engine_resolution():
     small = wavy_surface_mesh(n=5)
     assert small.resolved_engine == "numpy"
     assert TriangleMesh(small.vertices, small.faces, engine="numpy").resolved_engine == "numpy"
+    big = wavy_surface_mesh(n=41)  # 3200 faces >= EMBREE_MIN_FACES
+    assert big.n_faces >= EMBREE_MIN_FACES
+    assert big.resolved_engine == ("embree" if embree_available() else "numpy")
 
 
 @pytest.mark.parametrize("suffix", [".stl", ".obj"])

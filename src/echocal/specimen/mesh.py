@@ -38,7 +38,7 @@ __all__ = ["EMBREE_MIN_FACES", "MESH_ENGINES", "TriangleMesh", "embree_available
 MESH_ENGINES = ("auto", "numpy", "embree")
 """Allowed values of ``TriangleMesh.engine``."""
 
-EMBREE_MIN_FACES = 5000
+EMBREE_MIN_FACES = 1000
 """With ``engine="auto"``, meshes with at least this many faces use embree when installed."""
 
 _LEAF = 16  # faces per leaf box of the numpy engine's hierarchy
