@@ -1,0 +1,147 @@
+"""The calibrate() driver: stopping rules, bad input, NaN policy, result round-trip, presets."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import OPT, gaussian
+
+from echocal.calibrate import (
+    STATUS_MESSAGES,
+    CalibrationResult,
+    FunctionObjective,
+    calibrate,
+    method_options,
+    preset_names,
+    presets,
+)
+from echocal.errors import EchocalValueError, LimitError, UnknownNameError
+
+X0 = (1.5, 1.0)
+
+
+@pytest.mark.parametrize(("method", "per_iter"), [("gradient", 4), ("newton", 9), ("spsa", 2)])
+def test_budget_stops_cleanly_and_is_never_exceeded(method, per_iter, gauss_objective):
+    obj = gauss_objective()
+    opts = {"eps": 1.0} if method == "spsa" else {}
+    res = calibrate(obj, method, x0=X0, budget=31, max_iter=1000, rng=0, **opts)
+    assert res.status == 2 and res.success
+    assert res.message == STATUS_MESSAGES[2]
+    assert res.n_measurements <= 31 and res.n_measurements > 31 - per_iter
+    assert res.n_measurements == obj.n_measurements == len(res.points)
+
+
+def test_objective_budget_is_respected_too(gauss_objective):
+    obj = gauss_objective(budget=20)
+    res = calibrate(obj, "model-based", x0=X0, max_iter=1000)
+    assert res.status == 2 and obj.n_measurements == 20
+
+
+def test_budget_smaller_than_one_iteration_raises_before_measuring(gauss_objective):
+    obj = gauss_objective()
+    with pytest.raises(EchocalValueError, match="budget=8 is smaller.*newton.*9"):
+        calibrate(obj, "newton", x0=X0, budget=8)
+    with pytest.raises(EchocalValueError, match="spsa"):  # 4 gain estimates + 1 iteration
+        calibrate(obj, "spsa", x0=X0, budget=9)
+    assert obj.n_measurements == 0
+
+
+def test_x0_outside_bounds_raises_limit_error_naming_x0():
+    obj = FunctionObjective(gaussian, bounds=[[-5, 5], [-5, 5]])
+    with pytest.raises(LimitError, match=r"x0 \(azimuth=9"):
+        calibrate(obj, "gradient", x0=(9.0, 0.0))
+
+
+def test_unknown_method_and_unknown_options(gauss_objective):
+    with pytest.raises(UnknownNameError, match="model-based"):
+        calibrate(gauss_objective(), "bobyqa", x0=X0)
+    with pytest.warns(UserWarning, match="stepsize"):
+        res = calibrate(gauss_objective(), "gradient", x0=X0, max_iter=3, stepsize=0.1)
+    assert res.n_iterations == 3 and "stepsize" not in res.options
+
+
+def test_iteration_limit_xtol_and_callback(gauss_objective):
+    res = calibrate(gauss_objective(), "gradient", x0=X0, max_iter=5)
+    assert res.status == 1 and res.n_iterations == 5 and res.n_measurements == 20
+    assert res.iterates.shape == (6, 2)
+    np.testing.assert_array_equal(res.iteration_measurements, [0, 4, 8, 12, 16, 20])
+    res = calibrate(gauss_objective(), "newton", x0=X0, max_iter=50, xtol=1e-6)
+    assert res.status == 0 and res.n_iterations < 50
+    np.testing.assert_allclose(res.x, OPT, atol=1e-5)
+    seen = []
+
+    def stop_at_three(state):
+        seen.append(state.iteration)
+        return state.iteration == 3
+
+    res = calibrate(gauss_objective(), "spsa", x0=X0, callback=stop_at_three, rng=0, eps=1.0)
+    assert res.status == 3 and seen == [1, 2, 3] and res.n_iterations == 3
+
+
+def test_nan_measurements_are_counted_reported_and_not_used_as_numbers():
+    # NaN in a half-plane next to the start: the failed measurements are counted, reported,
+    # and the method still converges (they act as "no echo", the worst value seen)
+    def f(p):
+        return np.where(p[:, 0] > 2.0, np.nan, gaussian(p))
+
+    obj = FunctionObjective(f)
+    res = calibrate(obj, "model-based", x0=(1.6, 1.0), max_iter=40)
+    assert res.n_nan > 0 and res.n_nan == int(np.isnan(res.values).sum())
+    assert "NaN" in res.message
+    np.testing.assert_allclose(res.x, OPT, atol=1e-3)
+    res = calibrate(FunctionObjective(f), "gradient", x0=(1.9, 1.0), max_iter=60)
+    assert res.n_nan > 0
+    assert np.hypot(*(res.x - OPT)) < 1e-2
+
+
+def test_all_nan_objective_reports_failure():
+    obj = FunctionObjective(lambda p: np.full(len(p), np.nan))
+    res = calibrate(obj, "gradient", x0=(0.0, 0.0), max_iter=3)
+    assert res.status == 6 and not res.success and res.n_nan == 12
+
+
+def test_final_check_is_counted(gauss_objective):
+    res = calibrate(gauss_objective(), "newton", x0=X0, max_iter=4, final_check=3)
+    assert res.n_measurements == 4 * 9 + 3
+    # noiseless: fun is the mean of 3 exact measurements at x
+    np.testing.assert_allclose(res.fun, gaussian(res.x)[0], rtol=1e-12)
+
+
+def test_result_json_round_trip(tmp_path, gauss_objective):
+    obj = FunctionObjective(lambda p: np.where(p[:, 1] > 1.2, np.nan, gaussian(p)))
+    res = calibrate(obj, "auto", x0=X0, max_iter=10, rng=3)
+    path = tmp_path / "sub" / "result.json"
+    res.save_json(path)
+    back = CalibrationResult.load_json(path)
+    for name in ("x", "points", "values", "iterates", "iteration_measurements", "times"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(res, name))
+    assert back.to_dict() == res.to_dict()
+    assert back.message == res.message and back.names == res.names
+    assert not list(tmp_path.glob("sub/.*partial*"))
+
+
+def test_presets_hold_the_thesis_tables():
+    assert "thesis" in preset_names() and "thesis-table-7" in preset_names()
+    t7 = presets("thesis-table-7")
+    assert t7.max_iter == 30 and t7.x0 == (0.0, 0.0)
+    assert method_options("momentum") == {"mu": 0.05, "momentum": 0.7, "normalize": "max"}
+    assert method_options("quasi-newton")["lam"] == 0.9
+    spsa = method_options("spsa", preset="thesis-table-4")
+    assert (spsa["c"], spsa["A"], spsa["eps"], spsa["rho"], spsa["gamma"]) == (
+        1.0, 5.0, 0.1, 0.602, 0.101
+    )
+    with pytest.raises(UnknownNameError, match="thesis-table-1"):
+        presets("thesis-table-9")
+
+
+def test_thesis_preset_is_scale_free_through_normalization():
+    # normalize="max": the same run on energies scaled by 1e-6 and 1e6 moves identically
+    runs = [
+        calibrate(FunctionObjective(lambda p, s=s: s * gaussian(p, width=3.0)), "momentum",
+                  x0=(0.0, 0.0), preset="thesis")
+        for s in (1e-6, 1e6)
+    ]
+    assert runs[0].n_iterations == 30
+    np.testing.assert_allclose(runs[0].iterates, runs[1].iterates, rtol=1e-9, atol=1e-12)
+    f = gaussian(runs[0].iterates, width=3.0)
+    assert f[-1] > f[0]  # it ascends
