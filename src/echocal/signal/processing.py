@@ -218,7 +218,7 @@ def _energy_window(
     length = finite_float("window_length", length)
     if length <= 0:
         raise EchocalValueError(f"window_length must be > 0; got {length:g}")
-    half = int(round(0.5 * length * window.fs))
+    half = round(0.5 * length * window.fs)
     n = x.shape[-1]
     env = envelope(matched_filter(x, pulse, window.fs))
     centre = np.argmax(env, axis=-1)

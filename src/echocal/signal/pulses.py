@@ -53,6 +53,18 @@ DURATION_LEVEL = 0.1
 
 _LN2 = math.log(2.0)
 _F64 = NDArray[np.float64]
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(32)
+
+
+def _composite_gauss(a: float, b: float, n_nodes: int) -> tuple[_F64, _F64]:
+    """Nodes and weights of composite 32-point Gauss–Legendre with >= n_nodes nodes on [a, b]."""
+    panels = max(1, math.ceil(n_nodes / 24))
+    edges = np.linspace(a, b, panels + 1)
+    half = 0.5 * np.diff(edges)
+    mid = 0.5 * (edges[:-1] + edges[1:])
+    nodes = (mid[:, None] + half[:, None] * _GL_NODES).ravel()
+    weights = (half[:, None] * _GL_WEIGHTS).ravel()
+    return nodes, weights
 
 
 class Pulse(ABC):
@@ -90,8 +102,7 @@ class Pulse(ABC):
         s = self.support
         f_max = float(np.max(np.abs(f))) if f.size else 0.0
         n_nodes = int(3.0 * 2.0 * s * (f_max + self._scan_limit)) + 96
-        x, wq = np.polynomial.legendre.leggauss(n_nodes)
-        t, wq = s * x, s * wq
+        t, wq = _composite_gauss(-s, s, n_nodes)
         wt = self.waveform(t) * wq
         flat = f.ravel()
         out = np.empty(flat.shape, dtype=np.complex128)
@@ -331,8 +342,8 @@ class SincPulse(Pulse):
 
     The baseband sinc is the impulse response of the ideal low-pass P(f) = A'·rect(f/2B)
     (eq. 29) with A' = 1/(2B), so that the pulse peaks at 1 like the others (sinc(x) =
-    sin(πx)/(πx)); modulated, its passband is f_c ± B with |W| ≈ 1/(4B) there.  It is truncated to |t| ≤ T by the
-    named window.
+    sin(πx)/(πx)); modulated, its passband is f_c ± B with |W| ≈ 1/(4B) there.  It is
+    truncated to |t| ≤ T by the named window.
 
     Attributes
     ----------
