@@ -11,14 +11,23 @@ from collections.abc import Callable, Iterator
 from contextlib import AbstractContextManager as ContextManager
 
 import pytest
-from contract import CHECKS, SourceCase
+from contract import CHECKS, SourceCase, simple_case
 from fake_sources import GaussianEchoSource
 
 from echocal.geometry import Pose
-from echocal.measurement.hardware import HardwareSource
-from echocal.measurement.instrument_server import InstrumentServer
-from echocal.measurement.recording import RecordingGrid, record
-from echocal.measurement.replay import ReplaySource
+from echocal.measurement import (
+    HardwareSource,
+    InstrumentServer,
+    PositionerLimits,
+    ReceiverSettings,
+    RecordingGrid,
+    ReplaySource,
+    VirtualSetup,
+    record,
+)
+from echocal.signal import RecordingWindow, make_pulse
+from echocal.specimen import builtin_specimen
+from echocal.transducer import Transducer
 
 # Replay grid: steps of 10 deg (azimuth) and 5 deg (co-elevation), two positions 5 mm apart.
 GRID = RecordingGrid.regular(
@@ -86,19 +95,31 @@ def hardware_case(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SourceCa
             server.close()
 
 
+def _small_virtual_setup() -> VirtualSetup:
+    """A fast simulator: flat plate, 12 x 12 rays, 1024 samples, noisy (seeded)."""
+    return VirtualSetup(
+        specimen=builtin_specimen("flat-plate"),
+        transducer=Transducer(n_h=12, n_v=12),
+        pulse=make_pulse("gabor", center_frequency=5e6, bandwidth=60),
+        # echoes at 2 z / c = 24..34 us for z = 18..25 mm: inside [20, 40.5] us
+        window=RecordingWindow(fs=50e6, start=20e-6, n_samples=1024),
+        receiver=ReceiverSettings(snr_db=30.0),
+        limits=PositionerLimits(z=(0.01, 0.04), coelevation=(-30.0, 30.0)),
+        rng=1,
+    )
+
+
+def virtual_case(tmp_path_factory: pytest.TempPathFactory) -> ContextManager[SourceCase]:
+    # the simulator reaches the requested pose exactly (default tolerances: 1e-12 m, 1e-9 deg)
+    return simple_case(_small_virtual_setup, poses=HARDWARE_POSES)
+
+
 CASES: dict[str, Callable[[pytest.TempPathFactory], ContextManager[SourceCase]]] = {
     "replay-nearest": replay_case("nearest"),
     "replay-random-repeat": replay_case("random-repeat"),
     "replay-interpolate": replay_case("interpolate"),
     "hardware-tcp": hardware_case,
-    # VirtualSetup (verified to pass; needs `from contract import simple_case` and imports):
-    # "virtual": lambda tmp: simple_case(lambda: VirtualSetup(
-    #     specimen=builtin_specimen("flat-plate"), transducer=Transducer(n_h=12, n_v=12),
-    #     pulse=make_pulse("gabor", center_frequency=5e6, bandwidth=60),
-    #     window=RecordingWindow(fs=50e6, start=20e-6, n_samples=1024),
-    #     receiver=ReceiverSettings(snr_db=30.0), rng=1,
-    #     limits=PositionerLimits(z=(0.01, 0.04), coelevation=(-30.0, 30.0))),
-    #     poses=HARDWARE_POSES),
+    "virtual": virtual_case,
 }
 
 
