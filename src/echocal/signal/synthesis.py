@@ -110,8 +110,6 @@ def _validated_rays(
         taus = np.asarray(tofs, dtype=np.float64)
     except (TypeError, ValueError):
         raise EchocalValueError("amplitudes and tofs must be numeric arrays") from None
-    if amps.ndim == 0 or taus.ndim == 0:
-        raise EchocalValueError("amplitudes and tofs must have a ray axis (last axis)")
     if not np.all(np.isfinite(amps)):
         raise EchocalValueError("amplitudes must be finite everywhere; got NaN or inf")
     if np.any(np.isnan(taus)) or np.any(taus == -np.inf):
@@ -122,6 +120,8 @@ def _validated_rays(
         raise EchocalValueError(
             f"amplitudes shape {amps.shape} and tofs shape {taus.shape} do not broadcast"
         ) from None
+    if amps.ndim == 0:
+        raise EchocalValueError("amplitudes and tofs must have a ray axis (last axis)")
     return amps, taus
 
 
