@@ -128,7 +128,11 @@ def test_presets_hold_the_thesis_tables():
     assert method_options("quasi-newton")["lam"] == 0.9
     spsa = method_options("spsa", preset="thesis-table-4")
     assert (spsa["c"], spsa["A"], spsa["eps"], spsa["rho"], spsa["gamma"]) == (
-        1.0, 5.0, 0.1, 0.602, 0.101
+        1.0,
+        5.0,
+        0.1,
+        0.602,
+        0.101,
     )
     with pytest.raises(UnknownNameError, match="thesis-table-1"):
         presets("thesis-table-9")
@@ -137,8 +141,12 @@ def test_presets_hold_the_thesis_tables():
 def test_thesis_preset_is_scale_free_through_normalization():
     # normalize="max": the same run on energies scaled by 1e-6 and 1e6 moves identically
     runs = [
-        calibrate(FunctionObjective(lambda p, s=s: s * gaussian(p, width=3.0)), "momentum",
-                  x0=(0.0, 0.0), preset="thesis")
+        calibrate(
+            FunctionObjective(lambda p, s=s: s * gaussian(p, width=3.0)),
+            "momentum",
+            x0=(0.0, 0.0),
+            preset="thesis",
+        )
         for s in (1e-6, 1e6)
     ]
     assert runs[0].n_iterations == 30

@@ -50,8 +50,15 @@ def test_grid_finds_the_optimum_to_its_resolution(gauss_objective):
 
 @pytest.mark.parametrize(
     ("method", "per_iter"),
-    [("gradient", 4), ("momentum", 4), ("nesterov", 4), ("quasi-newton", 4), ("newton", 9),
-     ("spsa", 2), ("model-based", 1)],
+    [
+        ("gradient", 4),
+        ("momentum", 4),
+        ("nesterov", 4),
+        ("quasi-newton", 4),
+        ("newton", 9),
+        ("spsa", 2),
+        ("model-based", 1),
+    ],
 )
 def test_measurements_per_iteration_are_locked(method, per_iter, gauss_objective):
     opt_cls = get_method(method)
@@ -137,9 +144,7 @@ def test_seeded_runs_are_reproducible(method, gauss_objective):
 @pytest.mark.parametrize("method", ["newton", "quasi-newton"])
 @pytest.mark.parametrize("x0", [(1.5, 1.0), (-4.0, 3.0), (10.0, -8.0)])
 @pytest.mark.parametrize("mu", [1.0, 0.05])
-def test_newton_and_bfgs_never_step_downhill_on_a_concave_quadratic(
-    method, x0, mu, quad_objective
-):
+def test_newton_and_bfgs_never_step_downhill_on_a_concave_quadratic(method, x0, mu, quad_objective):
     res = calibrate(quad_objective(), method, x0=x0, rng=0, max_iter=25, mu=mu)
     f = quadratic(res.iterates)
     # noiseless and exact FD on a quadratic: f along the iterates is non-decreasing

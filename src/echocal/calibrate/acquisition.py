@@ -142,9 +142,8 @@ class Acquisition(Optimizer):
             opts.setdefault("history", (self._x.copy(), self._y.copy()))
             if "radius" in params:
                 opts.setdefault("radius", self.spacing)
-        self.local = self._local_cls(
-            best, bounds=self.bounds, rng=self.rng, normalize=self._local_normalize, **opts
-        )
+        opts.setdefault("normalize", self._local_normalize)
+        self.local = self._local_cls(best, bounds=self.bounds, rng=self.rng, **opts)
         self._iterate = best.copy()
         self.found_at = self.n_told
 

@@ -75,6 +75,10 @@ def build_optimizer(
     known, unknown = _split(cls, options)
     if wrap:
         aknown, aunknown = _split(Acquisition, acq_opts)
+        for key in ("local", "local_options", "normalize"):  # these come from the method
+            if key in aknown:
+                del aknown[key]
+                aunknown.append(key)
         unknown += [f"acquire.{k}" for k in aunknown]
     if unknown:
         warnings.warn(

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import one_of, positive_float
+from echocal._validate import in_range, one_of, positive_float
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.objective import as_points
@@ -97,15 +97,37 @@ class QuadraticModel:
 
 
 def fit_quadratic(
-    points: FloatArray, values: FloatArray, center: FloatArray, *, space: str, scale: float
+    points: FloatArray,
+    values: FloatArray,
+    center: FloatArray,
+    *,
+    space: str,
+    scale: float,
+    locality: float | None = None,
+    floor: float = 0.0,
 ) -> QuadraticModel | None:
     """Weighted least-squares quadratic fit (see module docstring); None if underdetermined.
 
     points : [deg] (n, 2); values : (n,) finite; scale : [deg] length for conditioning.
+    locality : [deg] only points within this distance of ``center`` are fitted (None: all).
+    floor : log space only — points below ``floor`` × the largest fitted value are left out
+        (at the noise floor log y says nothing about log f, and its residual would grow
+        with the squared distance from the peak); if fewer than 8 remain, the 8 largest
+        positive values are used.
     """
+    if locality is not None:
+        near = np.hypot(*(points - center).T) <= locality
+        points, values = points[near], values[near]
     d = (points - center) / scale
     if space == "log":
         keep = values > 0.0
+        if np.any(keep) and floor > 0.0:
+            strong = values > floor * values.max()
+            if np.count_nonzero(strong) >= 8:
+                keep &= strong
+            else:
+                top = np.argsort(values)[::-1][:8]
+                keep &= np.isin(np.arange(len(values)), top)
         d, y = d[keep], values[keep]
         if len(y) < 6:
             return None
@@ -121,7 +143,7 @@ def fit_quadratic(
         [np.ones(len(z)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
     )
     sw = np.sqrt(w)
-    ridge = np.sqrt(1e-8 * w.sum()) * np.eye(6)[1:]
+    ridge = np.sqrt(1e-12 * w.sum()) * np.eye(6)[1:]
     a = np.vstack([phi * sw[:, None], ridge])
     rhs = np.concatenate([z * sw, np.zeros(5)])
     coef, *_ = np.linalg.lstsq(a, rhs, rcond=None)
@@ -168,6 +190,8 @@ class ModelBased(Optimizer):
     max_radius, min_radius : [deg] trust-region limits (default 4×radius, radius/100).
     ring : flank distance of refinement points in units of the fitted peak width.
     space : ``"log"`` (default) or ``"linear"``.
+    locality : fit only points within ``locality`` × max(radius, trust radius) of the incumbent.
+    floor : leave out of the log fit points below ``floor`` × the largest value (noise floor).
     history : optional (points (n, 2) [deg], values (n,)) already measured (warm start),
         e.g. by an acquisition phase; the initial design is skipped where these cover x0.
     """
@@ -183,6 +207,8 @@ class ModelBased(Optimizer):
         min_radius: float | None = None,
         ring: float = 0.8,
         space: str = "log",
+        locality: float = 4.0,
+        floor: float = 0.05,
         history: tuple[ArrayLike, ArrayLike] | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
@@ -198,6 +224,8 @@ class ModelBased(Optimizer):
         )
         self.ring = positive_float("ring", ring)
         self.space = one_of("space", space, ("log", "linear"))
+        self.locality = positive_float("locality", locality)
+        self.floor = in_range("floor", floor, 0.0, 1.0)
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
         if history is not None:
@@ -239,32 +267,41 @@ class ModelBased(Optimizer):
     # -- internals --------------------------------------------------------------------
     def _refit(self) -> None:
         center = self._incumbent
-        model = fit_quadratic(self._x, self._y, center, space=self.space, scale=self.radius)
+        model = fit_quadratic(
+            self._x,
+            self._y,
+            center,
+            space=self.space,
+            scale=self.radius,
+            locality=self.locality * max(self.radius, self._trust),
+            floor=self.floor,
+        )
         self._model = model
         if model is None:
             best = self._x[int(np.argmax(self._y))] if len(self._y) else self.x0
             self._incumbent = best
             return
         pred = model(self._x)
+        local = np.hypot(*(self._x - center).T) <= self.locality * max(self.radius, self._trust)
         if self.space == "log":
-            pos = self._y > 0
-            cand = np.flatnonzero(pos)
+            ymax = float(self._y[local].max())
+            cand = np.flatnonzero(local & (self._y > max(self.floor * ymax, 0.0)))
             if cand.size:
                 self._incumbent = self._x[cand[int(np.argmax(pred[cand]))]]
-            e = model.energy(self._x)
-            top = e.max() if e.size else 0.0
-            near = e >= 0.3 * top
+            e = np.exp(np.minimum(pred, np.log(ymax) + 3.0)) if ymax > 0 else pred * 0.0
+            top = float(e[local].max())
+            near = local & (e >= 0.3 * top)
             n = int(near.sum())
             if n > 6 and top > 0:
                 sig = float(np.sqrt(np.sum((self._y[near] - e[near]) ** 2) / (n - 6)))
-                self._sigma_log = sig / max(
-                    float(model.energy(self._incumbent[None, :])[0]), 1e-300
-                )
+                inc = float(np.exp(min(float(model(self._incumbent[None, :])[0]), 700.0)))
+                self._sigma_log = sig / max(inc, 1e-300)
         else:
-            self._incumbent = self._x[int(np.argmax(pred))]
-            n = len(self._y)
+            idx = np.flatnonzero(local)
+            self._incumbent = self._x[idx[int(np.argmax(pred[idx]))]]
+            n = len(idx)
             if n > 6:
-                sig = float(np.sqrt(np.sum((self._y - pred) ** 2) / (n - 6)))
+                sig = float(np.sqrt(np.sum((self._y[idx] - pred[idx]) ** 2) / (n - 6)))
                 self._sigma_log = sig
         # re-centre the model on the incumbent (same function, better numbers)
         model = self._model
