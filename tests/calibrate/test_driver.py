@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import OPT, gaussian
 
+from conftest import OPT, gaussian
 from echocal.calibrate import (
     STATUS_MESSAGES,
     CalibrationResult,

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import OPT, gaussian, quadratic
 
+from conftest import OPT, gaussian, quadratic
 from echocal.calibrate import calibrate, get_method, method_names
 from echocal.calibrate.newton import newton_direction
 from echocal.calibrate.quasi_newton import bfgs_update

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import OPT, gaussian
 
+from conftest import OPT, gaussian
 from echocal.calibrate import FunctionObjective, calibrate
 from echocal.calibrate.acquisition import hex_spiral
 from echocal.calibrate.model_based import fit_quadratic, hexagon, trust_region_max
@@ -97,7 +97,7 @@ def test_acquisition_finds_a_narrow_peak_from_pure_noise(local):
 
 def test_auto_uses_the_noise_level_of_the_objective_and_reuses_the_first_ring():
     obj = FunctionObjective(gaussian, noise_sigma=SNR30, rng=1)
-    res = calibrate(obj, "auto", x0=OPT + [1.0, 0.5], max_iter=1, rng=0)
+    res = calibrate(obj, "auto", x0=OPT + np.array([1.0, 0.5]), max_iter=1, rng=0)
     # echo found in the first 7 points (x0 + hexagon), which double as the model's design:
     # one model-based iteration later the run has used exactly 8 measurements
     assert res.options["noise_sigma"] == SNR30 and res.n_measurements == 8
