@@ -22,7 +22,10 @@ app = typer.Typer(
 )
 
 # Command modules, in the order their commands appear in --help.
-_COMMAND_MODULES = ("echocal.cli.info",)
+_COMMAND_MODULES = (
+    "echocal.cli.info",
+    "echocal.cli.scene",
+)
 
 for _name in _COMMAND_MODULES:
     importlib.import_module(_name).register(app)

@@ -19,24 +19,15 @@ console = Console(stderr=True)
 
 
 def run_cli(app: typer.Typer) -> None:
-    """Run ``app``; echocal errors become one red line and exit code 2, not a traceback."""
-    try:
-        app(standalone_mode=False)
-    except EchocalError as exc:
-        console.print(f"[bold red]error:[/] {exc}")
-        sys.exit(2)
-    except typer.Abort:
-        console.print("[yellow]aborted[/]")
-        sys.exit(130)
-    except Exception as exc:  # click usage errors carry their own exit code
-        import click
+    """Run ``app``; echocal errors become one red line and exit code 2, not a traceback.
 
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            sys.exit(exc.exit_code)
-        if isinstance(exc, click.exceptions.Exit):
-            sys.exit(exc.exit_code)
-        raise
+    Usage errors (bad options) are reported by typer itself, also with exit code 2.
+    """
+    try:
+        app()
+    except EchocalError as exc:
+        console.print(f"[bold red]error:[/] {exc}", highlight=False)
+        sys.exit(2)
 
 
 def parse_pose(text: str, option: str = "--pose") -> Pose:

@@ -1,0 +1,49 @@
+"""``echocal scene``: a 3D picture of the probe against the part."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from echocal.cli._common import console, parse_pose
+from echocal.cli._setup_option import SETUP_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.io import atomic_path
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``echocal scene`` to ``app``."""
+
+    @app.command("scene")
+    def scene(
+        pose: Annotated[
+            list[str],
+            typer.Option(
+                "--pose",
+                help="X,Y,Z[,AZIMUTH,COELEVATION]: lengths in mm unless a unit is given, angles "
+                "in degrees. Repeat for several poses.",
+            ),
+        ],
+        setup: Annotated[str, typer.Option(help=SETUP_HELP)] = "thesis",
+        specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = None,
+        rays: Annotated[int, typer.Option(min=1, help="Rays drawn per pose.")] = 60,
+        out: Annotated[Path, typer.Option(help="Image file (.png or .svg).")] = Path(
+            "echocal-out/scene.png"
+        ),
+    ) -> None:
+        """Save a 3D view of specimen, transducer and a subsample of rays with their hits."""
+        from echocal.plots.scene import scene_figure
+
+        virtual = resolve_setup(setup, specimen=specimen)
+        poses = [parse_pose(p) for p in pose]
+        fig = scene_figure(
+            virtual.specimen,
+            virtual.transducer,
+            poses,
+            n_rays=rays,
+            reflection=virtual.reflection,
+        )
+        with atomic_path(out) as tmp:
+            fig.savefig(tmp, dpi=130, format=out.suffix.lstrip(".") or "png")
+        console.print(f"scene saved to [bold]{out}[/]")
