@@ -24,7 +24,9 @@ app = typer.Typer(
 # Command modules, in the order their commands appear in --help.
 _COMMAND_MODULES = (
     "echocal.cli.info",
+    "echocal.cli.pulse",
     "echocal.cli.scene",
+    "echocal.cli.calibrate",
 )
 
 for _name in _COMMAND_MODULES:

@@ -1,0 +1,148 @@
+"""``echocal calibrate``: find the orientation of maximum echo on a simulated setup."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from echocal.cli._common import console, parse_pair, parse_pose, write_json
+from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.io import atomic_path
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``echocal calibrate`` to ``app``."""
+
+    @app.command("calibrate")
+    def calibrate_command(
+        setup: Annotated[str, typer.Option(help=SETUP_HELP)] = "thesis",
+        method: Annotated[str, typer.Option(help="Calibration method (see `echocal methods`).")] = (
+            "auto"
+        ),
+        x0: Annotated[
+            str, typer.Option("--x0", help="Initial guess A,B [deg] in the parameterization.")
+        ] = "0,0",
+        position: Annotated[
+            str | None,
+            typer.Option(
+                help="X,Y,Z of the probe (mm unless a unit is given); default: the "
+                "setup's reference position."
+            ),
+        ] = None,
+        parameterization: Annotated[
+            str, typer.Option(help="'tilt' (pole-free gimbal tilts) or 'azimuth-coelevation'.")
+        ] = "tilt",
+        snr: Annotated[str | None, typer.Option(help=SNR_HELP)] = None,
+        specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = None,
+        budget: Annotated[int | None, typer.Option(help="Maximum number of measurements.")] = None,
+        max_iter: Annotated[int | None, typer.Option(help="Maximum iterations.")] = None,
+        preset: Annotated[
+            str | None, typer.Option(help="Method options preset, e.g. thesis-table-7.")
+        ] = None,
+        seed: Annotated[int, typer.Option(help="Seed for noise and randomized methods.")] = 0,
+        out: Annotated[Path, typer.Option(help="Folder for result.json and the plots.")] = Path(
+            "echocal-out/calibrate"
+        ),
+        plots: Annotated[bool, typer.Option(help="Save the convergence and path plots.")] = True,
+        json_output: Annotated[
+            bool, typer.Option("--json", help="Print the result as one JSON object.")
+        ] = False,
+    ) -> None:
+        """Calibrate the orientation at one position and compare with the true optimum."""
+        from echocal.calibrate import calibrate
+        from echocal.evaluation import evaluate_run
+        from echocal.measurement.objective import SourceObjective
+
+        virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
+        where = parse_pose(position, "--position").position if position else None
+        where = virtual.reference_position if where is None else where
+        objective = SourceObjective(virtual, where, parameterization=parameterization)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = calibrate(
+                objective,
+                method=method,
+                x0=parse_pair(x0, "--x0"),
+                budget=budget,
+                max_iter=max_iter,
+                preset=preset,
+                rng=seed,
+            )
+        for warning in caught:
+            console.print(f"[yellow]warning:[/] {warning.message}")
+        evaluation = evaluate_run(virtual, where, result)
+        out.mkdir(parents=True, exist_ok=True)
+        result.save_json(out / "result.json")
+        figures = _save_plots(virtual, where, evaluation, out) if plots else {}
+        summary = {
+            "setup": virtual.name,
+            "position_m": [float(v) for v in where],
+            "method": result.method,
+            "parameterization": parameterization,
+            "names": list(result.names),
+            "estimate_deg": [float(v) for v in result.x],
+            "truth_deg": [float(v) for v in evaluation.truth],
+            "error_deg": evaluation.error,
+            "n_measurements": result.n_measurements,
+            "n_iterations": result.n_iterations,
+            "status": result.status,
+            "message": result.message,
+            "files": {"result": str(out / "result.json"), **figures},
+        }
+        if json_output:
+            write_json(summary)
+            return
+        names = result.names
+        console.print(
+            f"[bold]{result.method}[/] on {virtual.description}\n"
+            f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
+            f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
+            f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
+            f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}   "
+            f"iterations {result.n_iterations}\n"
+            f"  stopped:  {result.message}\n"
+            f"  saved to  {out}/"
+        )
+
+
+def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
+    from echocal.evaluation import cost_map
+    from echocal.plots.calibration import convergence_figure, path_figure
+
+    result = evaluation.result
+    label = result.method
+    conv = convergence_figure(
+        {label: result},
+        {label: evaluation.iterate_values / evaluation.optimum_value},
+        optimum_value=1.0,
+        title=f"{label}: pseudo-energy of the estimate",
+    )
+    points = np.vstack([result.iterates, evaluation.truth[None, :]])
+    span = max(3.0, 1.3 * float(np.max(np.abs(points - evaluation.truth))))
+    centre = evaluation.truth
+    cmap = cost_map(
+        virtual,
+        where,
+        parameterization=result.parameterization,
+        a_range=(centre[0] - span, centre[0] + span),
+        b_range=(centre[1] - span, centre[1] + span),
+        n=41,
+    )
+    path = path_figure(
+        cmap,
+        {label: result},
+        x0=result.iterates[0],
+        truth=evaluation.truth,
+        title=f"{label}: path over the cost map",
+    )
+    files = {}
+    for name, fig in (("convergence", conv), ("path", path)):
+        target = out / f"{name}.png"
+        with atomic_path(target) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+        files[name] = str(target)
+    return files

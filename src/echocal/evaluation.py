@@ -1,0 +1,134 @@
+"""Judging a calibration run against the truth only the simulator knows.
+
+A :class:`~echocal.calibrate.CalibrationResult` says what a method *measured*;
+:func:`evaluate_run` adds what it *achieved*: the angular error of its
+estimate and of every iterate against the true optimum, the noiseless metric
+at every iterate (the thesis's "pseudo-energy vs iterations" curves), and how
+many measurements it needed to get within a tolerance.  The angular error is
+the angle between beam directions, so it means the same in either
+parameterization.  None of this is visible to the calibration method.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal.calibrate.result import CalibrationResult
+from echocal.geometry import angle_between, convert_angles, orientation_normal
+from echocal.measurement.virtual import VirtualSetup
+from echocal.plots.calibration import CostMap
+
+__all__ = ["RunEvaluation", "angular_error", "cost_map", "evaluate_run", "nearest_equivalent"]
+
+FloatArray = NDArray[np.float64]
+
+_AXES = {"azimuth-coelevation": ("azimuth", "coelevation"), "tilt": ("tilt_x", "tilt_y")}
+
+
+def angular_error(points: ArrayLike, truth: ArrayLike, parameterization: str) -> FloatArray:
+    """[deg] angle between the beams of ``points`` (shape (..., 2)) and ``truth`` (2,)."""
+    pts = np.asarray(points, dtype=np.float64)
+    az, coel = convert_angles(pts[..., 0], pts[..., 1], parameterization, "azimuth-coelevation")
+    taz, tcoel = convert_angles(truth[0], truth[1], parameterization, "azimuth-coelevation")
+    return angle_between(orientation_normal(az, coel), orientation_normal(taz, tcoel))
+
+
+@dataclass(frozen=True)
+class RunEvaluation:
+    """A calibration result judged against the truth.
+
+    Attributes
+    ----------
+    result : the run.
+    truth : [deg] the true optimum in the run's parameterization, shape (2,).
+    error : [deg] angle between the estimate's beam and the true optimum's.
+    iterate_errors : [deg] the same for x0 and every iterate, shape (n_iterations + 1,).
+    iterate_values : noiseless metric at x0 and every iterate, shape (n_iterations + 1,).
+    optimum_value : noiseless metric at the true optimum.
+    """
+
+    result: CalibrationResult
+    truth: FloatArray
+    error: float
+    iterate_errors: FloatArray
+    iterate_values: FloatArray
+    optimum_value: float
+
+    def measurements_to(self, tolerance: float) -> int | None:
+        """Measurements used when the iterates first came (and stayed) within ``tolerance`` [deg].
+
+        None if the final estimate is not within the tolerance.
+        """
+        if self.error > tolerance:
+            return None
+        outside = np.nonzero(self.iterate_errors > tolerance)[0]
+        first_inside = 0 if outside.size == 0 else int(outside[-1]) + 1
+        counts = self.result.iteration_measurements
+        if first_inside >= len(counts):
+            return int(self.result.n_measurements)
+        return int(counts[first_inside])
+
+
+def nearest_equivalent(angles: ArrayLike, near: ArrayLike, parameterization: str) -> FloatArray:
+    """The representation of orientation ``angles`` [deg] closest to ``near`` [deg].
+
+    (φ, θ), (φ ± 180°, −θ) and (φ ± 360°, θ) are the same beam; tilts are unique.
+    """
+    angles = np.asarray(angles, dtype=np.float64)
+    if parameterization == "tilt":
+        return angles
+    az, coel = angles
+    candidates = np.array([(az + k * 180.0, coel if k % 2 == 0 else -coel) for k in range(-3, 4)])
+    distance = np.hypot(*(candidates - np.asarray(near, dtype=np.float64)).T)
+    return candidates[int(np.argmin(distance))]
+
+
+def evaluate_run(
+    setup: VirtualSetup,
+    position: ArrayLike,
+    result: CalibrationResult,
+    *,
+    metric: str = "pseudo-energy",
+) -> RunEvaluation:
+    """Judge ``result`` (measured at ``position`` [m]) against ``setup``'s truth."""
+    param = result.parameterization
+    truth = nearest_equivalent(
+        setup.true_optimum(position, parameterization=param, metric=metric), result.x, param
+    )
+    iterates = np.asarray(result.iterates, dtype=np.float64)
+    values = setup.metric_values(
+        position, iterates[:, 0], iterates[:, 1], parameterization=param, metric=metric
+    )
+    optimum = float(
+        setup.metric_values(position, truth[0], truth[1], parameterization=param, metric=metric)
+    )
+    return RunEvaluation(
+        result=result,
+        truth=truth,
+        error=float(angular_error(result.x, truth, param)),
+        iterate_errors=angular_error(iterates, truth, param),
+        iterate_values=values,
+        optimum_value=optimum,
+    )
+
+
+def cost_map(
+    setup: VirtualSetup,
+    position: ArrayLike,
+    *,
+    parameterization: str = "tilt",
+    a_range: tuple[float, float] = (-20.0, 20.0),
+    b_range: tuple[float, float] = (-20.0, 20.0),
+    n: int = 61,
+    metric: str = "pseudo-energy",
+) -> CostMap:
+    """Noiseless metric on an ``n × n`` grid of orientations [deg] (one batched simulation)."""
+    a = np.linspace(*a_range, n)
+    b = np.linspace(*b_range, n)
+    values = setup.metric_values(
+        position, a[:, None], b[None, :], parameterization=parameterization, metric=metric
+    )
+    return CostMap(a=a, b=b, values=values, names=_AXES[parameterization])

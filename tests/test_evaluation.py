@@ -1,0 +1,89 @@
+"""Judging calibration runs against the simulator's truth; the `echocal calibrate` command."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from echocal.calibrate import calibrate
+from echocal.cli import app
+from echocal.evaluation import angular_error, cost_map, evaluate_run, nearest_equivalent
+from echocal.measurement.objective import SourceObjective
+from echocal.setups import load_setup
+
+POSITION = np.array([0.01, 0.0, 0.022])  # over the thesis block's right facet
+
+
+@pytest.fixture(scope="module")
+def thesis():
+    return load_setup("thesis", seed=1)
+
+
+def test_angular_error_is_parameterization_free():
+    # (φ, θ) and (φ + 180°, −θ) are one beam; tilts of the same beam agree too.
+    assert angular_error([195.0, -6.0], [15.0, 6.0], "azimuth-coelevation") < 1e-12
+    assert angular_error([0.0, 1.0], [0.0, 0.0], "tilt") == pytest.approx(1.0, rel=1e-9)
+
+
+def test_nearest_equivalent_picks_the_signed_form_near_the_start():
+    np.testing.assert_allclose(
+        nearest_equivalent([165.0, 6.0], [0.0, 0.0], "azimuth-coelevation"), [-15.0, -6.0]
+    )
+    np.testing.assert_allclose(nearest_equivalent([1.0, 2.0], [90.0, 0.0], "tilt"), [1.0, 2.0])
+
+
+def test_evaluate_run_and_measurements_to_tolerance(thesis):
+    objective = SourceObjective(thesis, POSITION, parameterization="tilt")
+    result = calibrate(objective, method="gradient", x0=(0.0, 0.0), max_iter=25, rng=0, mu=2.0)
+    ev = evaluate_run(thesis, POSITION, result)
+    assert ev.iterate_errors.shape == (result.n_iterations + 1,)
+    assert ev.iterate_errors[0] == pytest.approx(float(np.hypot(*ev.truth)), rel=0.05)
+    assert ev.error == pytest.approx(ev.iterate_errors[-1])
+    # The noiseless metric never exceeds its value at the true optimum (it is the maximum).
+    assert np.all(ev.iterate_values <= ev.optimum_value * (1 + 1e-9))
+    n = ev.measurements_to(10.0)  # x0 is within 10° of the truth: zero measurements needed
+    assert n == 0
+    assert ev.measurements_to(1e-9) is None
+
+
+def test_cost_map_peaks_at_the_truth(thesis):
+    truth = thesis.true_optimum(POSITION, parameterization="tilt")
+    cmap = cost_map(thesis, POSITION, a_range=(-15, 15), b_range=(-15, 15), n=31)
+    i, j = np.unravel_index(np.argmax(cmap.values), cmap.values.shape)
+    # Grid step 1°: the best grid node is within one step of the truth in each angle.
+    assert abs(cmap.a[i] - truth[0]) <= 1.0 and abs(cmap.b[j] - truth[1]) <= 1.0
+
+
+def test_calibrate_command_prints_json_and_saves_files(tmp_path):
+    result = CliRunner().invoke(
+        app,
+        [
+            "calibrate",
+            "--setup",
+            "thesis",
+            "--position",
+            "10,0,22",
+            "--method",
+            "gradient",
+            "--max-iter",
+            "5",
+            "--out",
+            str(tmp_path),
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["n_measurements"] == 20  # FD gradient: 4 measurements per iteration
+    assert len(summary["truth_deg"]) == 2 and summary["error_deg"] >= 0
+    for name in ("result.json", "convergence.png", "path.png"):
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_calibrate_command_bad_method_is_one_line(tmp_path):
+    result = CliRunner().invoke(app, ["calibrate", "--method", "magic", "--out", str(tmp_path)])
+    assert result.exit_code != 0
+    assert "magic" in str(result.exception) or "magic" in result.output
