@@ -168,8 +168,18 @@ class Pulse(ABC):
     def bandwidth_6db(self) -> tuple[float, float]:
         """[Hz] lower and upper frequency where |W| is −6 dB (half) of its peak."""
         f, mag = self._spectral_scan
-        above = np.nonzero(mag >= 0.5 * mag.max())[0]
-        return float(f[above[0]]), float(f[above[-1]])
+        half = 0.5 * mag.max()
+        above = np.nonzero(mag >= half)[0]
+        lo, hi = above[0], above[-1]
+
+        def cross(i: int, j: int) -> float:  # linear interpolation of the −6 dB crossing
+            if mag[i] == mag[j]:
+                return float(f[i])
+            return float(f[i] + (half - mag[i]) * (f[j] - f[i]) / (mag[j] - mag[i]))
+
+        f_lo = cross(lo - 1, lo) if lo > 0 else float(f[0])
+        f_hi = cross(hi, hi + 1) if hi + 1 < f.size else float(f[-1])
+        return f_lo, f_hi
 
     @cached_property
     def _envelope_scan(self) -> tuple[_F64, _F64]:
