@@ -19,7 +19,7 @@ demo: setup
 	$(BIN)/echocal info
 
 lint: setup
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests $(wildcard benchmarks)
 
 test: lint
 	$(BIN)/python -m pytest -n 2 --timeout=600
