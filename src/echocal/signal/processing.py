@@ -9,9 +9,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from types import MappingProxyType
 
 import numpy as np
+import scipy.fft
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal as sps
 
@@ -28,6 +30,7 @@ __all__ = [
     "energy_db",
     "envelope",
     "get_metric",
+    "matched_envelope",
     "matched_filter",
     "metric_names",
     "peak_amplitude",
@@ -52,22 +55,52 @@ def _samples(samples: ArrayLike, window: RecordingWindow | None = None) -> _F64:
     return x
 
 
+@lru_cache(maxsize=32)
+def _matched_transfer(pulse: Pulse, fs: float, n: int) -> tuple[int, NDArray[np.complex128]]:
+    """(FFT length, conj(DFT of the template w(j/fs), j = −J..J) / fs) for length-n A-scans."""
+    half = math.ceil(pulse.support * fs)
+    n_fft = scipy.fft.next_fast_len(n + half + 1, real=True)
+    j = np.arange(-half, half + 1)
+    placed = np.zeros(n_fft)
+    placed[j % n_fft] = pulse.waveform(j / fs)
+    transfer = np.conj(scipy.fft.rfft(placed)) / fs
+    transfer.setflags(write=False)
+    return n_fft, transfer
+
+
+def _matched_spectrum(x: _F64, pulse: Pulse, fs: float) -> tuple[int, NDArray[np.complex128]]:
+    n_fft, transfer = _matched_transfer(pulse, float(fs), x.shape[-1])
+    return n_fft, scipy.fft.rfft(x, n=n_fft, axis=-1) * transfer
+
+
 def matched_filter(samples: ArrayLike, pulse: Pulse, fs: float) -> _F64:
     """Correlate each A-scan with the transmitted pulse w sampled at ``fs`` [Hz].
 
     y[m] = Σⱼ x[m + j]·w(j/fs) / fs ≈ ∫ x(t)·w(t − t_m) dt, same length as ``samples``,
-    so a single echo w(t − τ) peaks at sample m = (τ − start)·fs.
+    so a single echo w(t − τ) peaks at sample m = (τ − start)·fs.  Computed by FFT with
+    zero padding (linear, not circular, correlation).
 
     Returns
     -------
     [a.u.²·s] shape ``(..., n_samples)``.
     """
     x = _samples(samples)
-    fs = float(fs)
-    half = math.ceil(pulse.support * fs)
-    template = pulse.waveform(np.arange(-half, half + 1) / fs)
-    kernel = template[::-1].reshape((1,) * (x.ndim - 1) + (-1,))
-    return sps.fftconvolve(x, kernel, mode="same", axes=-1) / fs
+    n_fft, spec = _matched_spectrum(x, pulse, fs)
+    return scipy.fft.irfft(spec, n=n_fft, axis=-1)[..., : x.shape[-1]]
+
+
+def matched_envelope(samples: ArrayLike, pulse: Pulse, fs: float) -> _F64:
+    """Envelope |analytic signal| of :func:`matched_filter`'s output, shape of ``samples``.
+
+    One FFT pair: the analytic signal is formed directly from the correlation's spectrum.
+    """
+    x = _samples(samples)
+    n_fft, spec = _matched_spectrum(x, pulse, fs)
+    full = np.zeros((*spec.shape[:-1], n_fft), dtype=np.complex128)
+    m = spec.shape[-1]
+    full[..., :m] = spec
+    full[..., 1 : (n_fft + 1) // 2] *= 2.0  # positive frequencies doubled, negative zero
+    return np.abs(scipy.fft.ifft(full, axis=-1)[..., : x.shape[-1]])
 
 
 def envelope(samples: ArrayLike) -> _F64:
@@ -198,7 +231,7 @@ def time_of_flight(
     fraction of a sample by Gaussian interpolation.
     """
     x = _samples(samples, window)
-    env = envelope(matched_filter(x, pulse, window.fs))
+    env = matched_envelope(x, pulse, window.fs)
     if gate is not None:
         env = np.where(gate.mask(window), env, 0.0)
     return window.start + _peak_position(env) / window.fs
@@ -220,7 +253,7 @@ def _energy_window(
         raise EchocalValueError(f"window_length must be > 0; got {length:g}")
     half = round(0.5 * length * window.fs)
     n = x.shape[-1]
-    env = envelope(matched_filter(x, pulse, window.fs))
+    env = matched_envelope(x, pulse, window.fs)
     centre = np.argmax(env, axis=-1)
     cs = np.concatenate([np.zeros((*x.shape[:-1], 1)), np.cumsum(x * x, axis=-1)], axis=-1)
     lo = np.clip(centre - half, 0, n)
