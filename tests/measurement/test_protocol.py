@@ -17,10 +17,23 @@ from echocal.measurement.limits import PositionerLimits
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
 
-@given(st.tuples(finite, finite, finite, finite, finite))
-def test_pose_round_trip_is_exact(values: tuple[float, ...]) -> None:
-    pose = Pose(*values)
-    assert protocol.decode_pose(protocol.encode_pose(pose)) == pose
+@given(st.tuples(finite, finite, finite, finite, finite), st.booleans())
+def test_pose_round_trip_is_exact(values: tuple[float, ...], gimbal: bool) -> None:
+    pose = Pose(*values, gimbal=gimbal)
+    text = protocol.encode_pose(pose)
+    assert text.endswith(" GIMBAL") == gimbal
+    assert protocol.decode_pose(text) == pose
+
+
+def test_gimbal_flag_is_the_only_sixth_token() -> None:
+    pose = protocol.decode_pose("0 0 0.02 30 4 GIMBAL")
+    assert pose == Pose(0.0, 0.0, 0.02, 30.0, 4.0, gimbal=True)
+    # same beam axis, different roll about it: that is what the flag carries
+    plain = Pose(0.0, 0.0, 0.02, 30.0, 4.0)
+    np.testing.assert_allclose(pose.frame[:, 2], plain.frame[:, 2], atol=1e-15)
+    assert not np.allclose(pose.frame[:, 0], plain.frame[:, 0], atol=1e-3)
+    with pytest.raises(InstrumentError, match="5 numbers"):
+        protocol.decode_pose("0 0 0.02 30 4 TILT")
 
 
 @given(

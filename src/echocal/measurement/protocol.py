@@ -18,6 +18,13 @@ client sends              instrument answers
 ``BYE``                   ``OK``, then the instrument closes the connection
 ========================  ===========================================================
 
+A pose may end with the flag ``GIMBAL`` (``MOVE x y z az coel GIMBAL``; ``POS?``
+then answers with the flag too): the beam axis is the same, but the probe's roll
+about it is that of a gimbal (tilt-x, tilt-y) positioner, as for poses made with
+:meth:`~echocal.geometry.Pose.from_tilt`.  Without it the roll is that of an
+(azimuth, co-elevation) positioner (thesis eqs. 9-10).  The roll matters for
+non-round apertures.
+
 Error codes after ``ERR``: ``LIMIT`` (pose out of the positioner's limits; the
 client raises :class:`~echocal.errors.LimitError`), ``SYNTAX`` (malformed or
 unknown command), ``FAULT`` (the instrument failed).  Any other reply is nonsense
@@ -43,6 +50,7 @@ from echocal.measurement.limits import PositionerLimits
 __all__ = [
     "COMMANDS",
     "ENCODING",
+    "GIMBAL",
     "MAX_LINE_BYTES",
     "ProtocolError",
     "decode_ascan_header",
@@ -63,6 +71,9 @@ MAX_LINE_BYTES = 64 * 1024 * 1024
 
 COMMANDS = ("*IDN?", "MOVE", "POS?", "ACQ?", "LIMITS?", "BYE")
 """Every command the protocol knows."""
+
+GIMBAL = "GIMBAL"
+"""Trailing flag of a pose whose probe frame is the gimbal's (tilt positioner)."""
 
 _LIMIT_AXES = ("x", "y", "z", "azimuth", "coelevation")
 
@@ -111,13 +122,22 @@ def decode_floats(text: str, count: int, what: str, *, allow_inf: bool = False) 
 
 
 def encode_pose(pose: Pose) -> str:
-    """``"x y z az coel"`` ([m] and [deg]) as used by ``MOVE`` and ``POS?``."""
-    return " ".join(format_float(v) for v in pose.as_array())
+    """``"x y z az coel"`` ([m] and [deg]) as used by ``MOVE`` and ``POS?``.
+
+    A gimbal pose (:meth:`~echocal.geometry.Pose.from_tilt`) gets the trailing
+    flag ``GIMBAL``: same beam axis, but the probe's roll is the gimbal's.
+    """
+    text = " ".join(format_float(v) for v in pose.as_array())
+    return f"{text} {GIMBAL}" if pose.gimbal else text
 
 
 def decode_pose(text: str, what: str = "pose") -> Pose:
-    """Inverse of :func:`encode_pose`."""
-    return Pose(*decode_floats(text, 5, what))
+    """Inverse of :func:`encode_pose` (5 numbers, optionally followed by ``GIMBAL``)."""
+    tokens = text.split()
+    gimbal = len(tokens) == 6 and tokens[-1] == GIMBAL
+    if gimbal:
+        text = " ".join(tokens[:5])
+    return Pose(*decode_floats(text, 5, what), gimbal=gimbal)
 
 
 def encode_limits(limits: PositionerLimits) -> str:
