@@ -73,30 +73,63 @@ def _as_shapes(specimen: Specimen | Shape | Iterable[Shape]) -> tuple[Shape, ...
         ) from None
 
 
-_CHUNK = 8192  # rays per kernel call
+_CHUNK = 16384  # rays per kernel call: keeps the kernels' temporaries in cache
 
 
 def _closest(
     shapes: tuple[Shape, ...], o: FloatArray, d: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.int64]]:
-    """Closest hit over ``shapes`` of rays (3, M): distance, point (3, M), normal (3, M), index."""
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """Closest hit over ``shapes`` of rays (3, M): distance (M,), normal (3, M), index (M,)."""
     m = o.shape[1]
-    best_t = np.full(m, np.inf)
-    best_n = np.zeros((3, m))
-    best_i = np.full(m, -1, dtype=np.int64)
-    for index, shape in enumerate(shapes):
+    if not shapes:
+        return np.full(m, np.inf), np.zeros((3, m)), np.full(m, -1, dtype=np.int64)
+    best_t, best_n = shapes[0]._intersect_soa(o, d)
+    best_i = np.where(best_t < np.inf, 0, -1)
+    for index, shape in enumerate(shapes[1:], start=1):
         t, n = shape._intersect_soa(o, d)
         closer = t < best_t
-        if index == 0:
-            best_t, best_n = t, n
-        else:
-            best_t = np.where(closer, t, best_t)
-            best_n = np.where(closer, n, best_n)
+        best_t = np.where(closer, t, best_t)
+        best_n = np.where(closer, n, best_n)
         best_i[closer] = index
-    hit = best_i >= 0
-    point = o + np.where(hit, best_t, 0.0) * d
-    point[:, ~hit] = np.inf
-    return best_t, point, best_n, best_i
+    return best_t, best_n, best_i
+
+
+def _cast_soa(
+    shapes: tuple[Shape, ...], o: FloatArray, d: FloatArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """Internal fast path of :func:`cast`: no checks, no copies of the rays.
+
+    Parameters
+    ----------
+    shapes : the specimen's shapes.
+    o : [m] finite origins, shape ``(3, M)`` (structure of arrays).
+    d : finite **unit** directions, shape ``(3, M)``.
+
+    Returns
+    -------
+    distance [m] ``(M,)`` (``inf`` for a miss), normal ``(3, M)`` (facing the ray,
+    zeros for a miss), shape index ``(M,)`` (−1 for a miss).
+    """
+    m = o.shape[1]
+    if m <= _CHUNK:
+        return _closest(shapes, o, d)
+    distance = np.empty(m)
+    normal = np.empty((3, m))
+    shape_index = np.empty(m, dtype=np.int64)
+    # chunks keep the kernels' temporaries in cache for large batches
+    for lo in range(0, m, _CHUNK):
+        sl = slice(lo, min(m, lo + _CHUNK))
+        distance[sl], normal[:, sl], shape_index[sl] = _closest(shapes, o[:, sl], d[:, sl])
+    return distance, normal, shape_index
+
+
+def _hit_points(o: FloatArray, d: FloatArray, distance: FloatArray) -> FloatArray:
+    """Hit points ``o + t·d`` [m], shape ``(3, ...)``; ``inf`` where ``distance`` is inf."""
+    hit = distance < np.inf
+    point = d * np.where(hit, distance, 0.0)
+    point += o
+    np.copyto(point, np.inf, where=~hit)
+    return point
 
 
 def cast(
@@ -133,19 +166,9 @@ def cast(
     if np.any(norm == 0.0):
         raise EchocalValueError("directions must be non-zero vectors; got a zero vector")
     if np.any(np.abs(norm - 1.0) > 1e-12):
-        d_soa /= norm
-    m = o_soa.shape[1]
-    distance = np.empty(m)
-    point = np.empty((3, m))
-    normal = np.empty((3, m))
-    shape_index = np.empty(m, dtype=np.int64)
-    # chunks keep the kernels' temporaries in cache for large batches
-    for lo in range(0, max(m, 1), _CHUNK):
-        hi = min(m, lo + _CHUNK)
-        sl = slice(lo, hi)
-        distance[sl], point[:, sl], normal[:, sl], shape_index[sl] = _closest(
-            shapes, o_soa[:, sl], d_soa[:, sl]
-        )
+        d_soa = d_soa / norm  # a new array: d_soa may be a view of the caller's data
+    distance, normal, shape_index = _cast_soa(shapes, o_soa, d_soa)
+    point = _hit_points(o_soa, d_soa, distance)
     # (3, M) -> (..., N, 3) as transposed views (no copy)
     return Hits(
         distance=distance.reshape(batch),

@@ -210,6 +210,14 @@ class Transducer:
         weights = np.asarray(self.directivity(self.ray_angles), dtype=np.float64)
         weights.setflags(write=False)
         object.__setattr__(self, "_weights", weights)
+        # Constants of the ray kernel (structure of arrays, one GEMM per pose batch):
+        # origins = [x', y', c] @ [u; v; 1], directions = [x', y', n] @ [du; dv; dn].
+        pixels_h = np.ascontiguousarray(np.vstack([local, np.ones(local.shape[1])]))
+        dirs_soa = np.ascontiguousarray(dirs.T)
+        pixels_h.setflags(write=False)
+        dirs_soa.setflags(write=False)
+        object.__setattr__(self, "_pixels_h", pixels_h)
+        object.__setattr__(self, "_dirs_soa", dirs_soa)
 
     def _local_pixels(self) -> FloatArray:
         u = (np.arange(self.n_h) + 0.5) / self.n_h * self.width - self.width / 2
@@ -275,7 +283,25 @@ class Transducer:
         """
         positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         frames = np.asarray(frames, dtype=np.float64).reshape(-1, 3, 3)
-        in_plane = frames[:, :, :2]  # T = [x', y'], shape (P, 3, 2)
-        origins = positions[:, None, :] + np.einsum("pik,kn->pni", in_plane, self.local_pixels)
-        directions = np.einsum("pik,nk->pni", frames, self.local_directions)
-        return RayBundle(origins=origins, directions=directions, weights=self.weights)
+        o, d = self._rays_soa(positions, frames)
+        # (3, P, N) -> (P, N, 3) as transposed views (no copy)
+        return RayBundle(
+            origins=o.transpose(1, 2, 0), directions=d.transpose(1, 2, 0), weights=self.weights
+        )
+
+    def _rays_soa(self, positions: FloatArray, frames: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Kernel of :meth:`rays`: float64 ``(P, 3)``, ``(P, 3, 3)`` in, no checks.
+
+        Returns origins [m] and unit directions in structure-of-arrays layout
+        ``(3, n_poses, n_rays)`` (C-contiguous): component k of ray n at pose p is
+        ``[k, p, n]``.  Each is one matrix product ``(3P, 3) @ (3, n_rays)``.
+        """
+        p = positions.shape[0]
+        frames_t = frames.transpose(1, 0, 2)  # (3, P, 3): [k, p, j] = frame[p][k, j]
+        lhs = np.empty((3, p, 3))
+        lhs[:, :, :2] = frames_t[:, :, :2]
+        lhs[:, :, 2] = positions.T
+        origins = (lhs.reshape(3 * p, 3) @ self._pixels_h).reshape(3, p, -1)  # type: ignore[attr-defined]
+        lhs[:] = frames_t
+        directions = (lhs.reshape(3 * p, 3) @ self._dirs_soa).reshape(3, p, -1)  # type: ignore[attr-defined]
+        return origins, directions
