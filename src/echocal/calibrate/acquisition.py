@@ -6,9 +6,12 @@ it, ring by ring (ring k: radius k·``spacing``, 6k points), in batches of at
 most ``batch`` points (default 1: stop at the first detection; within a ring the
 points nearest to the strongest value so far come first), until a value is *clearly above noise*:
 
-    max(values) − median(values) > ``threshold`` · σ   (default 5),
+    max_i (m_i − floor) / (σ / √n_i) > ``threshold``   (default 5),
 
-with σ the objective's known noise level (``noise_sigma``, e.g. from the
+where m_i is the mean of point i and its n_i − 1 measured lattice neighbours
+(averaging makes a peak detectable even when no single value stands out, as
+at 10 dB), the floor is the objective's ``noise_floor`` or the median of the
+values, and σ the objective's known noise level (``noise_sigma``, e.g. from the
 source's SNR) or else a robust estimate 1.4826 · MAD of the values measured
 so far (noise points are the majority while searching).  At least the first 7
 points (x0 and ring 1) are measured before deciding.  Then the local method
@@ -29,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import nonnegative_float, positive_float, positive_int
+from echocal._validate import finite_float, nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import get_method, register_method
@@ -67,6 +70,7 @@ class Acquisition(Optimizer):
     max_radius : [deg] give up beyond this distance from x0.
     threshold : detection threshold in units of σ.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
+    noise_floor : [energy units] mean value of pure noise (None: median of the data).
     batch : maximum points per acquisition ask (1 = stop at the first detection).
     """
 
@@ -80,6 +84,7 @@ class Acquisition(Optimizer):
         max_radius: float = 20.0,
         threshold: float = 5.0,
         noise_sigma: float | None = None,
+        noise_floor: float | None = None,
         batch: int = 1,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
@@ -100,6 +105,7 @@ class Acquisition(Optimizer):
         self.noise_sigma = (
             None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
         )
+        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
         self.batch = positive_int("batch", batch)
         n_rings = max(1, int(np.ceil(self.max_radius / self.spacing)))
         pts = np.vstack(hex_spiral(self.x0, self.spacing, n_rings))
@@ -111,6 +117,8 @@ class Acquisition(Optimizer):
         self._next = 0
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
+        self._sum = np.zeros(0)
+        self._cnt = np.zeros(0, dtype=np.int64)
         self.local: Optimizer | None = None
         """The local optimizer once the echo has been found."""
         self.found_at: int | None = None
@@ -124,18 +132,38 @@ class Acquisition(Optimizer):
     def min_budget(self) -> int:
         return min(7, len(self._queue)) if len(self._queue) else 1
 
-    def _detected(self) -> bool:
+    def _add(self, points: FloatArray, values: FloatArray) -> None:
+        """Append measurements and update the neighbour sums (lattice neighbours: points
+        within 1.01 spacing, each point being its own neighbour)."""
+        for p, v in zip(points, values, strict=True):
+            near = np.hypot(*(self._x - p).T) <= 1.01 * self.spacing if len(self._x) else []
+            self._sum[near] += v
+            self._cnt[near] += 1
+            self._sum = np.append(self._sum, v + float(np.sum(self._y[near])))
+            self._cnt = np.append(self._cnt, 1 + int(np.count_nonzero(near)))
+            self._x = np.vstack([self._x, p[None, :]])
+            self._y = np.append(self._y, v)
+
+    def scores(self) -> FloatArray:
+        """Detection statistic per measured point, shape (n,): z-score of the mean of the
+        point and its measured lattice neighbours above the noise floor."""
         y = self._y
-        if len(y) < min(7, len(self._queue)) or len(y) == 0:
-            return False
-        med = float(np.median(y))
+        floor = float(np.median(y)) if self.noise_floor is None else self.noise_floor
         sigma = self.noise_sigma
         if sigma is None:
-            sigma = 1.4826 * float(np.median(np.abs(y - med)))
-        return float(y.max()) - med > self.threshold * sigma
+            sigma = 1.4826 * float(np.median(np.abs(y - np.median(y))))
+        mean = self._sum / self._cnt
+        if sigma <= 0.0:
+            return np.where(mean > floor, np.inf, -np.inf)
+        return (mean - floor) / (sigma / np.sqrt(self._cnt))
+
+    def _detected(self) -> bool:
+        if len(self._y) < min(7, len(self._queue)) or len(self._y) == 0:
+            return False
+        return bool(np.max(self.scores()) > self.threshold)
 
     def _start_local(self) -> None:
-        best = self._x[int(np.argmax(self._y))]
+        best = self._x[int(np.argmax(self.scores()))]
         opts = dict(self.local_options)
         params = inspect.signature(self._local_cls.__init__).parameters
         if "history" in params:
@@ -165,8 +193,7 @@ class Acquisition(Optimizer):
             return done
         self._next += len(points)
         ok = ~self.last_nan
-        self._x = np.vstack([self._x, points[ok]])
-        self._y = np.concatenate([self._y, values[ok]])
+        self._add(points[ok], values[ok])
         if len(self._y) and self._next < len(self._queue):
             # search first where the echo is strongest so far: within each ring, the points
             # nearest to the best value come first

@@ -89,6 +89,7 @@ def build_optimizer(
         )
     if wrap:
         aknown.setdefault("noise_sigma", objective.noise_sigma)
+        aknown.setdefault("noise_floor", objective.noise_floor)
         if issubclass(cls, Acquisition):  # pragma: no cover - excluded above
             raise AssertionError
         used = {**known, "acquire": aknown}
@@ -99,6 +100,7 @@ def build_optimizer(
     if issubclass(cls, Acquisition):
         known.update({k: v for k, v in acq_opts.items() if k in _accepted(cls)})
         known.setdefault("noise_sigma", objective.noise_sigma)
+        known.setdefault("noise_floor", objective.noise_floor)
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
 
 

@@ -105,6 +105,7 @@ def fit_quadratic(
     scale: float,
     locality: float | None = None,
     floor: float = 0.0,
+    refine: bool = True,
 ) -> QuadraticModel | None:
     """Weighted least-squares quadratic fit (see module docstring); None if underdetermined.
 
@@ -114,11 +115,15 @@ def fit_quadratic(
         (at the noise floor log y says nothing about log f, and its residual would grow
         with the squared distance from the peak); if fewer than 8 remain, the 8 largest
         positive values are used.
+    refine : log space only — starting from that weighted log fit, fit f = exp(m) to *all*
+        local values (noise-floor and negative ones included) by nonlinear least squares
+        with equal weights, the maximum-likelihood fit for additive noise of fixed σ.
     """
     if locality is not None:
         near = np.hypot(*(points - center).T) <= locality
         points, values = points[near], values[near]
-    d = (points - center) / scale
+    d_all, y_all = (points - center) / scale, values
+    d = d_all
     if space == "log":
         keep = values > 0.0
         if np.any(keep) and floor > 0.0:
@@ -149,9 +154,74 @@ def fit_quadratic(
     coef, *_ = np.linalg.lstsq(a, rhs, rcond=None)
     if not np.all(np.isfinite(coef)):
         return None
+    if space == "log" and refine and len(y_all) >= 7:
+        coef = _refine_exp_fit(d_all, y_all, coef)
     b = coef[1:3] / scale
     h = np.array([[2.0 * coef[3], coef[4]], [coef[4], 2.0 * coef[5]]]) / scale**2
     return QuadraticModel(center=center.copy(), c=float(coef[0]), b=b, H=h, space=space)
+
+
+_PRIOR = np.array([-0.5, 0.0, -0.5])
+_PRIOR_STD = 0.5
+
+
+def _features(d: FloatArray) -> FloatArray:
+    return np.stack(
+        [np.ones(len(d)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
+    )
+
+
+def _refine_exp_fit(d: FloatArray, y: FloatArray, coef: FloatArray) -> FloatArray:
+    """Least squares of y ≈ exp(φ(d)·β) from ``coef``; the start is kept if not improved."""
+    from scipy.optimize import least_squares
+
+    phi = _features(d)
+    ymax = float(np.max(np.abs(y)))
+    if ymax <= 0.0:
+        return coef
+    yn = y / ymax
+    start = coef.copy()
+    start[0] -= np.log(ymax)
+
+    def model(beta: FloatArray) -> FloatArray:
+        return np.exp(np.minimum(phi @ beta, 50.0))
+
+    def res(beta: FloatArray) -> FloatArray:
+        return model(beta) - yn
+
+    def jac(beta: FloatArray) -> FloatArray:
+        return model(beta)[:, None] * phi
+
+    r0 = res(start)
+    try:
+        out = least_squares(res, start, jac=jac, method="lm", max_nfev=200)
+    except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
+        return coef
+    if not (np.all(np.isfinite(out.x)) and out.cost < 0.5 * float(r0 @ r0)):
+        return coef
+    n = len(y)
+    if n > 6:
+        # weak prior on the curvature: a peak about as wide as the design radius
+        # (scaled coordinates: -1/2 on the diagonal), std _PRIOR_STD, weighed against
+        # the data with their noise estimate (negligible at high SNR, stabilizing at low)
+        sig = np.sqrt(2.0 * out.cost / (n - 6))
+        wp = sig / _PRIOR_STD
+
+        def res_p(beta: FloatArray) -> FloatArray:
+            return np.concatenate([res(beta), wp * (beta[3:] - _PRIOR)])
+
+        def jac_p(beta: FloatArray) -> FloatArray:
+            return np.vstack([jac(beta), wp * np.eye(6)[3:]])
+
+        try:
+            out2 = least_squares(res_p, out.x, jac=jac_p, method="lm", max_nfev=200)
+            if np.all(np.isfinite(out2.x)):
+                out = out2
+        except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
+            pass
+    beta = out.x.copy()
+    beta[0] += np.log(ymax)
+    return beta
 
 
 def trust_region_max(model: QuadraticModel, radius: float) -> FloatArray:
@@ -187,7 +257,7 @@ class ModelBased(Optimizer):
     Parameters
     ----------
     radius : [deg] initial design radius and trust-region radius (≈ the expected peak width).
-    max_radius, min_radius : [deg] trust-region limits (default 4×radius, radius/100).
+    max_radius, min_radius : [deg] trust-region limits (default 4×radius, radius/10).
     ring : flank distance of refinement points in units of the fitted peak width.
     space : ``"log"`` (default) or ``"linear"``.
     locality : fit only points within ``locality`` × max(radius, trust radius) of the incumbent.
@@ -220,7 +290,7 @@ class ModelBased(Optimizer):
             "max_radius", 4.0 * self.radius if max_radius is None else max_radius
         )
         self.min_radius = positive_float(
-            "min_radius", self.radius / 100.0 if min_radius is None else min_radius
+            "min_radius", self.radius / 10.0 if min_radius is None else min_radius
         )
         self.ring = positive_float("ring", ring)
         self.space = one_of("space", space, ("log", "linear"))
@@ -335,7 +405,9 @@ class ModelBased(Optimizer):
             self._n_ring += 1
             ang = self._n_ring * _GOLDEN
             u = np.array([np.cos(ang), np.sin(ang)])
-            off = self.ring * (m.width() @ u)
+            eig, vec = np.linalg.eigh(m.width())
+            eig = np.clip(eig, 0.25 * self.radius, self.max_radius)
+            off = self.ring * (vec @ np.diag(eig) @ vec.T @ u)
             norm = float(np.hypot(*off))
             if norm > self.max_radius:
                 off *= self.max_radius / norm

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
-from echocal._validate import finite_array, nonnegative_float, one_of, positive_int
+from echocal._validate import finite_array, finite_float, nonnegative_float, one_of, positive_int
 from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
 
 __all__ = [
@@ -107,6 +107,7 @@ class Objective:
     description : one line for logs and reports.
     noise_sigma : [energy units] the standard deviation of the additive
         measurement noise when known (used by the acquisition phase), else None.
+    noise_floor : [energy units] the mean value of pure noise (no echo) when known, else None.
     """
 
     def __init__(
@@ -119,6 +120,7 @@ class Objective:
         parameterization: str = "azimuth-coelevation",
         description: str = "objective",
         noise_sigma: float | None = None,
+        noise_floor: float | None = None,
     ) -> None:
         self.bounds = as_bounds(bounds)
         self.budget = None if budget is None else positive_int("budget", budget)
@@ -130,6 +132,7 @@ class Objective:
         self.noise_sigma = (
             None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
         )
+        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
         self._points: list[FloatArray] = []
         self._values: list[FloatArray] = []
         self._times: list[FloatArray] = []
@@ -231,6 +234,7 @@ class FunctionObjective(Objective):
         so relative noise grows off-peak, as on a real instrument).
     rng : seed or Generator for the noise.
     optimum : [deg], shape (2,), the known maximizer if any (for error reports).
+    noise_floor : [energy units] f far from the peak, if known (e.g. 0 for a peak on zero).
     Other keywords as :class:`Objective`.
     """
 
@@ -247,6 +251,7 @@ class FunctionObjective(Objective):
         parameterization: str = "azimuth-coelevation",
         description: str = "analytic function",
         optimum: ArrayLike | None = None,
+        noise_floor: float | None = None,
     ) -> None:
         if not callable(func):
             raise EchocalValueError(f"func must be callable; got {type(func).__name__}")
@@ -258,6 +263,7 @@ class FunctionObjective(Objective):
             parameterization=parameterization,
             description=description,
             noise_sigma=noise_sigma,
+            noise_floor=noise_floor,
         )
         self.func = func
         self.rng = as_generator(rng)
