@@ -273,13 +273,28 @@ def ray_echoes(
     c0 = positive_float("sound_speed", sound_speed)
     pos, frm = _check_poses(positions, frames)
     shapes = _as_shapes(specimen)
-    rays = _trace(transducer, shapes, pos, frm)
-    amplitude, path = reflect(rays, transducer)
-    point = _hit_points(rays.origins, rays.directions, rays.distance)
+    n_poses, n_rays = pos.shape[0], transducer.n_rays
+    amplitude = np.empty((n_poses, n_rays))
+    tof = np.empty((n_poses, n_rays))
+    distance = np.empty((n_poses, n_rays))
+    point = np.empty((3, n_poses, n_rays))
+    normal = np.empty((3, n_poses, n_rays))
+    index = np.empty((n_poses, n_rays), dtype=np.int64)
+    step = _pose_chunk(n_rays)
+    for lo in range(0, n_poses, step):
+        sl = slice(lo, lo + step)
+        rays = _trace(transducer, shapes, pos[sl], frm[sl])
+        amp, path = reflect(rays, transducer)
+        amplitude[sl] = amp
+        np.divide(path, c0, out=tof[sl])
+        distance[sl] = rays.distance
+        point[:, sl] = _hit_points(rays.origins, rays.directions, rays.distance)
+        normal[:, sl] = rays.normal
+        index[sl] = rays.shape_index
     hits = Hits(  # (3, P, N) -> (P, N, 3) as transposed views (no copy)
-        distance=rays.distance,
+        distance=distance,
         point=point.transpose(1, 2, 0),
-        normal=rays.normal.transpose(1, 2, 0),
-        shape_index=rays.shape_index,
+        normal=normal.transpose(1, 2, 0),
+        shape_index=index,
     )
-    return RayEchoes(amplitude=amplitude, tof=path / c0, hits=hits)
+    return RayEchoes(amplitude=amplitude, tof=tof, hits=hits)

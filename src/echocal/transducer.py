@@ -45,6 +45,8 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
+_RAY_BLOCK = 16384  # rays generated per matrix product (see Transducer._rays_soa)
+
 
 class Directivity(Protocol):
     """Amplitude of a ray from its angle to the beam axis."""
@@ -294,14 +296,28 @@ class Transducer:
 
         Returns origins [m] and unit directions in structure-of-arrays layout
         ``(3, n_poses, n_rays)`` (C-contiguous): component k of ray n at pose p is
-        ``[k, p, n]``.  Each is one matrix product ``(3P, 3) @ (3, n_rays)``.
+        ``[k, p, n]``.  Each is a matrix product ``[x', y', c] @ [u; v; 1]`` resp.
+        ``[x', y', n] @ [du; dv; dn]``, done in small blocks of poses: one large GEMM
+        is many times slower per pose (OpenBLAS threads and leaves the cache).
         """
         p = positions.shape[0]
-        frames_t = frames.transpose(1, 0, 2)  # (3, P, 3): [k, p, j] = frame[p][k, j]
-        lhs = np.empty((3, p, 3))
-        lhs[:, :, :2] = frames_t[:, :, :2]
-        lhs[:, :, 2] = positions.T
-        origins = (lhs.reshape(3 * p, 3) @ self._pixels_h).reshape(3, p, -1)  # type: ignore[attr-defined]
-        lhs[:] = frames_t
-        directions = (lhs.reshape(3 * p, 3) @ self._dirs_soa).reshape(3, p, -1)  # type: ignore[attr-defined]
+        n = self.n_rays
+        lhs = np.empty((2, 3, p, 3))  # [origins|directions, k, pose, j]
+        frames_t = frames.transpose(1, 0, 2)  # [k, p, j] = frame[p][k, j]
+        lhs[0, :, :, :2] = frames_t[:, :, :2]
+        lhs[0, :, :, 2] = positions.T
+        lhs[1] = frames_t
+        pixels, dirs = self._pixels_h, self._dirs_soa  # type: ignore[attr-defined]
+        block = max(1, _RAY_BLOCK // n)
+        if p <= block:
+            origins = (lhs[0].reshape(3 * p, 3) @ pixels).reshape(3, p, n)
+            directions = (lhs[1].reshape(3 * p, 3) @ dirs).reshape(3, p, n)
+            return origins, directions
+        origins = np.empty((3, p, n))
+        directions = np.empty((3, p, n))
+        for lo in range(0, p, block):
+            sl = slice(lo, lo + block)
+            for k in range(3):
+                np.matmul(lhs[0, k, sl], pixels, out=origins[k, sl])
+                np.matmul(lhs[1, k, sl], dirs, out=directions[k, sl])
         return origins, directions

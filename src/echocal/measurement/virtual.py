@@ -61,11 +61,14 @@ __all__ = ["ReceiverSettings", "VirtualSetup"]
 
 FloatArray = NDArray[np.float64]
 
-_BATCH_ELEMENTS = 65536
+_BATCH_ELEMENTS = 16384
 """Poses are simulated in chunks of about this many rays (and samples): the temporaries of
-ray tracing, synthesis and the metric then stay in the CPU cache, so a batch costs no more
-per pose than a small one (measured: per-pose synthesis time doubles beyond ~32 poses of
-4096 rays × 4096 samples when done in one piece)."""
+ray tracing and synthesis then stay in the CPU's L2 cache, so a batch costs no more per pose
+than a single pose (measured on 64² rays × 4096 samples: in one piece, 100 poses cost
+about twice as much per pose as chunks of 4)."""
+
+_METRIC_ELEMENTS = 262144
+"""Samples per metric call in :meth:`VirtualSetup.metric_values` (64 A-scans of 4096)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -177,6 +180,15 @@ class VirtualSetup(BaseSource):
         """
         positions = finite_array("positions", positions, shape_tail=(3,)).reshape(-1, 3)
         frames = finite_array("frames", frames, shape_tail=(3, 3)).reshape(-1, 3, 3)
+        if positions.shape[0] != frames.shape[0]:
+            raise EchocalValueError(
+                f"positions and frames must hold the same number of poses; got "
+                f"{positions.shape[0]} and {frames.shape[0]}"
+            )
+        return self._ideal(positions, frames)
+
+    def _ideal(self, positions: FloatArray, frames: FloatArray) -> FloatArray:
+        """:meth:`ideal_samples` of checked arrays, in cache-sized chunks of poses."""
         n_poses = positions.shape[0]
         out = np.empty((n_poses, self.window.n_samples))
         step = self._pose_chunk
@@ -315,10 +327,11 @@ class VirtualSetup(BaseSource):
         if noise:
             generator = self._generator if rng is None else as_generator(rng)
         out = np.empty(a.size)
-        step = self._pose_chunk
+        # the metric is cheaper per pose on a larger group (fewer calls), synthesis on less
+        step = max(self._pose_chunk, _METRIC_ELEMENTS // self.window.n_samples)
         for lo in range(0, a.size, step):
             sl = slice(lo, lo + step)
-            samples = self._ideal_chunk(positions[sl], frames[sl])
+            samples = self._ideal(positions[sl], frames[sl])
             if generator is not None:
                 samples = self._receiver.receive(samples, generator)
             out[sl] = metric_fn(samples, self.window, self.pulse)
