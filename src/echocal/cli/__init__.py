@@ -26,7 +26,10 @@ _COMMAND_MODULES = (
     "echocal.cli.info",
     "echocal.cli.pulse",
     "echocal.cli.scene",
+    "echocal.cli.simulate",
     "echocal.cli.calibrate",
+    "echocal.cli.setup",
+    "echocal.cli.record",
 )
 
 for _name in _COMMAND_MODULES:

@@ -11,7 +11,6 @@ import typer
 
 from echocal.cli._common import console, parse_pair, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
-from echocal.io import atomic_path
 
 
 def register(app: typer.Typer) -> None:
@@ -111,6 +110,7 @@ def register(app: typer.Typer) -> None:
 
 def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
     from echocal.evaluation import cost_map
+    from echocal.plots import save_figure
     from echocal.plots.calibration import convergence_figure, path_figure
 
     result = evaluation.result
@@ -139,10 +139,7 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         truth=evaluation.truth,
         title=f"{label}: path over the cost map",
     )
-    files = {}
-    for name, fig in (("convergence", conv), ("path", path)):
-        target = out / f"{name}.png"
-        with atomic_path(target) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-        files[name] = str(target)
-    return files
+    return {
+        name: str(save_figure(fig, out / f"{name}.png", formats=("png",), dpi=110)[0])
+        for name, fig in (("convergence", conv), ("path", path))
+    }

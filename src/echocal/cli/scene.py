@@ -9,7 +9,6 @@ import typer
 
 from echocal.cli._common import console, parse_pose
 from echocal.cli._setup_option import SETUP_HELP, SPECIMEN_HELP, resolve_setup
-from echocal.io import atomic_path
 
 
 def register(app: typer.Typer) -> None:
@@ -33,6 +32,7 @@ def register(app: typer.Typer) -> None:
         ),
     ) -> None:
         """Save a 3D view of specimen, transducer and a subsample of rays with their hits."""
+        from echocal.plots import save_figure
         from echocal.plots.scene import scene_figure
 
         virtual = resolve_setup(setup, specimen=specimen)
@@ -44,6 +44,5 @@ def register(app: typer.Typer) -> None:
             n_rays=rays,
             reflection=virtual.reflection,
         )
-        with atomic_path(out) as tmp:
-            fig.savefig(tmp, dpi=130, format=out.suffix.lstrip(".") or "png")
-        console.print(f"scene saved to [bold]{out}[/]")
+        written = save_figure(fig, out, formats=(out.suffix.lstrip(".") or "png",), dpi=130)
+        console.print(f"scene saved to [bold]{written[0]}[/]")
