@@ -6,7 +6,7 @@ it, ring by ring (ring k: radius k·``spacing``, 6k points), in batches of at
 most ``batch`` points (default 1: stop at the first detection; within a ring the
 points nearest to the strongest value so far come first), until a value is *clearly above noise*:
 
-    max_i (m_i − floor) / (σ / √n_i) > ``threshold``   (default 5),
+    max_i (m_i − floor) / (σ / √n_i) > ``threshold``   (default 4.5),
 
 where m_i is the mean of point i and its n_i − 1 measured lattice neighbours
 (averaging makes a peak detectable even when no single value stands out, as
@@ -69,6 +69,7 @@ class Acquisition(Optimizer):
         detectable up to ~1.7 w from its centre at 30 dB with threshold 6).
     max_radius : [deg] give up beyond this distance from x0.
     threshold : detection threshold in units of σ.
+    first_threshold : the threshold while only x0 and the first ring are measured.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
     batch : maximum points per acquisition ask (1 = stop at the first detection).
@@ -82,7 +83,8 @@ class Acquisition(Optimizer):
         local_options: dict[str, Any] | None = None,
         spacing: float = 1.0,
         max_radius: float = 20.0,
-        threshold: float = 5.0,
+        threshold: float = 4.5,
+        first_threshold: float = 3.0,
         noise_sigma: float | None = None,
         noise_floor: float | None = None,
         batch: int = 1,
@@ -102,6 +104,7 @@ class Acquisition(Optimizer):
         self.spacing = positive_float("spacing", spacing)
         self.max_radius = positive_float("max_radius", max_radius)
         self.threshold = positive_float("threshold", threshold)
+        self.first_threshold = positive_float("first_threshold", first_threshold)
         self.noise_sigma = (
             None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
         )
@@ -160,7 +163,11 @@ class Acquisition(Optimizer):
     def _detected(self) -> bool:
         if len(self._y) < min(7, len(self._queue)) or len(self._y) == 0:
             return False
-        return bool(np.max(self.scores()) > self.threshold)
+        # x0 and its first ring: only 7 tests, so a lower threshold keeps the false-alarm
+        # rate as low (7 Q(3) = 1 %) as 4.5 sigma over a long search, and a start near
+        # a weak peak hands over at once
+        thr = self.first_threshold if len(self._y) <= 7 else self.threshold
+        return bool(np.max(self.scores()) > thr)
 
     def _start_local(self) -> None:
         best = self._x[int(np.argmax(self.scores()))]
