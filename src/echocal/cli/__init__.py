@@ -30,6 +30,7 @@ _COMMAND_MODULES = (
     "echocal.cli.calibrate",
     "echocal.cli.setup",
     "echocal.cli.record",
+    "echocal.cli.instrument",
 )
 
 for _name in _COMMAND_MODULES:

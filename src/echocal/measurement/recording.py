@@ -42,7 +42,14 @@ from echocal.io import atomic_path, atomic_write_text
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.replay import DIMS, FORMAT
 
-__all__ = ["PARTIAL_FORMAT", "RecordingGrid", "partial_path", "record", "recording_dataset"]
+__all__ = [
+    "PARTIAL_FORMAT",
+    "RecordingGrid",
+    "partial_path",
+    "record",
+    "recording_dataset",
+    "saved_count",
+]
 
 PARTIAL_FORMAT = "replay-partial/1"
 """Format name in the manifest of a partial recording."""
@@ -129,6 +136,20 @@ def partial_path(path: str | os.PathLike[str]) -> Path:
     """The sidecar directory of an unfinished recording of ``path``."""
     target = Path(path)
     return target.with_name(target.name + ".partial")
+
+
+def saved_count(path: str | os.PathLike[str]) -> int:
+    """Measurements already saved in the unfinished recording of ``path`` (0 if none).
+
+    What a resumed :func:`record` call will skip.  An unreadable partial recording
+    counts as 0 here; :func:`record` itself reports it.
+    """
+    manifest = partial_path(path) / "manifest.json"
+    try:
+        chunks = json.loads(manifest.read_text(encoding="utf-8"))["chunks"]
+        return sum(int(c["count"]) for c in chunks)
+    except (OSError, ValueError, KeyError, TypeError):
+        return 0
 
 
 def _json_safe(value: Any) -> Any:

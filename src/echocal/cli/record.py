@@ -1,0 +1,185 @@
+"""``echocal record``: measure a grid of orientations with a virtual setup into a replay file.
+
+Resumable: an interrupted recording (Ctrl-C, an error) keeps every saved
+measurement in ``<out>.partial/``; running the same command again continues
+where it stopped (see :func:`echocal.measurement.record`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from echocal.cli._setup_option import SETUP_HELP, SNR_HELP
+
+GRID_HELP = "FIRST:LAST:COUNT in degrees, e.g. -10:10:21 (or with units: -0.2rad:0.2rad:5)"
+
+
+def parse_axis(text: str, option: str) -> tuple[float, float, int]:
+    """Parse ``"FIRST:LAST:COUNT"`` (angles in degrees unless a unit is given) or one angle.
+
+    ``"5"`` is the single value 5 deg (``5:5:1``).  Malformed text raises
+    :class:`typer.BadParameter` naming ``option``.
+    """
+    from echocal.errors import EchocalValueError
+    from echocal.units import parse_angle
+
+    parts = [p.strip() for p in text.split(":")]
+    usage = f"{option} takes {GRID_HELP}; got {text!r}"
+    if len(parts) not in (1, 3):
+        raise typer.BadParameter(usage)
+    try:
+        first = parse_angle(f"{option} first", parts[0])
+        last = first if len(parts) == 1 else parse_angle(f"{option} last", parts[1])
+    except EchocalValueError as exc:
+        raise typer.BadParameter(f"{exc}; {usage}") from None
+    count = 1 if len(parts) == 1 else _count(parts[2], usage)
+    if count == 1 and first != last:
+        raise typer.BadParameter(f"{option}: COUNT 1 needs FIRST == LAST; got {text!r}")
+    if count > 1 and not last > first:
+        raise typer.BadParameter(f"{option}: LAST must be greater than FIRST; got {text!r}")
+    return first, last, count
+
+
+def _count(text: str, usage: str) -> int:
+    try:
+        count = int(text)
+    except ValueError:
+        raise typer.BadParameter(usage) from None
+    if count < 1:
+        raise typer.BadParameter(f"COUNT must be >= 1; {usage}")
+    return count
+
+
+def parse_position(text: str) -> tuple[float, float, float]:
+    """Parse ``"X,Y,Z"`` [mm unless a unit is given] into metres."""
+    from echocal.cli._common import parse_pose
+
+    if len(text.split(",")) != 3:
+        raise typer.BadParameter(
+            f"--position takes X,Y,Z (mm unless a unit is given, e.g. 0,0,22 or "
+            f"10mm,0,2.2cm); got {text!r}"
+        )
+    pose = parse_pose(text, "--position")
+    return pose.x, pose.y, pose.z
+
+
+def _say(text: str) -> None:
+    """One message line on stderr, not wrapped at the console width."""
+    from echocal.cli._common import console
+
+    console.print(text, soft_wrap=True, highlight=False)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``record`` to ``app``."""
+
+    @app.command("record")
+    def record_command(
+        setup: str = typer.Option(..., "--setup", help=SETUP_HELP),
+        out: Path = typer.Option(..., "--out", help="Replay file to write (.nc)."),
+        azimuth: str = typer.Option(..., "--azimuth", help=f"Azimuth grid: {GRID_HELP}"),
+        coelevation: str = typer.Option(
+            ..., "--coelevation", help=f"Co-elevation grid: {GRID_HELP}"
+        ),
+        position: list[str] | None = typer.Option(
+            None,
+            "--position",
+            help="X,Y,Z of a recording position, mm unless a unit is given; repeat the "
+            "option for several positions. Default: the setup's reference position.",
+        ),
+        repeats: int = typer.Option(1, "--repeats", min=1, help="A-scans per grid pose."),
+        seed: int | None = typer.Option(
+            None, "--seed", help="Seed of the receiver noise (default: the setup's)."
+        ),
+        snr: str | None = typer.Option(None, "--snr", help=SNR_HELP),
+        batch_size: int = typer.Option(
+            16,
+            "--batch-size",
+            min=1,
+            help="Poses simulated at once (an interruption loses "
+            "at most one batch, measured again on resume).",
+        ),
+        overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing file."),
+        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar."),
+        as_json: bool = typer.Option(False, "--json", help="Print one JSON object on stdout."),
+    ) -> None:
+        """Record A-scans on an (azimuth, co-elevation) grid into a replay file; resumable.
+
+        Ctrl-C keeps what was measured; the same command again resumes.
+        """
+        from echocal.cli._common import write_json
+        from echocal.cli._setup_option import resolve_setup
+        from echocal.errors import DataFileError, EchocalError
+        from echocal.measurement.recording import RecordingGrid, partial_path, record, saved_count
+        from echocal.setups import load_setup_config
+
+        az = parse_axis(azimuth, "--azimuth")
+        coel = parse_axis(coelevation, "--coelevation")
+        positions = [parse_position(p) for p in position or []]
+        config, _ = load_setup_config(setup)
+        seed = config.seed if seed is None else seed
+        sidecar = partial_path(out)
+        if out.exists() and not sidecar.exists() and not overwrite:
+            raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
+        done = saved_count(out) if sidecar.exists() else 0
+        run_seed = seed
+        if seed is not None and done:
+            # A fresh process restarts the noise generator: re-seed from (seed, done) so the
+            # resumed measurements do not repeat the noise draws of the first ones.
+            run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
+        source = resolve_setup(setup, snr=snr, seed=run_seed)
+        if not positions:
+            positions = [tuple(float(v) for v in source.reference_position)]
+        grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
+        total = len(grid.poses()) * repeats
+        if done:
+            _say(f"resuming {out}: {done} of {total} measurements already saved in {sidecar}")
+        try:
+            path = record(
+                source,
+                grid,
+                out,
+                repeats=repeats,
+                progress=progress,
+                batch_size=batch_size,
+                setup={"setup": setup, "seed": seed, "snr": snr, "config": config.model_dump()},
+                overwrite=overwrite,
+            )
+        except KeyboardInterrupt:
+            _say(
+                f"[yellow]interrupted:[/] {saved_count(out)} of {total} measurements are saved "
+                f"in {sidecar}; run the same command again to resume"
+            )
+            raise typer.Exit(130) from None
+        except EchocalError:
+            if sidecar.exists() and saved_count(out):
+                _say(
+                    f"{saved_count(out)} of {total} measurements are saved in {sidecar}; "
+                    "fix the problem and run the same command again to resume"
+                )
+            raise
+        n_p, n_a, n_c = grid.shape
+        if as_json:
+            write_json(
+                {
+                    "path": str(path),
+                    "n_ascans": total,
+                    "shape": {
+                        "position": n_p,
+                        "azimuth": n_a,
+                        "coelevation": n_c,
+                        "repeat": repeats,
+                        "time": source.window.n_samples,
+                    },
+                    "resumed_after": done,
+                    "source": source.description,
+                }
+            )
+        _say(
+            f"recorded {total} A-scans ({n_p} position(s) x {n_a} azimuths x {n_c} "
+            f"co-elevations x {repeats} repeat(s)) of {source.description} to {path}"
+            + (f" (resumed after {done})" if done else "")
+        )
