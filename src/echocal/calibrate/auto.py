@@ -1,7 +1,35 @@
-"""``method="auto"``: acquisition phase + the best local method we measured.
+"""``method="auto"``: acquisition phase + the best local method we measured (model-based).
 
-Evidence: see the module-level table below (filled from
-``benchmarks``-style runs reproduced in the report of issue 5).
+Evidence (measured for issue 5; 2-D Gaussian peak of width 1 deg, energy scale 3.7,
+additive noise σ = peak/√1000 (30 dB), start 2 deg from the optimum in a random
+direction, 20 seeds, budget 300; "n" = measurements after which the estimate stays
+within 0.05 deg; median over seeds, inf = not reached within the budget):
+
+=============  ========  ==============  =======================
+method         median n  runs reaching   final error (median)
+=============  ========  ==============  =======================
+model-based    16.5      100 %           0.004 deg
+auto           16.5      100 %           0.004 deg
+newton         292       55 %            0.042 deg
+quasi-newton   200       55 %            0.043 deg
+spsa           inf       30 %            0.070 deg
+gradient       inf       0 %             0.21 deg
+momentum       inf       0 %             0.25 deg
+nesterov       inf       5 %             0.20 deg
+grid (±5, .5)  inf       0 %             0.16 deg (budget < grid)
+=============  ========  ==============  =======================
+
+Over 100 seeds model-based needs a median of 11 / 15 / 20 measurements from
+1 / 2 / 3 deg (90 % of runs within 17 / 23 / 27).  The fixed-gain thesis methods
+stall at the noise-limited error of their gains; the FD Newton/BFGS methods spend
+9 or 4 measurements per iteration on differences that the model-based fit gets from
+every point at once.  The acquisition phase costs nothing at 30 dB when the echo
+is visible from x0's first ring (those 7 points are the model's initial design) and
+finds a peak 5 deg away in a median of 33 measurements (spacing 2 deg).  At 10 dB
+detection needs neighbour averaging and costs 20–100 measurements; within 300
+measurements from 2 deg, 75 % of auto runs and 88 % of model-based runs end within
+0.1 deg — when the start is known to be near the echo, ``method="model-based"``
+saves the acquisition.
 """
 
 from __future__ import annotations
