@@ -1,0 +1,111 @@
+"""Shared helpers of the benchmark scripts: timing, machine description, Markdown tables.
+
+Not a package (no ``__init__.py``): the scripts run as ``python benchmarks/NAME.py`` and
+import this module from their own directory.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from importlib import metadata
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Wall-clock times of repeated calls (``time.perf_counter``).
+
+    Attributes
+    ----------
+    median : [s] median over the repeats (the reported number).
+    best : [s] fastest repeat (least disturbed by other processes).
+    repeats : number of timed calls (after the warm-up calls).
+    """
+
+    median: float
+    best: float
+    repeats: int
+
+    def as_dict(self) -> dict[str, float | int]:
+        return asdict(self)
+
+
+def measure(fn: Callable[[], object], *, repeats: int, warmup: int = 1) -> Timing:
+    """Time ``fn()``: ``warmup`` untimed calls, then ``repeats`` timed ones."""
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return Timing(median=statistics.median(times), best=min(times), repeats=len(times))
+
+
+def _version(dist: str) -> str:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def _cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def machine_info(packages: Sequence[str] = ()) -> dict[str, Any]:
+    """Cores, CPU, Python and package versions, BLAS threads and the load when started."""
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        usable = os.cpu_count() or 1
+    try:
+        load = [round(x, 2) for x in os.getloadavg()]
+    except OSError:
+        load = []
+    return {
+        "cpu": _cpu_model(),
+        "cores": os.cpu_count(),
+        "usable_cores": usable,
+        "load_average_1_5_15min": load,
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS", "default"),
+        "versions": {name: _version(name) for name in ("numpy", "scipy", *packages)},
+    }
+
+
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A GitHub Markdown table (cells formatted with ``str``)."""
+    lines = [
+        "| " + " | ".join(header) + " |",
+        "| " + " | ".join("---" for _ in header) + " |",
+    ]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def fmt_time(seconds: float) -> str:
+    """Seconds in a readable unit: ``0.412 ms``, ``12.3 s``."""
+    if seconds < 1e-3:
+        return f"{seconds * 1e6:.1f} µs"
+    if seconds < 1.0:
+        return f"{seconds * 1e3:.3g} ms"
+    return f"{seconds:.3g} s"
+
+
+def fmt_rate(per_second: float) -> str:
+    """A rate with thousands separators: ``1,234/s``."""
+    return f"{per_second:,.0f}/s"
