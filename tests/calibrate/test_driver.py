@@ -153,3 +153,19 @@ def test_thesis_preset_is_scale_free_through_normalization():
     np.testing.assert_allclose(runs[0].iterates, runs[1].iterates, rtol=1e-9, atol=1e-12)
     f = gaussian(runs[0].iterates, width=3.0)
     assert f[-1] > f[0]  # it ascends
+
+
+@pytest.mark.parametrize("normalize", ["first", "max"])
+def test_normalize_makes_fixed_gains_scale_free(normalize):
+    runs = [
+        calibrate(
+            FunctionObjective(lambda p, s=s: s * gaussian(p)),
+            "gradient",
+            x0=X0,
+            mu=0.5,
+            normalize=normalize,
+            max_iter=10,
+        )
+        for s in (1e-3, 1e3)
+    ]
+    np.testing.assert_allclose(runs[0].iterates, runs[1].iterates, rtol=1e-9, atol=1e-12)

@@ -108,3 +108,23 @@ def test_acquisition_gives_up_beyond_max_radius():
     res = calibrate(obj, "auto", x0=(0.0, 0.0), max_radius=3.0, spacing=1.0)
     assert res.status == 4 and not res.success
     assert res.n_measurements == 1 + 6 + 12 + 18  # the whole lattice to 3 rings
+
+
+def test_acquisition_detection_false_alarm_and_averaging():
+    from echocal.calibrate import Acquisition
+
+    rng = np.random.default_rng(0)
+    acq = Acquisition(np.zeros(2), spacing=1.0, noise_sigma=1.0, max_radius=10.0)
+    for _ in range(300):  # pure noise: no score reaches 4.5 sigma (false alarm ~1e-3)
+        p = acq.ask()
+        acq.tell(rng.standard_normal(len(p)))
+    assert acq.local is None and np.max(acq.scores()) < acq.threshold
+    # a peak of only 2.5 sigma at x0, width = spacing: the score of x0 is the mean of
+    # x0 and its 6 neighbours over sigma / sqrt(7) = 4.2 > 3 (first-ring threshold)
+    acq = Acquisition(np.zeros(2), spacing=1.0, noise_sigma=1.0, noise_floor=0.0)
+    pts = acq.ask()
+    peak = 2.5 * np.exp(-np.sum(pts**2, axis=1) / 2.0)
+    acq.tell(peak)  # noiseless values, so the score is exact
+    expected = peak.mean() * np.sqrt(7)  # centre point: all 7 points are its neighbours
+    np.testing.assert_allclose(acq.scores()[0], expected, rtol=1e-12)
+    assert expected > acq.first_threshold and acq.local is not None
