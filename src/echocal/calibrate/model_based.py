@@ -353,6 +353,8 @@ class ModelBased(Optimizer):
             return
         pred = model(self._x)
         local = np.hypot(*(self._x - center).T) <= self.locality * max(self.radius, self._trust)
+        if not local.any():
+            local[:] = True
         if self.space == "log":
             ymax = float(self._y[local].max())
             cand = np.flatnonzero(local & (self._y > max(self.floor * ymax, 0.0)))
