@@ -88,19 +88,19 @@ class FinitePlane(Shape):
         d_loc = self._frame_t @ d
         n_dot_d = d_loc[2]
         # t' = n^T (p0 - s) / n^T d  (thesis eq. 21 with the text's numerator); rays with
-        # |n^T d| <= GRAZING_COS are masked out below, whatever their quotient
+        # |n^T d| <= GRAZING_COS are masked out, whatever their (inf, nan) quotient
+        ok = np.abs(n_dot_d) > GRAZING_COS
         with np.errstate(divide="ignore", invalid="ignore"):
             t = np.divide(s_loc[2], n_dot_d)
-        np.negative(t, out=t)
-        ok = np.abs(n_dot_d) > GRAZING_COS
-        ok &= t > self._eps
-        # in-plane coordinates of the hit, m = T^T (s + t d - p0)  (eq. 23); |m| within w/2, h/2
-        m = np.multiply(t, d_loc[0], out=d_loc[0])  # d_loc rows 0, 1 are not needed after
-        m += s_loc[0]
-        ok &= np.abs(m, out=m) <= 0.5 * self.width
-        m = np.multiply(t, d_loc[1], out=d_loc[1])
-        m += s_loc[1]
-        ok &= np.abs(m, out=m) <= 0.5 * self.height
+            np.negative(t, out=t)
+            ok &= t > self._eps
+            # in-plane coordinates of the hit, m = T^T (s + t d - p0) (eq. 23): |m| <= w/2, h/2
+            m = np.multiply(t, d_loc[0], out=d_loc[0])  # rows 0, 1 of d_loc are not needed after
+            m += s_loc[0]
+            ok &= np.abs(m, out=m) <= 0.5 * self.width
+            m = np.multiply(t, d_loc[1], out=d_loc[1])
+            m += s_loc[1]
+            ok &= np.abs(m, out=m) <= 0.5 * self.height
         distance = np.where(ok, t, np.inf)
         # normal facing the ray: -sign(n.d) n, zero for misses
         sign = np.copysign(ok, -n_dot_d)
