@@ -116,3 +116,9 @@ def test_seed_override_reproduces_noise():
     a = load_setup("thesis", seed=5).simulate([load_setup("thesis").true_pose([0.01, 0, 0.022])])
     b = load_setup("thesis", seed=5).simulate([load_setup("thesis").true_pose([0.01, 0, 0.022])])
     np.testing.assert_array_equal(a, b)
+
+
+def test_noiseless_receiver_from_toml(tmp_path):
+    path = write(tmp_path, '[noise]\nsnr_db = "none"\n')
+    assert load_setup(path).receiver.snr_db is None
+    assert load_setup(path).noise_sigma == 0.0

@@ -170,10 +170,17 @@ class WindowConfig(_Model):
     n_samples: int = Field(default=4096, ge=16, le=1 << 22)
 
 
-class NoiseConfig(_Model):
-    """Receiver noise: SNR of the reference echo, optional ADC and saturation."""
+def _none_word(value: Any) -> Any:
+    """TOML has no null: the word "none" (any case) stands for None."""
+    return None if isinstance(value, str) and value.strip().lower() == "none" else value
 
-    snr_db: float | None = Field(default=30.0, allow_inf_nan=False)
+
+class NoiseConfig(_Model):
+    """Receiver noise: SNR of the reference echo (``"none"``: noiseless), ADC, saturation."""
+
+    snr_db: Annotated[float | None, BeforeValidator(_none_word)] = Field(
+        default=30.0, allow_inf_nan=False
+    )
     adc_bits: int | None = Field(default=None, ge=1, le=32)
     full_scale: float | None = Field(default=None, gt=0)
 

@@ -26,7 +26,7 @@ def run_cli(app: typer.Typer) -> None:
     try:
         app()
     except EchocalError as exc:
-        console.print(f"[bold red]error:[/] {exc}", highlight=False)
+        console.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
         sys.exit(2)
 
 
