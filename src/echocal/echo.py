@@ -9,6 +9,13 @@ fires the transducer's rays, casts them at the specimen, and returns per ray
 
 with ``amplitude = 0`` and ``tof = inf`` for rays that bring nothing back.
 
+:func:`ray_echoes` also returns the hits (for plots and ground truth);
+:func:`echo_arrays` returns only amplitude and τ and is the simulator's fast path.
+Both work in structure-of-arrays layout ``(3, n_poses, n_rays)`` inside: rays come
+from one small matrix product per block of poses (``Transducer._rays_soa``), are
+cast without re-validation or transposes (``raytrace._cast_soa``), and are traced
+in chunks of about 16k rays so that the temporaries stay in the CPU cache.
+
 Models (registry :func:`reflection_model_names`):
 
 ``lambertian`` (thesis §2.2.1)

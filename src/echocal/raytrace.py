@@ -3,6 +3,8 @@
 :func:`cast` is the one entry point: rays with any leading batch axes
 ``(..., N, 3)`` go in, a :class:`Hits` of the same batch shape comes out.
 It is vectorized over rays; the only Python loop runs over the (few) shapes.
+``cast`` validates and normalizes its input; the simulator, whose rays are valid
+by construction, calls the unchecked structure-of-arrays kernel ``_cast_soa``.
 """
 
 from __future__ import annotations

@@ -128,7 +128,13 @@ class TriangleMesh(Shape):
         self._e2 = np.ascontiguousarray((tri[:, 2] - tri[:, 0]).T)
         self._normals_soa = np.ascontiguousarray(self.face_normals.T)
         self._det_tol = GRAZING_COS * double_area[good]
+        # cached: a (V, 3) min/max costs milliseconds on a large mesh, every cast needs it
+        self._bounds = np.stack([verts.min(axis=0), verts.max(axis=0)])
         self._eps = self.eps
+        # embree hits nearer than this (float32 tolerance) are re-cast with numpy
+        self._embree_near = 1e-5 * max(
+            float(np.linalg.norm(self._bounds[1] - self._bounds[0])), 1e-300
+        )
         self._hierarchy = _build_hierarchy(tri, pad=1e-9 * max(scale, 1.0))
         self._embree = None
 
@@ -193,7 +199,7 @@ class TriangleMesh(Shape):
         return self.engine
 
     def bounds(self) -> FloatArray:
-        return np.stack([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+        return self._bounds.copy()
 
     def intersect_faces(
         self, origins: ArrayLike, directions: ArrayLike
@@ -302,9 +308,7 @@ class TriangleMesh(Shape):
         t = self._moller_trumbore(o[:, ray], d[:, ray], tri, bounded=False)
         best_t[ray] = t
         best_face[ray] = np.where(t < np.inf, tri, -1)
-        box = self.bounds()
-        near = 1e-5 * max(float(np.linalg.norm(box[1] - box[0])), 1e-300)
-        redo = np.union1d(np.nonzero(best_t <= near)[0], ray[~(t < np.inf)])
+        redo = np.union1d(np.nonzero(best_t <= self._embree_near)[0], ray[~(t < np.inf)])
         if len(redo):
             t2, f2 = self._cast_numpy(o[:, redo], d[:, redo])
             best_t[redo] = t2
