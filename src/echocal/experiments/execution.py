@@ -1,0 +1,255 @@
+"""Running a sweep: local processes or a Dask cluster, stored run by run, resumable.
+
+::
+
+    results = run_sweep("quick", "out/quick")                    # 2 local processes
+    results = run_sweep("my.toml", "out/my", scheduler="tcp://10.0.0.5:8786")
+    results.summary()
+
+Every finished run is written at once (:mod:`echocal.experiments.storage`), so an
+interrupted sweep loses at most the runs in flight; running it again into the same
+folder skips the finished ones.  Runs are pure functions of their case
+(:func:`~echocal.experiments.runner.run_case`), so local and Dask give the same numbers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from echocal._validate import positive_int
+from echocal.errors import EchocalValueError
+from echocal.experiments import storage
+from echocal.experiments.runner import FAILED, run_case
+from echocal.experiments.summary import summarize
+from echocal.experiments.sweep import RunCase, SweepSpec, expand, load_sweep
+
+__all__ = ["DEFAULT_WORKERS", "SweepResults", "load_results", "run_sweep"]
+
+DEFAULT_WORKERS = 2
+"""Local worker processes when ``workers`` is not given."""
+
+Outcome = tuple[dict[str, Any], pd.DataFrame]
+Closer = Callable[[], None]
+
+
+@dataclass(frozen=True)
+class SweepResults:
+    """A sweep's results folder: its spec, and its tables read on first access.
+
+    out_dir : the folder; spec : the resolved sweep; hash : the spec's content hash;
+    n_cases : runs in the sweep; n_new : runs computed by the call that returned this
+    (0 for :func:`load_results`).
+    """
+
+    out_dir: Path
+    spec: SweepSpec
+    hash: str
+    n_cases: int
+    n_new: int = 0
+
+    @property
+    def runs_path(self) -> Path:
+        """``runs.parquet``: one row per run."""
+        return self.out_dir / storage.RUNS
+
+    @property
+    def history_path(self) -> Path:
+        """``history.parquet``: one row per measurement."""
+        return self.out_dir / storage.HISTORY
+
+    @property
+    def sweep_path(self) -> Path:
+        """``sweep.json``: the resolved spec and its hash."""
+        return self.out_dir / storage.SWEEP_JSON
+
+    @cached_property
+    def runs(self) -> pd.DataFrame:
+        """One row per finished run (columns: :data:`~echocal.experiments.runner.RUN_COLUMNS`)."""
+        return storage.read_runs(self.out_dir)
+
+    @cached_property
+    def history(self) -> pd.DataFrame:
+        """Every measurement of every finished run (case_id, index, a, b, value)."""
+        return storage.read_history(self.out_dir)
+
+    @property
+    def complete(self) -> bool:
+        """True when every run of the sweep is stored."""
+        return len(self.runs) == self.n_cases
+
+    def summary(self) -> pd.DataFrame:
+        """:func:`~echocal.experiments.summary.summarize` of :attr:`runs`."""
+        return summarize(self.runs)
+
+
+def load_results(out_dir: str | Path) -> SweepResults:
+    """The results of the sweep stored in ``out_dir`` (finished or interrupted)."""
+    out = Path(out_dir)
+    record = storage.read_sweep_json(out)
+    spec = SweepSpec.model_validate(record["spec"])
+    return SweepResults(out_dir=out, spec=spec, hash=record["hash"], n_cases=record["n_cases"])
+
+
+def run_sweep(
+    spec_or_path: SweepSpec | str | Path | dict[str, Any],
+    out_dir: str | Path,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+    overwrite: bool = False,
+    callback: Callable[[dict[str, Any]], None] | None = None,
+) -> SweepResults:
+    """Run every unfinished case of a sweep into ``out_dir``; return its results.
+
+    Parameters
+    ----------
+    spec_or_path : a :class:`SweepSpec`, a built-in sweep name, a TOML path or a dict.
+    out_dir : results folder; a folder of the same sweep is resumed (finished runs are
+        skipped), one of another sweep is refused unless ``overwrite``.
+    scheduler : ``"tcp://HOST:PORT"`` of a Dask distributed scheduler; None runs locally.
+        Workers need echocal installed and, for a setup file, the same path readable.
+    workers : local worker processes (default :data:`DEFAULT_WORKERS`); 1 runs in this
+        process.  Ignored with a scheduler.
+    progress : show a progress bar with an ETA (on stderr).
+    overwrite : delete the results of another sweep found in ``out_dir``.
+    callback : called with each finished run's row after it is stored.
+    """
+    spec = load_sweep(spec_or_path)
+    cases = expand(spec)
+    digest = storage.prepare_folder(out_dir, spec, len(cases), overwrite=overwrite)
+    done = storage.finished_case_ids(out_dir)
+    todo = [case for case in cases if case.case_id not in done]
+    # back ends start before the progress bar's thread: worker processes fork from a
+    # single-threaded parent
+    if scheduler is not None:
+        outcomes, close = _dask_outcomes(todo, scheduler, digest)
+    else:
+        n = DEFAULT_WORKERS if workers is None else positive_int("workers", workers)
+        outcomes, close = _local_outcomes(todo, n)
+    try:
+        with _progress_bar(spec.name, len(cases), len(cases) - len(todo), progress) as advance:
+            for row, history in outcomes:
+                storage.write_part(out_dir, row, history)
+                advance(failed=row["status"] == FAILED)
+                if callback is not None:
+                    callback(row)
+    finally:
+        close()
+    storage.consolidate(out_dir, [case.case_id for case in cases])
+    return SweepResults(
+        out_dir=Path(out_dir), spec=spec, hash=digest, n_cases=len(cases), n_new=len(todo)
+    )
+
+
+# ---------------------------------------------------------------- back ends
+def _local_outcomes(cases: Sequence[RunCase], workers: int) -> tuple[Iterator[Outcome], Closer]:
+    """Results in completion order from ``workers`` processes (1: in this process).
+
+    Worker processes use the platform's default start method (fork on Linux: instant,
+    and scripts need no ``if __name__ == "__main__"`` guard; the parent has no threads
+    yet).  Returns the results iterator and a function that stops the pool (cancelling
+    runs not yet started).
+    """
+    if workers == 1 or len(cases) <= 1:
+        return (run_case(case) for case in cases), lambda: None
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(cases)))
+    pending = {pool.submit(run_case, case) for case in cases}
+
+    def results() -> Iterator[Outcome]:
+        nonlocal pending
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in finished:
+                yield future.result()
+
+    return results(), lambda: pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _dask_outcomes(
+    cases: Sequence[RunCase], scheduler: str, digest: str
+) -> tuple[Iterator[Outcome], Closer]:
+    """Results in completion order from a Dask distributed cluster at ``scheduler``."""
+    try:
+        from distributed import Client, as_completed
+    except ImportError:  # pragma: no cover - distributed is a dependency
+        raise EchocalValueError(
+            "scheduler needs dask.distributed; install it (pip install distributed)"
+        ) from None
+    if not scheduler.startswith(("tcp://", "tls://", "inproc://", "ws://", "wss://")):
+        raise EchocalValueError(
+            f"scheduler must be an address like tcp://HOST:PORT; got {scheduler!r}"
+        )
+    try:
+        client = Client(scheduler, timeout="20s")
+    except OSError as exc:
+        raise EchocalValueError(f"scheduler {scheduler}: cannot connect: {exc}") from None
+    keys = [f"echocal-run-{digest[:12]}-{storage.part_key(c.case_id)}" for c in cases]
+    futures = client.map(run_case, list(cases), key=keys, pure=False) if cases else []
+
+    def results() -> Iterator[Outcome]:
+        for future in as_completed(futures):
+            yield future.result()
+            future.release()
+
+    def close() -> None:
+        if futures:
+            client.cancel(futures)
+        client.close()
+
+    return results(), close
+
+
+class _progress_bar:
+    """Context manager yielding ``advance(failed=...)``; a rich bar with ETA if enabled."""
+
+    def __init__(self, name: str, total: int, completed: int, enabled: bool) -> None:
+        self.name, self.total, self.completed, self.enabled = name, total, completed, enabled
+        self.failed = 0
+
+    def __enter__(self) -> Callable[..., None]:
+        if not self.enabled:
+            return lambda failed=False: None
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.bar = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("runs"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+        )
+        self.bar.start()
+        resumed = f" (resumed: {self.completed} done)" if self.completed else ""
+        self.task = self.bar.add_task(
+            f"sweep {self.name}{resumed}", total=self.total, completed=self.completed
+        )
+        return self._advance
+
+    def _advance(self, failed: bool = False) -> None:
+        self.failed += bool(failed)
+        if self.failed:
+            self.bar.update(self.task, description=f"sweep {self.name} [red]{self.failed} failed")
+        self.bar.advance(self.task)
+
+    def __exit__(self, *exc: object) -> None:
+        if self.enabled:
+            self.bar.stop()

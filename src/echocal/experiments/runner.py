@@ -1,0 +1,236 @@
+"""One run of a sweep: a pure function of a :class:`~echocal.experiments.sweep.RunCase`.
+
+:func:`run_case` builds the setup at the case's SNR with a noise seed derived from the
+case, calibrates, and judges the result against the simulator's truth.  Every random
+draw comes from seeds derived from the case (:attr:`RunCase.run_seed`,
+:attr:`RunCase.x0_seed`), so the same case gives bit-identical numbers in any
+process, on any worker, in any order.
+
+The true optimum (a deterministic Nelder–Mead search, a few tenths of a second) is
+memoized per process and (setup, position, parameterization): a cache of a pure
+function, which changes how fast a worker runs, never what it returns.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+import traceback
+import warnings
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from echocal.errors import EchocalError
+from echocal.experiments.sweep import RunCase
+
+__all__ = ["HISTORY_COLUMNS", "RUN_COLUMNS", "history_frame", "run_case", "runs_frame"]
+
+RUN_COLUMNS: dict[str, str] = {
+    "case_id": "object",
+    "sweep": "object",
+    "method": "object",
+    "label": "object",
+    "preset": "object",
+    "params": "object",
+    "snr_db": "float64",
+    "x0_kind": "object",
+    "x0_label": "object",
+    "x0_a": "float64",
+    "x0_b": "float64",
+    "seed": "int64",
+    "run_seed": "int64",
+    "error_deg": "float64",
+    "measurements_to_tol": "Int64",
+    "iterations_to_tol": "Int64",
+    "success": "bool",
+    "n_measurements": "int64",
+    "n_iterations": "int64",
+    "status": "int64",
+    "message": "object",
+    "estimate_a": "float64",
+    "estimate_b": "float64",
+    "truth_a": "float64",
+    "truth_b": "float64",
+    "tolerance": "float64",
+    "wall_time": "float64",
+    "warnings": "object",
+}
+"""Columns of the runs table and their pandas dtypes.
+
+Angles [deg] in the sweep's parameterization (``x0_*``, ``estimate_*``, ``truth_*``);
+``error_deg`` [deg] angle between the estimate's beam and the truth's; ``snr_db`` [dB]
+(NaN = noiseless); ``measurements_to_tol`` / ``iterations_to_tol`` (<NA> if the final
+estimate misses the tolerance); ``status`` from :data:`echocal.calibrate.STATUS_MESSAGES`,
+or -1 when the run raised (``message`` holds the error); ``wall_time`` [s].
+"""
+
+HISTORY_COLUMNS: dict[str, str] = {
+    "case_id": "object",
+    "index": "int64",
+    "a": "float64",
+    "b": "float64",
+    "value": "float64",
+}
+"""Columns of the history table: every measurement of every run, in order (``a``, ``b``
+[deg]; ``value`` the metric, NaN kept)."""
+
+FAILED = -1
+"""``status`` of a run that raised an error (its message is in ``message``)."""
+
+
+def runs_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
+    """Rows of :func:`run_case` as a DataFrame with the :data:`RUN_COLUMNS` dtypes."""
+    frame = pd.DataFrame(rows, columns=list(RUN_COLUMNS))
+    return frame.astype(RUN_COLUMNS)
+
+
+def history_frame(frames: list[pd.DataFrame]) -> pd.DataFrame:
+    """Concatenated history parts with the :data:`HISTORY_COLUMNS` dtypes."""
+    if not frames:
+        return pd.DataFrame(columns=list(HISTORY_COLUMNS)).astype(HISTORY_COLUMNS)
+    return pd.concat(frames, ignore_index=True).astype(HISTORY_COLUMNS)
+
+
+@functools.lru_cache(maxsize=8)
+def _truth_setup(setup: str):
+    """A noiseless-truth copy of ``setup``; its own cache memoizes the true optima."""
+    from echocal.setups import load_setup
+
+    return load_setup(setup, seed=0)
+
+
+def _random_start(case: RunCase, truth: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """[deg] a start at a uniform distance in ``case.x0`` and a uniform direction from truth."""
+    rng = np.random.default_rng(case.x0_seed)
+    lo, hi = case.x0
+    distance = rng.uniform(lo, hi)
+    direction = rng.uniform(0.0, 2.0 * np.pi)
+    start = truth + distance * np.array([np.cos(direction), np.sin(direction)])
+    return np.clip(start, bounds[:, 0], bounds[:, 1])
+
+
+def _to_tolerance(evaluation, tolerance: float) -> tuple[int | None, int | None]:
+    """Measurements and iterations when the iterates entered (and stayed in) the tolerance."""
+    measurements = evaluation.measurements_to(tolerance)
+    if measurements is None:
+        return None, None
+    outside = np.nonzero(evaluation.iterate_errors > tolerance)[0]
+    first_inside = 0 if outside.size == 0 else int(outside[-1]) + 1
+    return measurements, min(first_inside, evaluation.result.n_iterations)
+
+
+def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Run one case; return its row of the runs table and its measurement history.
+
+    Never raises for a failing run: an error inside the run gives a row with
+    ``status = -1`` and the error in ``message`` (so one bad case does not stop a sweep).
+    """
+    from echocal.calibrate import calibrate
+    from echocal.cli._setup_option import resolve_setup
+    from echocal.evaluation import evaluate_run
+    from echocal.measurement.objective import SourceObjective
+
+    t0 = time.perf_counter()
+    seeds = np.random.SeedSequence(case.run_seed).generate_state(2, dtype=np.uint32)
+    noise_seed, method_seed = (int(s) for s in seeds)
+    position = np.array(case.position, dtype=np.float64)
+    row: dict[str, Any] = {
+        "case_id": case.case_id,
+        "sweep": case.sweep,
+        "method": case.method,
+        "label": case.label,
+        "preset": case.preset,
+        "params": case.params_json,
+        "snr_db": np.nan if case.snr_db is None else case.snr_db,
+        "x0_kind": case.x0_kind,
+        "x0_label": case.x0_label,
+        "seed": case.seed,
+        "run_seed": case.run_seed,
+        "tolerance": case.tolerance,
+    }
+    history = history_frame([])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            truth_setup = _truth_setup(case.setup)
+            snr = "none" if case.snr_db is None else repr(case.snr_db)
+            virtual = resolve_setup(case.setup, snr=snr, seed=noise_seed)
+            objective = SourceObjective(virtual, position, parameterization=case.parameterization)
+            if case.x0_kind == "offset":
+                truth = np.array(
+                    truth_setup.true_optimum(position, parameterization=case.parameterization)
+                )
+                x0 = _random_start(case, truth, objective.bounds)
+            else:
+                x0 = np.array(case.x0, dtype=np.float64)
+            row.update(x0_a=float(x0[0]), x0_b=float(x0[1]))
+            result = calibrate(
+                objective,
+                case.method,
+                x0,
+                budget=case.budget,
+                max_iter=case.max_iter,
+                rng=method_seed,
+                preset=case.preset,
+                **{k: _thawed(v) for k, v in case.params},
+            )
+            evaluation = evaluate_run(truth_setup, position, result)
+        except EchocalError as exc:
+            row.update(_failed(str(exc)))
+        except Exception as exc:  # a bug in one run must not stop a sweep
+            row.update(_failed(f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}"))
+        else:
+            to_tol, iters_to_tol = _to_tolerance(evaluation, case.tolerance)
+            row.update(
+                error_deg=evaluation.error,
+                measurements_to_tol=to_tol,
+                iterations_to_tol=iters_to_tol,
+                success=bool(evaluation.error <= case.tolerance),
+                n_measurements=result.n_measurements,
+                n_iterations=result.n_iterations,
+                status=result.status,
+                message=result.message,
+                estimate_a=float(result.x[0]),
+                estimate_b=float(result.x[1]),
+                truth_a=float(evaluation.truth[0]),
+                truth_b=float(evaluation.truth[1]),
+            )
+            history = history_frame(
+                [
+                    pd.DataFrame(
+                        {
+                            "case_id": case.case_id,
+                            "index": np.arange(result.n_measurements),
+                            "a": result.points[:, 0],
+                            "b": result.points[:, 1],
+                            "value": result.values,
+                        }
+                    )
+                ]
+            )
+    row["warnings"] = "\n".join(sorted({str(w.message) for w in caught}))
+    row["wall_time"] = time.perf_counter() - t0
+    return row, history
+
+
+def _failed(message: str) -> dict[str, Any]:
+    return {
+        "error_deg": np.nan,
+        "measurements_to_tol": None,
+        "iterations_to_tol": None,
+        "success": False,
+        "n_measurements": 0,
+        "n_iterations": 0,
+        "status": FAILED,
+        "message": message,
+        "estimate_a": np.nan,
+        "estimate_b": np.nan,
+        "truth_a": np.nan,
+        "truth_b": np.nan,
+    }
+
+
+def _thawed(value: Any) -> Any:
+    return [_thawed(v) for v in value] if isinstance(value, tuple) else value
