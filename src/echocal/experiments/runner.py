@@ -172,6 +172,7 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
                 x0,
                 budget=case.budget,
                 max_iter=case.max_iter,
+                xtol=case.xtol,
                 rng=method_seed,
                 preset=case.preset,
                 **{k: _thawed(v) for k, v in case.params},

@@ -8,6 +8,7 @@ A sweep file names one setup and position and crosses everything else::
     parameterization = "tilt"
     budget = 120                          # measurements per run
     max_iter = 100
+    xtol = 0.01                           # [deg] stop when a step is shorter (optional)
     tolerance = 0.1                       # [deg] success threshold
     seeds = 20                            # seeds 0..19, or a list
     snr_db = [30, 20, 10]                 # default: the setup's SNR; "none" = noiseless
@@ -111,7 +112,7 @@ class X0Spec(_Model):
 class SweepSpec(_Model):
     """A sweep, as validated from a file; after :func:`load_sweep` every default is resolved.
 
-    position : [m] shape (3,); tolerance : [deg]; snr_db : [dB], None = noiseless.
+    position : [m] shape (3,); xtol, tolerance : [deg]; snr_db : [dB], None = noiseless.
     """
 
     name: str = "sweep"
@@ -121,6 +122,7 @@ class SweepSpec(_Model):
     parameterization: Literal["tilt", "azimuth-coelevation"] = "tilt"
     budget: int | None = Field(default=None, ge=1)
     max_iter: int = Field(default=100, ge=1)
+    xtol: float | None = Field(default=None, ge=0, allow_inf_nan=False)
     tolerance: float = Field(default=0.1, gt=0, allow_inf_nan=False)
     seed: int = Field(default=0, ge=0)
     seeds: int | list[Annotated[int, Field(ge=0)]] = 1
@@ -139,6 +141,7 @@ class RunCase:
     """Everything one run needs: a pure function of this (and nothing else) gives its result.
 
     setup : built-in setup name or absolute path; position : [m] (3,);
+    xtol : [deg] convergence stop of :func:`~echocal.calibrate.calibrate` (None: off);
     tolerance : [deg]; snr_db : [dB] or None (noiseless); params : sorted (option, value)
     pairs; x0 : [deg] the start (``x0_kind="point"``) or the ``(lo, hi)`` distance range
     from the truth (``"offset"``); x0_index : which entry of the sweep's x0 list;
@@ -151,6 +154,7 @@ class RunCase:
     parameterization: str
     budget: int | None
     max_iter: int
+    xtol: float | None
     tolerance: float
     sweep_seed: int
     method: str
@@ -419,6 +423,7 @@ def expand(spec: SweepSpec) -> list[RunCase]:
             parameterization=spec.parameterization,
             budget=spec.budget,
             max_iter=spec.max_iter,
+            xtol=spec.xtol,
             tolerance=float(spec.tolerance),
             sweep_seed=spec.seed,
             method=method.name,
