@@ -23,13 +23,15 @@ Over 100 seeds model-based needs a median of 11 / 14 / 16 measurements from
 1 / 2 / 3 deg (90 % of runs within 19 / 22 / 24; 92 / 80 / 73 % within 20).
 The fixed-gain thesis methods stall at the noise-limited error of their gains;
 the FD Newton/BFGS methods spend 9 or 4 measurements per iteration on
-differences that the model-based fit gets from every point at once.  The acquisition phase costs nothing at 30 dB when the echo
-is visible from x0's first ring (those 7 points are the model's initial design) and
-finds a peak 5 deg away in a median of 33 measurements (spacing 2 deg).  At 10 dB
-detection needs neighbour averaging and costs 20–100 measurements; within 300
-measurements from 2 deg, 75 % of auto runs and 88 % of model-based runs end within
-0.1 deg — when the start is known to be near the echo, ``method="model-based"``
-saves the acquisition.
+differences that the model-based fit gets from every point at once.
+
+The acquisition phase costs nothing at 30 dB when the echo is visible from x0's
+first ring (those 7 points are the model's initial design), and it finds a peak
+5 deg away in a median of 33 measurements (spacing 2 deg).  At 10 dB detection
+needs neighbour averaging and costs 20-100 measurements; within 300
+measurements from 2 deg, 75 % of auto runs and 88 % of model-based runs end
+within 0.1 deg, so when the start is known to be near the echo,
+``method="model-based"`` saves the acquisition.
 """
 
 from __future__ import annotations
