@@ -54,7 +54,7 @@ def summarize(runs: pd.DataFrame) -> pd.DataFrame:
     out = pd.DataFrame(
         [{**dict(zip(keys, key, strict=True)), **_stats(group)} for key, group in grouped]
     )
-    out["preset"] = out["preset"].replace("", None)
+    out["preset"] = pd.Series([p or None for p in out["preset"]], index=out.index, dtype=object)
     out["runs"] = out["runs"].astype("int64")
     out["failed"] = out["failed"].astype("int64")
     return out.reset_index(drop=True)
