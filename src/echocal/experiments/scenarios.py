@@ -552,7 +552,9 @@ def _map_range(records: Sequence[RunRecord], truth: np.ndarray) -> tuple[tuple, 
 
 
 def _slug(group: str) -> str:
-    keep = "".join(c if c.isalnum() else "-" for c in group.lower())
+    for greek, latin in (("μ", "mu"), ("λ", "lambda"), ("ε", "eps"), ("η", "eta")):
+        group = group.replace(greek, latin)
+    keep = "".join(c if c.isascii() and c.isalnum() else "-" for c in group.lower())
     return "-".join(p for p in keep.split("-") if p)[:40]
 
 
