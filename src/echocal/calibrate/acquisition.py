@@ -26,6 +26,7 @@ Acquisition batches are not counted as iterations.
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -37,7 +38,10 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import get_method, register_method
 
-__all__ = ["Acquisition", "hex_spiral"]
+__all__ = ["Acquisition", "NoiseModel", "hex_spiral"]
+
+NoiseModel = Callable[[], tuple[float | None, float | None]]
+"""A live ``(noise_floor, noise_sigma)`` estimate [energy units] (either may be None)."""
 
 
 def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatArray]:
@@ -72,6 +76,9 @@ class Acquisition(Optimizer):
     first_threshold : the threshold while only x0 and the first ring are measured.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
+    noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
+        estimates (either may be None), consulted at every decision when the fixed values
+        above are None — e.g. a source objective that measures the noise in each A-scan.
     batch : maximum points per acquisition ask (1 = stop at the first detection).
     """
 
@@ -87,12 +94,14 @@ class Acquisition(Optimizer):
         first_threshold: float = 3.0,
         noise_sigma: float | None = None,
         noise_floor: float | None = None,
+        noise_model: NoiseModel | None = None,
         batch: int = 1,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
     ) -> None:
         super().__init__(x0, bounds=bounds, rng=rng, normalize="none")
+        self.noise_model = noise_model
         self._local_cls = get_method(local)
         if self._local_cls is Acquisition or issubclass(self._local_cls, Acquisition):
             from echocal.errors import EchocalValueError
@@ -151,8 +160,12 @@ class Acquisition(Optimizer):
         """Detection statistic per measured point, shape (n,): z-score of the mean of the
         point and its measured lattice neighbours above the noise floor."""
         y = self._y
-        floor = float(np.median(y)) if self.noise_floor is None else self.noise_floor
-        sigma = self.noise_sigma
+        floor, sigma = self.noise_floor, self.noise_sigma
+        if self.noise_model is not None:
+            live_floor, live_sigma = self.noise_model()
+            floor = live_floor if floor is None else floor
+            sigma = live_sigma if sigma is None else sigma
+        floor = float(np.median(y)) if floor is None else floor
         if sigma is None:
             sigma = 1.4826 * float(np.median(np.abs(y - np.median(y))))
         mean = self._sum / self._cnt

@@ -41,7 +41,7 @@ from typing import Any
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal.calibrate.acquisition import Acquisition
+from echocal.calibrate.acquisition import Acquisition, NoiseModel
 from echocal.calibrate.registry import register_method
 
 __all__ = ["Auto"]
@@ -64,6 +64,7 @@ class Auto(Acquisition):
         first_threshold: float = 3.0,
         noise_sigma: float | None = None,
         noise_floor: float | None = None,
+        noise_model: NoiseModel | None = None,
         batch: int = 1,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
@@ -79,6 +80,7 @@ class Auto(Acquisition):
             first_threshold=first_threshold,
             noise_sigma=noise_sigma,
             noise_floor=noise_floor,
+            noise_model=noise_model,
             batch=batch,
             bounds=bounds,
             rng=rng,

@@ -90,6 +90,7 @@ def build_optimizer(
     if wrap:
         aknown.setdefault("noise_sigma", objective.noise_sigma)
         aknown.setdefault("noise_floor", objective.noise_floor)
+        aknown.setdefault("noise_model", objective.noise_estimate)
         if issubclass(cls, Acquisition):  # pragma: no cover - excluded above
             raise AssertionError
         used = {**known, "acquire": aknown}
@@ -101,6 +102,7 @@ def build_optimizer(
         known.update({k: v for k, v in acq_opts.items() if k in _accepted(cls)})
         known.setdefault("noise_sigma", objective.noise_sigma)
         known.setdefault("noise_floor", objective.noise_floor)
+        known.setdefault("noise_model", objective.noise_estimate)
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
 
 

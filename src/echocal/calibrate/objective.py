@@ -159,6 +159,14 @@ class Objective:
             np.concatenate(self._points), np.concatenate(self._values), np.concatenate(self._times)
         )
 
+    def noise_estimate(self) -> tuple[float | None, float | None]:
+        """Current ``(noise_floor, noise_sigma)`` of the values [energy units], None if unknown.
+
+        The base class returns the fixed attributes; a subclass that can measure its
+        noise (e.g. from the quiet part of each A-scan) returns live estimates.
+        """
+        return self.noise_floor, self.noise_sigma
+
     def cost(self, n_points: int) -> int:
         """Measurements needed to evaluate ``n_points`` points (``n_points * repeats``)."""
         return int(n_points) * self.repeats

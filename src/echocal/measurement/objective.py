@@ -100,6 +100,9 @@ class SourceObjective(Objective):
         self.metric = metric
         self.pulse = pulse
         self.window_length = window_length
+        self._last_scan: AScan | None = None
+        self._scan_sigmas: list[float] = []  # robust per-sample noise σ of each A-scan
+        self._noise_cache: tuple[float, tuple[float, float]] | None = None
 
     def pose(self, a: float, b: float) -> Pose:
         """The pose measured for orientation ``(a, b)`` [deg]."""
@@ -108,6 +111,36 @@ class SourceObjective(Objective):
     def _evaluate(self, points: np.ndarray) -> np.ndarray:
         poses = [self.pose(a, b) for a, b in points]
         scans = self.source.measure_many(poses)
+        for scan in scans:
+            if scan.is_finite:
+                x = scan.samples
+                self._scan_sigmas.append(1.4826 * float(np.median(np.abs(x - np.median(x)))))
+        self._last_scan = scans[-1] if scans else None
         return np.array(
             [ascan_metric(s, self.metric, self.pulse, self.window_length) for s in scans]
         )
+
+    def noise_estimate(self) -> tuple[float | None, float | None]:
+        """Live ``(noise_floor, noise_sigma)`` of the metric, measured from the A-scans.
+
+        Each A-scan carries its own noise: the echo fills a small part of the
+        recording, so 1.4826 · MAD of the samples estimates the receiver's
+        per-sample σ.  The metric of pure noise at that σ (mean and standard
+        deviation over 64 synthetic noise A-scans of the same window, with a fixed
+        internal seed so the source's random stream is untouched) gives the floor
+        that an echo must clear.  None until the first finite A-scan.
+        """
+        if not self._scan_sigmas or self._last_scan is None:
+            return super().noise_estimate()
+        sigma = float(np.median(self._scan_sigmas))
+        cached = self._noise_cache
+        if cached is not None and abs(cached[0] - sigma) <= 0.05 * max(cached[0], 1e-300):
+            return cached[1]
+        scan = self._last_scan
+        noise = np.random.default_rng(12345).standard_normal((64, scan.n_samples)) * sigma
+        window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
+        fn = get_metric(self.metric)
+        values = np.asarray(fn(noise, window, self.pulse), dtype=np.float64)
+        estimate = (float(np.mean(values)), float(np.std(values)))
+        self._noise_cache = (sigma, estimate)
+        return estimate
