@@ -1,0 +1,261 @@
+"""The result of a surface scan: an xarray Dataset on dims (y, x), with units and summaries.
+
+Variables (NaN where a point is missing; ``status`` says why):
+
+=================  ======  ===================================================
+name               units   meaning
+=================  ======  ===================================================
+probe_z            m       probe height
+tilt_x, tilt_y     deg     estimated orientation as gimbal tilts
+azimuth            deg     ... as azimuth (canonical: co-elevation >= 0)
+coelevation        deg     ... as co-elevation
+normal_x/_y/_z     1       unit surface normal n (the beam travels along −n)
+tof                s       pulse-echo time of flight at the estimate
+distance           m       c₀·tof/2, along the beam
+surface_x/_y/_z    m       probe position + distance · (−n)
+echo_snr           1       matched-envelope peak / its median (detection statistic)
+n_measurements     1       A-scans used at the point (calibration + time of flight)
+status             1       0 found, see ``flag_meanings``
+found              bool    status == 0
+warm               bool    the point started from its neighbours
+normal_error       deg     vs the true normal (only with a truth)
+height_error       m       measured z − true surface z below the point (with a truth)
+=================  ======  ===================================================
+
+Summaries (in ``attrs`` and :attr:`SurfaceScan.summary`): points found/missing,
+total and per-point measurements, median / p90 / max of both errors.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+from echocal.errors import DataFileError
+from echocal.geometry import convert_angles, orientation_normal
+from echocal.io import atomic_path
+from echocal.scanning.grid import ScanGrid
+from echocal.specimen import Specimen
+
+__all__ = ["FORMAT", "STATUS", "SurfaceScan", "surface_dataset"]
+
+FORMAT = "surface-scan/1"
+"""Format name stored in the NetCDF attributes."""
+
+STATUS: dict[str, int] = {
+    "found": 0,
+    "no-echo": 1,
+    "weak-echo": 2,
+    "at-limit": 3,
+    "no-tof": 4,
+    "source-error": 5,
+}
+"""Per-point status codes: 0 found, else why the point is missing."""
+
+_UNITS = {
+    "probe_z": "m",
+    "tilt_x": "deg",
+    "tilt_y": "deg",
+    "azimuth": "deg",
+    "coelevation": "deg",
+    "normal_x": "1",
+    "normal_y": "1",
+    "normal_z": "1",
+    "tof": "s",
+    "distance": "m",
+    "surface_x": "m",
+    "surface_y": "m",
+    "surface_z": "m",
+    "echo_snr": "1",
+    "n_measurements": "1",
+    "status": "1",
+    "normal_error": "deg",
+    "height_error": "m",
+}
+
+FloatArray = NDArray[np.float64]
+
+
+def _convert(
+    a: FloatArray, b: FloatArray, source: str, target: str
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`convert_angles` where both angles are finite; NaN elsewhere."""
+    ok = np.isfinite(a) & np.isfinite(b)
+    out_a, out_b = np.full(a.shape, np.nan), np.full(a.shape, np.nan)
+    if np.any(ok):
+        out_a[ok], out_b[ok] = convert_angles(a[ok], b[ok], source, target)
+    return out_a, out_b
+
+
+def _quantiles(values: FloatArray) -> dict[str, float | None]:
+    v = values[np.isfinite(values)]
+    if not v.size:
+        return {"median": None, "p90": None, "max": None}
+    return {
+        "median": float(np.median(v)),
+        "p90": float(np.percentile(v, 90)),
+        "max": float(np.max(v)),
+    }
+
+
+@dataclass(frozen=True)
+class SurfaceScan:
+    """A finished surface scan: the Dataset and its summary (plain data)."""
+
+    dataset: xr.Dataset
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Points found/missing, measurements, error quantiles (JSON-ready)."""
+        return json.loads(self.dataset.attrs["summary"])
+
+    @property
+    def found(self) -> NDArray[np.bool_]:
+        """Which points were found, shape (n_y, n_x)."""
+        return self.dataset["found"].values.astype(bool)
+
+    def surface_points(self) -> FloatArray:
+        """[m] found surface points, shape (n_found, 3)."""
+        ds = self.dataset
+        pts = np.stack([ds[f"surface_{a}"].values for a in "xyz"], axis=-1)
+        return pts[self.found]
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the Dataset as NetCDF (h5netcdf), atomically."""
+        target = Path(path)
+        with atomic_path(target) as tmp:
+            self.dataset.to_netcdf(tmp, engine="h5netcdf")
+        return target
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> SurfaceScan:
+        """Read a file written by :meth:`save`."""
+        try:
+            with xr.open_dataset(path, engine="h5netcdf") as ds:
+                data = ds.load()
+        except (OSError, ValueError) as exc:
+            raise DataFileError(f"cannot read surface scan {str(path)!r}: {exc}") from None
+        if data.attrs.get("format") != FORMAT:
+            raise DataFileError(f"{path}: not a surface scan (format {FORMAT!r} expected)")
+        return cls(data)
+
+
+def surface_dataset(
+    grid: ScanGrid,
+    records: dict[tuple[int, int], dict[str, Any]],
+    *,
+    parameterization: str,
+    sound_speed: float,
+    truth: Specimen | None = None,
+    attrs: dict[str, Any] | None = None,
+) -> SurfaceScan:
+    """Assemble per-point ``records`` (keyed (iy, ix)) into a :class:`SurfaceScan`."""
+    from echocal.scanning.truth import height_errors, normal_errors
+
+    shape = grid.shape
+    nan = np.full(shape, np.nan)
+    a, b, tof, snr = nan.copy(), nan.copy(), nan.copy(), nan.copy()
+    n_meas = np.zeros(shape, dtype=np.int64)
+    status = np.full(shape, -1, dtype=np.int64)
+    warm = np.zeros(shape, dtype=bool)
+    for (iy, ix), rec in records.items():
+        status[iy, ix] = int(rec["status"])
+        n_meas[iy, ix] = int(rec["n_measurements"])
+        warm[iy, ix] = bool(rec.get("warm", False))
+        snr[iy, ix] = rec["snr"] if rec["snr"] is not None else np.nan
+        if rec["status"] == 0:
+            a[iy, ix], b[iy, ix], tof[iy, ix] = rec["a"], rec["b"], rec["tof"]
+    az, coel = _convert(a, b, parameterization, "azimuth-coelevation")
+    # canonical (azimuth, co-elevation): co-elevation >= 0
+    flip = coel < 0
+    az = np.where(flip, (az + 360.0) % 360.0 - 180.0, az)
+    coel = np.abs(coel)
+    tx, ty = _convert(az, coel, "azimuth-coelevation", "tilt")
+    normal = orientation_normal(az, coel)  # (n_y, n_x, 3), NaN where missing
+    dist = tof * sound_speed / 2.0
+    probe = grid.positions()
+    surface = probe - dist[..., None] * normal
+    found = status == 0
+    dims = ("y", "x")
+    data: dict[str, Any] = {
+        "probe_z": (dims, probe[..., 2]),
+        "tilt_x": (dims, tx),
+        "tilt_y": (dims, ty),
+        "azimuth": (dims, az),
+        "coelevation": (dims, coel),
+        "normal_x": (dims, normal[..., 0]),
+        "normal_y": (dims, normal[..., 1]),
+        "normal_z": (dims, normal[..., 2]),
+        "tof": (dims, tof),
+        "distance": (dims, dist),
+        "surface_x": (dims, surface[..., 0]),
+        "surface_y": (dims, surface[..., 1]),
+        "surface_z": (dims, surface[..., 2]),
+        "echo_snr": (dims, snr),
+        "n_measurements": (dims, n_meas),
+        "status": (dims, status),
+        "found": (dims, found.astype(np.int8)),
+        "warm": (dims, warm.astype(np.int8)),
+    }
+    n_found = int(found.sum())
+    summary: dict[str, Any] = {
+        "points": grid.size,
+        "found": n_found,
+        "missing": int(grid.size - n_found),
+        "missing_by_status": {
+            name: int(np.count_nonzero(status == code))
+            for name, code in STATUS.items()
+            if code and np.any(status == code)
+        },
+        "measurements_total": int(n_meas.sum()),
+        "measurements_per_point": float(n_meas.mean()) if grid.size else 0.0,
+        "measurements_per_point_median": float(np.median(n_meas)) if grid.size else 0.0,
+    }
+    if truth is not None:
+        flat = found.reshape(-1)
+        nerr, herr = np.full(grid.size, np.nan), np.full(grid.size, np.nan)
+        pts = surface.reshape(-1, 3)[flat]
+        nerr[flat] = normal_errors(
+            truth, probe.reshape(-1, 3)[flat], pts, normal.reshape(-1, 3)[flat]
+        )
+        herr[flat] = height_errors(truth, pts)
+        data["normal_error"] = (dims, nerr.reshape(shape))
+        data["height_error"] = (dims, herr.reshape(shape))
+        summary["normal_error_deg"] = _quantiles(nerr)
+        summary["height_error_abs_m"] = _quantiles(np.abs(herr))
+        summary["truth"] = truth.name
+    ds = xr.Dataset(data, coords={"x": ("x", np.array(grid.x)), "y": ("y", np.array(grid.y))})
+    for name, unit in _UNITS.items():
+        if name in ds:
+            ds[name].attrs["units"] = unit
+    ds["x"].attrs["units"] = ds["y"].attrs["units"] = "m"
+    ds["status"].attrs["flag_values"] = np.array(list(STATUS.values()), dtype=np.int64)
+    ds["status"].attrs["flag_meanings"] = " ".join(n.replace("-", "_") for n in STATUS)
+    ds["found"].attrs["units"] = ds["warm"].attrs["units"] = "1"
+    ds["found"].attrs["long_name"] = "1 where the surface was found (status 0)"
+    ds["warm"].attrs["long_name"] = "1 where the point started from its neighbours"
+    ds.attrs.update(
+        {
+            "format": FORMAT,
+            "parameterization": parameterization,
+            "sound_speed": float(sound_speed),
+            "grid": json.dumps(grid.to_dict()),
+            "summary": json.dumps(summary),
+        }
+    )
+    for key, value in (attrs or {}).items():
+        if key in ds.attrs:
+            continue
+        ds.attrs[key] = (
+            value
+            if isinstance(value, int | float | str) and not isinstance(value, bool)
+            else json.dumps(value, default=str)
+        )
+    return SurfaceScan(ds)

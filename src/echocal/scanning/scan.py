@@ -1,0 +1,412 @@
+"""``scan_surface``: map a specimen's surface — normal and distance at every raster point.
+
+At each probe position of a :class:`~echocal.scanning.ScanGrid`, in serpentine order:
+
+1. **Orientation.**  Calibrate the orientation of maximum echo (the surface normal)
+   with :func:`echocal.calibrate.calibrate`, warm-started from the finished
+   neighbours: a least-squares plane through the estimates of the found points
+   within 1.5 raster steps, evaluated at this position (the previous point alone
+   at the start of a scan, nothing — a cold start at ``x0`` — when no neighbour was
+   found).  A run stops when its recommendation has stayed within ``tol`` [deg] for
+   ``patience`` iterations, or at ``budget_per_point``.
+2. **Distance.**  Measure ``tof_repeats`` A-scans at the estimate (counted) and take
+   the matched-filter peak (:func:`echocal.signal.time_of_flight`) of each; their mean
+   τ gives the distance along the beam d = c₀τ/2 and the surface point
+   p + d · (−n).
+3. **Missing, not guessed.**  A point is *missing* (NaN, and never a warm start for
+   its neighbours) when the calibration found no echo (acquisition failed, every
+   value NaN), when the estimate sits on the positioner's angle limits (the true
+   optimum is out of reach), when the echo at the estimate is not clearly above
+   noise (matched-envelope peak < ``min_snr`` × its median over the window, a
+   robust noise level every source provides), when the time of flight is NaN, or
+   when the source raised an echocal error at that point.  A point that failed from
+   a cold start is retried once, warm, after the pass (its measurements add up).
+
+The result (:class:`SurfaceScan`) is an xarray Dataset on dims (y, x); see
+:func:`surface_dataset` for its variables.  With ``out`` the scan is resumable (see
+:mod:`echocal.scanning.store`) and the NetCDF file is written atomically at the end.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal._rng import RngLike, as_generator
+from echocal._validate import nonnegative_float, one_of, positive_float, positive_int
+from echocal.calibrate import calibrate, method_names
+from echocal.calibrate.driver import CalibrationState
+from echocal.constants import SOUND_SPEED_WATER
+from echocal.errors import DataFileError, EchocalError, EchocalValueError
+from echocal.geometry import PARAMETERIZATIONS
+from echocal.measurement.base import MeasurementSource
+from echocal.measurement.objective import SourceObjective
+from echocal.scanning.dataset import STATUS, SurfaceScan, surface_dataset
+from echocal.scanning.grid import ScanGrid
+from echocal.scanning.store import PointStore, partial_path
+from echocal.signal import Pulse, RecordingWindow, matched_envelope, time_of_flight
+from echocal.specimen import Specimen
+
+__all__ = ["echo_snr", "scan_surface"]
+
+FloatArray = NDArray[np.float64]
+
+
+def echo_snr(samples: ArrayLike, window: RecordingWindow, pulse: Pulse) -> FloatArray:
+    """Peak of the matched-filter envelope over its median across the window, shape (...,).
+
+    The median envelope is a robust noise level (an echo occupies a few percent of the
+    window); pure noise gives ≈ 3–4 (a Rayleigh maximum over ~10³ samples), a clear
+    echo tens to thousands; a noiseless echo +inf; an all-zero A-scan NaN.
+    """
+    env = matched_envelope(np.asarray(samples, dtype=np.float64), pulse, window.fs)
+    peak = env.max(axis=-1)
+    median = np.median(env, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(peak > 0, peak / median, np.nan)
+    return ratio
+
+
+def _stopper(tol: float, patience: int) -> Callable[[CalibrationState], bool]:
+    """Stop once the last ``patience`` recommendations lie within ``tol`` [deg] of their mean."""
+    history: list[FloatArray] = []
+
+    def callback(state: CalibrationState) -> bool:
+        history.append(np.asarray(state.recommendation, dtype=np.float64))
+        if len(history) < patience:
+            return False
+        recent = np.array(history[-patience:])
+        return bool(np.max(np.hypot(*(recent - recent.mean(axis=0)).T)) < tol)
+
+    return callback
+
+
+def _predict(
+    done: Mapping[tuple[int, int], FloatArray], here: FloatArray, xy: FloatArray, radius: float
+) -> FloatArray | None:
+    """Warm start [deg] (2,) at ``here`` [m] (2,) from found neighbours within ``radius``:
+    a least-squares plane a + g·(p − centroid) (minimum-norm where the neighbours are
+    collinear or alone), so a steady slope of the normal along a row is extrapolated."""
+    keys = [k for k in done if np.hypot(*(xy[k] - here)) <= radius]
+    if not keys:
+        return None
+    pos = np.array([xy[k] for k in keys])
+    val = np.array([done[k] for k in keys])
+    centre = pos.mean(axis=0)
+    scale = max(radius, 1e-12)
+    design = np.column_stack([np.ones(len(keys)), (pos - centre) / scale])
+    coef, *_ = np.linalg.lstsq(design, val, rcond=1e-6)
+    at = np.concatenate([[1.0], (here - centre) / scale])
+    return at @ coef
+
+
+def _settings(source: MeasurementSource, grid: ScanGrid, options: dict[str, Any]) -> dict[str, Any]:
+    return {"grid": grid.to_dict(), "source": source.description, **options}
+
+
+@dataclass
+class _Context:
+    """Everything one point's measurement needs (private)."""
+
+    source: MeasurementSource
+    method: str
+    parameterization: str
+    budget: int
+    tof_repeats: int
+    tol: float
+    patience: int
+    min_snr: float
+    x0: FloatArray
+    pulse: Pulse | None
+    sound_speed: float
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+def _measure_point(
+    ctx: _Context, position: FloatArray, start: FloatArray, rng: np.random.Generator
+) -> dict[str, Any]:
+    """Calibrate, then time of flight, at one probe position; a JSON-ready record."""
+    record: dict[str, Any] = {
+        "status": STATUS["found"],
+        "a": np.nan,
+        "b": np.nan,
+        "tof": np.nan,
+        "snr": np.nan,
+        "n_measurements": 0,
+        "n_calibration": 0,
+        "start": [float(v) for v in start],
+        "message": "",
+    }
+    t0 = time.perf_counter()
+    objective = SourceObjective(
+        ctx.source, position, parameterization=ctx.parameterization, pulse=ctx.pulse
+    )
+    try:
+        x0 = np.clip(start, objective.bounds[:, 0], objective.bounds[:, 1])
+        result = calibrate(
+            objective,
+            ctx.method,
+            x0=x0,
+            budget=ctx.budget - ctx.tof_repeats,
+            rng=rng,
+            callback=_stopper(ctx.tol, ctx.patience),
+            **ctx.options,
+        )
+    except EchocalError as exc:
+        record.update(status=STATUS["source-error"], message=str(exc))
+        record["n_measurements"] = record["n_calibration"] = objective.n_measurements
+        record["wall_time"] = time.perf_counter() - t0
+        return record
+    record["n_calibration"] = result.n_measurements
+    record["n_measurements"] = result.n_measurements
+    record["a"], record["b"] = (float(v) for v in result.x)
+    if result.status in (4, 6):
+        record.update(status=STATUS["no-echo"], message=result.message)
+    elif np.any(np.isclose(result.x, objective.bounds.ravel()[[0, 2]], atol=1e-6)) or np.any(
+        np.isclose(result.x, objective.bounds.ravel()[[1, 3]], atol=1e-6)
+    ):
+        record.update(status=STATUS["at-limit"], message="estimate on the angle limits")
+    else:
+        pose = objective.pose(*result.x)
+        try:
+            scans = ctx.source.measure_many([pose] * ctx.tof_repeats)
+        except EchocalError as exc:
+            record.update(status=STATUS["source-error"], message=str(exc))
+            scans = []
+        record["n_measurements"] += len(scans)
+        if scans:
+            samples = np.stack([s.samples for s in scans])
+            window = RecordingWindow(
+                fs=scans[0].fs, start=scans[0].start_time, n_samples=scans[0].n_samples
+            )
+            pulse = objective.pulse
+            snr = echo_snr(samples, window, pulse) if np.all(np.isfinite(samples)) else [np.nan]
+            tof = (
+                time_of_flight(samples, window, pulse) if np.all(np.isfinite(samples)) else [np.nan]
+            )
+            record["snr"] = float(np.mean(snr))
+            record["tof"] = float(np.mean(tof))
+            if not np.isfinite(record["tof"]):
+                record.update(status=STATUS["no-tof"], message="time of flight is NaN")
+            elif not record["snr"] >= ctx.min_snr:
+                record.update(
+                    status=STATUS["weak-echo"],
+                    message=f"echo {record['snr']:.3g} x the noise median < {ctx.min_snr:g}",
+                )
+    record["wall_time"] = time.perf_counter() - t0
+    return record
+
+
+def scan_surface(
+    source: MeasurementSource,
+    grid: ScanGrid,
+    *,
+    method: str = "auto",
+    parameterization: str = "tilt",
+    budget_per_point: int = 80,
+    warm_start: bool = True,
+    rng: RngLike = None,
+    progress: bool = True,
+    out: str | os.PathLike[str] | None = None,
+    truth: Specimen | None = None,
+    x0: ArrayLike = (0.0, 0.0),
+    tof_repeats: int = 2,
+    tol: float = 0.01,
+    patience: int = 6,
+    min_snr: float = 6.0,
+    pulse: Pulse | None = None,
+    sound_speed: float | None = None,
+    method_options: Mapping[str, Any] | None = None,
+    metadata: Mapping[str, Any] | None = None,
+    on_point: Callable[[int, int], None] | None = None,
+) -> SurfaceScan:
+    """Scan ``grid`` with ``source``: surface normal and distance at every point.
+
+    Parameters
+    ----------
+    source : any measurement source (simulator, replay, hardware).
+    grid : probe positions [m].
+    method : calibration method (:func:`echocal.calibrate.method_names`).
+    parameterization : ``"tilt"`` (default: no pole at normal incidence) or
+        ``"azimuth-coelevation"``.
+    budget_per_point : [measurements] cap per point, time-of-flight repeats included.
+    warm_start : start each point from its finished neighbours (else from ``x0``).
+    rng : seed or Generator; each point draws its own seed from it in scan order.
+    progress : show a progress bar with ETA on stderr.
+    out : NetCDF file to write (atomically); the scan is then resumable from
+        ``<out>.partial/`` and refuses to resume a different scan.
+    truth : the specimen to judge against; default ``source.specimen`` if the source has
+        one (the simulator).  Adds ``normal_error`` and ``height_error``.
+    x0 : [deg] (2,) cold-start orientation.
+    tof_repeats : A-scans averaged for the time of flight (counted).
+    tol, patience : [deg], [iterations] the per-point stopping rule.
+    min_snr : the echo must exceed this many times the median matched envelope.
+    pulse : matched-filter template (default: the source's own).
+    sound_speed : [m/s] c₀ (default: the source's, else water).
+    method_options : extra options of the calibration method.
+    metadata : extra JSON-ready attributes to store (e.g. the setup name and seed).
+    on_point : called with (points done, total) after each point (e.g. to interrupt
+        a scan in tests or drive another progress display).
+    """
+    one_of("parameterization", parameterization, PARAMETERIZATIONS)
+    one_of("method", method, method_names())
+    budget = positive_int("budget_per_point", budget_per_point)
+    tof_repeats = positive_int("tof_repeats", tof_repeats)
+    if budget <= tof_repeats:
+        raise EchocalValueError(
+            f"budget_per_point ({budget}) must exceed tof_repeats ({tof_repeats})"
+        )
+    c0 = sound_speed if sound_speed is not None else getattr(source, "sound_speed", None)
+    ctx = _Context(
+        source=source,
+        method=method,
+        parameterization=parameterization,
+        budget=budget,
+        tof_repeats=tof_repeats,
+        tol=nonnegative_float("tol", tol),
+        patience=positive_int("patience", patience),
+        min_snr=positive_float("min_snr", min_snr),
+        x0=np.asarray(x0, dtype=np.float64).reshape(2),
+        pulse=pulse,
+        sound_speed=positive_float("sound_speed", SOUND_SPEED_WATER if c0 is None else c0),
+        options=dict(method_options or {}),
+    )
+    gen = as_generator(rng)
+    order = grid.order()
+    seeds = gen.integers(0, 2**63 - 1, size=len(order))
+    settings = _settings(
+        source,
+        grid,
+        {
+            "method": method,
+            "parameterization": parameterization,
+            "budget_per_point": budget,
+            "warm_start": bool(warm_start),
+            "x0": ctx.x0.tolist(),
+            "tof_repeats": tof_repeats,
+            "tol": ctx.tol,
+            "patience": ctx.patience,
+            "min_snr": ctx.min_snr,
+            "sound_speed": ctx.sound_speed,
+            "method_options": ctx.options,
+        },
+    )
+    store = None
+    records: dict[tuple[int, int], dict[str, Any]] = {}
+    if out is not None:
+        out = Path(out)
+        if out.exists() and not partial_path(out).exists():
+            raise DataFileError(f"{out} already exists; remove it or choose another output")
+        store = PointStore(out, settings)
+        for rec in store.open():
+            records[(int(rec["iy"]), int(rec["ix"]))] = rec
+    resumed = len(records)
+
+    xy = grid.positions()[..., :2]
+    positions = grid.positions()
+    found: dict[tuple[int, int], FloatArray] = {
+        k: np.array([r["a"], r["b"]]) for k, r in records.items() if r["status"] == 0
+    }
+    radius = 1.5 * grid.spacing
+    t_start = time.perf_counter()
+    with _ProgressBar(progress, len(order), resumed) as advance:
+        for i, key in enumerate(order):
+            if key in records:
+                continue
+            start = None
+            if warm_start:
+                start = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
+            start = ctx.x0 if start is None else start
+            rec = _measure_point(ctx, positions[key], start, np.random.default_rng(seeds[i]))
+            rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and start is not ctx.x0))
+            records[key] = rec
+            if rec["status"] == 0:
+                found[key] = np.array([rec["a"], rec["b"]])
+            if store is not None:
+                store.append(rec)
+            advance()
+            if on_point is not None:
+                on_point(len(records), len(order))
+        # cold-start failures get one warm retry once a neighbour has been found
+        for i, key in enumerate(order):
+            old = records[key]
+            if not warm_start or old["status"] == 0 or old.get("warm") or old.get("retried"):
+                continue
+            start = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
+            if start is None:
+                continue
+            rng_i = np.random.default_rng([int(seeds[i]), 1])
+            rec = _measure_point(ctx, positions[key], start, rng_i)
+            rec.update(iy=key[0], ix=key[1], order=i, warm=True, retried=True)
+            rec["n_measurements"] += int(old["n_measurements"])
+            records[key] = rec
+            if rec["status"] == 0:
+                found[key] = np.array([rec["a"], rec["b"]])
+            if store is not None:
+                store.append(rec)
+    wall = time.perf_counter() - t_start
+    if truth is None:
+        truth = getattr(source, "specimen", None)
+    attrs = {
+        **{k: v for k, v in settings.items() if k not in ("grid",)},
+        **dict(metadata or {}),
+        "resumed_points": resumed,
+        "wall_time": wall,
+    }
+    result = surface_dataset(
+        grid,
+        records,
+        parameterization=parameterization,
+        sound_speed=ctx.sound_speed,
+        truth=truth,
+        attrs=attrs,
+    )
+    if out is not None and store is not None:
+        result.save(out)
+        store.remove()
+    return result
+
+
+class _ProgressBar:
+    """A rich progress bar with ETA (stderr), or nothing."""
+
+    def __init__(self, enabled: bool, total: int, completed: int) -> None:
+        self.enabled, self.total, self.completed = enabled, total, completed
+        self._bar: Any = None
+
+    def __enter__(self) -> Callable[[], None]:
+        if not self.enabled:
+            return lambda: None
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self._bar = Progress(
+            TextColumn("scan"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+        )
+        self._bar.__enter__()
+        task = self._bar.add_task("scan", total=self.total, completed=self.completed)
+        return lambda: self._bar.advance(task)
+
+    def __exit__(self, *exc: object) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
