@@ -32,6 +32,7 @@ _COMMAND_MODULES = (
     "echocal.cli.record",
     "echocal.cli.instrument",
     "echocal.cli.sweep",
+    "echocal.cli.experiments",
 )
 
 for _name in _COMMAND_MODULES:

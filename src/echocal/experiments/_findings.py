@@ -52,10 +52,9 @@ def _key(row: pd.Series) -> tuple[float, float]:
 
 
 def _describe(row: pd.Series) -> str:
-    return (
-        f"{row['label']}: 90 % after {fmt_iter(row['iterations_to_90pct'])} it., "
-        f"final error {row['final_error_deg']:.2f}°"
-    )
+    k = row["iterations_to_90pct"]
+    reached = f"90 % after {k:g} it." if math.isfinite(k) else "90 % never reached"
+    return f"{row['label']}: {reached}, final error {row['final_error_deg']:.2f}°"
 
 
 SPEED = (
