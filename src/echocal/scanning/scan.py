@@ -19,8 +19,13 @@ At each probe position of a :class:`~echocal.scanning.ScanGrid`, in serpentine o
    optimum is out of reach), when the echo at the estimate is not clearly above
    noise (matched-envelope peak < ``min_snr`` × its median over the window, a
    robust noise level every source provides), when the time of flight is NaN, or
-   when the source raised an echocal error at that point.  A point that failed from
-   a cold start is retried once, warm, after the pass (its measurements add up).
+   when the source raised an echocal error at that point.
+4. **Second look.**  After the pass, suspicious points — missing after a cold start,
+   an echo below ``relative_snr`` × the scan's median echo (a side lobe), or more
+   than ``outlier`` degrees off the plane through their neighbours — are measured
+   once more, warm from their trusted neighbours; the attempt with the stronger echo
+   is kept, the measurements of both are counted, and a point still far weaker than
+   the median echo is missing.
 
 The result (:class:`SurfaceScan`) is an xarray Dataset on dims (y, x); see
 :func:`surface_dataset` for its variables.  With ``out`` the scan is resumable (see
@@ -107,6 +112,54 @@ def _predict(
     return at @ coef
 
 
+def _score(rec: Mapping[str, Any]) -> tuple[bool, float]:
+    """Which of two attempts at a point to keep: a found one, then the stronger echo."""
+    snr = rec.get("snr")
+    return rec["status"] == 0, float(snr) if snr is not None and np.isfinite(snr) else -np.inf
+
+
+def _relative_check(rec: dict[str, Any], ctx: _Context, snr_ref: float) -> dict[str, Any]:
+    """Demote a found point whose echo is far weaker than the scan's median echo."""
+    if rec["status"] == 0 and rec["snr"] < ctx.relative_snr * snr_ref:
+        rec = {
+            **rec,
+            "status": STATUS["weak-echo"],
+            "message": f"echo {rec['snr']:.3g} < {ctx.relative_snr:g} x the scan median "
+            f"{snr_ref:.3g}: a side lobe or a partial footprint",
+        }
+    return rec
+
+
+def _suspicious(
+    records: Mapping[tuple[int, int], Mapping[str, Any]],
+    found: Mapping[tuple[int, int], FloatArray],
+    xy: FloatArray,
+    radius: float,
+    ctx: _Context,
+) -> tuple[set[tuple[int, int]], float]:
+    """Points worth a second, warm look, and the median echo of the found points.
+
+    * missing after a cold start (no neighbour to start from then);
+    * found with an echo below ``relative_snr`` × the median echo (a side lobe);
+    * found more than ``outlier`` [deg] away from the plane through its trusted
+      neighbours (converged to another peak).
+    """
+    snrs = np.array([records[k]["snr"] for k in found], dtype=np.float64)
+    snrs = snrs[np.isfinite(snrs)]
+    snr_ref = float(np.median(snrs)) if snrs.size else np.inf
+    weak = {k for k in found if not records[k]["snr"] >= ctx.relative_snr * snr_ref}
+    good = {k: v for k, v in found.items() if k not in weak}
+    pos = {k: xy[k] for k in good}
+    outliers = set()
+    for key, est in good.items():
+        others = {k: v for k, v in good.items() if k != key}
+        pred = _predict(others, xy[key], pos, radius)
+        if pred is not None and np.hypot(*(pred - est)) > ctx.outlier:
+            outliers.add(key)
+    cold = {k for k, r in records.items() if r["status"] != 0 and not r.get("warm")}
+    return weak | outliers | cold, snr_ref
+
+
 def _settings(source: MeasurementSource, grid: ScanGrid, options: dict[str, Any]) -> dict[str, Any]:
     return {"grid": grid.to_dict(), "source": source.description, **options}
 
@@ -123,6 +176,8 @@ class _Context:
     tol: float
     patience: int
     min_snr: float
+    relative_snr: float
+    outlier: float
     x0: FloatArray
     pulse: Pulse | None
     sound_speed: float
@@ -221,6 +276,8 @@ def scan_surface(
     tol: float = 0.01,
     patience: int = 6,
     min_snr: float = 6.0,
+    relative_snr: float = 0.25,
+    outlier: float = 0.3,
     pulse: Pulse | None = None,
     sound_speed: float | None = None,
     method_options: Mapping[str, Any] | None = None,
@@ -248,6 +305,10 @@ def scan_surface(
     tof_repeats : A-scans averaged for the time of flight (counted).
     tol, patience : [deg], [iterations] the per-point stopping rule.
     min_snr : the echo must exceed this many times the median matched envelope.
+    relative_snr : ... and this fraction of the median echo of the found points (a
+        weaker one is a side lobe or a partial footprint).
+    outlier : [deg] a found point this far from the plane through its neighbours'
+        estimates is measured again from them; the stronger echo is kept.
     pulse : matched-filter template (default: the source's own).
     sound_speed : [m/s] c₀ (default: the source's, else water).
     method_options : extra options of the calibration method.
@@ -273,6 +334,8 @@ def scan_surface(
         tol=nonnegative_float("tol", tol),
         patience=positive_int("patience", patience),
         min_snr=positive_float("min_snr", min_snr),
+        relative_snr=nonnegative_float("relative_snr", relative_snr),
+        outlier=positive_float("outlier", outlier),
         x0=np.asarray(x0, dtype=np.float64).reshape(2),
         pulse=pulse,
         sound_speed=positive_float("sound_speed", SOUND_SPEED_WATER if c0 is None else c0),
@@ -294,6 +357,8 @@ def scan_surface(
             "tol": ctx.tol,
             "patience": ctx.patience,
             "min_snr": ctx.min_snr,
+            "relative_snr": ctx.relative_snr,
+            "outlier": ctx.outlier,
             "sound_speed": ctx.sound_speed,
             "method_options": ctx.options,
         },
@@ -334,18 +399,26 @@ def scan_surface(
             advance()
             if on_point is not None:
                 on_point(len(records), len(order))
-        # cold-start failures get one warm retry once a neighbour has been found
+        # second look at suspicious points, warm from their trusted neighbours
+        retry, snr_ref = _suspicious(records, found, xy, radius, ctx)
+        for key in retry:
+            found.pop(key, None)
         for i, key in enumerate(order):
             old = records[key]
-            if not warm_start or old["status"] == 0 or old.get("warm") or old.get("retried"):
+            if key not in retry or old.get("retried"):
                 continue
-            start = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
+            others = {k: v for k, v in found.items() if k != key}
+            start = _predict(others, xy[key], {k: xy[k] for k in others}, radius)
             if start is None:
                 continue
-            rng_i = np.random.default_rng([int(seeds[i]), 1])
-            rec = _measure_point(ctx, positions[key], start, rng_i)
-            rec.update(iy=key[0], ix=key[1], order=i, warm=True, retried=True)
-            rec["n_measurements"] += int(old["n_measurements"])
+            new = _measure_point(
+                ctx, positions[key], start, np.random.default_rng([int(seeds[i]), 1])
+            )
+            new["warm"] = True
+            best = new if _score(new) >= _score(old) else old
+            rec = {**best, "iy": key[0], "ix": key[1], "order": i, "retried": True}
+            rec["n_measurements"] = int(old["n_measurements"]) + int(new["n_measurements"])
+            rec = _relative_check(rec, ctx, snr_ref)
             records[key] = rec
             if rec["status"] == 0:
                 found[key] = np.array([rec["a"], rec["b"]])
