@@ -270,7 +270,7 @@ def bench_cost_map(sizes: Sizes, out: dict[str, Any]) -> None:
     b = np.linspace(-5.0, 5.0, k)[None, :]
     position = (0.0, 0.0, STANDOFF)
     setup.metric_values(position, a[:2], b[:, :2], parameterization="tilt")  # warm-up
-    repeats = 1 if sizes.name != "quick" else 2
+    repeats = 3 if sizes.name == "full" else 1
     t = measure(
         lambda: setup.metric_values(position, a, b, parameterization="tilt"),
         repeats=repeats,
@@ -490,7 +490,16 @@ def markdown(out: dict[str, Any]) -> str:
             ],
         ),
         "",
-        "trimesh (ray_triangle) is trimesh's pure-numpy intersector (needs `rtree`); its "
+        "## Notes",
+        "",
+        "- BLAS is pinned to one thread, so every number is one core's.",
+        "- Batches are simulated in chunks of about 16k rays / samples so the temporaries stay "
+        "in the L2 cache; `VirtualSetup` also raises glibc's dynamic mmap threshold once per "
+        "process (without it every 0.1–1 MiB temporary of a batch is a fresh mmap that "
+        "page-faults, and a batch of 10 costs twice as much per A-scan).",
+        "- The machine is shared with other jobs: medians are shown, with the fastest repeat "
+        "beside the headline numbers.",
+        "- trimesh (ray_triangle) is trimesh's pure-numpy intersector (needs `rtree`); its "
         "first call, which builds the r-tree, is not counted. echocal's embree engine finds "
         "the face with embree (float32) and recomputes the distance in float64.",
         "",
