@@ -216,3 +216,13 @@ def _toml(data: dict) -> str:
         lines.append("[[methods]]")
         lines += [f"{k} = {json.dumps(v)}" for k, v in method.items()]
     return "\n".join(lines) + "\n"
+
+
+def test_a_failing_run_is_recorded_not_fatal(tmp_path):
+    # Newton needs 9 measurements per iteration: a budget of 2 fails before measuring
+    sweep = {**TINY, "budget": 2, "seeds": 1, "methods": [{"name": "newton"}]}
+    results = run_sweep(sweep, tmp_path, workers=1, progress=False)
+    row = results.runs.iloc[0]
+    assert row["status"] == -1 and "budget >= 9" in row["message"]
+    assert not row["success"] and row["n_measurements"] == 0
+    assert results.summary()["failed"].tolist() == [1]
