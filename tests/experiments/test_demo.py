@@ -1,0 +1,32 @@
+"""The main job: Table 7 + a short sweep → one report (quick mode end to end)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from echocal.cli import app
+from echocal.errors import DataFileError
+from echocal.experiments.demo import run_demo
+
+
+def test_demo_quick_end_to_end(tmp_path):
+    out = tmp_path / "demo"
+    result = run_demo(out, quick=True, progress=False)
+    page = result.report.read_text()
+    assert result.report == out / "report.html"
+    assert "table-7: all methods compared" in page and "sweep quick-reduced" in page
+    meta = json.loads((out / "table-7" / "findings.json").read_text())
+    assert [f["group"] for f in meta["findings"]] == [
+        "thesis presets (Table 7)",
+        "echocal automatic gains",
+    ]
+    # the sweep summary covers every configuration of quick.toml: 3 methods x 2 SNRs
+    assert len(result.sweep_summary) == 6
+    # an existing demo folder is never overwritten silently (Python and CLI)
+    with pytest.raises(DataFileError, match="already holds results"):
+        run_demo(out, quick=True, progress=False)
+    res = CliRunner().invoke(app, ["demo", "--quick", "--out", str(out)])
+    assert isinstance(res.exception, DataFileError)

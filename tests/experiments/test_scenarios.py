@@ -1,0 +1,133 @@
+"""Thesis scenarios: every one runs (quick mode), writes its files and checks its findings."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from echocal.cli import app
+from echocal.errors import DataFileError, UnknownNameError
+from echocal.experiments import _findings as fnd
+from echocal.experiments._ascan import facet_distance
+from echocal.experiments._runs import oscillation_count
+from echocal.experiments.scenarios import get_scenario, run_scenario, scenario_names
+
+NAMES = scenario_names()
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    """Every scenario once, in quick mode (shared by the tests below)."""
+    root = tmp_path_factory.mktemp("scenarios")
+    return {name: run_scenario(name, root / name, quick=True) for name in NAMES}
+
+
+def test_registry_lists_the_thesis_scenarios():
+    assert NAMES == ["scenario-1", "scenario-2", *[f"table-{k}" for k in range(1, 8)]]
+    with pytest.raises(UnknownNameError, match="table-7"):  # the message lists valid names
+        get_scenario("table-8")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_scenario_writes_files_and_findings(results, name):
+    result = results[name]
+    out = result.out_dir
+    meta = json.loads((out / "findings.json").read_text())
+    assert meta["scenario"] == name and meta["quick"] is True
+    assert meta["findings"], "each scenario states at least one thesis finding"
+    for finding in meta["findings"]:
+        assert isinstance(finding["agrees"], bool)
+        assert finding["claim"] and finding["criterion"] and finding["evidence"]
+    assert (out / "summary.md").read_text().startswith(f"# {name}")
+    for files in meta["files"]["figures"].values():
+        assert {f.rsplit(".", 1)[1] for f in files} == {"png", "svg"}
+        assert all((out / f).stat().st_size > 1000 for f in files)
+    for files in meta["files"]["tables"].values():
+        assert all((out / f).is_file() for f in files)
+
+
+@pytest.mark.parametrize("name", [n for n in NAMES if n.startswith("table-")])
+def test_table_runs_are_tidy_and_consistent(results, name):
+    result = results[name]
+    runs = pd.read_parquet(result.out_dir / "runs.parquet")
+    assert len(runs) == len(result.runs) and runs["seed"].nunique() == 2  # quick: 2 seeds
+    # measurements to 0.1° can never come before measurements to 0.5° (tighter tolerance)
+    both = runs.dropna(subset=["measurements_to_0.5deg", "measurements_to_0.1deg"])
+    assert (both["measurements_to_0.1deg"] >= both["measurements_to_0.5deg"]).all()
+    # a run reaching 0.5° ends within 0.5° (definition), and its metric is near the optimum
+    reached = runs.dropna(subset=["measurements_to_0.5deg"])
+    assert (reached["final_error_deg"] <= 0.5).all()
+    assert (runs["final_metric_rel"] <= 1.0 + 1e-6).all()  # the optimum is the maximum
+    # Table 1-7 all start 6° from the optimum, except table-5 which varies x0
+    if name != "table-5":
+        np.testing.assert_allclose(runs["initial_error_deg"], 6.0, atol=1e-3)
+
+
+def test_scenario_1_times_of_flight_follow_geometry(results):
+    table = results["scenario-1"].runs
+    # 2d/c0 from the closed-form facet planes, within one sample (0.05 µs at 20 MHz)
+    np.testing.assert_allclose(table["tof_us"], table["expected_tof_us"], atol=0.05)
+    assert results["scenario-1"].findings[0].agrees
+
+
+def test_facet_distance_closed_form():
+    # centre facet is z = 0: the distance is the height
+    assert facet_distance((0.0, 0.0, 0.02)) == ("centre", pytest.approx(0.02))
+    # left facet: plane through (-5, 0, 0) mm with normal n(20°, 10°)
+    n = np.array([np.sin(np.radians(10)) * np.cos(np.radians(20)), 0.0, np.cos(np.radians(10))])
+    expected = n[0] * (-0.010 + 0.005) + n[2] * 0.022
+    assert facet_distance((-0.010, 0.0, 0.022))[1] == pytest.approx(expected, rel=1e-12)
+
+
+def test_oscillation_count_counts_reversals_above_the_band():
+    assert oscillation_count(np.array([6.0, 5.0, 4.0, 3.0])) == 0  # monotone
+    assert oscillation_count(np.array([6.0, 3.0, 5.0, 2.0, 4.0])) == 3  # down-up-down-up
+    assert oscillation_count(np.array([2.0, 1.95, 2.0, 1.95])) == 0  # jitter < 0.2°
+
+
+def test_speed_finding_is_falsifiable():
+    def summary(iters, errors):
+        return pd.DataFrame(
+            {"label": ["a", "b", "c"], "iterations_to_90pct": iters, "final_error_deg": errors}
+        )
+
+    good = fnd.faster_with_order(
+        summary([np.inf, 10.0, 5.0], [3.0, 1.0, 1.0]), claim="c", group="g", increasing=True
+    )
+    bad = fnd.faster_with_order(
+        summary([5.0, 10.0, 3.0], [1.0, 1.0, 1.0]), claim="c", group="g", increasing=True
+    )
+    assert good.agrees and not bad.agrees
+
+
+def test_existing_folder_is_refused(results):
+    with pytest.raises(DataFileError, match="already holds results"):
+        run_scenario("scenario-1", results["scenario-1"].out_dir, quick=True)
+
+
+def test_cli_runs_scenarios_and_refuses_existing(tmp_path):
+    runner = CliRunner()
+    # the CLI is one loop over run_scenario for every name; one scenario of each kind here
+    for name in ("scenario-2", "table-5"):
+        res = runner.invoke(
+            app, ["scenario", "run", name, "--quick", "--out", str(tmp_path), "--json"]
+        )
+        assert res.exit_code == 0, res.output
+        data = json.loads(res.stdout)
+        assert data["scenarios"][0]["scenario"] == name
+        assert (tmp_path / name / "findings.json").is_file()
+    again = runner.invoke(app, ["scenario", "run", "table-5", "--quick", "--out", str(tmp_path)])
+    assert again.exit_code != 0
+    assert isinstance(again.exception, DataFileError)
+    listed = runner.invoke(app, ["scenario", "list", "--json"])
+    assert [s["name"] for s in json.loads(listed.stdout)["scenarios"]] == NAMES
+
+
+def test_cli_unknown_scenario_lists_valid_names(tmp_path):
+    res = CliRunner().invoke(app, ["scenario", "run", "nope", "--out", str(tmp_path)])
+    assert isinstance(res.exception, UnknownNameError)
+    assert "table-1" in str(res.exception)
