@@ -31,6 +31,7 @@ _COMMAND_MODULES = (
     "echocal.cli.setup",
     "echocal.cli.record",
     "echocal.cli.instrument",
+    "echocal.cli.scan",
     "echocal.cli.sweep",
     "echocal.cli.experiments",
 )

@@ -1,0 +1,167 @@
+"""``echocal scan``: map a specimen's surface on an x–y raster (normals + distances).
+
+A thin layer over :func:`echocal.scanning.scan_surface`: writes ``scan.nc`` and the
+figures into ``--out``; resumable (an interrupted scan keeps its finished points in
+``scan.nc.partial/`` and the same command continues).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP
+
+GRID_HELP = (
+    "X0:X1:DX,Y0:Y1:DY in mm unless a unit is given, e.g. -10:10:2,-10:10:2 or -1cm:1cm:2mm,0:0:1"
+)
+
+
+def parse_grid(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Parse ``"X0:X1:DX,Y0:Y1:DY"`` (lengths in mm unless a unit is given) into metres."""
+    from echocal.errors import EchocalValueError
+    from echocal.units import parse_length
+
+    axes = [a.strip() for a in text.split(",")]
+    usage = f"--grid takes {GRID_HELP}; got {text!r}"
+    if len(axes) != 2 or any(len(a.split(":")) != 3 for a in axes):
+        raise typer.BadParameter(usage)
+    out = []
+    for name, axis in zip("xy", axes, strict=True):
+        try:
+            first, last, step = (parse_length(f"--grid {name}", v.strip()) for v in axis.split(":"))
+        except EchocalValueError as exc:
+            raise typer.BadParameter(f"{exc}; {usage}") from None
+        out.append((first, last, step))
+    return out[0], out[1]
+
+
+def _say(text: str) -> None:
+    from echocal.cli._common import console
+
+    console.print(text, soft_wrap=True, highlight=False)
+
+
+def _fmt(value: float | None, scale: float, unit: str, digits: int = 3) -> str:
+    return "n/a" if value is None else f"{value * scale:.{digits}g} {unit}"
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``scan`` to ``app``."""
+
+    @app.command("scan")
+    def scan_command(
+        setup: str = typer.Option(..., "--setup", help=SETUP_HELP),
+        grid: str = typer.Option(..., "--grid", help=f"Raster: {GRID_HELP}."),
+        out: Path = typer.Option(..., "--out", help="Output folder (scan.nc + figures)."),
+        specimen: str | None = typer.Option(None, "--specimen", help=SPECIMEN_HELP),
+        z: str = typer.Option("25", "--z", help="Probe stand-off height, mm unless a unit."),
+        method: str = typer.Option("auto", "--method", help="Calibration method per point."),
+        budget_per_point: int = typer.Option(
+            80, "--budget-per-point", min=3, help="Measurement cap per point."
+        ),
+        cold: bool = typer.Option(
+            False, "--cold", help="Also run a cold-start scan (no warm starts) to compare."
+        ),
+        snr: str | None = typer.Option(None, "--snr", help=SNR_HELP),
+        seed: int | None = typer.Option(None, "--seed", help="Noise and calibration seed."),
+        figures: bool = typer.Option(True, "--figures/--no-figures", help="Save figures."),
+        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar."),
+        as_json: bool = typer.Option(False, "--json", help="Print one JSON object on stdout."),
+    ) -> None:
+        """Scan a specimen: surface normal and distance at every raster point.
+
+        Ctrl-C keeps the finished points; the same command again resumes.
+        """
+        import numpy as np
+
+        from echocal.cli._common import write_json
+        from echocal.cli._setup_option import resolve_setup
+        from echocal.scanning import ScanGrid, partial_path, scan_surface
+        from echocal.units import parse_length
+
+        gx, gy = parse_grid(grid)
+        scan_grid = ScanGrid.regular(x=gx, y=gy, z=parse_length("--z", z))
+        out.mkdir(parents=True, exist_ok=True)
+        runs = {"warm": True, "cold": False} if cold else {"warm": True}
+        results = {}
+        for label, warm in runs.items():
+            path = out / ("scan.nc" if warm else "scan-cold.nc")
+            sidecar = partial_path(path)
+            if path.exists() and not sidecar.exists():
+                path.unlink()  # a finished earlier run in this folder is replaced
+            done = 0
+            if sidecar.exists():
+                done = (
+                    sum(1 for _ in (sidecar / "points.jsonl").open())
+                    if (sidecar / "points.jsonl").exists()
+                    else 0
+                )
+                _say(f"resuming {path}: {done} point(s) already saved in {sidecar}")
+            run_seed = seed
+            if seed is not None and done:
+                # a fresh process restarts the noise: do not repeat the first points' draws
+                run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
+            source = resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
+            try:
+                results[label] = scan_surface(
+                    source,
+                    scan_grid,
+                    method=method,
+                    budget_per_point=budget_per_point,
+                    warm_start=warm,
+                    rng=seed,
+                    progress=progress,
+                    out=path,
+                    metadata={"setup": setup, "specimen": source.specimen.name, "seed": seed},
+                )
+            except KeyboardInterrupt:
+                _say(
+                    f"[yellow]interrupted:[/] finished points are saved in {sidecar}; "
+                    "run the same command again to resume"
+                )
+                raise typer.Exit(130) from None
+            if figures and warm:
+                from echocal.plots.surface import save_surface_figures
+
+                save_surface_figures(results[label], out, specimen=source.specimen)
+        summary = results["warm"].summary
+        report = {
+            "out": str(out),
+            "scan": summary,
+            "wall_time": results["warm"].dataset.attrs["wall_time"],
+        }
+        if cold:
+            cs = results["cold"].summary
+            report["cold"] = cs
+            report["cold_over_warm_measurements"] = (
+                cs["measurements_total"] / summary["measurements_total"]
+                if summary["measurements_total"]
+                else None
+            )
+        if as_json:
+            write_json(report)
+        ne, he = summary.get("normal_error_deg"), summary.get("height_error_abs_m")
+        lines = [
+            f"scanned {summary['points']} points: {summary['found']} found, "
+            f"{summary['missing']} missing {summary['missing_by_status'] or ''}".rstrip(),
+            f"measurements: {summary['measurements_total']} total, "
+            f"{summary['measurements_per_point']:.1f} per point "
+            f"(median {summary['measurements_per_point_median']:g})",
+        ]
+        if ne is not None:
+            lines.append(
+                f"normal error: median {_fmt(ne['median'], 1, 'deg')}, "
+                f"p90 {_fmt(ne['p90'], 1, 'deg')}; |height error|: median "
+                f"{_fmt(he['median'], 1e3, 'mm')}, p90 {_fmt(he['p90'], 1e3, 'mm')}"
+            )
+        if cold:
+            lines.append(
+                f"cold starts: {report['cold']['measurements_total']} measurements, "
+                f"{report['cold']['found']} found; warm starts save a factor "
+                f"{report['cold_over_warm_measurements']:.2f}"
+            )
+        lines.append(f"wrote {out / 'scan.nc'}" + (" and figures" if figures else ""))
+        for line in lines:
+            _say(line)
