@@ -20,6 +20,7 @@ field path: ``transducer.width: must be > 0, got -0.01``.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.resources
 import json
 import math
@@ -51,6 +52,7 @@ __all__ = [
     "builtin_setup_names",
     "load_setup",
     "load_setup_config",
+    "setup_with_overrides",
     "validate_setup_file",
 ]
 
@@ -345,13 +347,16 @@ def builtin_setup_names() -> tuple[str, ...]:
     return tuple(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
 
 
-def _format_errors(error: ValidationError) -> list[str]:
+def _format_errors(
+    error: ValidationError, hint: str = "see `echocal setup show thesis`"
+) -> list[str]:
+    """One line per pydantic error: ``field.path: message, got value`` (``hint`` for typos)."""
     lines = []
     for item in error.errors():
         where = ".".join(str(part) for part in item["loc"]) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
-            message = "unknown key (check the spelling; see `echocal setup show thesis`)"
+            message = f"unknown key (check the spelling; {hint})"
         elif "input" in item and item["type"] not in ("missing",):
             message = f"{message}, got {item['input']!r}"
         message = message.replace("Value error, ", "").replace("Input should be", "must be")
@@ -401,6 +406,35 @@ def load_setup(name_or_path: str | Path, *, seed: int | None = None) -> VirtualS
     """The :class:`~echocal.measurement.virtual.VirtualSetup` of a built-in name or TOML file."""
     config, base_dir = load_setup_config(name_or_path)
     return build_setup(config, base_dir=base_dir, seed=seed)
+
+
+_KEEP: Any = object()
+
+
+def setup_with_overrides(
+    name_or_path: str | Path,
+    *,
+    specimen: str | None = None,
+    snr_db: float | None = _KEEP,
+    seed: int | None = None,
+) -> VirtualSetup:
+    """:func:`load_setup` with the usual overrides applied.
+
+    Parameters
+    ----------
+    specimen : a built-in specimen name replacing the setup's specimen.
+    snr_db : [dB] the receiver SNR; ``None`` for a noiseless receiver; omitted: the file's.
+    seed : noise seed (overrides the file's).
+    """
+    virtual = load_setup(name_or_path, seed=seed)
+    changes: dict[str, Any] = {}
+    if specimen is not None:
+        changes["specimen"] = builtin_specimen(specimen)
+    if snr_db is not _KEEP:
+        changes["receiver"] = dataclasses.replace(virtual.receiver, snr_db=snr_db)
+    if not changes:
+        return virtual
+    return dataclasses.replace(virtual, rng=seed if seed is not None else virtual.rng, **changes)
 
 
 def validate_setup_file(name_or_path: str | Path) -> list[str]:

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import dataclasses
-
+from echocal.errors import EchocalValueError
 from echocal.measurement.virtual import VirtualSetup
-from echocal.setups import load_setup
-from echocal.specimen import builtin_specimen
+from echocal.setups import setup_with_overrides
+
+__all__ = ["SETUP_HELP", "SNR_HELP", "SPECIMEN_HELP", "resolve_setup"]
 
 SETUP_HELP = "Built-in setup name (see `echocal setup list`) or a setup TOML file."
 SPECIMEN_HELP = "Replace the setup's specimen by this built-in one (e.g. thesis-block, sphere)."
@@ -18,29 +18,16 @@ SNR_HELP = (
 def resolve_setup(
     setup: str, *, specimen: str | None = None, snr: str | None = None, seed: int | None = None
 ) -> VirtualSetup:
-    """Load ``setup`` and apply the common command-line overrides."""
-    virtual = load_setup(setup, seed=seed)
-    changes: dict[str, object] = {}
-    if specimen is not None:
-        changes["specimen"] = builtin_specimen(specimen)
-    if snr is not None:
-        snr_db = None if snr.strip().lower() in ("none", "inf", "off") else _float("--snr", snr)
-        changes["receiver"] = dataclasses.replace(virtual.receiver, snr_db=snr_db)
-    if changes:
-        changes["rng"] = seed if seed is not None else virtual.rng
-        virtual = dataclasses.replace(virtual, **changes)
-    return virtual
+    """Load ``setup`` with the command-line overrides (``snr`` as typed: dB or 'none')."""
+    if snr is None:
+        return setup_with_overrides(setup, specimen=specimen, seed=seed)
+    return setup_with_overrides(setup, specimen=specimen, snr_db=_parse_snr(snr), seed=seed)
 
 
-def _float(option: str, text: str) -> float:
-    from echocal.errors import EchocalValueError
-
+def _parse_snr(text: str) -> float | None:
+    if text.strip().lower() in ("none", "inf", "off"):
+        return None
     try:
         return float(text)
     except ValueError:
-        raise EchocalValueError(
-            f"{option} must be a number in dB or 'none'; got {text!r}"
-        ) from None
-
-
-__all__ = ["SETUP_HELP", "SNR_HELP", "SPECIMEN_HELP", "resolve_setup"]
+        raise EchocalValueError(f"--snr must be a number in dB or 'none'; got {text!r}") from None

@@ -128,9 +128,9 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
     ``status = -1`` and the error in ``message`` (so one bad case does not stop a sweep).
     """
     from echocal.calibrate import calibrate
-    from echocal.cli._setup_option import resolve_setup
     from echocal.evaluation import evaluate_run
     from echocal.measurement.objective import SourceObjective
+    from echocal.setups import setup_with_overrides
 
     t0 = time.perf_counter()
     seeds = np.random.SeedSequence(case.run_seed).generate_state(2, dtype=np.uint32)
@@ -155,8 +155,7 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
         warnings.simplefilter("always")
         try:
             truth_setup = _truth_setup(case.setup)
-            snr = "none" if case.snr_db is None else repr(case.snr_db)
-            virtual = resolve_setup(case.setup, snr=snr, seed=noise_seed)
+            virtual = setup_with_overrides(case.setup, snr_db=case.snr_db, seed=noise_seed)
             objective = SourceObjective(virtual, position, parameterization=case.parameterization)
             if case.x0_kind == "offset":
                 truth = np.array(

@@ -285,15 +285,11 @@ def load_sweep(
     try:
         spec = SweepSpec.model_validate(raw)
     except ValidationError as exc:
-        _raise(where, [_hint(line) for line in _format_errors(exc)])
+        _raise(where, _format_errors(exc, hint="see docs/sweeps.md"))
     problems = _check(spec)
     if problems:
         _raise(where, problems)
     return _resolve(spec, base, where)
-
-
-def _hint(line: str) -> str:
-    return line.replace("see `echocal setup show thesis`", "see docs/sweeps.md")
 
 
 def _raise(where: str, problems: list[str]) -> None:
