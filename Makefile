@@ -16,7 +16,7 @@ $(BIN)/echocal: pyproject.toml
 setup: $(BIN)/echocal
 
 demo: setup
-	$(BIN)/echocal info
+	$(BIN)/echocal demo --out echocal-out/demo --overwrite
 
 lint: setup
 	$(BIN)/ruff check src tests $(wildcard benchmarks)
