@@ -18,7 +18,7 @@ n_measurements     1       A-scans used at the point (calibration + time of flig
 status             1       0 found, see ``flag_meanings``
 found              bool    status == 0
 warm               bool    the point started from its neighbours
-normal_error       deg     vs the true normal (only with a truth)
+normal_error       deg     vs the true normal below the measured point (truth)
 height_error       m       measured z − true surface z below the point (with a truth)
 =================  ======  ===================================================
 
@@ -222,9 +222,7 @@ def surface_dataset(
         flat = found.reshape(-1)
         nerr, herr = np.full(grid.size, np.nan), np.full(grid.size, np.nan)
         pts = surface.reshape(-1, 3)[flat]
-        nerr[flat] = normal_errors(
-            truth, probe.reshape(-1, 3)[flat], pts, normal.reshape(-1, 3)[flat]
-        )
+        nerr[flat] = normal_errors(truth, pts, normal.reshape(-1, 3)[flat])
         herr[flat] = height_errors(truth, pts)
         data["normal_error"] = (dims, nerr.reshape(shape))
         data["height_error"] = (dims, herr.reshape(shape))

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from echocal._validate import finite_array, finite_float, positive_float
+from echocal._validate import finite_array, finite_float, one_of, positive_float
 from echocal.errors import EchocalValueError
 
 __all__ = ["ScanGrid", "axis_values"]
@@ -112,16 +112,30 @@ class ScanGrid:
         xx, yy = np.meshgrid(self.x, self.y, indexing="xy")
         return np.stack([xx, yy, self.heights()], axis=-1)
 
-    def order(self) -> list[tuple[int, int]]:
-        """Serpentine (boustrophedon) order of (iy, ix): row 0 left to right, row 1 back, ...
+    def order(self, start: str = "centre") -> list[tuple[int, int]]:
+        """Measuring order of (iy, ix): serpentine (boustrophedon) rows.
 
-        Consecutive points are always raster neighbours, so each point can start
-        from the estimate of the one just finished.
+        ``start="corner"``: row 0 left to right, row 1 back, ... — consecutive points
+        are raster neighbours.  ``start="centre"`` (default): the centre point first,
+        then the rest of the centre row (right, then left), then the rows above it and
+        the rows below it, each swept in serpentine — every point after the first has a
+        finished raster neighbour, and the first (cold) start is over the middle of the
+        part, where the stand-off is normally set and the surface faces the probe.
         """
-        out = []
-        for iy in range(len(self.y)):
-            cols = range(len(self.x)) if iy % 2 == 0 else range(len(self.x) - 1, -1, -1)
-            out.extend((iy, ix) for ix in cols)
+        one_of("start", start, ("centre", "corner"))
+        n_y, n_x = self.shape
+        if start == "corner":
+            out = []
+            for iy in range(n_y):
+                cols = range(n_x) if iy % 2 == 0 else range(n_x - 1, -1, -1)
+                out.extend((iy, ix) for ix in cols)
+            return out
+        cy, cx = n_y // 2, n_x // 2
+        out = [(cy, ix) for ix in range(cx, n_x)] + [(cy, ix) for ix in range(cx - 1, -1, -1)]
+        for rows in (range(cy + 1, n_y), range(cy - 1, -1, -1)):
+            for k, iy in enumerate(rows):
+                cols = range(n_x) if k % 2 == 0 else range(n_x - 1, -1, -1)
+                out.extend((iy, ix) for ix in cols)
         return out
 
     def to_dict(self) -> dict[str, Any]:

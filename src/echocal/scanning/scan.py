@@ -1,6 +1,7 @@
 """``scan_surface``: map a specimen's surface — normal and distance at every raster point.
 
-At each probe position of a :class:`~echocal.scanning.ScanGrid`, in serpentine order:
+At each probe position of a :class:`~echocal.scanning.ScanGrid`, in serpentine order
+from the centre out (:meth:`~echocal.scanning.ScanGrid.order`):
 
 1. **Orientation.**  Calibrate the orientation of maximum echo (the surface normal)
    with :func:`echocal.calibrate.calibrate`, warm-started from the finished
@@ -274,7 +275,7 @@ def scan_surface(
     x0: ArrayLike = (0.0, 0.0),
     tof_repeats: int = 2,
     tol: float = 0.01,
-    patience: int = 6,
+    patience: int = 8,
     min_snr: float = 6.0,
     relative_snr: float = 0.25,
     outlier: float = 0.3,
@@ -283,6 +284,7 @@ def scan_surface(
     method_options: Mapping[str, Any] | None = None,
     metadata: Mapping[str, Any] | None = None,
     on_point: Callable[[int, int], None] | None = None,
+    start: str = "centre",
 ) -> SurfaceScan:
     """Scan ``grid`` with ``source``: surface normal and distance at every point.
 
@@ -313,6 +315,8 @@ def scan_surface(
     sound_speed : [m/s] c₀ (default: the source's, else water).
     method_options : extra options of the calibration method.
     metadata : extra JSON-ready attributes to store (e.g. the setup name and seed).
+    start : ``"centre"`` (default) or ``"corner"``: where the serpentine order begins
+        (:meth:`ScanGrid.order`).
     on_point : called with (points done, total) after each point (e.g. to interrupt
         a scan in tests or drive another progress display).
     """
@@ -342,7 +346,7 @@ def scan_surface(
         options=dict(method_options or {}),
     )
     gen = as_generator(rng)
-    order = grid.order()
+    order = grid.order(start)
     seeds = gen.integers(0, 2**63 - 1, size=len(order))
     settings = _settings(
         source,
@@ -351,6 +355,7 @@ def scan_surface(
             "method": method,
             "parameterization": parameterization,
             "budget_per_point": budget,
+            "start": start,
             "warm_start": bool(warm_start),
             "x0": ctx.x0.tolist(),
             "tof_repeats": tof_repeats,
@@ -403,14 +408,21 @@ def scan_surface(
         retry, snr_ref = _suspicious(records, found, xy, radius, ctx)
         for key in retry:
             found.pop(key, None)
-        for i, key in enumerate(order):
-            old = records[key]
-            if key not in retry or old.get("retried"):
-                continue
+        index = {key: i for i, key in enumerate(order)}
+        pending = {k for k in retry if not records[k].get("retried")}
+        while pending:
+            # the point with the most trusted neighbours first: the best warm start
+            support = {
+                k: sum(np.hypot(*(xy[j] - xy[k])) <= radius for j in found if j != k)
+                for k in pending
+            }
+            key = max(sorted(pending), key=lambda k: support[k])
+            if support[key] == 0:
+                break
+            pending.discard(key)
+            i, old = index[key], records[key]
             others = {k: v for k, v in found.items() if k != key}
             start = _predict(others, xy[key], {k: xy[k] for k in others}, radius)
-            if start is None:
-                continue
             new = _measure_point(
                 ctx, positions[key], start, np.random.default_rng([int(seeds[i]), 1])
             )
@@ -424,6 +436,8 @@ def scan_surface(
                 found[key] = np.array([rec["a"], rec["b"]])
             if store is not None:
                 store.append(rec)
+        for key in records:  # a found echo far below the median one is not trusted
+            records[key] = _relative_check(records[key], ctx, snr_ref)
     wall = time.perf_counter() - t_start
     if truth is None:
         truth = getattr(source, "specimen", None)

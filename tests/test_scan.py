@@ -1,0 +1,190 @@
+"""Surface scanning: accuracy on curved parts, warm vs cold starts, resume, edges, any source.
+
+Grids are small (3 × 3 or fewer) so the module runs in well under 30 s; the full-size
+numbers (11 × 11) are measured in docs/scanning.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from echocal.errors import DataFileError, EchocalValueError
+from echocal.measurement import BaseSource, VirtualSetup
+from echocal.scanning import ScanGrid, SurfaceScan, axis_values, partial_path, scan_surface
+from echocal.setups import load_setup
+from echocal.specimen import builtin_specimen
+
+MM = 1e-3
+
+
+def _setup(specimen: str, seed: int = 1) -> VirtualSetup:
+    setup = load_setup("scan-5mhz", seed=seed)
+    return dataclasses.replace(setup, specimen=builtin_specimen(specimen), rng=seed)
+
+
+class CountingSource(BaseSource):
+    """Delegates to a simulator through the protocol only, counting every A-scan.
+
+    It exposes no specimen, pulse or sound speed: the scan must work from the
+    MeasurementSource interface alone (pulse given explicitly, as for a rig).
+    """
+
+    def __init__(self, inner: VirtualSetup) -> None:
+        self.inner = inner
+        self.limits = inner.limits
+        self.description = f"counting({inner.description})"
+        self.count = 0
+
+    def measure_many(self, poses):
+        self.count += len(poses)
+        return self.inner.measure_many(poses)
+
+    def measure(self, pose):
+        return self.measure_many([pose])[0]
+
+
+# ------------------------------------------------------------------ grid
+def test_axis_values_include_last_and_refuse_bad_steps():
+    assert np.allclose(axis_values("x", -1e-3, 1e-3, 1e-3), [-1e-3, 0.0, 1e-3])
+    assert axis_values("x", 0.0, 0.0, 1e-3).tolist() == [0.0]
+    with pytest.raises(EchocalValueError, match="x step"):
+        axis_values("x", 0.0, 1.0, 0.0)
+    with pytest.raises(EchocalValueError, match="last"):
+        axis_values("x", 1.0, 0.0, 0.1)
+
+
+def test_serpentine_orders_visit_every_point_once_through_neighbours():
+    grid = ScanGrid.regular(x=(0.0, 4e-3, 1e-3), y=(0.0, 3e-3, 1e-3), z=0.02)
+    every = sorted((iy, ix) for iy in range(4) for ix in range(5))
+    corner = grid.order("corner")
+    assert sorted(corner) == every
+    steps = np.abs(np.diff(np.array(corner), axis=0)).sum(axis=1)
+    assert np.all(steps == 1)  # consecutive points are raster neighbours
+    centre = grid.order()
+    assert sorted(centre) == every and centre[0] == (2, 2)
+    for k, (iy, ix) in enumerate(centre[1:], start=1):  # a finished neighbour to start from
+        assert any(max(abs(iy - jy), abs(ix - jx)) == 1 for jy, jx in centre[:k])
+    assert grid.positions().shape == (4, 5, 3)
+
+
+def test_grid_refuses_a_wrong_height_shape():
+    with pytest.raises(EchocalValueError, match="grid z"):
+        ScanGrid(x=(0.0, 1e-3), y=(0.0,), z=np.zeros((2, 2)))
+    per_point = ScanGrid(x=(0.0, 1e-3), y=(0.0,), z=np.array([[0.02, 0.03]]))
+    assert np.allclose(per_point.positions()[0, :, 2], [0.02, 0.03])
+
+
+# ------------------------------------------------------------------ accuracy
+@pytest.mark.parametrize("specimen", ["sphere", "cylinder"])
+def test_curved_parts_at_30_db_meet_the_accuracy_targets(specimen):
+    grid = ScanGrid.regular(x=(-8 * MM, 8 * MM, 8 * MM), y=(0.0, 8 * MM, 8 * MM), z=25 * MM)
+    scan = scan_surface(_setup(specimen), grid, rng=3, progress=False)
+    s = scan.summary
+    assert s["found"] == 6 and s["missing"] == 0
+    # issue 8 targets: median normal error <= 0.1 deg, median |height error| <= 0.05 mm
+    assert s["normal_error_deg"]["median"] <= 0.1
+    assert s["height_error_abs_m"]["median"] <= 0.05 * MM
+    ds = scan.dataset
+    assert np.all(ds["n_measurements"].values > 2)  # reported per point, incl. ToF repeats
+    assert s["measurements_total"] == int(ds["n_measurements"].sum())
+    # the surface point is on the beam: probe + distance * (-n)
+    probe = grid.positions()
+    n = np.stack([ds[f"normal_{a}"].values for a in "xyz"], -1)
+    pts = np.stack([ds[f"surface_{a}"].values for a in "xyz"], -1)
+    assert np.allclose(pts, probe - ds["distance"].values[..., None] * n, atol=1e-12)
+    assert np.allclose(np.linalg.norm(n, axis=-1), 1.0)
+    assert ds["distance"].attrs["units"] == "m" and ds["normal_error"].attrs["units"] == "deg"
+
+
+def test_warm_starts_need_fewer_measurements_than_cold_starts():
+    grid = ScanGrid.regular(x=(-4 * MM, 4 * MM, 2 * MM), y=(0.0, 0.0, 2 * MM), z=25 * MM)
+    warm = scan_surface(_setup("sphere", 5), grid, rng=7, progress=False)
+    cold = scan_surface(_setup("sphere", 5), grid, rng=7, progress=False, warm_start=False)
+    assert warm.summary["found"] == cold.summary["found"] == grid.size
+    # same seeds and points: the only difference is where each calibration starts
+    assert warm.summary["measurements_total"] < cold.summary["measurements_total"]
+
+
+# ------------------------------------------------------------------ resume
+def test_an_interrupted_scan_resumes_without_redoing_finished_points(tmp_path):
+    grid = ScanGrid.regular(x=(-4 * MM, 4 * MM, 4 * MM), y=(0.0, 2 * MM, 2 * MM), z=25 * MM)
+    out = tmp_path / "scan.nc"
+    first = CountingSource(_setup("cylinder", 2))
+    pulse = first.inner.pulse
+
+    def stop_after_three(done, total):
+        if done == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        scan_surface(
+            first, grid, rng=1, progress=False, out=out, pulse=pulse, on_point=stop_after_three
+        )
+    assert not out.exists() and partial_path(out).is_dir()
+    saved = [json.loads(line) for line in (partial_path(out) / "points.jsonl").open()]
+    assert len(saved) == 3 and first.count == sum(r["n_measurements"] for r in saved)
+
+    with pytest.raises(DataFileError, match="different unfinished scan"):
+        other = ScanGrid.regular(x=(-4 * MM, 4 * MM, 2 * MM), y=(0.0, 0.0, 1 * MM), z=25 * MM)
+        scan_surface(first, other, rng=1, progress=False, out=out, pulse=pulse)
+
+    second = CountingSource(_setup("cylinder", 3))
+    scan = scan_surface(second, grid, rng=1, progress=False, out=out, pulse=pulse)
+    assert out.exists() and not partial_path(out).exists()
+    ds = scan.dataset
+    assert ds.attrs["resumed_points"] == 3
+    # the second run measured exactly the points the first did not finish
+    done = {(r["iy"], r["ix"]) for r in saved}
+    rest = [ds["n_measurements"].values[k] for k in np.ndindex(grid.shape) if k not in done]
+    assert second.count == sum(rest)
+    for r in saved:  # finished points are kept as measured
+        assert ds["tof"].values[r["iy"], r["ix"]] == pytest.approx(r["tof"], rel=0, abs=0)
+    reread = SurfaceScan.load(out)
+    assert reread.summary == scan.summary
+
+
+# ------------------------------------------------------------------ edges, specimens
+def test_points_beyond_the_part_are_missing_not_guessed():
+    # the rod ends at y = 50 mm (no caps): nothing is perpendicular to the beam beyond
+    grid = ScanGrid.regular(x=(0.0, 0.0, 1 * MM), y=(40 * MM, 70 * MM, 15 * MM), z=25 * MM)
+    scan = scan_surface(_setup("cylinder"), grid, rng=2, progress=False)
+    found = scan.found[:, 0]
+    assert found[0] and not found[2]
+    ds = scan.dataset
+    assert np.isnan(ds["surface_z"].values[2, 0]) and ds["status"].values[2, 0] != 0
+
+
+def test_the_thesis_block_facets_are_mapped():
+    # x = -20, -10 mm over the left facet (azimuth 20, co-elevation 10 deg), x = 0 over
+    # the centre one; from x = 0 the warm start may legitimately lock onto the left facet
+    grid = ScanGrid.regular(x=(-20 * MM, 0.0, 10 * MM), y=(0.0, 0.0, 1 * MM), z=25 * MM)
+    scan = scan_surface(_setup("thesis-block"), grid, rng=4, progress=False)
+    s = scan.summary
+    assert s["found"] == 3
+    # planes: no footprint averaging, so the curved-part targets hold here too
+    assert s["normal_error_deg"]["median"] <= 0.1
+    assert s["height_error_abs_m"]["median"] <= 0.05 * MM
+
+
+def test_a_mesh_part_is_mapped():
+    grid = ScanGrid.regular(x=(-4 * MM, 4 * MM, 8 * MM), y=(0.0, 0.0, 1 * MM), z=25 * MM)
+    scan = scan_surface(_setup("wavy-surface"), grid, rng=4, progress=False)
+    s = scan.summary
+    assert s["found"] == 2
+    # heights: the 3 mm footprint spans the ±1 mm waves' curvature (and facets of 3 mm),
+    # so allow 0.1 mm.  Normals are only checked to be reported: on this faceted mesh the
+    # echo's maximum lies several degrees from the facet normal (open, docs/scanning.md)
+    assert np.all(np.isfinite(scan.dataset["normal_error"].values))
+    assert s["height_error_abs_m"]["max"] <= 0.1 * MM
+
+
+def test_bad_arguments_are_refused_clearly():
+    grid = ScanGrid(x=(0.0,), y=(0.0,), z=0.025)
+    with pytest.raises(EchocalValueError, match="budget_per_point"):
+        scan_surface(_setup("sphere"), grid, budget_per_point=2, progress=False)
+    with pytest.raises(Exception, match="method"):
+        scan_surface(_setup("sphere"), grid, method="nope", progress=False)
