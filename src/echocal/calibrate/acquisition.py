@@ -190,6 +190,10 @@ class Acquisition(Optimizer):
             opts.setdefault("history", (self._x.copy(), self._y.copy()))
             if "radius" in params:
                 opts.setdefault("radius", self.spacing)
+        if "noise_model" in params and self.noise_model is not None:
+            opts.setdefault("noise_model", self.noise_model)
+        if "noise_floor" in params and self.noise_floor is not None:
+            opts.setdefault("noise_floor", self.noise_floor)
         opts.setdefault("normalize", self._local_normalize)
         self.local = self._local_cls(best, bounds=self.bounds, rng=self.rng, **opts)
         self._iterate = best.copy()

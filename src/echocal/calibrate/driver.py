@@ -98,6 +98,8 @@ def build_optimizer(
             x0, local=method, local_options=known, bounds=objective.bounds, rng=rng, **aknown
         )
         return opt, used
+    if "noise_model" in _accepted(cls) and not issubclass(cls, Acquisition):
+        known.setdefault("noise_model", objective.noise_estimate)
     if issubclass(cls, Acquisition):
         known.update({k: v for k, v in acq_opts.items() if k in _accepted(cls)})
         known.setdefault("noise_sigma", objective.noise_sigma)

@@ -33,13 +33,14 @@ that can be negative).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import in_range, one_of, positive_float
+from echocal._validate import finite_float, in_range, one_of, positive_float
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.objective import as_points
@@ -264,6 +265,13 @@ class ModelBased(Optimizer):
     floor : leave out of the log fit points below ``floor`` × the largest value (noise floor).
     history : optional (points (n, 2) [deg], values (n,)) already measured (warm start),
         e.g. by an acquisition phase; the initial design is skipped where these cover x0.
+    noise_floor : [energy units] mean value of pure noise, subtracted before the fit (the
+        echo's energy is the measured energy minus the noise's).  None: taken from
+        ``noise_model`` when given, else 0.
+    noise_model : callable returning the objective's live ``(noise_floor, noise_sigma)``
+        (e.g. :meth:`~echocal.calibrate.Objective.noise_estimate`); its floor is used when
+        ``noise_floor`` is None.  At 10 dB SNR the floor is ~10 % of the peak: left in, it
+        makes log f look like a much broader peak than the echo's and the fit wanders.
     """
 
     batch_size = 1
@@ -280,11 +288,15 @@ class ModelBased(Optimizer):
         locality: float = 4.0,
         floor: float = 0.05,
         history: tuple[ArrayLike, ArrayLike] | None = None,
+        noise_floor: float | None = None,
+        noise_model: Callable[[], tuple[float | None, float | None]] | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
     ) -> None:
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
+        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
+        self.noise_model = noise_model
         self.radius = positive_float("radius", radius)
         self.max_radius = positive_float(
             "max_radius", 4.0 * self.radius if max_radius is None else max_radius
@@ -335,11 +347,21 @@ class ModelBased(Optimizer):
         return self._model
 
     # -- internals --------------------------------------------------------------------
+    def _floor(self) -> float:
+        """[energy units, method scale] noise floor to subtract (0 when unknown)."""
+        floor = self.noise_floor
+        if floor is None and self.noise_model is not None:
+            floor = self.noise_model()[0]
+        if floor is None or not np.isfinite(floor):
+            return 0.0
+        return float(floor) / self._scale
+
     def _refit(self) -> None:
         center = self._incumbent
+        y_all = self._y - self._floor()
         model = fit_quadratic(
             self._x,
-            self._y,
+            y_all,
             center,
             space=self.space,
             scale=self.radius,
@@ -348,7 +370,7 @@ class ModelBased(Optimizer):
         )
         self._model = model
         if model is None:
-            best = self._x[int(np.argmax(self._y))] if len(self._y) else self.x0
+            best = self._x[int(np.argmax(y_all))] if len(y_all) else self.x0
             self._incumbent = best
             return
         pred = model(self._x)
@@ -356,8 +378,8 @@ class ModelBased(Optimizer):
         if not local.any():
             local[:] = True
         if self.space == "log":
-            ymax = float(self._y[local].max())
-            cand = np.flatnonzero(local & (self._y > max(self.floor * ymax, 0.0)))
+            ymax = float(y_all[local].max())
+            cand = np.flatnonzero(local & (y_all > max(self.floor * ymax, 0.0)))
             if cand.size:
                 self._incumbent = self._x[cand[int(np.argmax(pred[cand]))]]
             e = np.exp(np.minimum(pred, np.log(ymax) + 3.0)) if ymax > 0 else pred * 0.0
@@ -365,7 +387,7 @@ class ModelBased(Optimizer):
             near = local & (e >= 0.3 * top)
             n = int(near.sum())
             if n > 6 and top > 0:
-                sig = float(np.sqrt(np.sum((self._y[near] - e[near]) ** 2) / (n - 6)))
+                sig = float(np.sqrt(np.sum((y_all[near] - e[near]) ** 2) / (n - 6)))
                 inc = float(np.exp(min(float(model(self._incumbent[None, :])[0]), 700.0)))
                 self._sigma_log = sig / max(inc, 1e-300)
         else:
@@ -373,7 +395,7 @@ class ModelBased(Optimizer):
             self._incumbent = self._x[idx[int(np.argmax(pred[idx]))]]
             n = len(idx)
             if n > 6:
-                sig = float(np.sqrt(np.sum((self._y[idx] - pred[idx]) ** 2) / (n - 6)))
+                sig = float(np.sqrt(np.sum((y_all[idx] - pred[idx]) ** 2) / (n - 6)))
                 self._sigma_log = sig
         # re-centre the model on the incumbent (same function, better numbers)
         model = self._model
@@ -433,7 +455,7 @@ class ModelBased(Optimizer):
         self._design = np.zeros((0, 2))
         if self._mode == "approach" and self._pred is not None and ok.all():
             m_center, m_cand = self._pred
-            y = float(values[0])
+            y = float(values[0]) - self._floor()
             actual = (np.log(y) if y > 0 else -np.inf) if self.space == "log" else y
             predicted = m_cand - m_center
             noise = 2.0 * self._sigma_log

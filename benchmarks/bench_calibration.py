@@ -1,0 +1,713 @@
+"""Calibration benchmark: measurements to the optimum, ours against the peers (issues 5 and 7).
+
+Run from the repository root::
+
+    python benchmarks/bench_calibration.py            # full run (~25 min on 2 cores)
+    python benchmarks/bench_calibration.py --quick    # ~10 runs per cell, fewer cells
+    python benchmarks/bench_calibration.py --smoke    # 2 runs of one cell (CI)
+    python benchmarks/bench_calibration.py --methods auto,model-based --runs 20
+
+Cases (the simulator knows the truth; the methods do not):
+
+* ``immersion-5mhz``: 12.7 mm 5 MHz probe, 50 mm water path over a tilted plate — a
+  narrow main lobe (about 1° wide), at the setup's reference position;
+* ``thesis``: the thesis block with a 4 mm 1 MHz probe — a broad lobe — at the thesis's
+  reference position (10, 0, 22) mm.
+
+Each case runs at SNR 30, 20 and 10 dB with starts 1–3° and 5–20° from the true optimum
+(tilt parameterization, uniform distance in the band, uniform direction).  Every method of
+a cell sees the same starts and the same noise seeds (common random numbers), measures
+through the same :class:`~echocal.measurement.SourceObjective` (the same counter and a
+budget of 80 measurements), and is judged by the angle between its estimate's beam and the
+true optimum's.
+
+The estimate after n measurements is the method's recommendation at that point: for
+echocal's methods the iterate after the last iteration completed within n measurements
+(``iterates`` and ``iteration_measurements`` of the result; for the model-based methods
+this is the fitted model's maximum); for the peers the best point evaluated so far (what
+scipy, Py-BOBYQA and scikit-optimize return), or, for nevergrad, its own
+``provide_recommendation()``.  Per (case, method) the report gives
+
+* success within 0.05° / 0.1°: the estimate at the budget (80) is within the tolerance;
+* measurements to 0.05° / 0.1° (median and 90th percentile over the runs, ``>80`` when
+  more than half / a tenth of the runs never got there): the first n after which the
+  estimate stays within the tolerance up to the budget;
+* the fraction within 0.05° / 0.1° and the median error at fixed budgets 20, 40, 80
+  (read from the same runs' histories; a method that does not look at its budget behaves
+  identically when run with a budget of 20).
+
+Our methods' options ("best presets"): the thesis methods with echocal's scale-free gains
+(the step size calibrated so the first step is 0.5°, Spall's automatic SPSA gains, Newton
+with Levenberg damping, BFGS from a calibrated identity) — the thesis's fixed μ = 0.05
+(preset ``thesis``) stalls far from the peak of a narrow lobe; model-based and auto with
+their defaults.  Peers: scipy Nelder–Mead (initial simplex of 1°, bounds), Py-BOBYQA
+(``objfun_has_noise=True``, ``seek_global_minimum=False``, ``rhobeg=1``), scikit-optimize
+``gp_minimize`` (``noise="gaussian"``: the GP learns the noise level; x0 as the first
+point) and nevergrad ``NGOpt`` told that the function is noisy.  The bounded peers
+(BOBYQA, gp_minimize, nevergrad) search the box x0 ± (the start band's outer distance
++ 1°), clipped to the positioner's limits — information the echocal methods are not given.
+Each peer minimizes −metric; the budget is enforced by the objective itself
+(:class:`~echocal.errors.BudgetExhaustedError` ends a peer's run).  Peers are optional
+(``pip install echocal[bench]``); a peer that is not installed or fails to import is
+skipped with a message.
+
+Output: a Markdown table per case on stdout (headline lines start with ``HEADLINE``);
+``--json OUT`` / ``--out-md OUT`` / ``--plot OUT``.  A full run writes
+``docs/benchmarks/calibration.{md,json,png}``.  Two worker processes by default
+(``--workers``); BLAS is pinned to one thread per worker.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # before numpy is imported
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from concurrent.futures import ProcessPoolExecutor  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+from _common import machine_info, markdown_table  # noqa: E402
+
+from echocal.calibrate import calibrate  # noqa: E402
+from echocal.errors import BudgetExhaustedError  # noqa: E402
+from echocal.evaluation import angular_error  # noqa: E402
+from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
+from echocal.setups import load_setup  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs" / "benchmarks"
+BUDGET = 80
+FIXED_BUDGETS = (20, 40, 60, 80)
+TOLERANCES = (0.05, 0.1)
+PARAM = "tilt"
+
+CASES: dict[str, dict[str, Any]] = {
+    "immersion-5mhz": {"setup": "immersion-5mhz", "position": None, "lobe": "narrow (~1°)"},
+    "thesis": {"setup": "thesis", "position": (0.010, 0.0, 0.022), "lobe": "broad (~±8°)"},
+}
+STARTS: dict[str, tuple[float, float]] = {"near": (1.0, 3.0), "far": (5.0, 20.0)}
+SNRS = (30.0, 20.0, 10.0)
+
+OURS: dict[str, dict[str, Any]] = {
+    "auto": {},
+    "model-based": {},
+    "newton": {},
+    "quasi-newton": {},
+    "spsa": {},
+    "gradient": {},
+    "momentum": {},
+    "nesterov": {},
+}
+PEERS = ("scipy-nelder-mead", "py-bobyqa", "skopt-gp", "nevergrad-ngopt")
+RUN_CAP = {"skopt-gp": {"full": 10, "quick": 3, "smoke": 1}}
+"""Fewer runs per cell for expensive peers: gp_minimize costs ~9 s of CPU per 80-point run
+(a GP refit per measurement), 20-60 times any other method; the cap keeps the full run
+under 30 minutes on 2 cores and is reported in the output."""
+_PEER_MODULES = {
+    "scipy-nelder-mead": "scipy.optimize",
+    "py-bobyqa": "pybobyqa",
+    "skopt-gp": "skopt",
+    "nevergrad-ngopt": "nevergrad",
+}
+
+
+# ----------------------------------------------------------------------------- cases
+_SETUPS: dict[str, Any] = {}
+
+
+def _case(case: str) -> tuple[Any, np.ndarray, np.ndarray]:
+    """(base setup, position [m] (3,), true optimum [deg] (2,) in tilts), cached per process."""
+    if case not in _SETUPS:
+        spec = CASES[case]
+        setup = load_setup(spec["setup"], seed=0)
+        pos = np.asarray(
+            setup.reference_position if spec["position"] is None else spec["position"], float
+        )
+        truth = np.array(setup.true_optimum(pos, parameterization=PARAM))
+        _SETUPS[case] = (setup, pos, truth)
+    return _SETUPS[case]
+
+
+def tilt_bounds(setup: Any) -> np.ndarray:
+    """[deg] (2, 2): the largest tilt box whose corners stay inside the positioner's
+    co-elevation cone (cos θ = cos t_x cos t_y at a corner: t = arccos √cos θ_max)."""
+    cone = np.radians(max(abs(v) for v in setup.limits.coelevation))
+    half = float(np.degrees(np.arccos(np.sqrt(np.cos(cone))))) - 1e-6
+    return np.array([[-half, half], [-half, half]])
+
+
+def run_seed(case: str, start: str, snr: float, run: int) -> int:
+    """Seed of one run, the same for every method (common random numbers)."""
+    return int(
+        np.random.SeedSequence(
+            [list(CASES).index(case), list(STARTS).index(start), int(snr), run]
+        ).generate_state(1)[0]
+    )
+
+
+def start_point(truth: np.ndarray, start: str, seed: int, bounds: np.ndarray) -> np.ndarray:
+    """x0 [deg] at a uniform distance in the start band and a uniform direction."""
+    rng = np.random.default_rng(seed)
+    lo, hi = STARTS[start]
+    for _ in range(100):
+        dist = rng.uniform(lo, hi)
+        ang = rng.uniform(0.0, 2.0 * np.pi)
+        x0 = truth + dist * np.array([np.cos(ang), np.sin(ang)])
+        if np.all((x0 >= bounds[:, 0]) & (x0 <= bounds[:, 1])):
+            return x0
+    raise RuntimeError("no start inside the bounds")  # pragma: no cover
+
+
+# ----------------------------------------------------------------------------- peers
+class _Stop(Exception):
+    """Raised inside a peer's objective when the budget is spent."""
+
+
+class _Tracker:
+    """−metric for a minimizing peer, through the SourceObjective; keeps best-so-far."""
+
+    def __init__(self, objective: SourceObjective) -> None:
+        self.objective = objective
+        self.best_x: np.ndarray | None = None
+        self.best_f = np.inf
+        self.history: list[np.ndarray] = []  # estimate after each measurement
+
+    def __call__(self, x: Any) -> float:
+        x = np.asarray(x, dtype=float).reshape(2)
+        try:
+            value = float(self.objective(x[None, :])[0])
+        except BudgetExhaustedError:
+            raise _Stop from None
+        f = -value if np.isfinite(value) else np.inf
+        if f < self.best_f or self.best_x is None:
+            self.best_f, self.best_x = f, x.copy()
+        self.history.append(self.best_x.copy())
+        return f
+
+
+def _box(x0: np.ndarray, start: str, bounds: np.ndarray) -> np.ndarray:
+    half = STARTS[start][1] + 1.0
+    return np.stack(
+        [np.maximum(x0 - half, bounds[:, 0]), np.minimum(x0 + half, bounds[:, 1])], axis=1
+    )
+
+
+def _peer_nelder_mead(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
+    from scipy.optimize import minimize
+
+    simplex = x0 + np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    minimize(
+        tr,
+        x0,
+        method="Nelder-Mead",
+        bounds=tr.objective.bounds,
+        options={"initial_simplex": simplex, "maxfev": BUDGET, "xatol": 1e-4, "fatol": 0.0},
+    )
+
+
+def _peer_bobyqa(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
+    import pybobyqa
+
+    np.random.seed(seed % 2**32)  # noqa: NPY002 - Py-BOBYQA draws from the global stream
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pybobyqa.solve(
+            tr,
+            x0,
+            bounds=(box[:, 0], box[:, 1]),
+            maxfun=BUDGET,
+            rhobeg=1.0,
+            rhoend=1e-3,
+            objfun_has_noise=True,
+            seek_global_minimum=False,
+            scaling_within_bounds=False,
+        )
+
+
+def _peer_skopt(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
+    from skopt import gp_minimize
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gp_minimize(
+            tr,
+            [tuple(box[0]), tuple(box[1])],
+            n_calls=BUDGET,
+            n_initial_points=10,
+            x0=[list(x0)],
+            noise="gaussian",
+            acq_optimizer="sampling",
+            n_points=2000,
+            random_state=seed % 2**31,
+        )
+
+
+def _peer_nevergrad(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
+    import nevergrad as ng
+
+    param = ng.p.Array(init=x0).set_bounds(box[:, 0], box[:, 1]).set_mutation(sigma=1.0)
+    param.random_state = np.random.RandomState(seed % 2**32)
+    param.function.deterministic = False  # noisy: NGOpt picks a noise-robust optimizer
+    opt = ng.optimizers.NGOpt(parametrization=param, budget=BUDGET, num_workers=1)
+    tr.history_override = []  # nevergrad's own recommendation after each tell
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(BUDGET):
+            cand = opt.ask()
+            try:
+                f = tr(cand.value)
+            except _Stop:
+                return
+            opt.tell(cand, f)
+            tr.history_override.append(np.asarray(opt.provide_recommendation().value, float))
+
+
+_PEER_FUNCS: dict[str, Callable[..., None]] = {
+    "scipy-nelder-mead": _peer_nelder_mead,
+    "py-bobyqa": _peer_bobyqa,
+    "skopt-gp": _peer_skopt,
+    "nevergrad-ngopt": _peer_nevergrad,
+}
+
+
+def available_peers(names: list[str]) -> tuple[list[str], dict[str, str]]:
+    """The peers that import, and a reason for each skipped one."""
+    ok, skipped = [], {}
+    for name in names:
+        try:
+            __import__(_PEER_MODULES[name])
+            ok.append(name)
+        except Exception as exc:  # a broken install is a skip, not a crash
+            skipped[name] = f"{type(exc).__name__}: {exc}"
+    return ok, skipped
+
+
+# ----------------------------------------------------------------------------- one run
+def _estimates_ours(result: Any, x0: np.ndarray) -> np.ndarray:
+    """Estimate after n = 0..BUDGET measurements [deg], shape (BUDGET + 1, 2)."""
+    counts = np.asarray(result.iteration_measurements)
+    its = np.asarray(result.iterates)
+    n = np.arange(BUDGET + 1)
+    idx = np.searchsorted(counts, n, side="right") - 1
+    est = its[np.clip(idx, 0, len(its) - 1)].copy()
+    est[-1] = result.x  # the final recommendation at the end of the run
+    if result.n_measurements < BUDGET:
+        est[result.n_measurements :] = result.x
+    return est
+
+
+def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
+    """One seeded run of one method; returns its error after each measurement."""
+    case, start, snr, run, method = task
+    base, pos, truth = _case(case)
+    seed = run_seed(case, start, snr, run)
+    setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
+    objective = SourceObjective(
+        setup, pos, parameterization=PARAM, budget=BUDGET, bounds=tilt_bounds(setup)
+    )
+    x0 = start_point(truth, start, seed, objective.bounds)
+    t0 = time.perf_counter()
+    status = ""
+    if method in OURS:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = calibrate(
+                objective,
+                method=method,
+                x0=x0,
+                budget=BUDGET,
+                max_iter=10_000,
+                rng=seed,
+                **OURS[method],
+            )
+        est = _estimates_ours(res, x0)
+        status = str(res.status)
+    else:
+        tr = _Tracker(objective)
+        try:
+            _PEER_FUNCS[method](tr, x0, _box(x0, start, objective.bounds), seed)
+        except _Stop:
+            pass
+        hist = getattr(tr, "history_override", None) or tr.history
+        est = np.empty((BUDGET + 1, 2))
+        est[0] = x0
+        for n in range(1, BUDGET + 1):
+            est[n] = hist[min(n, len(hist)) - 1] if hist else x0
+    errors = angular_error(est, truth, PARAM)
+    return {
+        "case": case,
+        "start": start,
+        "snr": snr,
+        "run": run,
+        "method": method,
+        "errors": [round(float(e), 6) for e in errors],
+        "n_measurements": int(objective.n_measurements),
+        "status": status,
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+# ----------------------------------------------------------------------------- metrics
+def measurements_to(errors: np.ndarray, tol: float) -> float:
+    """First n after which the error stays <= tol through the budget (inf if never)."""
+    outside = np.nonzero(errors > tol)[0]
+    if outside.size == 0:
+        return 0.0
+    last = int(outside[-1])
+    return float(last + 1) if last + 1 < len(errors) else np.inf
+
+
+def summarize(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per-method metrics of the runs of one cell (or one case)."""
+    errs = np.array([r["errors"] for r in runs])  # (n_runs, BUDGET + 1)
+    out: dict[str, Any] = {"runs": len(runs)}
+    for tol in TOLERANCES:
+        m = np.array([measurements_to(e, tol) for e in errs])
+        key = f"{tol:g}"
+        out[f"success_{key}"] = float(np.mean(errs[:, -1] <= tol))
+        out[f"median_n_{key}"] = float(np.median(m))
+        out[f"p90_n_{key}"] = float(np.percentile(m, 90, method="higher"))
+        out[f"n_to_{key}"] = [None if not np.isfinite(v) else int(v) for v in m]
+        for b in FIXED_BUDGETS:
+            out[f"within_{key}_at_{b}"] = float(np.mean(errs[:, b] <= tol))
+    for b in FIXED_BUDGETS:
+        out[f"median_error_at_{b}"] = float(np.median(errs[:, b]))
+    out["seconds_per_run"] = float(np.mean([r["seconds"] for r in runs]))
+    return out
+
+
+def _fmt_n(v: float) -> str:
+    return f">{BUDGET}" if not np.isfinite(v) else f"{v:g}"
+
+
+def case_table(summary: dict[str, dict[str, Any]]) -> str:
+    header = [
+        "method",
+        "runs",
+        "ok 0.05°",
+        "ok 0.1°",
+        "n to 0.05° med / p90",
+        "n to 0.1° med / p90",
+        "≤0.1° at 20 / 40 / 80",
+        "median error [°] at 20 / 40 / 80",
+    ]
+    order = sorted(summary, key=lambda m: (summary[m]["median_n_0.1"], -summary[m]["success_0.1"]))
+    rows = []
+    for m in order:
+        s = summary[m]
+        rows.append(
+            [
+                m,
+                s["runs"],
+                f"{100 * s['success_0.05']:.0f} %",
+                f"{100 * s['success_0.1']:.0f} %",
+                f"{_fmt_n(s['median_n_0.05'])} / {_fmt_n(s['p90_n_0.05'])}",
+                f"{_fmt_n(s['median_n_0.1'])} / {_fmt_n(s['p90_n_0.1'])}",
+                " / ".join(f"{100 * s[f'within_0.1_at_{b}']:.0f} %" for b in (20, 40, 80)),
+                " / ".join(f"{s[f'median_error_at_{b}']:.3g}" for b in (20, 40, 80)),
+            ]
+        )
+    return markdown_table(header, rows)
+
+
+def winner(summary: dict[str, dict[str, Any]], peers: list[str]) -> dict[str, Any]:
+    """The method with the fewest median measurements to 0.1° (ties: higher success), and
+    its margin over the best peer."""
+
+    def key(m: str) -> tuple[float, float, float]:
+        s = summary[m]
+        return (s["median_n_0.1"], -s["success_0.1"], s["p90_n_0.1"])
+
+    best = min(summary, key=key)
+    present = [p for p in peers if p in summary]
+    out = {"method": best, "median_n_0.1": summary[best]["median_n_0.1"]}
+    if present:
+        bp = min(present, key=key)
+        out.update(best_peer=bp, best_peer_median_n_0_1=summary[bp]["median_n_0.1"])
+    return out
+
+
+def plot_ecdf(per_case: dict[str, dict[str, dict[str, Any]]], path: Path) -> None:
+    """Fraction of runs within 0.1° (and staying there) vs measurements, per method."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(per_case), figsize=(6.5 * len(per_case), 4.6), squeeze=False)
+    n = np.arange(BUDGET + 1)
+    for ax, (case, summary) in zip(axes[0], per_case.items(), strict=True):
+        for m, s in sorted(summary.items()):
+            reach = np.array([np.inf if v is None else v for v in s["n_to_0.1"]])
+            frac = (reach[None, :] <= n[:, None]).mean(axis=1)
+            style = "-" if m in OURS else "--"
+            ax.step(n, 100 * frac, where="post", ls=style, lw=2 if m == "auto" else 1.2, label=m)
+        ax.set_title(f"{case}: all cells pooled")
+        ax.set_xlabel("measurements")
+        ax.set_ylabel("runs within 0.1° (and staying) [%]")
+        ax.set_xlim(0, BUDGET)
+        ax.set_ylim(0, 100)
+        ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+AUTO_TARGETS = (
+    ("near", 30.0, 0.05, 20, 0.99),
+    ("near", 10.0, 0.1, 60, 0.95),
+    ("far", 30.0, 0.1, 60, 0.99),
+)
+"""Issue 5's targets for auto on immersion-5mhz: (start, SNR [dB], tolerance [deg],
+measurements, fraction of runs)."""
+
+
+def _winner_sentence(w: dict[str, Any]) -> str:
+    text = f"fewest measurements to 0.1 deg (median): {w['method']} ({_fmt_n(w['median_n_0.1'])})"
+    if "best_peer" in w:
+        bp = w["best_peer_median_n_0_1"]
+        text += f"; best peer {w['best_peer']} ({_fmt_n(bp)})"
+        if np.isfinite(bp) and w["median_n_0.1"] > 0:
+            text += f": {bp / w['median_n_0.1']:.1f}x fewer"
+        elif not np.isfinite(bp):
+            text += f": the best peer's median run is not within 0.1 deg after {BUDGET}"
+    return text
+
+
+def report_markdown(
+    *,
+    mode: str,
+    n_runs: int,
+    caps: dict[str, int],
+    skipped: dict[str, str],
+    elapsed: float,
+    workers: int,
+    per_case: dict[str, Any],
+    per_cell: dict[str, Any],
+    winners: dict[str, Any],
+    auto_targets: dict[str, Any],
+    png_name: str,
+) -> str:
+    """The Markdown report: method, winners, auto's targets, plot, tables."""
+    doc = (__doc__ or "").split("Cases (the simulator", 1)[1].split("Output:", 1)[0]
+    md = [
+        "# Calibration benchmark",
+        "",
+        "Generated by `python benchmarks/bench_calibration.py` "
+        f"(mode `{mode}`: {n_runs} seeded runs per cell and method"
+        + (", " + ", ".join(f"{m}: {c}" for m, c in caps.items()) if caps else "")
+        + f"; budget {BUDGET} measurements; {elapsed / 60:.1f} min on {workers} worker(s)).",
+        "",
+        "## Method",
+        "",
+        "Cases (the simulator" + doc.rstrip(),
+        "",
+    ]
+    if skipped:
+        md += ["Skipped peers: " + "; ".join(f"{k} ({v})" for k, v in skipped.items()), ""]
+    md += ["## Results", ""]
+    for c, w in winners.items():
+        md.append(f"* **{c}** ({CASES[c]['lobe']} lobe, all cells pooled): {_winner_sentence(w)}.")
+    md.append("")
+    if auto_targets:
+        md += ["Issue 5's targets for `auto` on immersion-5mhz:", ""]
+        md += [
+            markdown_table(
+                ["target", "runs meeting it", "goal", "met"],
+                [
+                    [k, f"{100 * v['got']:.0f} %", f"≥ {100 * v['goal']:.0f} %", v["met"]]
+                    for k, v in auto_targets.items()
+                ],
+            ),
+            "",
+        ]
+    md += [
+        f"![fraction of runs within 0.1° vs measurements]({png_name})",
+        "",
+        "Columns: *ok* = estimate within the tolerance at the budget; *n to* = measurements "
+        "after which the estimate stays within the tolerance (median / 90th percentile; "
+        f"`>{BUDGET}` = not within the budget); *≤0.1° at* = fraction within 0.1° after "
+        "20 / 40 / 80 measurements; median error after 20 / 40 / 80.",
+        "",
+    ]
+    for c, summary in per_case.items():
+        md += [f"## {c} — {CASES[c]['lobe']} lobe, all cells pooled", "", case_table(summary), ""]
+        for key, cell in per_cell.items():
+            cc, s, snr = key.split("|")
+            if cc == c:
+                md += [f"### {c}, start {s} ({STARTS[s][0]:g}–{STARTS[s][1]:g}°), {snr} dB", ""]
+                md += [case_table(cell), ""]
+    return "\n".join(md) + "\n"
+
+
+# ----------------------------------------------------------------------------- main
+def _plan(mode: str, runs: int | None) -> tuple[list[tuple[str, str, float]], int]:
+    cells = [(c, s, snr) for c in CASES for s in STARTS for snr in SNRS]
+    if mode == "smoke":
+        return [("thesis", "near", 30.0)], runs or 2
+    if mode == "quick":
+        quick = [c for c in cells if c[2] in (30.0, 10.0)]
+        return quick, runs or 10
+    return cells, runs or 50
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    g = ap.add_mutually_exclusive_group()
+    g.add_argument("--quick", action="store_true", help="~10 runs per cell, SNR 30 and 10 dB")
+    g.add_argument("--smoke", action="store_true", help="2 runs of one cell (CI)")
+    ap.add_argument("--runs", type=int, default=None, help="runs per cell")
+    ap.add_argument("--methods", default=None, help="comma-separated subset of methods")
+    ap.add_argument("--cases", default=None, help="comma-separated subset of cases")
+    ap.add_argument("--snr", default=None, help="comma-separated subset of SNRs [dB]")
+    ap.add_argument("--starts", default=None, help="comma-separated subset of near,far")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--out-md", type=Path, default=None)
+    ap.add_argument("--plot", type=Path, default=None)
+    args = ap.parse_args(argv)
+    mode = "smoke" if args.smoke else "quick" if args.quick else "full"
+    cells, n_runs = _plan(mode, args.runs)
+    if args.cases:
+        cells = [c for c in cells if c[0] in args.cases.split(",")]
+    if args.snr:
+        cells = [c for c in cells if c[2] in [float(s) for s in args.snr.split(",")]]
+    if args.starts:
+        cells = [c for c in cells if c[1] in args.starts.split(",")]
+    wanted = args.methods.split(",") if args.methods else [*OURS, *PEERS]
+    unknown = sorted(set(wanted) - set(OURS) - set(PEERS))
+    if unknown:
+        ap.error(f"unknown method(s) {unknown}; choose from {[*OURS, *PEERS]}")
+    peers, skipped = available_peers([m for m in wanted if m in PEERS])
+    for name, why in skipped.items():
+        print(f"SKIPPED peer {name}: not available ({why}); pip install echocal[bench]")
+    methods = [m for m in wanted if m in OURS] + peers
+    caps = {m: min(n_runs, RUN_CAP.get(m, {}).get(mode, n_runs)) for m in methods}
+    for m, cap in caps.items():
+        if cap < n_runs:
+            print(f"NOTE {m}: {cap} runs per cell (run cap: cost per run)")
+    tasks = [
+        (c, s, snr, r, m)
+        for (c, s, snr) in cells
+        for r in range(n_runs)
+        for m in methods
+        if r < caps[m]
+    ]
+    print(
+        f"calibration benchmark ({mode}): {len(cells)} cell(s) x up to {n_runs} runs x "
+        f"{len(methods)} methods = {len(tasks)} runs, budget {BUDGET}, {args.workers} worker(s)",
+        flush=True,
+    )
+    t0 = time.perf_counter()
+    results: list[dict[str, Any]] = []
+    if args.workers > 1:
+        with ProcessPoolExecutor(args.workers) as pool:
+            for i, r in enumerate(pool.map(run_one, tasks, chunksize=4)):
+                results.append(r)
+                if (i + 1) % max(1, len(tasks) // 20) == 0:
+                    el = time.perf_counter() - t0
+                    print(f"  {i + 1}/{len(tasks)} runs, {el:.0f} s", flush=True)
+    else:
+        results = [run_one(t) for t in tasks]
+    elapsed = time.perf_counter() - t0
+
+    per_cell: dict[str, dict[str, Any]] = {}
+    per_case: dict[str, dict[str, Any]] = {}
+    for c, s, snr in cells:
+        key = f"{c}|{s}|{snr:g}"
+        per_cell[key] = {
+            m: summarize(
+                [
+                    r
+                    for r in results
+                    if (r["case"], r["start"], r["snr"], r["method"]) == (c, s, snr, m)
+                ]
+            )
+            for m in methods
+        }
+    for c in dict.fromkeys(cell[0] for cell in cells):
+        per_case[c] = {
+            m: summarize([r for r in results if r["case"] == c and r["method"] == m])
+            for m in methods
+        }
+
+    winners = {c: winner(summary, peers) for c, summary in per_case.items()}
+    for c, w in winners.items():
+        print(f"HEADLINE {c}: {_winner_sentence(w)}")
+    auto_targets = {}
+    if "auto" in methods:
+        for s, snr, tol, b, goal in AUTO_TARGETS:
+            key = f"immersion-5mhz|{s}|{snr:g}"
+            if key in per_cell:
+                got = per_cell[key]["auto"][f"within_{tol:g}_at_{b}"]
+                name = f"{s} start, {snr:g} dB: within {tol:g} deg after {b} measurements"
+                auto_targets[name] = {"got": got, "goal": goal, "met": got >= goal}
+                print(
+                    f"HEADLINE auto target ({name}): {100 * got:.0f} % "
+                    f"(goal >= {100 * goal:.0f} %) {'met' if got >= goal else 'NOT met'}"
+                )
+    md = report_markdown(
+        mode=mode,
+        n_runs=n_runs,
+        caps={m: c for m, c in caps.items() if c < n_runs},
+        skipped=skipped,
+        elapsed=elapsed,
+        workers=args.workers,
+        per_case=per_case,
+        per_cell=per_cell,
+        winners=winners,
+        auto_targets=auto_targets,
+        png_name=(args.plot.name if args.plot else "calibration.png"),
+    )
+    for c, summary in per_case.items():
+        print()
+        print(f"## {c}")
+        print(case_table(summary))
+    print(f"HEADLINE total time {elapsed:.0f} s")
+
+    data = {
+        "mode": mode,
+        "budget": BUDGET,
+        "runs_per_cell": n_runs,
+        "methods": methods,
+        "skipped_peers": skipped,
+        "cells": per_cell,
+        "cases": per_case,
+        "winners": winners,
+        "auto_targets": auto_targets,
+        "elapsed_s": elapsed,
+        "machine": machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize"]),
+        "run_caps": {m: c for m, c in caps.items() if c < n_runs},
+        "raw": results,
+    }
+    json_path, md_path, png_path = args.json, args.out_md, args.plot
+    subset = any(
+        v is not None for v in (args.runs, args.methods, args.cases, args.snr, args.starts)
+    )
+    if mode == "full" and not subset:  # the complete benchmark refreshes the docs
+        DOCS.mkdir(parents=True, exist_ok=True)
+        json_path = json_path or DOCS / "calibration.json"
+        md_path = md_path or DOCS / "calibration.md"
+        png_path = png_path or DOCS / "calibration.png"
+    if json_path:
+        json_path.write_text(json.dumps(data, indent=None), encoding="utf-8")
+    if md_path:
+        md_path.write_text(md, encoding="utf-8")
+    if png_path:
+        plot_ecdf(per_case, png_path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

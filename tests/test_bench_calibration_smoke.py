@@ -1,0 +1,66 @@
+"""Smoke test of the calibration benchmark script: it runs ``--smoke``, prints its headline
+and writes consistent JSON and Markdown.  No thresholds on the numbers (2 runs say nothing
+about success rates; the numbers are the benchmark's report)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPT = ROOT / "benchmarks" / "bench_calibration.py"
+
+
+def test_bench_calibration_smoke_runs_and_reports(tmp_path):
+    out_json, out_md, out_png = tmp_path / "c.json", tmp_path / "c.md", tmp_path / "c.png"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(SCRIPT),
+            "--smoke",
+            "--workers",
+            "1",
+            "--json",
+            str(out_json),
+            "--out-md",
+            str(out_md),
+            "--plot",
+            str(out_png),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,  # a loaded shared 2-core machine; the smoke run itself takes ~20 s
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "HEADLINE thesis: fewest measurements to 0.1 deg (median):" in proc.stdout
+    assert "HEADLINE total time" in proc.stdout
+
+    data = json.loads(out_json.read_text(encoding="utf-8"))
+    assert data["mode"] == "smoke"
+    # every peer is either run or reported as skipped (optional dependencies)
+    ours = {"auto", "model-based", "newton", "quasi-newton", "spsa", "gradient"}
+    assert ours <= set(data["methods"])
+    for peer in ("scipy-nelder-mead", "py-bobyqa", "skopt-gp", "nevergrad-ngopt"):
+        assert (peer in data["methods"]) != (peer in data["skipped_peers"]), peer
+        if peer in data["skipped_peers"]:
+            assert f"SKIPPED peer {peer}" in proc.stdout
+    budget = data["budget"]
+    for run in data["raw"]:
+        # the shared objective enforces the budget for every method, peers included
+        assert run["n_measurements"] <= budget
+        assert len(run["errors"]) == budget + 1
+        assert all(math.isfinite(e) and 0.0 <= e < 180.0 for e in run["errors"])
+    # the summary is derived from the raw runs: success at the budget = final error <= tol
+    summary = data["cases"]["thesis"]
+    for method, s in summary.items():
+        finals = [r["errors"][-1] for r in data["raw"] if r["method"] == method]
+        assert s["runs"] == len(finals)
+        assert math.isclose(s["success_0.1"], sum(e <= 0.1 for e in finals) / len(finals))
+    md = out_md.read_text(encoding="utf-8")
+    assert md.startswith("# Calibration benchmark")
+    assert "## thesis" in md and "| method |" in md
+    assert out_png.stat().st_size > 1000
