@@ -406,6 +406,8 @@ def scan_surface(
                 on_point(len(records), len(order))
         # second look at suspicious points, warm from their trusted neighbours
         retry, snr_ref = _suspicious(records, found, xy, radius, ctx)
+        if not warm_start:  # a cold scan takes no advice from its neighbours
+            retry = set()
         for key in retry:
             found.pop(key, None)
         index = {key: i for i, key in enumerate(order)}
