@@ -101,7 +101,7 @@ def test_curved_parts_at_30_db_meet_the_accuracy_targets(specimen):
 
 
 def test_warm_starts_need_fewer_measurements_than_cold_starts():
-    grid = ScanGrid.regular(x=(-4 * MM, 4 * MM, 2 * MM), y=(0.0, 0.0, 2 * MM), z=25 * MM)
+    grid = ScanGrid.regular(x=(-8 * MM, 8 * MM, 2 * MM), y=(0.0, 0.0, 2 * MM), z=25 * MM)
     warm = scan_surface(_setup("sphere", 5), grid, rng=7, progress=False)
     cold = scan_surface(_setup("sphere", 5), grid, rng=7, progress=False, warm_start=False)
     assert warm.summary["found"] == cold.summary["found"] == grid.size

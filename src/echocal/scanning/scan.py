@@ -384,7 +384,7 @@ def scan_surface(
     found: dict[tuple[int, int], FloatArray] = {
         k: np.array([r["a"], r["b"]]) for k, r in records.items() if r["status"] == 0
     }
-    radius = 1.5 * grid.spacing
+    radius = 2.5 * grid.spacing
     t_start = time.perf_counter()
     with _ProgressBar(progress, len(order), resumed) as advance:
         for i, key in enumerate(order):
