@@ -109,7 +109,7 @@ OURS: dict[str, dict[str, Any]] = {
     "nesterov": {},
 }
 PEERS = ("scipy-nelder-mead", "py-bobyqa", "skopt-gp", "nevergrad-ngopt")
-RUN_CAP = {"skopt-gp": {"full": 10, "quick": 3, "smoke": 1}}
+RUN_CAP = {"skopt-gp": {"full": 5, "quick": 2, "smoke": 1}}
 """Fewer runs per cell for expensive peers: gp_minimize costs ~9 s of CPU per 80-point run
 (a GP refit per measurement), 20-60 times any other method; the cap keeps the full run
 under 30 minutes on 2 cores and is reported in the output."""

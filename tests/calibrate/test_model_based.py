@@ -128,3 +128,59 @@ def test_acquisition_detection_false_alarm_and_averaging():
     expected = peak.mean() * np.sqrt(7)  # centre point: all 7 points are its neighbours
     np.testing.assert_allclose(acq.scores()[0], expected, rtol=1e-12)
     assert expected > acq.first_threshold and acq.local is not None
+
+
+def _pedestal(points: np.ndarray) -> np.ndarray:
+    """A Gaussian echo of width 0.3° and peak 10 on a noise floor of 1 (10 dB-like)."""
+    d = np.atleast_2d(points) - OPT
+    return 1.0 + 10.0 * np.exp(-np.sum(d**2, axis=1) / (2.0 * 0.3**2))
+
+
+@pytest.mark.parametrize("floor", [1.0, None])
+def test_model_based_subtracts_the_noise_floor_before_the_log_fit(floor):
+    # Noiseless: with the floor known (the objective's noise_floor reaches the method
+    # through the driver's noise_model), log(f - floor) is exactly quadratic, so the fitted
+    # width is the echo's 0.3° (2 % allows for the ridge and the weak curvature prior);
+    # left in, the floor makes the peak look broader (log(1 + 10 g) is flatter than log g).
+    from echocal.calibrate import FunctionObjective
+    from echocal.calibrate.driver import build_optimizer
+
+    obj = FunctionObjective(_pedestal, noise_floor=floor)
+    opt, _ = build_optimizer(
+        obj,
+        "model-based",
+        OPT + np.array([0.2, 0.1]),
+        rng=np.random.default_rng(0),
+        options={"radius": 0.3},
+    )
+    for _ in range(25):
+        opt.tell(obj(opt.ask()))
+    widths = np.linalg.eigvalsh(opt.model.width())
+    if floor is None:
+        assert widths.max() > 0.32  # measured 0.33: 10 % broader
+    else:
+        np.testing.assert_allclose(widths, 0.3, rtol=0.02)
+        assert np.hypot(*(opt.recommend() - OPT)) < 1e-3
+
+
+def test_search_rings_coarse_outside_cover_the_annulus():
+    from echocal.calibrate.acquisition import search_rings
+
+    rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, growth=0.5, max_spacing=4.0)
+    # inside fine_radius: the hexagonal lattice itself
+    for a, b in zip(rings[:4], hex_spiral(np.zeros(2), 1.0, 3), strict=True):
+        np.testing.assert_allclose(a, b)
+    pts = np.vstack(rings)
+    assert np.hypot(*pts.T).max() <= 20.0 + 1e-9
+    # every direction and distance up to the last full circle is covered: the nearest
+    # search point is within 0.7 s(r) (a hexagonal lattice's covering radius is s/√3 =
+    # 0.577 s; circles add curvature and the stagger: 0.65 s measured)
+    q = np.random.default_rng(0).uniform(-17.0, 17.0, (4000, 2))
+    r = np.hypot(*q.T)
+    q, r = q[(r > 3.0) & (r < 17.0)], r[(r > 3.0) & (r < 17.0)]
+    nearest = np.min(np.hypot(*(q[:, None, :] - pts[None, :, :]).transpose(2, 0, 1)), axis=1)
+    s = np.minimum(np.maximum(1.0, 0.5 * r), 4.0)
+    assert np.all(nearest <= 0.7 * s)
+    # growth 0 (the Acquisition default) is the plain hexagonal lattice
+    plain = search_rings(np.zeros(2), 1.0, 3.0)
+    assert sum(len(x) for x in plain) == 37

@@ -38,7 +38,7 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import get_method, register_method
 
-__all__ = ["Acquisition", "NoiseModel", "hex_spiral"]
+__all__ = ["Acquisition", "NoiseModel", "hex_spiral", "search_rings"]
 
 NoiseModel = Callable[[], tuple[float | None, float | None]]
 """A live ``(noise_floor, noise_sigma)`` estimate [energy units] (either may be None)."""
@@ -61,6 +61,41 @@ def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatAr
     return rings
 
 
+def search_rings(
+    center: FloatArray,
+    spacing: float,
+    max_radius: float,
+    *,
+    fine_radius: float = np.inf,
+    growth: float = 0.0,
+    max_spacing: float | None = None,
+) -> list[FloatArray]:
+    """Search rings around ``center`` [deg]: the hexagonal lattice of ``spacing`` out to
+    ``fine_radius``, then (coarse-to-the-outside) staggered circles whose point spacing
+    and circle spacing grow with the radius r as ``max(spacing, growth · r)``, capped at
+    ``max_spacing`` — the area a measurement must cover grows with the area to search.
+
+    Returns a list of arrays of shape (k_i, 2) (the first is ``center``), out to ``max_radius``.
+    """
+    n_fine = int(np.ceil(min(fine_radius, max_radius) / spacing)) if np.isfinite(fine_radius) else 0
+    if not np.isfinite(fine_radius) or growth <= 0.0:
+        return hex_spiral(center, spacing, max(1, int(np.ceil(max_radius / spacing))))
+    rings = hex_spiral(center, spacing, max(1, n_fine))
+    cap = np.inf if max_spacing is None else max_spacing
+    r = max(1, n_fine) * spacing
+    k = 0
+    while True:
+        s = min(max(spacing, growth * r), cap)
+        r += 0.5 * np.sqrt(3.0) * s
+        if r > max_radius + 1e-9:
+            break
+        n = int(np.ceil(2.0 * np.pi * r / s))
+        ang = (np.arange(n) + 0.5 * (k % 2)) * 2.0 * np.pi / n
+        rings.append(center[None, :] + r * np.stack([np.cos(ang), np.sin(ang)], axis=1))
+        k += 1
+    return rings
+
+
 @register_method("acquisition")
 class Acquisition(Optimizer):
     """Outward hexagonal search until the echo is clearly above noise, then a local method.
@@ -80,6 +115,12 @@ class Acquisition(Optimizer):
         estimates (either may be None), consulted at every decision when the fixed values
         above are None — e.g. a source objective that measures the noise in each A-scan.
     batch : maximum points per acquisition ask (1 = stop at the first detection).
+    fine_radius : [deg] the lattice of ``spacing`` is used out to this distance from x0;
+        beyond it the search continues on coarser circles (see :func:`search_rings`).
+        Default: infinite (the fine lattice everywhere).
+    growth : beyond ``fine_radius`` the point spacing is ``max(spacing, growth · r)``.
+    max_spacing : [deg] cap on that spacing (≈ √3 × the distance from the peak at which
+        the echo still clears the threshold in one measurement).
     """
 
     def __init__(
@@ -96,6 +137,9 @@ class Acquisition(Optimizer):
         noise_floor: float | None = None,
         noise_model: NoiseModel | None = None,
         batch: int = 1,
+        fine_radius: float | None = None,
+        growth: float = 0.0,
+        max_spacing: float | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -119,13 +163,25 @@ class Acquisition(Optimizer):
         )
         self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
         self.batch = positive_int("batch", batch)
-        n_rings = max(1, int(np.ceil(self.max_radius / self.spacing)))
-        pts = np.vstack(hex_spiral(self.x0, self.spacing, n_rings))
+        self.fine_radius = (
+            np.inf if fine_radius is None else positive_float("fine_radius", fine_radius)
+        )
+        self.growth = nonnegative_float("growth", growth)
+        self.max_spacing = (
+            None if max_spacing is None else positive_float("max_spacing", max_spacing)
+        )
+        rings = search_rings(
+            self.x0,
+            self.spacing,
+            self.max_radius,
+            fine_radius=self.fine_radius,
+            growth=self.growth,
+            max_spacing=self.max_spacing,
+        )
+        pts = np.vstack(rings)
         inside = np.all((pts >= self.bounds[:, 0]) & (pts <= self.bounds[:, 1]), axis=1)
         self._queue = pts[inside]
-        self._ring = np.concatenate(
-            [np.full(len(r), k) for k, r in enumerate(hex_spiral(self.x0, self.spacing, n_rings))]
-        )[inside]
+        self._ring = np.concatenate([np.full(len(r), k) for k, r in enumerate(rings)])[inside]
         self._next = 0
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
