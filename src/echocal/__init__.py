@@ -3,7 +3,8 @@
 Units are SI (metres, seconds, hertz) everywhere in code; orientation angles are
 degrees at every public boundary.  The main entry points::
 
-    from echocal import load_setup, SourceObjective, calibrate, evaluate_run
+    from echocal import load_setup, SourceObjective, evaluate_run
+    from echocal.calibrate import calibrate
 
     setup = load_setup("immersion-5mhz", seed=0)          # the simulator (a source)
     objective = SourceObjective(setup, setup.reference_position, parameterization="tilt")
@@ -11,13 +12,15 @@ degrees at every public boundary.  The main entry points::
     print(result.x, result.n_measurements, evaluate_run(setup, setup.reference_position,
                                                         result).error)
 
-See the README for the architecture and the command line.
+See the README for the architecture and the command line.  The function
+``calibrate`` lives in :mod:`echocal.calibrate` and is deliberately not
+re-exported here: the name would shadow that subpackage.
 """
 
 from __future__ import annotations
 
 from echocal.ascan import AScan
-from echocal.calibrate import CalibrationResult, calibrate, method_names
+from echocal.calibrate import CalibrationResult, method_names
 from echocal.constants import MM, SOUND_SPEED_WATER, US
 from echocal.errors import (
     BudgetExhaustedError,
@@ -98,7 +101,6 @@ __all__ = [
     "angular_error",
     "builtin_setup_names",
     "builtin_specimen",
-    "calibrate",
     "cast",
     "evaluate_run",
     "get_metric",
