@@ -22,11 +22,11 @@ from the centre out (:meth:`~echocal.scanning.ScanGrid.order`):
    robust noise level every source provides), when the time of flight is NaN, or
    when the source raised an echocal error at that point.
 4. **Second look.**  After the pass, suspicious points — missing after a cold start,
-   an echo below ``relative_snr`` × the scan's median echo (a side lobe), or more
+   an echo below ``relative_snr`` × the scan's 90th-percentile echo (a side lobe), or more
    than ``outlier`` degrees off the plane through their neighbours — are measured
    once more, warm from their trusted neighbours; the attempt with the stronger echo
    is kept, the measurements of both are counted, and a point still far weaker than
-   the median echo is missing.
+   the strong echoes is missing.
 
 The result (:class:`SurfaceScan`) is an xarray Dataset on dims (y, x); see
 :func:`surface_dataset` for its variables.  With ``out`` the scan is resumable (see
@@ -120,12 +120,12 @@ def _score(rec: Mapping[str, Any]) -> tuple[bool, float]:
 
 
 def _relative_check(rec: dict[str, Any], ctx: _Context, snr_ref: float) -> dict[str, Any]:
-    """Demote a found point whose echo is far weaker than the scan's median echo."""
+    """Demote a found point whose echo is far weaker than the scan's strong echoes (90th percentile)."""
     if rec["status"] == 0 and rec["snr"] < ctx.relative_snr * snr_ref:
         rec = {
             **rec,
             "status": STATUS["weak-echo"],
-            "message": f"echo {rec['snr']:.3g} < {ctx.relative_snr:g} x the scan median "
+            "message": f"echo {rec['snr']:.3g} < {ctx.relative_snr:g} x the scan's 90th-percentile echo "
             f"{snr_ref:.3g}: a side lobe or a partial footprint",
         }
     return rec
@@ -138,16 +138,18 @@ def _suspicious(
     radius: float,
     ctx: _Context,
 ) -> tuple[set[tuple[int, int]], float]:
-    """Points worth a second, warm look, and the median echo of the found points.
+    """Points worth a second, warm look, and the 90th-percentile echo of the found points.
 
     * missing after a cold start (no neighbour to start from then);
-    * found with an echo below ``relative_snr`` × the median echo (a side lobe);
+    * found with an echo below ``relative_snr`` × the 90th-percentile echo (a side lobe);
     * found more than ``outlier`` [deg] away from the plane through its trusted
       neighbours (converged to another peak).
     """
     snrs = np.array([records[k]["snr"] for k in found], dtype=np.float64)
     snrs = snrs[np.isfinite(snrs)]
-    snr_ref = float(np.median(snrs)) if snrs.size else np.inf
+    # the reference is the 90th percentile, not the median: where most points locked
+    # onto side lobes (cold starts far from the normal) their median is a side lobe's
+    snr_ref = float(np.percentile(snrs, 90)) if snrs.size else np.inf
     weak = {k for k in found if not records[k]["snr"] >= ctx.relative_snr * snr_ref}
     good = {k: v for k, v in found.items() if k not in weak}
     pos = {k: xy[k] for k in good}
@@ -307,7 +309,7 @@ def scan_surface(
     tof_repeats : A-scans averaged for the time of flight (counted).
     tol, patience : [deg], [iterations] the per-point stopping rule.
     min_snr : the echo must exceed this many times the median matched envelope.
-    relative_snr : ... and this fraction of the median echo of the found points (a
+    relative_snr : ... and this fraction of the 90th-percentile echo of the found points (a
         weaker one is a side lobe or a partial footprint).
     outlier : [deg] a found point this far from the plane through its neighbours'
         estimates is measured again from them; the stronger echo is kept.
@@ -438,7 +440,7 @@ def scan_surface(
                 found[key] = np.array([rec["a"], rec["b"]])
             if store is not None:
                 store.append(rec)
-        for key in records:  # a found echo far below the median one is not trusted
+        for key in records:  # a found echo far below the strong ones is not trusted
             records[key] = _relative_check(records[key], ctx, snr_ref)
     wall = time.perf_counter() - t_start
     if truth is None:
