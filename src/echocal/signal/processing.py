@@ -68,9 +68,35 @@ def _matched_transfer(pulse: Pulse, fs: float, n: int) -> tuple[int, NDArray[np.
     return n_fft, transfer
 
 
+@lru_cache(maxsize=32)
+def _analytic_transfer(pulse: Pulse, fs: float, n: int) -> tuple[int, NDArray[np.complex128]]:
+    """(FFT length, matched-filter transfer × the one-sided analytic-signal weights).
+
+    The weights are 1 at f = 0 (and at N/2 for even N) and 2 at positive frequencies, so
+    ifft(rfft(x)·H, n=N) is the analytic signal of the matched filter's output.
+    """
+    n_fft, transfer = _matched_transfer(pulse, fs, n)
+    weights = np.full(transfer.size, 2.0)
+    weights[0] = 1.0
+    if n_fft % 2 == 0:
+        weights[-1] = 1.0
+    out = transfer * weights
+    out.setflags(write=False)
+    return n_fft, out
+
+
 def _matched_spectrum(x: _F64, pulse: Pulse, fs: float) -> tuple[int, NDArray[np.complex128]]:
     n_fft, transfer = _matched_transfer(pulse, float(fs), x.shape[-1])
     return n_fft, scipy.fft.rfft(x, n=n_fft, axis=-1) * transfer
+
+
+def _analytic(x: _F64, pulse: Pulse, fs: float) -> NDArray[np.complex128]:
+    """Analytic signal of the matched filter's output, shape ``(..., n_fft)`` (first
+    ``n_samples`` are the A-scan's): one real FFT and one inverse complex FFT."""
+    n_fft, transfer = _analytic_transfer(pulse, float(fs), x.shape[-1])
+    spec = scipy.fft.rfft(x, n=n_fft, axis=-1)
+    spec *= transfer
+    return scipy.fft.ifft(spec, n=n_fft, axis=-1, overwrite_x=True)
 
 
 def matched_filter(samples: ArrayLike, pulse: Pulse, fs: float) -> _F64:
@@ -95,12 +121,7 @@ def matched_envelope(samples: ArrayLike, pulse: Pulse, fs: float) -> _F64:
     One FFT pair: the analytic signal is formed directly from the correlation's spectrum.
     """
     x = _samples(samples)
-    n_fft, spec = _matched_spectrum(x, pulse, fs)
-    full = np.zeros((*spec.shape[:-1], n_fft), dtype=np.complex128)
-    m = spec.shape[-1]
-    full[..., :m] = spec
-    full[..., 1 : (n_fft + 1) // 2] *= 2.0  # positive frequencies doubled, negative zero
-    return np.abs(scipy.fft.ifft(full, axis=-1)[..., : x.shape[-1]])
+    return np.abs(_analytic(x, pulse, fs)[..., : x.shape[-1]])
 
 
 def envelope(samples: ArrayLike) -> _F64:
@@ -242,6 +263,9 @@ def distance(tof: ArrayLike, c0: float = SOUND_SPEED_WATER) -> _F64:
     return np.asarray(tof, dtype=np.float64) * float(c0) / 2.0
 
 
+_ENERGY_CHUNK = 1 << 15  # samples of A-scans processed at once (temporaries stay in cache)
+
+
 def _energy_window(
     samples: ArrayLike, window: RecordingWindow, pulse: Pulse, window_length: float | None
 ) -> tuple[_F64, NDArray[np.int64]]:
@@ -253,16 +277,32 @@ def _energy_window(
         raise EchocalValueError(f"window_length must be > 0; got {length:g}")
     half = round(0.5 * length * window.fs)
     n = x.shape[-1]
-    env = matched_envelope(x, pulse, window.fs)
-    centre = np.argmax(env, axis=-1)
-    cs = np.concatenate([np.zeros((*x.shape[:-1], 1)), np.cumsum(x * x, axis=-1)], axis=-1)
+    batch = x.shape[:-1]
+    rows = x.reshape(-1, n)
+    energy = np.empty(rows.shape[0])
+    count = np.empty(rows.shape[0], dtype=np.int64)
+    step = max(1, _ENERGY_CHUNK // n)
+    for lo in range(0, rows.shape[0], step):
+        sl = slice(lo, lo + step)
+        energy[sl], count[sl] = _window_sums(rows[sl], pulse, window.fs, half)
+    return energy.reshape(batch), count.reshape(batch)
+
+
+def _window_sums(x: _F64, pulse: Pulse, fs: float, half: int) -> tuple[_F64, NDArray[np.int64]]:
+    """Σx² over [peak − half, peak + half] of rows ``x`` (n_rows, n), and the counts."""
+    n = x.shape[-1]
+    z = _analytic(x, pulse, fs)[:, :n]
+    power = z.real * z.real
+    power += z.imag * z.imag  # |z|²: the same peak as the envelope |z|
+    centre = np.argmax(power, axis=-1)
     lo = np.clip(centre - half, 0, n)
     hi = np.clip(centre + half + 1, 0, n)
-    energy = (
-        np.take_along_axis(cs, hi[..., None], -1)[..., 0]
-        - np.take_along_axis(cs, lo[..., None], -1)[..., 0]
-    )
-    return np.maximum(energy, 0.0), hi - lo
+    idx = lo[:, None] + np.arange(2 * half + 1)
+    inside = idx < hi[:, None]
+    vals = np.take_along_axis(x, np.minimum(idx, n - 1), axis=-1)
+    vals *= vals
+    vals *= inside
+    return vals.sum(axis=-1), hi - lo
 
 
 def pseudo_energy(

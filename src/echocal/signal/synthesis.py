@@ -33,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import one_of
 from echocal.errors import EchocalValueError
+from echocal.signal._kernels import horner_coefficients, kernel_transform, spread
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow, check_echoes, check_window
 
@@ -86,20 +87,66 @@ def synthesize(
     check_window(window, pulse)
     batch_shape, n_rays = amps.shape[:-1], amps.shape[-1]
     check_echoes(window, pulse, np.where(amps != 0.0, taus, np.inf))
-    a2 = amps.reshape(-1, n_rays)
-    t2 = taus.reshape(-1, n_rays)
+    out = _synthesize_2d(
+        amps.reshape(-1, n_rays), taus.reshape(-1, n_rays), pulse, window, method, normalize
+    )
+    return out.reshape((*batch_shape, window.n_samples))
+
+
+def _synthesize_unchecked(
+    amplitudes: NDArray[np.float64],
+    tofs: NDArray[np.float64],
+    pulse: Pulse,
+    window: RecordingWindow,
+    *,
+    method: str = "fast",
+    normalize: Normalize = "rays",
+) -> NDArray[np.float64]:
+    """:func:`synthesize` for arrays the caller has checked (the simulator's entry point).
+
+    ``amplitudes`` and ``tofs`` must be float64 of the same shape ``(n_batch, n_rays)``,
+    amplitudes finite, tofs finite or +inf; ``method`` and ``normalize`` valid.  Nothing
+    per ray is validated again.  The window is still checked against the pulse, and a
+    window that cannot contain any echo of the rays that hit raises as in
+    :func:`synthesize` (the fast path counts those rays while spreading them).
+
+    Returns
+    -------
+    samples : [a.u.] shape ``(n_batch, n_samples)``.
+    """
+    check_window(window, pulse)
+    if method == "direct":
+        check_echoes(window, pulse, np.where(amplitudes != 0.0, tofs, np.inf))
+    return _synthesize_2d(amplitudes, tofs, pulse, window, method, normalize, check=True)
+
+
+def _synthesize_2d(
+    amps: NDArray[np.float64],
+    taus: NDArray[np.float64],
+    pulse: Pulse,
+    window: RecordingWindow,
+    method: str,
+    normalize: Normalize,
+    *,
+    check: bool = False,
+) -> NDArray[np.float64]:
+    """Samples ``(n_batch, n_samples)`` of checked rays ``(n_batch, n_rays)``; ``check``
+    raises (via :func:`check_echoes`) when rays hit but none lies near the window."""
+    n_rays = amps.shape[-1]
     if n_rays == 0:
-        out = np.zeros((a2.shape[0], window.n_samples))
-    elif method == "direct":
-        out = _direct(a2, t2, pulse, window)
+        return np.zeros((amps.shape[0], window.n_samples))
+    if method == "direct":
+        out = _direct(amps, taus, pulse, window)
     else:
-        out = _fast(a2, t2, pulse, window)
-    if normalize == "rays" and n_rays:
+        out, n_hit, n_keep = _fast(amps, taus, pulse, window)
+        if check and n_hit and not n_keep:
+            check_echoes(window, pulse, np.where(amps != 0.0, taus, np.inf))
+    if normalize == "rays":
         out /= n_rays
     elif normalize == "peak":
         peak = np.max(np.abs(out), axis=-1, keepdims=True)
         out /= np.where(peak > 0.0, peak, 1.0)
-    return out.reshape((*batch_shape, window.n_samples))
+    return np.ascontiguousarray(out)
 
 
 def _validated_rays(
@@ -145,9 +192,9 @@ class _Plan:
     n_fft: int  # N: output-rate FFT length (window + padding)
     sigma: int  # spreading grid = sigma * N points
     width: int  # kernel width [grid points]
-    beta: float  # kernel shape
+    coefs: NDArray[np.float64]  # the kernel's tap polynomials (see _kernels)
     pad: int  # samples of padding before the window
-    transfer: NDArray[np.complex128]  # fs·W(f_k)/φ̂(ξ_k), k = 0..N/2
+    transfer: NDArray[np.complex128]  # fs·W(f_k)/K̂(ξ_k), k = 0..N/2
 
 
 def _kernel_parameters(sigma_f: float) -> tuple[int, float]:
@@ -158,59 +205,44 @@ def _kernel_parameters(sigma_f: float) -> tuple[int, float]:
     return width, beta
 
 
-def _kernel_transform(xi: NDArray[np.float64], width: int, beta: float) -> NDArray[np.float64]:
-    """φ̂(ξ) = (w/2)∫₋₁¹ exp(β(√(1−z²)−1)) cos(πξwz) dz, ξ in cycles per grid point."""
-    z, wq = np.polynomial.legendre.leggauss(4 * width + 40)
-    phi = np.exp(beta * (np.sqrt(1.0 - z * z) - 1.0)) * wq
-    return 0.5 * width * (np.cos(np.pi * width * np.outer(xi, z)) @ phi)
-
-
 @lru_cache(maxsize=32)
 def _plan(pulse: Pulse, fs: float, n_samples: int) -> _Plan:
     ratio = fs / (2.0 * pulse.highest_frequency)
     sigma = 1 if ratio >= 2.0 else 2
     width, beta = _kernel_parameters(sigma * ratio)
+    coefs = horner_coefficients(width, beta)
     pad = math.ceil(pulse.support * fs) + width + 1
     n_fft = scipy.fft.next_fast_len(n_samples + 2 * pad, real=True)
     if sigma * n_fft % 2:  # keep the spreading grid even so its rfft holds bin N/2
         n_fft = scipy.fft.next_fast_len(n_fft + 1, real=True)
     k = np.arange(n_fft // 2 + 1)
     f = k * fs / n_fft
-    phihat = _kernel_transform(k / (sigma * n_fft), width, beta)
-    transfer = fs * math.exp(-beta) * pulse.spectrum(f) / phihat
+    transfer = fs * pulse.spectrum(f) / kernel_transform(k / (sigma * n_fft), coefs)
     transfer.setflags(write=False)
-    return _Plan(n_fft, sigma, width, beta, pad, transfer)
+    return _Plan(n_fft, sigma, width, coefs, pad, transfer)
 
 
 def _fast(
     amps: NDArray[np.float64], taus: NDArray[np.float64], pulse: Pulse, window: RecordingWindow
-) -> NDArray[np.float64]:
+) -> tuple[NDArray[np.float64], int, int]:
+    """(samples (n_batch, n_samples), rays that hit, rays kept inside the window ± support)."""
     plan = _plan(pulse, window.fs, window.n_samples)
-    n_batch = amps.shape[0]
     n_grid = plan.sigma * plan.n_fft
-    t0 = window.start - plan.pad / window.fs  # time of grid point 0
     s = pulse.support
-    with np.errstate(invalid="ignore"):
-        keep = (taus > window.start - s) & (taus < window.end + s) & (amps != 0.0)
-    a = np.where(keep, amps, 0.0)
-    # grid position of each impulse; the padding keeps every kernel point inside the grid
-    u = np.where(keep, taus - t0, plan.pad / window.fs) * (plan.sigma * window.fs)
-    half = 0.5 * plan.width
-    j0 = np.ceil(u - half)
-    z = ((j0 - u) * (1.0 / half))[..., None] + np.arange(plan.width) * (1.0 / half)
-    z *= z
-    np.subtract(1.0, z, out=z)
-    np.maximum(z, 0.0, out=z)
-    np.sqrt(z, out=z)
-    z *= plan.beta
-    np.exp(z, out=z)  # φ·e^β; e^−β is folded into the transfer function
-    z *= a[..., None]
-    first = j0.astype(np.int64)
-    if n_batch > 1:
-        first += (np.arange(n_batch) * n_grid)[:, None]
-    idx = first[..., None] + np.arange(plan.width)
-    grid = np.bincount(idx.ravel(), z.ravel(), minlength=n_batch * n_grid)
-    spec = scipy.fft.rfft(grid.reshape(n_batch, n_grid), axis=-1)[:, : plan.n_fft // 2 + 1]
+    grid = np.zeros((amps.shape[0], n_grid))
+    n_hit, n_keep = spread(
+        np.ascontiguousarray(amps),
+        np.ascontiguousarray(taus),
+        t_lo=window.start - s,
+        t_hi=window.end + s,
+        t0=window.start - plan.pad / window.fs,  # time of grid point 0
+        scale=plan.sigma * window.fs,
+        coefs=plan.coefs,
+        grid=grid,
+    )
+    spec = scipy.fft.rfft(grid, axis=-1, overwrite_x=True)
+    if plan.sigma > 1:
+        spec = spec[:, : plan.n_fft // 2 + 1]
     spec *= plan.transfer
-    x = scipy.fft.irfft(spec, n=plan.n_fft, axis=-1)
-    return x[:, plan.pad : plan.pad + window.n_samples]
+    x = scipy.fft.irfft(spec, n=plan.n_fft, axis=-1, overwrite_x=True)
+    return x[:, plan.pad : plan.pad + window.n_samples], n_hit, n_keep
