@@ -210,7 +210,7 @@ def _plan(pulse: Pulse, fs: float, n_samples: int) -> _Plan:
     ratio = fs / (2.0 * pulse.highest_frequency)
     sigma = 1 if ratio >= 2.0 else 2
     width, beta = _kernel_parameters(sigma * ratio)
-    coefs = horner_coefficients(width, beta)
+    coefs = horner_coefficients(width, beta, tol=_KERNEL_TOL / 10)
     pad = math.ceil(pulse.support * fs) + width + 1
     n_fft = scipy.fft.next_fast_len(n_samples + 2 * pad, real=True)
     if sigma * n_fft % 2:  # keep the spreading grid even so its rfft holds bin N/2
