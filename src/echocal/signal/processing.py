@@ -297,12 +297,11 @@ def _window_sums(x: _F64, pulse: Pulse, fs: float, half: int) -> tuple[_F64, NDA
     centre = np.argmax(power, axis=-1)
     lo = np.clip(centre - half, 0, n)
     hi = np.clip(centre + half + 1, 0, n)
-    idx = lo[:, None] + np.arange(2 * half + 1)
-    inside = idx < hi[:, None]
-    vals = np.take_along_axis(x, np.minimum(idx, n - 1), axis=-1)
-    vals *= vals
-    vals *= inside
-    return vals.sum(axis=-1), hi - lo
+    energy = np.empty(x.shape[0])
+    for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist(), strict=True)):
+        seg = x[i, a:b]
+        energy[i] = seg @ seg  # a few dozen samples: cheaper per row than any gather
+    return energy, hi - lo
 
 
 def pseudo_energy(
