@@ -118,3 +118,14 @@ def test_bad_settings_name_the_field():
         ReceiverSettings(snr_db=float("nan"))
     with pytest.raises(KeyError, match="lambertian, specular"):
         setup(reflection="diffuse")
+
+
+def test_true_optimum_over_a_sphere_points_at_its_centre():
+    # Off-centre over a sphere the beam of maximum echo meets the surface at normal
+    # incidence: along the line from the probe to the sphere's centre (0, 0, −25 mm).
+    sim = setup("sphere", snr_db=None)
+    position = np.array([10 * MM, 0.0, 25 * MM])
+    az, coel = sim.true_optimum(position)
+    expected = position - np.array([0.0, 0.0, -25 * MM])
+    # Symmetric beam on a sphere: the echo peaks exactly there (search tol 1e-5°).
+    assert angle_between(orientation_normal(az, coel), expected) < 1e-3

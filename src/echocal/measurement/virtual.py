@@ -43,10 +43,12 @@ from echocal.geometry import (
     pose_from_angles,
     poses_to_arrays,
     tilt_frame,
+    tilt_normal,
     tilt_to_orientation,
 )
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
+from echocal.raytrace import cast
 from echocal.signal import (
     SYNTHESIS_METHODS,
     Pulse,
@@ -382,14 +384,8 @@ class VirtualSetup(BaseSource):
         return float(a), float(b)
 
     def _search_optimum(self, position: FloatArray, metric: str) -> tuple[float, float]:
-        azimuth, coelevation = self.specimen.optimal_orientation_below(position[0], position[1])
-        if not (np.isfinite(azimuth) and np.isfinite(coelevation)):
-            raise GeometryError(
-                f"no surface below position ({position[0]:g}, {position[1]:g}) m; "
-                "the optimum is undefined there"
-            )
         # Search in gimbal tilts: smooth at the pole, where most optima lie.
-        start = np.array(convert_angles(azimuth, coelevation, "azimuth-coelevation", "tilt"))
+        start = self._perpendicular_start(position)
 
         def negative(v: FloatArray) -> float:
             value = self.metric_values(position, v[0], v[1], parameterization="tilt", metric=metric)
@@ -403,6 +399,27 @@ class VirtualSetup(BaseSource):
         )
         az, coel = convert_angles(best.x[0], best.x[1], "tilt", "azimuth-coelevation")
         return float(az), float(coel)
+
+    def _perpendicular_start(self, position: FloatArray) -> FloatArray:
+        """Tilts [deg] of the beam towards the nearest surface point within ±60°.
+
+        The distance to a smooth surface is stationary where the ray meets it at
+        normal incidence, so the nearest hit of a 1° fan of rays from ``position``
+        starts the search on the main lobe — also for curved parts, where the
+        normal straight below the probe would aim at a side lobe.
+        """
+        grid = np.arange(-60.0, 60.5, 1.0)
+        tx, ty = (g.ravel() for g in np.meshgrid(grid, grid, indexing="ij"))
+        directions = -tilt_normal(tx, ty)
+        hits = cast(self.specimen, np.broadcast_to(position, directions.shape), directions)
+        if not np.any(hits.hit):
+            raise GeometryError(
+                f"no surface within 60° of straight down from position "
+                f"({position[0]:g}, {position[1]:g}, {position[2]:g}) m; "
+                "the optimum is undefined there"
+            )
+        nearest = int(np.argmin(hits.distance))
+        return np.array([tx[nearest], ty[nearest]])
 
     def true_pose(self, position: ArrayLike, **kwargs: str) -> Pose:
         """The pose of maximum echo at ``position`` (see :meth:`true_optimum`)."""
