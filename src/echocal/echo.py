@@ -161,7 +161,7 @@ def reflection_model_names() -> list[str]:
 _POSE_CHUNK_RAYS = 16384  # rays traced per chunk of poses: temporaries stay in cache
 
 
-def _check_poses(positions: ArrayLike, frames: ArrayLike) -> tuple[FloatArray, FloatArray]:
+def check_pose_arrays(positions: ArrayLike, frames: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Finite float64 positions ``(P, 3)`` and frames ``(P, 3, 3)`` (cheap: per pose, not ray)."""
     pos = finite_array("positions", positions, shape_tail=(3,)).reshape(-1, 3)
     frm = finite_array("frames", frames, shape_tail=(3, 3)).reshape(-1, 3, 3)
@@ -237,7 +237,7 @@ def echo_arrays(
     """
     reflect = lookup("reflection model", model, _MODELS)
     c0 = positive_float("sound_speed", sound_speed)
-    pos, frm = _check_poses(positions, frames)
+    pos, frm = check_pose_arrays(positions, frames)
     shapes = _as_shapes(specimen)
     n_poses, n_rays = pos.shape[0], transducer.n_rays
     amplitude = np.empty((n_poses, n_rays))
@@ -278,7 +278,7 @@ def ray_echoes(
     """
     reflect = lookup("reflection model", model, _MODELS)
     c0 = positive_float("sound_speed", sound_speed)
-    pos, frm = _check_poses(positions, frames)
+    pos, frm = check_pose_arrays(positions, frames)
     shapes = _as_shapes(specimen)
     n_poses, n_rays = pos.shape[0], transducer.n_rays
     amplitude = np.empty((n_poses, n_rays))

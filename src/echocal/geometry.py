@@ -95,11 +95,19 @@ def orientation_frame(azimuth: ArrayLike, coelevation: ArrayLike) -> FloatArray:
     theta = np.deg2rad(np.asarray(coelevation, dtype=np.float64))
     phi, theta = np.broadcast_arrays(phi, theta)
     cp, sp, ct, st = np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta)
-    zero = np.zeros_like(phi)
-    x_axis = np.stack([ct * cp, ct * sp, -st], axis=-1)  # y' × n
-    y_axis = np.stack([-sp, cp, zero], axis=-1)
-    normal = np.stack([st * cp, st * sp, ct], axis=-1)
-    return np.stack([x_axis, y_axis, normal], axis=-1)
+    frame = np.empty((*phi.shape, 3, 3))
+    frame[..., :, 0] = _columns(ct * cp, ct * sp, -st)  # x' = y' × n
+    frame[..., :, 1] = _columns(-sp, cp, 0.0)  # y'
+    frame[..., :, 2] = _columns(st * cp, st * sp, ct)  # n
+    return frame
+
+
+def _columns(x: ArrayLike, y: ArrayLike, z: ArrayLike) -> FloatArray:
+    """Stack three broadcastable components into vectors on a new last axis."""
+    x, y, z = np.broadcast_arrays(x, y, z)
+    out = np.empty((*x.shape, 3))
+    out[..., 0], out[..., 1], out[..., 2] = x, y, z
+    return out
 
 
 def tilt_normal(tilt_x: ArrayLike, tilt_y: ArrayLike) -> FloatArray:
@@ -121,11 +129,11 @@ def tilt_frame(tilt_x: ArrayLike, tilt_y: ArrayLike) -> FloatArray:
     b = np.deg2rad(np.asarray(tilt_y, dtype=np.float64))
     a, b = np.broadcast_arrays(a, b)
     ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
-    zero = np.zeros_like(a)
-    col_x = np.stack([cb, zero, -sb], axis=-1)
-    col_y = np.stack([sb * sa, ca, cb * sa], axis=-1)
-    col_z = np.stack([sb * ca, -sa, cb * ca], axis=-1)
-    return np.stack([col_x, col_y, col_z], axis=-1)
+    frame = np.empty((*a.shape, 3, 3))
+    frame[..., :, 0] = _columns(cb, 0.0, -sb)
+    frame[..., :, 1] = _columns(sb * sa, ca, cb * sa)
+    frame[..., :, 2] = _columns(sb * ca, -sa, cb * ca)
+    return frame
 
 
 def _unit(name: str, vectors: ArrayLike) -> FloatArray:

@@ -32,7 +32,13 @@ from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, lookup, one_of, positive_float
 from echocal.ascan import AScan
 from echocal.constants import SOUND_SPEED_WATER
-from echocal.echo import RayEchoes, echo_arrays, ray_echoes, reflection_model_names
+from echocal.echo import (
+    RayEchoes,
+    check_pose_arrays,
+    echo_arrays,
+    ray_echoes,
+    reflection_model_names,
+)
 from echocal.errors import EchocalValueError, GeometryError
 from echocal.geometry import (
     PARAMETERIZATIONS,
@@ -202,14 +208,7 @@ class VirtualSetup(BaseSource):
         positions : [m] shape ``(n_poses, 3)``.
         frames : transducer frames ``[x', y', n]``, shape ``(n_poses, 3, 3)``.
         """
-        positions = finite_array("positions", positions, shape_tail=(3,)).reshape(-1, 3)
-        frames = finite_array("frames", frames, shape_tail=(3, 3)).reshape(-1, 3, 3)
-        if positions.shape[0] != frames.shape[0]:
-            raise EchocalValueError(
-                f"positions and frames must hold the same number of poses; got "
-                f"{positions.shape[0]} and {frames.shape[0]}"
-            )
-        return self._ideal(positions, frames)
+        return self._ideal(*check_pose_arrays(positions, frames))
 
     def _ideal(self, positions: FloatArray, frames: FloatArray) -> FloatArray:
         """:meth:`ideal_samples` of checked arrays, in cache-sized chunks of poses."""
@@ -246,8 +245,7 @@ class VirtualSetup(BaseSource):
         ``noise=False`` gives the ideal A-scans.  Noise draws from ``rng`` if given,
         else from the setup's own generator.
         """
-        positions, frames = poses_to_arrays(list(poses))
-        samples = self.ideal_samples(positions, frames)
+        samples = self._ideal(*poses_to_arrays(list(poses)))  # Pose values are already finite
         if noise:
             generator = self._generator if rng is None else as_generator(rng)
             samples = self._receiver.receive(samples, generator)
