@@ -53,7 +53,12 @@ def test_tilt_parameterization_measures_the_same_beam(sim):
 
 def test_default_bounds_follow_the_limits(sim):
     np.testing.assert_allclose(default_bounds(sim, "azimuth-coelevation"), [[-180, 180], [-20, 20]])
-    np.testing.assert_allclose(default_bounds(sim, "tilt"), [[-20, 20], [-20, 20]])
+    half = default_bounds(sim, "tilt")[0, 1]
+    assert default_bounds(sim, "tilt").tolist() == [[-half, half], [-half, half]]
+    # The box's corner lies exactly on the 20° co-elevation cone (every tilt reachable).
+    corner = Pose.from_tilt(*POSITION, half, half)
+    assert corner.coelevation == pytest.approx(20.0, abs=1e-9)
+    assert sim.limits.contains(corner.with_orientation(corner.azimuth, corner.coelevation - 1e-9))
 
 
 class _NaNSource(BaseSource):

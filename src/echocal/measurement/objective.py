@@ -27,13 +27,15 @@ __all__ = ["SourceObjective", "ascan_metric", "default_bounds"]
 def default_bounds(source: MeasurementSource, parameterization: str) -> np.ndarray:
     """Angle bounds [deg], shape (2, 2), from the source's positioner limits.
 
-    For (azimuth, co-elevation) these are the limits themselves; for tilts, the
-    largest tilt box inside the co-elevation cone: |tilt| <= max |co-elevation|.
+    For (azimuth, co-elevation) these are the limits themselves.  For tilts, the
+    largest square tilt box inside the co-elevation cone θ_max: its corner (h, h)
+    is arccos(cos² h) from vertical, so h = arccos(√cos θ_max) (21.4° for 30°).
     """
     limits = source.limits
     if parameterization == "tilt":
-        cone = max(abs(limits.coelevation[0]), abs(limits.coelevation[1]))
-        return np.array([[-cone, cone], [-cone, cone]])
+        cone = min(max(abs(limits.coelevation[0]), abs(limits.coelevation[1])), 90.0)
+        half = float(np.rad2deg(np.arccos(np.sqrt(np.cos(np.deg2rad(cone))))))
+        return np.array([[-half, half], [-half, half]])
     return np.array([limits.azimuth, limits.coelevation], dtype=np.float64)
 
 
