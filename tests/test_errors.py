@@ -29,16 +29,3 @@ def test_unknown_name_prints_plain_message():
     assert str(errors.UnknownNameError("unknown pulse 'x'; choose one of: a, b")) == (
         "unknown pulse 'x'; choose one of: a, b"
     )
-
-
-def test_atomic_files_follow_the_umask(tmp_path):
-    import os
-
-    from echocal.io import atomic_write_text
-
-    umask = os.umask(0o022)
-    try:
-        atomic_write_text(tmp_path / "a.txt", "x")
-    finally:
-        os.umask(umask)
-    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
