@@ -23,6 +23,7 @@ from typing import Any
 
 import pandas as pd
 
+from echocal._progress import ProgressBar
 from echocal._validate import positive_int
 from echocal.errors import EchocalValueError
 from echocal.experiments import storage
@@ -135,10 +136,10 @@ def run_sweep(
         n = DEFAULT_WORKERS if workers is None else positive_int("workers", workers)
         outcomes, close = _local_outcomes(todo, n)
     try:
-        with _progress_bar(spec.name, len(cases), len(cases) - len(todo), progress) as advance:
+        with _SweepBar(spec.name, len(cases), len(cases) - len(todo), progress) as bar:
             for row, history in outcomes:
                 storage.write_part(out_dir, row, history)
-                advance(failed=row["status"] == FAILED)
+                bar.advance(failed=row["status"] == FAILED)
                 if callback is not None:
                     callback(row)
     finally:
@@ -207,49 +208,25 @@ def _dask_outcomes(
     return results(), close
 
 
-class _progress_bar:
-    """Context manager yielding ``advance(failed=...)``; a rich bar with ETA if enabled."""
+class _SweepBar(ProgressBar):
+    """The sweep's bar: ``sweep NAME`` in bold, runs counted, failures shown in red."""
 
     def __init__(self, name: str, total: int, completed: int, enabled: bool) -> None:
-        self.name, self.total, self.completed, self.enabled = name, total, completed, enabled
+        resumed = f" (resumed: {completed} done)" if completed else ""
+        super().__init__(
+            "[bold]{task.description}",
+            total=total,
+            completed=completed,
+            enabled=enabled,
+            description=f"sweep {name}{resumed}",
+            unit="runs",
+        )
+        self.name = name
         self.failed = 0
 
-    def __enter__(self) -> Callable[..., None]:
-        if not self.enabled:
-            return lambda failed=False: None
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        self.bar = Progress(
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("runs"),
-            TimeElapsedColumn(),
-            TextColumn("ETA"),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-        )
-        self.bar.start()
-        resumed = f" (resumed: {self.completed} done)" if self.completed else ""
-        self.task = self.bar.add_task(
-            f"sweep {self.name}{resumed}", total=self.total, completed=self.completed
-        )
-        return self._advance
-
-    def _advance(self, failed: bool = False) -> None:
+    def advance(self, failed: bool = False) -> None:
+        """One more run done (``failed``: it failed)."""
         self.failed += bool(failed)
         if self.failed:
-            self.bar.update(self.task, description=f"sweep {self.name} [red]{self.failed} failed")
-        self.bar.advance(self.task)
-
-    def __exit__(self, *exc: object) -> None:
-        if self.enabled:
-            self.bar.stop()
+            self.describe(f"sweep {self.name} [red]{self.failed} failed")
+        super().advance()

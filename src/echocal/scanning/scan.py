@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from echocal._progress import ProgressBar
 from echocal._rng import RngLike, as_generator
 from echocal._validate import nonnegative_float, one_of, positive_float, positive_int
 from echocal.calibrate import calibrate, method_names
@@ -120,13 +121,16 @@ def _score(rec: Mapping[str, Any]) -> tuple[bool, float]:
 
 
 def _relative_check(rec: dict[str, Any], ctx: _Context, snr_ref: float) -> dict[str, Any]:
-    """Demote a found point whose echo is far weaker than the scan's strong echoes (90th percentile)."""
+    """Demote a found point whose echo is far weaker than the scan's strong echoes.
+
+    Strong: the scan's 90th-percentile echo ``snr_ref``.
+    """
     if rec["status"] == 0 and rec["snr"] < ctx.relative_snr * snr_ref:
         rec = {
             **rec,
             "status": STATUS["weak-echo"],
-            "message": f"echo {rec['snr']:.3g} < {ctx.relative_snr:g} x the scan's 90th-percentile echo "
-            f"{snr_ref:.3g}: a side lobe or a partial footprint",
+            "message": f"echo {rec['snr']:.3g} < {ctx.relative_snr:g} x the scan's "
+            f"90th-percentile echo {snr_ref:.3g}: a side lobe or a partial footprint",
         }
     return rec
 
@@ -388,7 +392,7 @@ def scan_surface(
     }
     radius = 2.5 * grid.spacing
     t_start = time.perf_counter()
-    with _ProgressBar(progress, len(order), resumed) as advance:
+    with ProgressBar("scan", total=len(order), completed=resumed, enabled=progress) as bar:
         for i, key in enumerate(order):
             if key in records:
                 continue
@@ -403,7 +407,7 @@ def scan_surface(
                 found[key] = np.array([rec["a"], rec["b"]])
             if store is not None:
                 store.append(rec)
-            advance()
+            bar.advance()
             if on_point is not None:
                 on_point(len(records), len(order))
         # second look at suspicious points, warm from their trusted neighbours
@@ -463,41 +467,3 @@ def scan_surface(
         result.save(out)
         store.remove()
     return result
-
-
-class _ProgressBar:
-    """A rich progress bar with ETA (stderr), or nothing."""
-
-    def __init__(self, enabled: bool, total: int, completed: int) -> None:
-        self.enabled, self.total, self.completed = enabled, total, completed
-        self._bar: Any = None
-
-    def __enter__(self) -> Callable[[], None]:
-        if not self.enabled:
-            return lambda: None
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        self._bar = Progress(
-            TextColumn("scan"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            TextColumn("ETA"),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-        )
-        self._bar.__enter__()
-        task = self._bar.add_task("scan", total=self.total, completed=self.completed)
-        return lambda: self._bar.advance(task)
-
-    def __exit__(self, *exc: object) -> None:
-        if self._bar is not None:
-            self._bar.__exit__(*exc)
