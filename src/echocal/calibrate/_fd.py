@@ -57,3 +57,12 @@ def cap_step(step: FloatArray, max_step: float | None) -> FloatArray:
         return step
     norm = float(np.hypot(*step))
     return step * (max_step / norm) if norm > max_step else step
+
+
+def trapezoid_rise(g_old: FloatArray, g_new: FloatArray, step: FloatArray) -> float:
+    """Trapezoid estimate ½(ĝ_old + ĝ_new)ᵀs of f(θ + s) − f(θ) [energy units].
+
+    g_old, g_new : gradients, shape (2,), at θ and θ + s; step : s [deg], shape (2,).
+    Exact for quadratics; Newton and quasi-Newton reject a candidate with a negative rise.
+    """
+    return 0.5 * float((g_old + g_new) @ step)

@@ -22,7 +22,13 @@ from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
 from echocal._validate import one_of, positive_float
-from echocal.calibrate._fd import FloatArray, cap_step, nine_gradient_hessian, nine_points
+from echocal.calibrate._fd import (
+    FloatArray,
+    cap_step,
+    nine_gradient_hessian,
+    nine_points,
+    trapezoid_rise,
+)
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 
@@ -109,7 +115,7 @@ class Newton(Optimizer):
         if self._state is not None:
             y_old, g_old, _h_old = self._state
             s = self._candidate - self._iterate
-            if y0 < y_old and 0.5 * float((g_old + g) @ s) < 0.0:
+            if y0 < y_old and trapezoid_rise(g_old, g, s) < 0.0:
                 self.n_rejected += 1
                 half = 0.5 * float(np.hypot(*s))
                 self._step = cap_step(s, half)

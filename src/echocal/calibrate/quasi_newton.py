@@ -24,7 +24,13 @@ from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
 from echocal._validate import positive_float
-from echocal.calibrate._fd import FloatArray, cap_step, cross_gradient, cross_points
+from echocal.calibrate._fd import (
+    FloatArray,
+    cap_step,
+    cross_gradient,
+    cross_points,
+    trapezoid_rise,
+)
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 
@@ -117,7 +123,7 @@ class QuasiNewton(Optimizer):
             self.n_skipped += 1
         else:
             self.hess = new
-        if 0.5 * float((self._g + g) @ s) < 0.0:
+        if trapezoid_rise(self._g, g, s) < 0.0:
             self.n_rejected += 1
             self._limit = 0.5 * float(np.hypot(*s))
         else:
