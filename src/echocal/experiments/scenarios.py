@@ -167,6 +167,54 @@ def run_scenario(
     return scenario.run(scenario, out, quick=quick, seed=seed, progress=progress)
 
 
+def _finish(
+    scenario: Scenario,
+    out: Path,
+    *,
+    t0: float,
+    setup: str,
+    quick: bool,
+    seeds: Sequence[int],
+    findings: Sequence[Finding],
+    notes: Sequence[str],
+    runs: pd.DataFrame,
+    summary: pd.DataFrame | None,
+    tables: dict[str, pd.DataFrame],
+    files: list[Path],
+    figures: dict[str, list[Path]],
+) -> ScenarioResult:
+    """Write ``findings.json`` and ``summary.md``; the result with every file written.
+
+    t0 : [s] ``time.perf_counter()`` at the start (the wall time ends before the summary);
+    files : the tables written so far; figures : the figures written, by caption.
+    """
+    wall = time.perf_counter() - t0
+    files = files + write_summary(
+        out,
+        scenario=scenario.name,
+        title=scenario.title,
+        thesis=scenario.thesis,
+        description=scenario.description,
+        setup=setup,
+        quick=quick,
+        seeds=seeds,
+        findings=findings,
+        notes=notes,
+        tables=tables,
+        figures=figures,
+        wall_time=wall,
+    )
+    return ScenarioResult(
+        name=scenario.name,
+        out_dir=out,
+        findings=tuple(findings),
+        runs=runs,
+        summary=summary,
+        files=tuple(files + [p for v in figures.values() for p in v]),
+        wall_time=wall,
+    )
+
+
 # ------------------------------------------------------------------ A-scan scenarios
 def _run_ascans(
     scenario: Scenario,
@@ -211,13 +259,10 @@ def _run_ascans(
         | {label: row for label, row in zip(labels, samples, strict=True)}
     )
     files = write_table(table, out, "ascans") + write_table(samples_frame, out, "ascan_samples")
-    wall = time.perf_counter() - t0
-    files += write_summary(
+    result = _finish(
+        scenario,
         out,
-        scenario=scenario.name,
-        title=scenario.title,
-        thesis=scenario.thesis,
-        description=scenario.description,
+        t0=t0,
         setup=setup.description,
         quick=quick,
         seeds=[seed],
@@ -226,21 +271,15 @@ def _run_ascans(
             "Each pose points along the true optimum of its point (normal to the facet below).",
             "Expected times of flight from the closed-form facet planes, τ = 2d/c₀ (eq. 24).",
         ],
+        runs=table,
+        summary=None,
         tables={"ascans": table},
+        files=files,
         figures=figures,
-        wall_time=wall,
     )
     if progress:
         progress(3, 3)
-    return ScenarioResult(
-        name=scenario.name,
-        out_dir=out,
-        findings=(finding,),
-        runs=table,
-        summary=None,
-        files=tuple(files + [p for v in figures.values() for p in v]),
-        wall_time=wall,
-    )
+    return result
 
 
 # ------------------------------------------------------------------ table scenarios
@@ -633,7 +672,6 @@ def _run_table(
         group_summary = summary[summary["group"] == group].reset_index(drop=True)
         findings += [check(group_summary, group) for check in checks]
     files = write_table(runs, out, "runs") + write_table(summary, out, "summary")
-    wall = time.perf_counter() - t0
     shown = [
         "group",
         "label",
@@ -646,12 +684,10 @@ def _run_table(
         "final_metric_rel",
         "oscillations",
     ]
-    files += write_summary(
+    return _finish(
+        scenario,
         out,
-        scenario=scenario.name,
-        title=scenario.title,
-        thesis=scenario.thesis,
-        description=scenario.description,
+        t0=t0,
         setup=f"{bench.setup.description}; position (10, 0, 22) mm; truth "
         f"({truth[0]:.2f}°, {truth[1]:.2f}°) in (azimuth, co-elevation); x0 (0, 0) unless "
         "varied; 30 iterations",
@@ -659,18 +695,11 @@ def _run_table(
         seeds=seeds,
         findings=findings,
         notes=spec.notes,
-        tables={"summary": summary[shown]},
-        figures=figures,
-        wall_time=wall,
-    )
-    return ScenarioResult(
-        name=scenario.name,
-        out_dir=out,
-        findings=tuple(findings),
         runs=runs,
         summary=summary,
-        files=tuple(files + [p for v in figures.values() for p in v]),
-        wall_time=wall,
+        tables={"summary": summary[shown]},
+        files=files,
+        figures=figures,
     )
 
 
