@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -39,12 +40,23 @@ def _extent(scan: SurfaceScan) -> list[float]:
     return [x[0] - dx, x[-1] + dx, y[0] - dy, y[-1] + dy]
 
 
-def _image(fig: Figure, ax: object, scan: SurfaceScan, values: NDArray, label: str, **kw) -> None:
+def _image(
+    fig: Figure,
+    ax: object,
+    scan: SurfaceScan,
+    values: NDArray,
+    label: str,
+    *,
+    mark_missing: bool = True,
+    **kw,
+) -> None:
+    """``values`` shape (n_y, n_x) as an image in mm with a colour bar ``label``; the points
+    not found marked ×, unless ``mark_missing`` is False."""
     im = ax.imshow(  # type: ignore[attr-defined]
         np.ma.masked_invalid(values), origin="lower", extent=_extent(scan), **kw
     )
     missing = ~scan.found
-    if np.any(missing):
+    if mark_missing and np.any(missing):
         xx, yy = np.meshgrid(scan.dataset["x"].values * _MM, scan.dataset["y"].values * _MM)
         ax.plot(xx[missing], yy[missing], "x", color="0.4", ms=4, label="missing")  # type: ignore[attr-defined]
         ax.legend(loc="upper right", fontsize="small")  # type: ignore[attr-defined]
@@ -54,24 +66,35 @@ def _image(fig: Figure, ax: object, scan: SurfaceScan, values: NDArray, label: s
     fig.colorbar(im, ax=ax, label=label)
 
 
-def height_map_figure(scan: SurfaceScan) -> Figure:
-    """Measured surface height z [mm] per probe position."""
+def _map_figure(
+    scan: SurfaceScan, values: NDArray, label: str, title: str, **kw
+) -> tuple[Figure, Any]:
+    """One map of ``values`` (see :func:`_image`) titled ``title``; the figure and its axes."""
     fig = Figure(figsize=(5.5, 4.5), layout="constrained")
     ax = fig.add_subplot()
-    _image(fig, ax, scan, scan.dataset["surface_z"].values * _MM, "surface z [mm]", cmap="viridis")
-    ax.set_title("surface height")
-    return fig
+    _image(fig, ax, scan, values, label, **kw)
+    ax.set_title(title)
+    return fig, ax
+
+
+def height_map_figure(scan: SurfaceScan) -> Figure:
+    """Measured surface height z [mm] per probe position."""
+    z = scan.dataset["surface_z"].values * _MM
+    return _map_figure(scan, z, "surface z [mm]", "surface height", cmap="viridis")[0]
 
 
 def normal_map_figure(scan: SurfaceScan) -> Figure:
     """Surface normals: co-elevation [deg] as colour, the normal's x–y part as arrows."""
     ds = scan.dataset
-    fig = Figure(figsize=(5.5, 4.5), layout="constrained")
-    ax = fig.add_subplot()
-    _image(fig, ax, scan, ds["coelevation"].values, "co-elevation [deg]", cmap="magma")
+    fig, ax = _map_figure(
+        scan,
+        ds["coelevation"].values,
+        "co-elevation [deg]",
+        "surface normal (arrows: n_x, n_y)",
+        cmap="magma",
+    )
     xx, yy = np.meshgrid(ds["x"].values * _MM, ds["y"].values * _MM)
     ax.quiver(xx, yy, ds["normal_x"].values, ds["normal_y"].values, color="white", pivot="mid")
-    ax.set_title("surface normal (arrows: n_x, n_y)")
     return fig
 
 
@@ -95,21 +118,13 @@ def error_maps_figure(scan: SurfaceScan) -> Figure:
 
 def measurements_figure(scan: SurfaceScan) -> Figure:
     """Measurements (A-scans) used per point."""
-    ds = scan.dataset
-    fig = Figure(figsize=(5.5, 4.5), layout="constrained")
-    ax = fig.add_subplot()
-    im = ax.imshow(
-        ds["n_measurements"].values, origin="lower", extent=_extent(scan), cmap="cividis"
-    )
-    fig.colorbar(im, ax=ax, label="measurements")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_aspect("equal")
     s = scan.summary
-    ax.set_title(
+    title = (
         f"measurements per point (total {s['measurements_total']}, "
         f"mean {s['measurements_per_point']:.1f})"
     )
+    values = scan.dataset["n_measurements"].values
+    fig, _ = _map_figure(scan, values, "measurements", title, mark_missing=False, cmap="cividis")
     return fig
 
 
