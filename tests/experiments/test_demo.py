@@ -23,8 +23,8 @@ def test_demo_quick_end_to_end(tmp_path):
         "thesis presets (Table 7)",
         "echocal automatic gains",
     ]
-    # the sweep summary covers every configuration of quick.toml: 3 methods x 2 SNRs
-    assert len(result.sweep_summary) == 6
+    # the sweep summary covers every configuration of quick.toml: 4 methods x 2 SNRs
+    assert len(result.sweep_summary) == 8
     # an existing demo folder is never overwritten silently (Python and CLI)
     with pytest.raises(DataFileError, match="already holds results"):
         run_demo(out, quick=True, progress=False)

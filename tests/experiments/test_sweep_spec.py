@@ -77,7 +77,7 @@ def test_units_and_noiseless():
 def test_builtin_quick_sweep():
     assert "quick" in builtin_sweep_names()
     spec = load_sweep("quick")
-    assert len(expand(spec)) == 3 * 2 * 5  # 3 methods × 2 SNRs × 5 seeds, one start kind
+    assert len(expand(spec)) == 4 * 2 * 5  # 4 methods × 2 SNRs × 5 seeds, one start kind
 
 
 def test_unknown_method_lists_valid_ones():
