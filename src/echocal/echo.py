@@ -16,6 +16,12 @@ from one small matrix product per block of poses (``Transducer._rays_soa``), are
 cast without re-validation or transposes (``raytrace._cast_soa``), and are traced
 in chunks of about 16k rays so that the temporaries stay in the CPU cache.
 
+For the ``lambertian`` model on specimens whose shapes all provide
+``Shape._kernel_params`` (planes and spheres), rays, closest hits, amplitudes and times
+of flight come from one compiled pass over the rays (:func:`_lambertian_loops`, numba)
+with no temporaries; other specimens and models, and installs without numba, take the
+numpy path, which gives the same values to round-off.
+
 Models (registry :func:`reflection_model_names`):
 
 ``lambertian`` (thesis §2.2.1)
@@ -32,17 +38,21 @@ Models (registry :func:`reflection_model_names`):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from echocal._numba import compiled
 from echocal._validate import finite_array, lookup, positive_float
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import EchocalValueError
 from echocal.raytrace import Hits, _as_shapes, _cast_soa, _hit_points
 from echocal.specimen import Shape, Specimen
+from echocal.specimen.base import GRAZING_COS, KERNEL_PARAMS, KERNEL_PLANE, KERNEL_SPHERE
 from echocal.transducer import Transducer
 
 __all__ = [
@@ -153,6 +163,11 @@ def _specular(rays: _Rays, transducer: Transducer) -> tuple[FloatArray, FloatArr
 _MODELS: dict[str, ReflectionModel] = {"lambertian": _lambertian, "specular": _specular}
 
 
+def _reflection_model(name: str) -> ReflectionModel:
+    """The model registered as ``name``; an unknown name lists the valid ones."""
+    return lookup("reflection model", name, _MODELS)
+
+
 def reflection_model_names() -> list[str]:
     """Names accepted by :func:`ray_echoes` (``lambertian``, ``specular``)."""
     return sorted(_MODELS)
@@ -211,6 +226,193 @@ def _pose_chunk(n_rays: int) -> int:
     return max(1, _POSE_CHUNK_RAYS // max(n_rays, 1))
 
 
+# --- fused lambertian kernel (numba) -----------------------------------------------------
+
+
+@lru_cache(maxsize=64)
+def _kernel_table(shapes: tuple[Shape, ...]) -> tuple[NDArray[np.int64], FloatArray] | None:
+    """Codes ``(S,)`` and parameters ``(S, KERNEL_PARAMS)`` of the shapes, or None if any
+    shape has no compiled intersection (then the generic path is used)."""
+    entries = [s._kernel_params() for s in shapes]
+    if any(e is None for e in entries):
+        return None
+    codes = np.array([e[0] for e in entries], dtype=np.int64)  # type: ignore[index]
+    params = np.zeros((len(entries), KERNEL_PARAMS))
+    for i, e in enumerate(entries):
+        params[i] = e[1]  # type: ignore[index]
+    codes.setflags(write=False)
+    params.setflags(write=False)
+    return codes, params
+
+
+def _lambertian_loops(pixels, dirs, weights, positions, frames, codes, params, c0, amp, tof):
+    """Fire, cast and reflect (lambertian) every ray of every pose in one pass.
+
+    The arithmetic of ``Transducer._rays_soa``, the shapes' ``_intersect_soa`` and
+    :func:`_lambertian`, ray by ray: pixels ``(3, N)`` ([u; v; 1]), local directions
+    ``(3, N)``, directivity weights ``(N,)``, positions ``(P, 3)``, frames ``(P, 3, 3)``,
+    shape codes ``(S,)`` and parameters ``(S, KERNEL_PARAMS)``, c₀ [m/s]; writes
+    amplitude and τ [s] ``(P, N)``.  Returns 1 if a frame maps a ray to the zero vector
+    (nothing is valid then), else 0.
+    """
+    n_poses = positions.shape[0]
+    n_rays = pixels.shape[1]
+    n_shapes = codes.shape[0]
+    for p in range(n_poses):
+        f = frames[p]  # a view per pose; per ray, no views are made
+        unit = True  # orthonormal frame: rotated unit directions stay unit
+        for i in range(3):
+            for j in range(3):
+                g = f[0, i] * f[0, j] + f[1, i] * f[1, j] + f[2, i] * f[2, j]
+                if abs(g - (1.0 if i == j else 0.0)) > 1e-14:
+                    unit = False
+        f00, f01, f02 = f[0, 0], f[0, 1], f[0, 2]
+        f10, f11, f12 = f[1, 0], f[1, 1], f[1, 2]
+        f20, f21, f22 = f[2, 0], f[2, 1], f[2, 2]
+        cx, cy, cz = positions[p, 0], positions[p, 1], positions[p, 2]
+        for n in range(n_rays):
+            u = pixels[0, n]
+            v = pixels[1, n]
+            ox = f00 * u + f01 * v + cx
+            oy = f10 * u + f11 * v + cy
+            oz = f20 * u + f21 * v + cz
+            du = dirs[0, n]
+            dv = dirs[1, n]
+            dn = dirs[2, n]
+            dx = f00 * du + f01 * dv + f02 * dn
+            dy = f10 * du + f11 * dv + f12 * dn
+            dz = f20 * du + f21 * dv + f22 * dn
+            if not unit:
+                norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+                if norm == 0.0:
+                    return 1
+                dx /= norm
+                dy /= norm
+                dz /= norm
+            best = np.inf
+            cos = 0.0
+            for s in range(n_shapes):
+                t = np.inf
+                c = 0.0
+                if codes[s] == KERNEL_PLANE:
+                    sx = params[s, 0] * ox + params[s, 1] * oy + params[s, 2] * oz - params[s, 9]
+                    sy = params[s, 3] * ox + params[s, 4] * oy + params[s, 5] * oz - params[s, 10]
+                    sz = params[s, 6] * ox + params[s, 7] * oy + params[s, 8] * oz - params[s, 11]
+                    ndd = params[s, 6] * dx + params[s, 7] * dy + params[s, 8] * dz
+                    if abs(ndd) > GRAZING_COS:
+                        tt = -(sz / ndd)
+                        if tt > params[s, 14]:
+                            m0 = (
+                                tt * (params[s, 0] * dx + params[s, 1] * dy + params[s, 2] * dz)
+                                + sx
+                            )
+                            m1 = (
+                                tt * (params[s, 3] * dx + params[s, 4] * dy + params[s, 5] * dz)
+                                + sy
+                            )
+                            if abs(m0) <= params[s, 12] and abs(m1) <= params[s, 13]:
+                                t = tt
+                                c = ndd if ndd < 0.0 else -ndd  # n facing the ray: n·d <= 0
+                elif codes[s] == KERNEL_SPHERE:
+                    r = params[s, 3]
+                    fx = ox - params[s, 0]
+                    fy = oy - params[s, 1]
+                    fz = oz - params[s, 2]
+                    b = fx * dx + fy * dy + fz * dz
+                    px = fx - b * dx
+                    py = fy - b * dy
+                    pz = fz - b * dz
+                    disc = r * r - (px * px + py * py + pz * pz)
+                    if disc >= 0.0:
+                        root = math.sqrt(disc)
+                        cc = (fx * fx + fy * fy + fz * fz) - r * r
+                        qq = -b - (root if b >= 0.0 else -root)
+                        t2 = cc / qq if qq != 0.0 else 0.0
+                        lo = min(qq, t2)
+                        hi = max(qq, t2)
+                        if lo > params[s, 4]:
+                            t = lo
+                        elif hi > params[s, 4]:
+                            t = hi
+                        if t < np.inf:
+                            nx = (fx + t * dx) / r
+                            ny = (fy + t * dy) / r
+                            nz = (fz + t * dz) / r
+                            nn = max(math.sqrt(nx * nx + ny * ny + nz * nz), 1e-300)
+                            nd = (nx * dx + ny * dy + nz * dz) / nn
+                            c = -nd if nd > 0.0 else nd
+                if t < best:
+                    best = t
+                    cos = c
+            if best < np.inf:
+                cos = min(max(-cos, 0.0), 1.0)
+                amp[p, n] = cos * weights[n]
+            else:
+                amp[p, n] = 0.0
+            tof[p, n] = (2.0 * best) / c0
+    return 0
+
+
+def _fused_lambertian(
+    transducer: Transducer,
+    shapes: tuple[Shape, ...],
+    positions: FloatArray,
+    frames: FloatArray,
+    c0: float,
+) -> tuple[FloatArray, FloatArray] | None:
+    """Amplitude and τ ``(P, N)`` from the compiled kernel, or None where it does not apply
+    (numba missing, or a shape without ``_kernel_params``)."""
+    table = _kernel_table(shapes) if shapes else None
+    if table is None:
+        return None
+    kernel = compiled(_lambertian_loops)
+    if kernel is None:
+        return None
+    n_poses, n_rays = positions.shape[0], transducer.n_rays
+    amplitude = np.empty((n_poses, n_rays))
+    tof = np.empty((n_poses, n_rays))
+    status = kernel(
+        transducer._pixels_h,  # type: ignore[attr-defined]
+        transducer._dirs_soa,  # type: ignore[attr-defined]
+        transducer.weights,
+        positions,
+        frames,
+        table[0],
+        table[1],
+        c0,
+        amplitude,
+        tof,
+    )
+    if status:
+        raise EchocalValueError("frames must not map a ray direction to the zero vector")
+    return amplitude, tof
+
+
+def _echo_arrays_unchecked(
+    transducer: Transducer,
+    shapes: tuple[Shape, ...],
+    pos: FloatArray,
+    frm: FloatArray,
+    reflect: ReflectionModel,
+    c0: float,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`echo_arrays` of checked float64 ``(P, 3)``, ``(P, 3, 3)`` arrays (no copies)."""
+    if reflect is _lambertian:
+        fused = _fused_lambertian(transducer, shapes, pos, frm, c0)
+        if fused is not None:
+            return fused
+    n_poses, n_rays = pos.shape[0], transducer.n_rays
+    amplitude = np.empty((n_poses, n_rays))
+    tof = np.empty((n_poses, n_rays))
+    step = _pose_chunk(n_rays)
+    for lo in range(0, n_poses, step):
+        sl = slice(lo, lo + step)
+        amp, path = reflect(_trace(transducer, shapes, pos[sl], frm[sl]), transducer)
+        amplitude[sl] = amp
+        np.divide(path, c0, out=tof[sl])
+    return amplitude, tof
+
+
 def echo_arrays(
     transducer: Transducer,
     specimen: Specimen,
@@ -238,17 +440,7 @@ def echo_arrays(
     reflect = lookup("reflection model", model, _MODELS)
     c0 = positive_float("sound_speed", sound_speed)
     pos, frm = check_pose_arrays(positions, frames)
-    shapes = _as_shapes(specimen)
-    n_poses, n_rays = pos.shape[0], transducer.n_rays
-    amplitude = np.empty((n_poses, n_rays))
-    tof = np.empty((n_poses, n_rays))
-    step = _pose_chunk(n_rays)
-    for lo in range(0, n_poses, step):
-        sl = slice(lo, lo + step)
-        amp, path = reflect(_trace(transducer, shapes, pos[sl], frm[sl]), transducer)
-        amplitude[sl] = amp
-        np.divide(path, c0, out=tof[sl])
-    return amplitude, tof
+    return _echo_arrays_unchecked(transducer, _as_shapes(specimen), pos, frm, reflect, c0)
 
 
 def ray_echoes(
@@ -288,16 +480,20 @@ def ray_echoes(
     normal = np.empty((3, n_poses, n_rays))
     index = np.empty((n_poses, n_rays), dtype=np.int64)
     step = _pose_chunk(n_rays)
+    fused = _fused_lambertian(transducer, shapes, pos, frm, c0) if reflect is _lambertian else None
     for lo in range(0, n_poses, step):
         sl = slice(lo, lo + step)
         rays = _trace(transducer, shapes, pos[sl], frm[sl])
-        amp, path = reflect(rays, transducer)
-        amplitude[sl] = amp
-        np.divide(path, c0, out=tof[sl])
+        if fused is None:
+            amp, path = reflect(rays, transducer)
+            amplitude[sl] = amp
+            np.divide(path, c0, out=tof[sl])
         distance[sl] = rays.distance
         point[:, sl] = _hit_points(rays.origins, rays.directions, rays.distance)
         normal[:, sl] = rays.normal
         index[sl] = rays.shape_index
+    if fused is not None:  # the same amplitudes and τ as echo_arrays, bit for bit
+        amplitude, tof = fused
     hits = Hits(  # (3, P, N) -> (P, N, 3) as transposed views (no copy)
         distance=distance,
         point=point.transpose(1, 2, 0),

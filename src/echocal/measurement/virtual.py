@@ -34,8 +34,9 @@ from echocal.ascan import AScan
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.echo import (
     RayEchoes,
+    _echo_arrays_unchecked,
+    _reflection_model,
     check_pose_arrays,
-    echo_arrays,
     ray_echoes,
     reflection_model_names,
 )
@@ -54,7 +55,7 @@ from echocal.geometry import (
 )
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
-from echocal.raytrace import cast
+from echocal.raytrace import _as_shapes, cast
 from echocal.signal import (
     SYNTHESIS_METHODS,
     Pulse,
@@ -221,15 +222,16 @@ class VirtualSetup(BaseSource):
         return out
 
     def _ideal_chunk(self, positions: FloatArray, frames: FloatArray) -> FloatArray:
-        amplitude, tof = echo_arrays(
+        # checked float64 pose arrays, model and c₀ validated in __post_init__: no re-checks
+        amplitude, tof = _echo_arrays_unchecked(
             self.transducer,
-            self.specimen,
+            _as_shapes(self.specimen),
             positions,
             frames,
-            model=self.reflection,
-            sound_speed=self.sound_speed,
+            _reflection_model(self.reflection),
+            self.sound_speed,
         )
-        # echo_arrays gives finite amplitudes and finite-or-inf tofs of one shape: no re-check
+        # the ray stage gives finite amplitudes and finite-or-inf tofs of one shape: no re-check
         return _synthesize_unchecked(amplitude, tof, self.pulse, self.window, method=self.synthesis)
 
     @property
@@ -248,7 +250,7 @@ class VirtualSetup(BaseSource):
         samples = self._ideal(*poses_to_arrays(list(poses)))  # Pose values are already finite
         if noise:
             generator = self._generator if rng is None else as_generator(rng)
-            samples = self._receiver.receive(samples, generator)
+            samples = self._receiver._receive_unchecked(samples, generator)
         return samples
 
     @cached_property
@@ -356,7 +358,7 @@ class VirtualSetup(BaseSource):
             sl = slice(lo, lo + step)
             samples = self._ideal(positions[sl], frames[sl])
             if generator is not None:
-                samples = self._receiver.receive(samples, generator)
+                samples = self._receiver._receive_unchecked(samples, generator)
             out[sl] = metric_fn(samples, self.window, self.pulse)
         return out.reshape(a.shape)
 

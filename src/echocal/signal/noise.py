@@ -141,9 +141,18 @@ class Receiver:
 
         ``rng``: Generator, int seed or None; the same seed gives bit-for-bit the same output.
         """
-        x = finite_array("samples", samples)
-        gen = as_generator(rng)
-        y = x + self.noise_sigma * gen.standard_normal(x.shape) if self.noise_sigma else x.copy()
+        return self._receive_unchecked(finite_array("samples", samples), as_generator(rng))
+
+    def _receive_unchecked(
+        self, x: NDArray[np.float64], gen: np.random.Generator
+    ) -> NDArray[np.float64]:
+        """:meth:`receive` of finite float64 samples (the simulator's, checked by construction)."""
+        if self.noise_sigma:
+            y = gen.standard_normal(x.shape)
+            y *= self.noise_sigma
+            y += x  # σ·n + x: the same sum as x + σ·n
+        else:
+            y = x.copy()
         if self.gain != 1.0:
             y *= self.gain
         if self.full_scale is not None:

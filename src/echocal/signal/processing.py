@@ -17,6 +17,7 @@ import scipy.fft
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal as sps
 
+from echocal._numba import compiled
 from echocal._validate import finite_array, finite_float, lookup, nonnegative_float
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import EchocalValueError
@@ -291,7 +292,14 @@ def _energy_window(
 def _window_sums(x: _F64, pulse: Pulse, fs: float, half: int) -> tuple[_F64, NDArray[np.int64]]:
     """Σx² over [peak − half, peak + half] of rows ``x`` (n_rows, n), and the counts."""
     n = x.shape[-1]
-    z = _analytic(x, pulse, fs)[:, :n]
+    z = _analytic(x, pulse, fs)
+    kernel = compiled(_peak_window_loops)
+    if kernel is not None:
+        energy = np.empty(x.shape[0])
+        count = np.empty(x.shape[0], dtype=np.int64)
+        kernel(z, x, half, energy, count)
+        return energy, count
+    z = z[:, :n]
     power = z.real * z.real
     power += z.imag * z.imag  # |z|²: the same peak as the envelope |z|
     centre = np.argmax(power, axis=-1)
@@ -302,6 +310,28 @@ def _window_sums(x: _F64, pulse: Pulse, fs: float, half: int) -> tuple[_F64, NDA
         seg = x[i, a:b]
         energy[i] = seg @ seg  # a few dozen samples: cheaper per row than any gather
     return energy, hi - lo
+
+
+def _peak_window_loops(z, x, half, energy, count):
+    """Compiled :func:`_window_sums` after the FFTs: per row, the first maximum of |z|² over
+    the ``n`` samples of ``x`` (n_rows, n), then Σx² over [peak − half, peak + half]."""
+    n = x.shape[1]
+    for i in range(x.shape[0]):
+        best = -1.0
+        centre = 0
+        for m in range(n):
+            w = z[i, m]
+            pw = w.real * w.real + w.imag * w.imag
+            if pw > best:
+                best = pw
+                centre = m
+        lo = min(max(centre - half, 0), n)
+        hi = min(max(centre + half + 1, 0), n)
+        acc = 0.0
+        for m in range(lo, hi):
+            acc += x[i, m] * x[i, m]
+        energy[i] = acc
+        count[i] = hi - lo
 
 
 def pseudo_energy(

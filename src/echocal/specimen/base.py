@@ -38,6 +38,13 @@ EPS_REL = 1e-9
 GRAZING_COS = 1e-12
 """Rays with ``|cos(angle to the normal)| <= GRAZING_COS`` graze a flat surface and miss it."""
 
+KERNEL_PLANE = 1
+"""``_kernel_params`` code of a :class:`~echocal.specimen.FinitePlane` (see ``echocal.echo``)."""
+KERNEL_SPHERE = 2
+"""``_kernel_params`` code of a :class:`~echocal.specimen.Sphere`."""
+KERNEL_PARAMS = 16
+"""Length of the parameter vector of ``_kernel_params``."""
+
 
 class Shape(abc.ABC):
     """A reflecting surface that a bundle of rays can be cast against.
@@ -58,6 +65,15 @@ class Shape(abc.ABC):
     @abc.abstractmethod
     def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Kernel: ``o``, ``d`` (3, M), ``d`` unit -> distance (M,), normal (3, M)."""
+
+    def _kernel_params(self) -> tuple[int, FloatArray] | None:
+        """``(code, parameters (KERNEL_PARAMS,))`` for the simulator's compiled ray kernel.
+
+        Shapes whose intersection the fused kernel of :mod:`echocal.echo` implements
+        (``KERNEL_PLANE``, ``KERNEL_SPHERE``) return their constants; the default None
+        sends every specimen holding the shape through the generic :meth:`_intersect_soa`.
+        """
+        return None
 
     def _intersect(
         self, origins: FloatArray, directions: FloatArray

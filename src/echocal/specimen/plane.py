@@ -8,6 +8,8 @@ from numpy.typing import ArrayLike
 from echocal.geometry import orientation_frame
 from echocal.specimen.base import (
     GRAZING_COS,
+    KERNEL_PARAMS,
+    KERNEL_PLANE,
     FloatArray,
     Shape,
     _angle,
@@ -68,6 +70,16 @@ class FinitePlane(Shape):
         self._frame_t = np.ascontiguousarray(frame.T)  # rows x', y', n
         self._center_local = self._frame_t @ self.center
         self._eps = self.eps
+        params = np.zeros(KERNEL_PARAMS)
+        params[:9] = self._frame_t.ravel()
+        params[9:12] = self._center_local
+        params[12:15] = 0.5 * self.width, 0.5 * self.height, self._eps
+        params.setflags(write=False)
+        self._params = params
+
+    def _kernel_params(self) -> tuple[int, FloatArray]:
+        """Rows x', y', n of the frame (9), the centre in that frame (3), w/2, h/2, eps."""
+        return KERNEL_PLANE, self._params
 
     def corners(self) -> FloatArray:
         """The four corners [m], shape (4, 3), in order around the rectangle."""

@@ -6,6 +6,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal.specimen.base import (
+    KERNEL_PARAMS,
+    KERNEL_SPHERE,
     FloatArray,
     Shape,
     _check_name,
@@ -35,6 +37,14 @@ class Sphere(Shape):
         self.radius = _size("Sphere", "radius", radius)
         self.name = _check_name("Sphere", name)
         self._eps = self.eps
+        params = np.zeros(KERNEL_PARAMS)
+        params[:5] = *self.center, self.radius, self._eps
+        params.setflags(write=False)
+        self._params = params
+
+    def _kernel_params(self) -> tuple[int, FloatArray]:
+        """Centre (3), radius, eps."""
+        return KERNEL_SPHERE, self._params
 
     def bounds(self) -> FloatArray:
         return np.stack([self.center - self.radius, self.center + self.radius])
