@@ -113,11 +113,17 @@ def run_demo(
         console.print(f"[bold]sweep[/] {sweep.spec.name}: {len(sweep.runs)} runs")
         for row in summary.itertuples():
             console.print(
-                f"  {row.label:12s} {row.snr_db:5.1f} dB  success {100 * row.success_rate:5.1f} %"
-                f"  expected measurements to success {row.expected_measurements_to_success:.4g}",
+                f"  {row.label:12s} {row.snr_db:4.0f} dB  success {100 * row.success_rate:3.0f} %"
+                f"  to {sweep.spec.tolerance:g}°: median {_count(row.median_measurements_to_tol)}"
+                f", p90 {_count(row.p90_measurements_to_tol)} measurements",
                 highlight=False,
             )
         console.print(f"[bold]report[/] {report}  (total {wall:.1f} s)")
     return DemoResult(
         report=report, scenario=scenario, sweep_dir=sweep_dir, sweep_summary=summary, wall_time=wall
     )
+
+
+def _count(value: float) -> str:
+    """A measurement count for the console ('—' when no run reached the tolerance)."""
+    return "—" if value != value else f"{value:.0f}"  # NaN-safe without numpy
