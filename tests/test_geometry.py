@@ -157,3 +157,12 @@ def test_pose_from_angles_round_trips_both_parameterizations(a, b):
     assert_allclose(angles_of(pose, "tilt"), [a, b], atol=1e-9)
     az, coel = convert_angles(a, b, "tilt", "azimuth-coelevation")
     assert_allclose([az, coel], [pose.azimuth, pose.coelevation], atol=1e-12)
+
+
+@given(angles, coelevations)
+def test_single_pose_arrays_match_the_vectorized_frames(az, coel):
+    pose = Pose(0.01, 0.02, 0.03, az, coel)
+    positions, frames = poses_to_arrays([pose])
+    assert_allclose(positions, [[0.01, 0.02, 0.03]])
+    # np.cos/np.sin vs math.cos/math.sin: both correctly rounded to about 1 ulp.
+    assert_allclose(frames[0], orientation_frame(az, coel), atol=1e-15)

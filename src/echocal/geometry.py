@@ -29,6 +29,7 @@ vectors of shape ``(..., 3)`` and frames of shape ``(..., 3, 3)``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -285,13 +286,23 @@ class Pose:
 
 def poses_to_arrays(poses: Sequence[Pose]) -> tuple[FloatArray, FloatArray]:
     """Stack poses into positions ``(P, 3)`` [m] and frames ``(P, 3, 3)``."""
-    values = np.array([p.as_array() for p in poses]).reshape(-1, 5)
+    if len(poses) == 1 and not poses[0].gimbal:  # the hot path of single measurements
+        pose = poses[0]
+        return np.array([[pose.x, pose.y, pose.z]]), _scalar_frame(pose.azimuth, pose.coelevation)
+    values = np.array([(p.x, p.y, p.z, p.azimuth, p.coelevation) for p in poses]).reshape(-1, 5)
     frames = orientation_frame(values[:, 3], values[:, 4])
     gimbal = np.array([p.gimbal for p in poses], dtype=bool)
     if gimbal.any():
         tx, ty = orientation_to_tilt(values[gimbal, 3], values[gimbal, 4])
         frames[gimbal] = tilt_frame(tx, ty)
     return values[:, :3], frames
+
+
+def _scalar_frame(azimuth: float, coelevation: float) -> FloatArray:
+    """:func:`orientation_frame` of one orientation [deg], shape ``(1, 3, 3)`` (scalar math)."""
+    phi, theta = math.radians(azimuth), math.radians(coelevation)
+    cp, sp, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
+    return np.array([[[ct * cp, -sp, st * cp], [ct * sp, cp, st * sp], [-st, 0.0, ct]]])
 
 
 PARAMETERIZATIONS = ("azimuth-coelevation", "tilt")
