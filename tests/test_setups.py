@@ -122,3 +122,19 @@ def test_noiseless_receiver_from_toml(tmp_path):
     path = write(tmp_path, '[noise]\nsnr_db = "none"\n')
     assert load_setup(path).receiver.snr_db is None
     assert load_setup(path).noise_sigma == 0.0
+
+
+def test_mesh_specimen_from_a_file_in_millimetres(tmp_path):
+    import trimesh
+
+    # A 40 x 40 mm square made of two triangles, written in millimetres.
+    square = trimesh.Trimesh(
+        vertices=[[-20, -20, 0], [20, -20, 0], [20, 20, 0], [-20, 20, 0]],
+        faces=[[0, 1, 2], [0, 2, 3]],
+    )
+    square.export(tmp_path / "square.stl")
+    path = write(tmp_path, '[specimen]\nmesh = "square.stl"\nmesh_scale = 0.001\n')
+    setup = load_setup(path)
+    hits = setup.specimen.surface_below(0.019, 0.0)
+    assert bool(hits.hit) and float(hits.distance) > 0
+    assert not bool(setup.specimen.surface_below(0.021, 0.0).hit)  # scaled to 20 mm half-width
