@@ -158,3 +158,18 @@ def test_setup_path_relative_to_sweep_file_and_hashed(tmp_path, monkeypatch):
     sweep.write_text('setup = "missing.toml"\n[[methods]]\nname = "spsa"\n', encoding="utf-8")
     with pytest.raises(ConfigError, match="setup: setup file not found"):
         load_sweep(sweep)
+
+
+def test_cli_check_prints_names_with_brackets_verbatim(tmp_path):
+    # rich would read "[bold]" / "[deg]" in a name as markup and drop it; the CLI escapes
+    from typer.testing import CliRunner
+
+    from echocal.cli import app
+
+    path = tmp_path / "s.toml"
+    path.write_text(
+        'name = "a[bold]b [deg]"\nsetup = "thesis"\nbudget = 30\n[[methods]]\nname = "spsa"\n'
+    )
+    result = CliRunner().invoke(app, ["sweep", "check", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "a[bold]b [deg]" in result.output

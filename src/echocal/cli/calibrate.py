@@ -8,6 +8,7 @@ from typing import Annotated
 
 import numpy as np
 import typer
+from rich.markup import escape
 
 from echocal.cli._common import console, parse_pair, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
@@ -72,7 +73,7 @@ def register(app: typer.Typer) -> None:
                 rng=seed,
             )
         for warning in caught:
-            console.print(f"[yellow]warning:[/] {warning.message}")
+            console.print(f"[yellow]warning:[/] {escape(str(warning.message))}")
         evaluation = evaluate_run(virtual, where, result)
         out.mkdir(parents=True, exist_ok=True)
         result.save_json(out / "result.json")
@@ -97,14 +98,14 @@ def register(app: typer.Typer) -> None:
             return
         names = result.names
         console.print(
-            f"[bold]{result.method}[/] on {virtual.description}\n"
+            f"[bold]{escape(result.method)}[/] on {escape(virtual.description)}\n"
             f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
             f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
             f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
             f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}   "
             f"iterations {result.n_iterations}\n"
-            f"  stopped:  {result.message}\n"
-            f"  saved to  {out}/"
+            f"  stopped:  {escape(result.message)}\n"
+            f"  saved to  {escape(str(out))}/"
         )
 
 

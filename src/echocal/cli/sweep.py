@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+from rich.markup import escape
 
 from echocal.cli._common import console, write_json
 
@@ -57,8 +58,8 @@ def register(app: typer.Typer) -> None:
             return
         resumed = f", {skipped} already done" if skipped else ""
         console.print(
-            f"sweep [bold]{results.spec.name}[/]: {results.n_new} run(s) computed{resumed}; "
-            f"results in {out}/ (runs.parquet, history.parquet)"
+            f"sweep [bold]{escape(results.spec.name)}[/]: {results.n_new} run(s) computed"
+            f"{resumed}; results in {escape(str(out))}/ (runs.parquet, history.parquet)"
         )
         _print_table(results)
 
@@ -100,9 +101,9 @@ def register(app: typer.Typer) -> None:
             )
             return
         console.print(
-            f"sweep [bold]{spec.name}[/] is valid: {len(cases)} runs "
+            f"sweep [bold]{escape(spec.name)}[/] is valid: {len(cases)} runs "
             f"({len(spec.methods)} method(s), {len(spec.snr_db or [])} SNR(s), "
-            f"{len(spec.seed_list)} seed(s)); setup {spec.setup}"
+            f"{len(spec.seed_list)} seed(s)); setup {escape(spec.setup)}"
         )
 
     @sweep_app.command("list")
@@ -159,7 +160,7 @@ def _print_table(results) -> None:
     done = len(results.runs)
     state = "" if done == results.n_cases else f" — INCOMPLETE: {done}/{results.n_cases} runs"
     view = Table(
-        title=f"sweep {results.spec.name}: tolerance {results.spec.tolerance:g}°{state}",
+        title=f"sweep {escape(results.spec.name)}: tolerance {results.spec.tolerance:g}°{state}",
         title_justify="left",
         caption="ok: success rate; to tol / p90: median and 90th percentile of measurements "
         "to the tolerance (successful runs); E(meas): mean measurements / success rate; "
@@ -177,9 +178,9 @@ def _print_table(results) -> None:
     for row in table.itertuples(index=False):
         method = row.label + (f"@{row.preset}" if isinstance(row.preset, str) else "")
         failed = f" ({row.failed} failed)" if row.failed else ""
-        cells = [method]
+        cells = [escape(method)]
         if show_options:
-            cells.append("" if row.params == "{}" else row.params)
+            cells.append("" if row.params == "{}" else escape(row.params))
         cells.append("none" if math.isnan(row.snr_db) else f"{row.snr_db:g}")
         if show_x0:
             cells.append(row.x0_kind)
