@@ -188,3 +188,22 @@ def test_bad_arguments_are_refused_clearly():
         scan_surface(_setup("sphere"), grid, budget_per_point=2, progress=False)
     with pytest.raises(Exception, match="method"):
         scan_surface(_setup("sphere"), grid, method="nope", progress=False)
+
+
+def test_bad_x0_and_another_seed_are_refused_clearly(tmp_path):
+    grid = ScanGrid(x=(0.0,), y=(0.0,), z=0.025)
+    with pytest.raises(EchocalValueError, match=r"x0 must be 2 angles.*\(3,\)"):
+        scan_surface(_setup("sphere"), grid, x0=(1.0, 2.0, 3.0), progress=False)
+    with pytest.raises(EchocalValueError, match="x0"):
+        scan_surface(_setup("sphere"), grid, x0=("a", 0), progress=False)
+    # an unfinished scan made with seed 1 is not resumed with seed 2 (mixed draws)
+    out = tmp_path / "scan.nc"
+    grid = ScanGrid.regular(x=(-2 * MM, 2 * MM, 2 * MM), y=(0.0, 0.0, 1 * MM), z=25 * MM)
+
+    def stop(done, total):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        scan_surface(_setup("sphere"), grid, rng=1, progress=False, out=out, on_point=stop)
+    with pytest.raises(DataFileError, match="different unfinished scan"):
+        scan_surface(_setup("sphere"), grid, rng=2, progress=False, out=out)

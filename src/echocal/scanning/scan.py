@@ -47,7 +47,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._progress import ProgressBar
 from echocal._rng import RngLike, as_generator
-from echocal._validate import nonnegative_float, one_of, positive_float, positive_int
+from echocal._validate import (
+    finite_array,
+    nonnegative_float,
+    one_of,
+    positive_float,
+    positive_int,
+)
 from echocal.calibrate import calibrate, method_names
 from echocal.calibrate.driver import CalibrationState
 from echocal.constants import SOUND_SPEED_WATER
@@ -330,6 +336,9 @@ def scan_surface(
     one_of("method", method, method_names())
     budget = positive_int("budget_per_point", budget_per_point)
     tof_repeats = positive_int("tof_repeats", tof_repeats)
+    x0 = finite_array("x0", x0)
+    if x0.shape != (2,):
+        raise EchocalValueError(f"x0 must be 2 angles [deg], shape (2,); got shape {x0.shape}")
     if budget <= tof_repeats:
         raise EchocalValueError(
             f"budget_per_point ({budget}) must exceed tof_repeats ({tof_repeats})"
@@ -346,7 +355,7 @@ def scan_surface(
         min_snr=positive_float("min_snr", min_snr),
         relative_snr=nonnegative_float("relative_snr", relative_snr),
         outlier=positive_float("outlier", outlier),
-        x0=np.asarray(x0, dtype=np.float64).reshape(2),
+        x0=x0,
         pulse=pulse,
         sound_speed=positive_float("sound_speed", SOUND_SPEED_WATER if c0 is None else c0),
         options=dict(method_options or {}),
@@ -372,6 +381,8 @@ def scan_surface(
             "outlier": ctx.outlier,
             "sound_speed": ctx.sound_speed,
             "method_options": ctx.options,
+            # an integer seed defines the scan: resuming with another one is refused
+            "seed": int(rng) if isinstance(rng, int | np.integer) else None,
         },
     )
     store = None
@@ -414,10 +425,12 @@ def scan_surface(
         retry, snr_ref = _suspicious(records, found, xy, radius, ctx)
         if not warm_start:  # a cold scan takes no advice from its neighbours
             retry = set()
-        for key in retry:
+        # a point already retried (before an interruption) keeps its final record and
+        # stays a trusted neighbour
+        pending = {k for k in retry if not records[k].get("retried")}
+        for key in pending:
             found.pop(key, None)
         index = {key: i for i, key in enumerate(order)}
-        pending = {k for k in retry if not records[k].get("retried")}
         while pending:
             # the point with the most trusted neighbours first: the best warm start
             support = {
