@@ -87,3 +87,29 @@ def test_calibrate_command_bad_method_is_one_line(tmp_path):
     result = CliRunner().invoke(app, ["calibrate", "--method", "magic", "--out", str(tmp_path)])
     assert result.exit_code != 0
     assert "magic" in str(result.exception) or "magic" in result.output
+
+
+def test_iterations_to_matches_the_iterate_errors(thesis):
+    # independent truth: recount by hand from iterate_errors
+    from echocal.calibrate import calibrate
+    from echocal.evaluation import evaluate_run
+    from echocal.measurement.objective import SourceObjective
+
+    pos = thesis.reference_position
+    res = calibrate(
+        SourceObjective(thesis, pos, parameterization="tilt"),
+        "newton",
+        x0=(3.0, -2.0),
+        max_iter=6,
+        rng=0,
+    )
+    ev = evaluate_run(thesis, pos, res)
+    for tol in (0.05, 0.5, 2.0, 10.0):
+        if ev.error > tol:
+            assert ev.iterations_to(tol) is None and ev.measurements_to(tol) is None
+            continue
+        inside = ev.iterate_errors <= tol
+        first = next(i for i in range(len(inside) + 1) if inside[i:].all())
+        assert ev.iterations_to(tol) == min(first, res.n_iterations)
+        expected = res.n_measurements if first > res.n_iterations else first * 9
+        assert ev.measurements_to(tol) == expected  # newton: 9 measurements per iteration

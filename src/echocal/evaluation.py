@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from echocal.calibrate.objective import PARAMETERIZATIONS
 from echocal.calibrate.result import CalibrationResult
 from echocal.geometry import angle_between, convert_angles, orientation_normal
 from echocal.measurement.virtual import VirtualSetup
@@ -24,8 +25,6 @@ from echocal.plots.calibration import CostMap
 __all__ = ["RunEvaluation", "angular_error", "cost_map", "evaluate_run", "nearest_equivalent"]
 
 FloatArray = NDArray[np.float64]
-
-_AXES = {"azimuth-coelevation": ("azimuth", "coelevation"), "tilt": ("tilt_x", "tilt_y")}
 
 
 def angular_error(points: ArrayLike, truth: ArrayLike, parameterization: str) -> FloatArray:
@@ -57,19 +56,34 @@ class RunEvaluation:
     iterate_values: FloatArray
     optimum_value: float
 
-    def measurements_to(self, tolerance: float) -> int | None:
-        """Measurements used when the iterates first came (and stayed) within ``tolerance`` [deg].
-
-        None if the final estimate is not within the tolerance.
-        """
+    def _first_inside(self, tolerance: float) -> int | None:
+        """Index of the iterate from which all stay within ``tolerance`` [deg] (None: the
+        final estimate misses it; ``len(iterate_errors)``: only the final estimate is in)."""
         if self.error > tolerance:
             return None
         outside = np.nonzero(self.iterate_errors > tolerance)[0]
-        first_inside = 0 if outside.size == 0 else int(outside[-1]) + 1
+        return 0 if outside.size == 0 else int(outside[-1]) + 1
+
+    def iterations_to(self, tolerance: float) -> int | None:
+        """Iterations after which the iterates came (and stayed) within ``tolerance`` [deg].
+
+        None if the final estimate is not within the tolerance; ``n_iterations`` when only
+        the final estimate (e.g. a model's recommendation) is.
+        """
+        first = self._first_inside(tolerance)
+        return None if first is None else min(first, self.result.n_iterations)
+
+    def measurements_to(self, tolerance: float) -> int | None:
+        """Measurements used when the iterates first came (and stayed) within ``tolerance`` [deg].
+
+        None if the final estimate is not within the tolerance; every measurement of the
+        run when only the final estimate is.
+        """
+        first = self._first_inside(tolerance)
+        if first is None:
+            return None
         counts = self.result.iteration_measurements
-        if first_inside >= len(counts):
-            return int(self.result.n_measurements)
-        return int(counts[first_inside])
+        return int(self.result.n_measurements if first >= len(counts) else counts[first])
 
 
 def nearest_equivalent(angles: ArrayLike, near: ArrayLike, parameterization: str) -> FloatArray:
@@ -131,4 +145,4 @@ def cost_map(
     values = setup.metric_values(
         position, a[:, None], b[None, :], parameterization=parameterization, metric=metric
     )
-    return CostMap(a=a, b=b, values=values, names=_AXES[parameterization])
+    return CostMap(a=a, b=b, values=values, names=PARAMETERIZATIONS[parameterization])

@@ -111,16 +111,6 @@ def _random_start(case: RunCase, truth: np.ndarray, bounds: np.ndarray) -> np.nd
     return np.clip(start, bounds[:, 0], bounds[:, 1])
 
 
-def _to_tolerance(evaluation, tolerance: float) -> tuple[int | None, int | None]:
-    """Measurements and iterations when the iterates entered (and stayed in) the tolerance."""
-    measurements = evaluation.measurements_to(tolerance)
-    if measurements is None:
-        return None, None
-    outside = np.nonzero(evaluation.iterate_errors > tolerance)[0]
-    first_inside = 0 if outside.size == 0 else int(outside[-1]) + 1
-    return measurements, min(first_inside, evaluation.result.n_iterations)
-
-
 def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
     """Run one case; return its row of the runs table and its measurement history.
 
@@ -182,11 +172,10 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
         except Exception as exc:  # a bug in one run must not stop a sweep
             row.update(_failed(f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}"))
         else:
-            to_tol, iters_to_tol = _to_tolerance(evaluation, case.tolerance)
             row.update(
                 error_deg=evaluation.error,
-                measurements_to_tol=to_tol,
-                iterations_to_tol=iters_to_tol,
+                measurements_to_tol=evaluation.measurements_to(case.tolerance),
+                iterations_to_tol=evaluation.iterations_to(case.tolerance),
                 success=bool(evaluation.error <= case.tolerance),
                 n_measurements=result.n_measurements,
                 n_iterations=result.n_iterations,
