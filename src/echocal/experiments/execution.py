@@ -212,6 +212,9 @@ class _SweepBar(ProgressBar):
     """The sweep's bar: ``sweep NAME`` in bold, runs counted, failures shown in red."""
 
     def __init__(self, name: str, total: int, completed: int, enabled: bool) -> None:
+        from rich.markup import escape
+
+        name = escape(name)  # shown as rich markup
         resumed = f" (resumed: {completed} done)" if completed else ""
         super().__init__(
             "[bold]{task.description}",
