@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -60,8 +61,12 @@ def parse_pair(text: str, option: str) -> tuple[float, float]:
 
 
 def write_json(data: dict[str, Any], path: Path | None = None) -> None:
-    """Print ``data`` as one JSON object on stdout, or write it atomically to ``path``."""
-    text = json.dumps(data, indent=None if path is None else 2, default=_json_default)
+    """Print ``data`` as one JSON object on stdout, or write it atomically to ``path``.
+
+    NaN and ±inf (no echo, an unlimited bound) become ``null``: JSON has no such numbers,
+    and strict parsers (``jq``, browsers) refuse Python's ``NaN``/``Infinity`` tokens.
+    """
+    text = json.dumps(_json_ready(data), indent=None if path is None else 2, allow_nan=False)
     if path is None:
         sys.stdout.write(text + "\n")
         return
@@ -70,13 +75,21 @@ def write_json(data: dict[str, Any], path: Path | None = None) -> None:
     atomic_write_text(path, text + "\n")
 
 
-def _json_default(value: Any) -> Any:
+def _json_ready(value: Any) -> Any:
+    """``value`` with numpy scalars/arrays as Python values, paths as strings and
+    non-finite floats as None, recursively through dicts, lists and tuples."""
     import numpy as np
 
-    if isinstance(value, np.generic):
-        return value.item()
     if isinstance(value, np.ndarray):
-        return value.tolist()
+        value = value.tolist()
+    elif isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_ready(v) for v in value]
     if isinstance(value, Path):
         return str(value)
-    raise TypeError(f"not JSON serializable: {type(value).__name__}")
+    return value

@@ -113,17 +113,6 @@ def as_toml(data: dict[str, Any]) -> str:
     return "\n".join(out) + "\n"
 
 
-def _json_ready(value: Any) -> Any:
-    """Infinite bounds become null (JSON has no inf): null means unlimited."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_ready(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_ready(v) for v in value]
-    return value
-
-
 # ---------------------------------------------------------------- commands
 def register(app: typer.Typer) -> None:
     """Add the ``setup`` command group to ``app``."""
@@ -160,7 +149,7 @@ def register(app: typer.Typer) -> None:
 
         data, description = resolved_setup(setup)
         if as_json:
-            write_json({"setup": setup, "description": description, "config": _json_ready(data)})
+            write_json({"setup": setup, "description": description, "config": data})  # inf -> null
             return
         header = [
             f"# {description}",
