@@ -63,9 +63,39 @@ def test_same_seed_same_ascan(tmp_path):
         (["--pose", "0,0,20", "--setup", "nowhere"], "unknown setup"),
         (["--pose", "0,0,20", "--format", "xlsx"], "--format must be csv or nc"),
         (["--pose", "0,0,20MHz"], "not a length unit"),
+        (["--pose", "0,0,20", "--gate", "500,1"], "holds no sample of the recording window"),
     ],
 )
 def test_bad_input_is_named(tmp_path, args, message):
     result = runner.invoke(app, ["simulate", *args, "--out", str(tmp_path)])
     assert result.exit_code != 0
     assert message in result.output + str(result.exception)
+
+
+def test_gate_restricts_the_time_of_flight(tmp_path):
+    # Noiseless flat plate from 20 mm: the echo is at 2·20 mm / 1480 m/s ≈ 27.03 µs.  A gate
+    # [40, 45] µs excludes it, so the reported time of flight must lie inside the gate.
+    summary = json.loads(
+        run(
+            *("--pose", "0,0,20", "--specimen", "flat-plate", "--snr", "none", "--json"),
+            *("--gate", "40,5", "--out", str(tmp_path)),
+        ).stdout
+    )
+    assert 40e-6 <= summary["tof_s"] <= 45e-6
+    assert summary["gate_s"] == pytest.approx([40e-6, 5e-6])
+
+
+def test_json_is_strict_when_nothing_returns(tmp_path):
+    # Far off the sphere, noiseless: an all-zero A-scan has no time of flight (NaN) and an
+    # energy of −inf dB; strict JSON has neither, so both must come out as null.
+    out = run(
+        *("--pose", "40,40,20", "--specimen", "sphere", "--snr", "none", "--json"),
+        *("--out", str(tmp_path)),
+    )
+
+    def refuse(token):
+        raise AssertionError(f"non-standard JSON token {token}")
+
+    summary = json.loads(out.stdout, parse_constant=refuse)
+    assert summary["tof_s"] is None and summary["energy_db"] is None
+    assert summary["pseudo_energy"] == 0.0

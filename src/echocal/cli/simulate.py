@@ -34,8 +34,9 @@ def register(app: typer.Typer) -> None:
         gate: Annotated[
             str | None,
             typer.Option(
-                help="START,WIDTH of the gate (µs unless a unit is given); default: the "
-                "pseudo-energy window around the strongest echo."
+                help="START,WIDTH of the gate (µs unless a unit is given): the time of "
+                "flight is that of the strongest echo inside it; default: no gate (the "
+                "plot shows the pseudo-energy window around the strongest echo)."
             ),
         ] = None,
         out: Annotated[Path, typer.Option(help="Folder for the A-scan file and plot.")] = Path(
@@ -64,8 +65,10 @@ def register(app: typer.Typer) -> None:
         target = parse_pose(pose)
         scan = virtual.measure(target)
         window, pulse = virtual.window, virtual.pulse
-        tof = float(time_of_flight(scan.samples, window, pulse))
-        chosen = _parse_gate(gate) if gate else _default_gate(tof, pulse.duration, window)
+        user_gate = _parse_gate(gate, window) if gate else None
+        # as on a flaw detector, a gate restricts the time of flight to the echo inside it
+        tof = float(time_of_flight(scan.samples, window, pulse, gate=user_gate))
+        chosen = user_gate or _default_gate(tof, pulse.duration, window)
         energy = float(pseudo_energy(scan.samples, window, pulse))
         summary: dict[str, Any] = {
             "setup": virtual.name,
@@ -96,7 +99,8 @@ def register(app: typer.Typer) -> None:
             write_json(summary)
             return
         if np.isnan(tof):
-            console.print("[yellow]no echo in the recording window[/]")
+            where = "gate" if user_gate else "recording window"
+            console.print(f"[yellow]no echo in the {where}[/]")
         console.print(
             f"time of flight  {tof * 1e6:10.4f} µs\n"
             f"distance        {summary['distance_m'] * 1e3:10.4f} mm\n"
@@ -112,7 +116,8 @@ def _label(pose: Any) -> str:
     )
 
 
-def _parse_gate(text: str) -> Any:
+def _parse_gate(text: str, window: Any) -> Any:
+    from echocal.errors import EchocalValueError
     from echocal.signal import Gate
 
     parts = [p.strip() for p in text.split(",")]
@@ -122,7 +127,13 @@ def _parse_gate(text: str) -> Any:
         parse_quantity(f"--gate {n}", v, "time", "us")
         for n, v in zip(("start", "width"), parts, strict=True)
     )
-    return Gate(start=start, width=width)
+    chosen = Gate(start=start, width=width)
+    if not chosen.mask(window).any():
+        raise EchocalValueError(
+            f"--gate [{start * 1e6:g}, {chosen.end * 1e6:g}] µs holds no sample of the "
+            f"recording window [{window.start * 1e6:g}, {window.end * 1e6:g}] µs"
+        )
+    return chosen
 
 
 def _default_gate(tof: float, duration: float, window: Any) -> Any:
