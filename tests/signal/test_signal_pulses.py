@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -167,6 +168,12 @@ def test_sampled_from_files(tmp_path):
         SampledPulse.from_file(tmp_path / "three.csv")
     with pytest.raises(DataFileError, match="does not exist"):
         SampledPulse.from_file(tmp_path / "missing.npy", fs=fs)
+    for name, text in (("empty.csv", ""), ("header.csv", "time,amplitude\n")):
+        (tmp_path / name).write_text(text)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # no numpy "input contained no data" warning leaks
+            with pytest.raises(DataFileError, match=f"{name}' holds no samples"):
+                SampledPulse.from_file(tmp_path / name, fs=fs)
     np.savetxt(tmp_path / "jitter.csv", np.column_stack([t**2, w]), delimiter=",")
     with pytest.raises(DataFileError, match="uniform"):
         SampledPulse.from_file(tmp_path / "jitter.csv")

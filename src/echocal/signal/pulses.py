@@ -549,15 +549,19 @@ class SampledPulse(Pulse):
             if path.suffix.lower() == ".npy":
                 data = np.load(path, allow_pickle=False)
             else:
-                try:
-                    data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-                except ValueError:
-                    data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, skiprows=1)
+                with warnings.catch_warnings():  # an empty file: refused below, by name
+                    warnings.simplefilter("ignore", UserWarning)
+                    try:
+                        data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+                    except ValueError:
+                        data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, skiprows=1)
         except (ValueError, OSError, EOFError) as exc:
             raise DataFileError(
                 f"pulse file {str(path)!r} is not a numeric .npy or CSV file: {exc}"
             ) from None
         data = np.asarray(data)
+        if data.size == 0:
+            raise DataFileError(f"pulse file {str(path)!r} holds no samples")
         if not np.issubdtype(data.dtype, np.number):
             raise DataFileError(f"pulse file {str(path)!r} must hold numbers; got {data.dtype}")
         data = data.astype(np.float64)
