@@ -167,6 +167,24 @@ def test_unknown_command_and_bad_arguments_are_reported() -> None:
             instrument.identify()
 
 
+class _BrokenSource(GaussianEchoSource):
+    """A source whose acquisition fails with an error that is not echocal's."""
+
+    def measure(self, pose: Pose) -> AScan:
+        raise ZeroDivisionError("digitizer fell over")
+
+
+def test_unexpected_source_failure_is_reported_as_fault_and_the_server_keeps_serving() -> None:
+    with InstrumentServer(_BrokenSource()) as server:
+        instrument = TcpInstrument(*server.address, **FAST)
+        with pytest.raises(InstrumentError, match=r"ACQ\?.*FAULT.*ZeroDivisionError"):
+            instrument.query_line("ACQ?")
+        # answered, not dropped: no reconnect, and the same connection still works
+        assert instrument.n_reconnects == 0
+        assert instrument.identify().startswith("echocal,instrument-server")
+        instrument.close()
+
+
 def test_non_protocol_reply_is_nonsense() -> None:
     # a server that answers garbage to everything
     listener = socket.create_server(("127.0.0.1", 0))

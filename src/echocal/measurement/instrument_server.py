@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from echocal._validate import nonnegative_float, one_of, positive_int
-from echocal.errors import EchocalError, LimitError
+from echocal.errors import LimitError
 from echocal.geometry import Pose
 from echocal.measurement import protocol
 from echocal.measurement.base import MeasurementSource
@@ -81,6 +81,9 @@ class _Handler(socketserver.StreamRequestHandler):
             while True:
                 raw = self.rfile.readline(protocol.MAX_LINE_BYTES + 1)
                 if not raw or owner._gone:
+                    return
+                if len(raw) > protocol.MAX_LINE_BYTES:  # the rest of it would parse as commands
+                    self.wfile.write(_err("SYNTAX", "command line is too long"))
                     return
                 reply = owner._dispatch(raw)
                 if reply is None:  # injected drop
@@ -226,7 +229,8 @@ class InstrumentServer:
                 return [_err("LIMIT", str(exc))], 0.0, False
             except protocol.ProtocolError as exc:
                 return [_err("SYNTAX", str(exc))], 0.0, False
-            except EchocalError as exc:
+            except Exception as exc:  # the instrument failed: say so, and keep serving
+                # (unanswered, the client would time out and resend the failing command)
                 return [_err("FAULT", f"{type(exc).__name__}: {exc}")], 0.0, False
 
     def _idn(self, args: str) -> tuple[list[bytes], float, bool]:
