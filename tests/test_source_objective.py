@@ -83,3 +83,15 @@ def test_source_without_pulse_needs_one():
         SourceObjective(NoPulse(), POSITION)
     with pytest.raises(KeyError, match="pseudo-energy"):
         SourceObjective(_NaNSource(), POSITION, metric="loudness")
+
+
+def test_ascan_freezes_a_copy_not_the_callers_array():
+    # AScan is frozen: its samples are read-only, but the caller's buffer stays writable and
+    # a later write to it does not change the A-scan.
+    buffer = np.zeros(8)
+    scan = AScan(samples=buffer, fs=1e6)
+    buffer[0] = 1.0
+    assert scan.samples[0] == 0.0 and not scan.samples.flags.writeable
+    frozen = np.zeros(8)
+    frozen.setflags(write=False)
+    assert AScan(samples=frozen, fs=1e6).samples is frozen  # read-only input: kept, no copy

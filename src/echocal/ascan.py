@@ -38,6 +38,8 @@ class AScan:
 
     def __post_init__(self) -> None:
         samples = np.asarray(self.samples, dtype=np.float64)
+        if samples is self.samples and samples.flags.writeable:
+            samples = samples.copy()  # freeze a copy, never the caller's own array
         if samples.ndim != 1 or samples.size == 0:
             raise EchocalValueError(
                 f"AScan.samples must be a non-empty 1-D array; got shape {samples.shape}"

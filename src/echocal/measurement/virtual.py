@@ -310,6 +310,7 @@ class VirtualSetup(BaseSource):
         if not poses:
             return []
         samples = self.simulate(poses)
+        samples.setflags(write=False)  # read-only rows: AScan keeps them without a copy
         metadata = {"source": "virtual", "setup": self.name, "snr_db": self.receiver.snr_db}
         return [
             AScan(
