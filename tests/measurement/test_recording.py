@@ -98,6 +98,16 @@ def test_existing_final_file_needs_overwrite(tmp_path: Path) -> None:
     record(GaussianEchoSource(), GRID, path, progress=False, overwrite=True)
 
 
+def test_unwritable_targets_are_named_data_file_errors(tmp_path: Path) -> None:
+    (tmp_path / "folder.nc").mkdir()
+    with pytest.raises(DataFileError, match="folder.nc is a directory"):
+        record(GaussianEchoSource(), GRID, tmp_path / "folder.nc", progress=False, overwrite=True)
+    # the sidecar's parent is a regular file: mkdir fails (as on a read-only disk)
+    (tmp_path / "plain").write_text("")
+    with pytest.raises(DataFileError, match="cannot create the partial recording"):
+        record(GaussianEchoSource(), GRID, tmp_path / "plain" / "a.nc", progress=False)
+
+
 def test_grid_outside_the_source_limits_measures_nothing(tmp_path: Path) -> None:
     fake = GaussianEchoSource()
     wide = RecordingGrid.regular(

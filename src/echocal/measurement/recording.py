@@ -234,9 +234,14 @@ class _Partial:
                     "record to another path or delete the partial directory"
                 )
         else:
-            directory.mkdir(parents=True, exist_ok=True)
             self.manifest = {"format": PARTIAL_FORMAT, "fingerprint": fingerprint, "chunks": []}
-            self._save()
+            try:
+                directory.mkdir(parents=True, exist_ok=True)
+                self._save()
+            except OSError as exc:
+                raise DataFileError(
+                    f"cannot create the partial recording {directory}: {exc.strerror or exc}"
+                ) from None
 
     @property
     def n_done(self) -> int:
@@ -333,6 +338,8 @@ def record(
     batch_size = positive_int("batch_size", batch_size)
     chunk_size = positive_int("chunk_size", chunk_size)
     sidecar = partial_path(target)
+    if target.is_dir():
+        raise DataFileError(f"{target} is a directory; give the replay file's path (.nc)")
     if target.exists() and not sidecar.exists() and not overwrite:
         raise DataFileError(f"{target} already exists; pass overwrite=True to record it again")
     poses = grid.poses()
