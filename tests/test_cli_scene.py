@@ -45,3 +45,12 @@ def test_bad_pose_is_a_one_line_error_not_a_traceback():
     assert result.returncode == 2
     assert "--pose z must be" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_pose_outside_the_positioner_limits_is_drawn_with_a_warning(tmp_path):
+    # 20 mm *below* the thesis block (limits z ∈ [5, 100] mm): a legal picture, but flagged
+    out = tmp_path / "below.png"
+    result = runner.invoke(app, ["scene", "--pose", "0,0,-20", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "out of the setup's positioner limits" in result.output and "z=-0.02" in result.output
+    assert out.exists()

@@ -37,6 +37,14 @@ def register(app: typer.Typer) -> None:
 
         virtual = resolve_setup(setup, specimen=specimen)
         poses = [parse_pose(p) for p in pose]
+        for text, target in zip(pose, poses, strict=True):
+            if problems := virtual.limits.violations(target):  # drawn, but say so
+                console.print(
+                    f"[yellow]warning:[/] --pose {text} is out of the setup's positioner "
+                    f"limits ({'; '.join(problems)}); `echocal simulate` would refuse it",
+                    highlight=False,
+                    soft_wrap=True,
+                )
         fig = scene_figure(
             virtual.specimen,
             virtual.transducer,
