@@ -121,6 +121,9 @@ def test_misses_and_zero_amplitudes_contribute_nothing_and_normalization_counts_
         assert np.max(np.abs(y)) == pytest.approx(1.0)
     all_miss = synthesize([1.0, 1.0], [np.inf, np.inf], p, w, normalize="peak")
     assert np.all(all_miss == 0.0)
+    for method in ("fast", "direct"):  # no rays at all (e.g. a batch of empty bundles): silence
+        none = synthesize(np.zeros((2, 0)), np.zeros((2, 0)), p, w, method=method)
+        assert none.shape == (2, 1024) and not none.any()
 
 
 def test_batched_poses_equal_one_by_one():

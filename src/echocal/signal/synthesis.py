@@ -87,8 +87,14 @@ def synthesize(
     check_window(window, pulse)
     batch_shape, n_rays = amps.shape[:-1], amps.shape[-1]
     check_echoes(window, pulse, np.where(amps != 0.0, taus, np.inf))
+    n_batch = math.prod(batch_shape)  # not reshape(-1, 0): ambiguous without rays
     out = _synthesize_2d(
-        amps.reshape(-1, n_rays), taus.reshape(-1, n_rays), pulse, window, method, normalize
+        amps.reshape(n_batch, n_rays),
+        taus.reshape(n_batch, n_rays),
+        pulse,
+        window,
+        method,
+        normalize,
     )
     return out.reshape((*batch_shape, window.n_samples))
 
