@@ -102,6 +102,7 @@ def test_batched_rays_equal_single_pose_rays():
         ({"n_v": 2.5}, "transducer.n_v"),
         ({"focal_length": float("nan")}, "transducer.focal_length"),
         ({"aperture": "hexagonal"}, "transducer.aperture"),
+        ({"directivity": None}, "transducer.directivity"),
     ],
 )
 def test_bad_transducer_names_the_field(kwargs, field):

@@ -201,6 +201,11 @@ class Transducer:
             raise EchocalValueError(
                 f"transducer.aperture must be 'rectangular' or 'circular'; got {self.aperture!r}"
             )
+        if not callable(self.directivity):
+            raise EchocalValueError(
+                "transducer.directivity must be a directivity model (see make_directivity: "
+                f"{', '.join(directivity_names())}); got {self.directivity!r}"
+            )
         local = self._local_pixels()  # never empty: the central pixel is always inside
         local.setflags(write=False)
         object.__setattr__(self, "_local", local)
