@@ -17,6 +17,8 @@ from echocal.units import parse_angle, parse_length, parse_quantity
         ("0.5in", 0.0127),
         ("1e-3 m", 1e-3),
         (3, 0.003),
+        ("5\u00b5m", 5e-6),  # micro sign
+        ("5\u03bcm", 5e-6),  # Greek small letter mu: looks the same, means the same
     ],
 )
 def test_lengths(text, metres):
@@ -26,6 +28,7 @@ def test_lengths(text, metres):
 def test_frequency_and_angle():
     assert parse_quantity("f", "5MHz", "frequency", "Hz") == pytest.approx(5e6)
     assert parse_angle("a", "0.5rad") == pytest.approx(28.6478897565)
+    assert parse_quantity("t", "2\u03bcs", "time", "us") == pytest.approx(2e-6)
 
 
 @pytest.mark.parametrize("text", ["20 MHz", "abc", "nan mm", "1e400 mm"])

@@ -51,7 +51,8 @@ def parse_quantity(field: str, text: str | float | int, kind: str, default_unit:
                 f"({', '.join(scales)}); got {text!r}"
             )
         number = float(match.group(1))
-        unit = (match.group(2) or default_unit).strip()
+        # the Greek letter mu (U+03BC) looks like the micro sign (U+00B5): accept both
+        unit = (match.group(2) or default_unit).strip().replace("\u03bc", "\u00b5")
     key = unit if unit in scales else unit.lower()
     if key not in scales:
         raise EchocalValueError(
