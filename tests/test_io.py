@@ -14,3 +14,15 @@ def test_atomic_files_follow_the_umask(tmp_path):
     finally:
         os.umask(umask)
     assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+
+
+def test_atomic_path_leaves_the_process_umask_alone(tmp_path, monkeypatch):
+    # Reading the umask by setting it (os.umask(0)) races other threads' file creation;
+    # atomic_path must never call os.umask at all.
+    def forbidden(_mask):
+        raise AssertionError("atomic_path changed the process umask")
+
+    monkeypatch.setattr(os, "umask", forbidden)
+    atomic_write_text(tmp_path / "b.txt", "y")
+    assert (tmp_path / "b.txt").read_text() == "y"
+    assert [p.name for p in tmp_path.iterdir()] == ["b.txt"]  # no temporary file left

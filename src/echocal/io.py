@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -21,20 +21,31 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{target.name}.", suffix=".partial" + target.suffix, dir=target.parent
-    )
-    os.close(fd)
-    tmp = Path(tmp_name)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; results should be as shareable as usual
+    tmp = _create_unique(target)
     try:
         yield tmp
         os.replace(tmp, target)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def _create_unique(target: Path) -> Path:
+    """Create an empty, unique temporary file beside ``target`` with mode 0666 & ~umask.
+
+    Not ``mkstemp`` + ``chmod``: its 0600 would need the umask, which can only be read by
+    setting it — process-wide, racing other threads' file creation (Dask workers, the
+    instrument server).  ``os.open`` with mode 0666 lets the kernel apply the umask.
+    """
+    for _ in range(100):
+        name = f".{target.name}.{secrets.token_hex(6)}.partial{target.suffix}"
+        tmp = target.parent / name
+        try:
+            os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:
+            continue
+        return tmp
+    raise FileExistsError(f"no free temporary name beside {target}")  # pragma: no cover
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
