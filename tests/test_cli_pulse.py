@@ -89,6 +89,31 @@ def test_pulse_sinc_and_sampled_file(tmp_path):
     assert json.loads(r.stdout)["center_frequency_hz"] == pytest.approx(5e6, rel=0.01)
 
 
+def test_sampled_time_amplitude_file_keeps_its_own_rate(tmp_path):
+    # The same 5 MHz Gabor sampled at 50 MHz in a (time, amplitude) CSV.  The default
+    # --fs (100 MHz, the plotting rate) must not re-time it: at 100 MHz the pulse would be
+    # squeezed to half its duration and read as 10 MHz.  Tolerance 1 %: the centre
+    # frequency of 101 samples of a smooth pulse.
+    t = np.arange(-50, 51) / 50e6
+    data = np.column_stack([t, GaborPulse().waveform(t)])
+    np.savetxt(tmp_path / "p.csv", data, delimiter=",", header="time_s,amplitude")
+    r = runner.invoke(
+        app,
+        [
+            "pulse",
+            "sampled",
+            "--file",
+            str(tmp_path / "p.csv"),
+            "--out",
+            str(tmp_path / "p.png"),
+            "--json",
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    summary = json.loads(r.stdout)
+    assert summary["center_frequency_hz"] == pytest.approx(5e6, rel=0.01)
+
+
 def test_unknown_pulse_is_a_clean_error(tmp_path):
     result = runner.invoke(app, ["pulse", "triangle", "--out", str(tmp_path / "x.png")])
     assert result.exit_code != 0

@@ -133,8 +133,15 @@ def _run(
     if name == "sampled":
         if file is None:
             raise EchocalValueError("the sampled pulse needs --file (CSV or NPY)")
-        params.update(file=file, fs=fs)
-    pulse = make_pulse(name, **params)
+        params["file"] = file
+        try:  # a (time, amplitude) file brings its own rate: --fs must not override it
+            pulse = make_pulse(name, **params)
+        except EchocalValueError as exc:
+            if not str(exc).startswith("fs is required"):
+                raise
+            pulse = make_pulse(name, **params, fs=fs)  # amplitudes only: sampled at --fs
+    else:
+        pulse = make_pulse(name, **params)
     aliased = fs < 2.0 * pulse.highest_frequency
     if aliased:
         console.print(
