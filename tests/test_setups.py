@@ -138,3 +138,22 @@ def test_mesh_specimen_from_a_file_in_millimetres(tmp_path):
     hits = setup.specimen.surface_below(0.019, 0.0)
     assert bool(hits.hit) and float(hits.distance) > 0
     assert not bool(setup.specimen.surface_below(0.021, 0.0).hit)  # scaled to 20 mm half-width
+
+
+def test_sampled_pulse_file_is_relative_to_the_setup_file(tmp_path, monkeypatch):
+    # As for a mesh, a relative pulse file is found beside the TOML, whatever the working
+    # directory; the loaded samples must be the file's (exact: float repr round trip).
+    from echocal.signal import GaborPulse
+
+    folder = tmp_path / "rig"
+    folder.mkdir()
+    t = np.arange(-100, 101) / 100e6
+    w = GaborPulse(center_frequency=5e6).waveform(t)
+    np.savetxt(folder / "pulse.csv", np.column_stack([t, w]), delimiter=",", fmt="%.17g")
+    path = write(
+        folder, '[pulse]\nname = "sampled"\nfile = "pulse.csv"\n[window]\nstart = "20 us"\n'
+    )
+    monkeypatch.chdir(tmp_path)  # not the setup's folder
+    setup = load_setup(path)
+    np.testing.assert_array_equal(setup.pulse.samples, w)
+    assert setup.pulse.fs == pytest.approx(100e6, rel=1e-9)

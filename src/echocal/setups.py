@@ -222,9 +222,12 @@ class SetupConfig(_Model):
 
 
 # ---------------------------------------------------------------- building
-def _pulse_params(config: PulseConfig) -> dict[str, Any]:
+def _pulse_params(config: PulseConfig, base_dir: Path) -> dict[str, Any]:
     params: dict[str, Any] = {}
     for key, value in (config.model_extra or {}).items():
+        if key == "file":  # a sampled pulse's file: relative to the setup file, as a mesh
+            params[key] = base_dir / Path(str(value))  # (an absolute path stays as it is)
+            continue
         params[key] = _parse_any(f"pulse.{key}", value) if isinstance(value, str) else value
     return params
 
@@ -304,7 +307,7 @@ def build_setup(config: SetupConfig, *, base_dir: Path | None = None, seed: int 
     """
     base_dir = Path.cwd() if base_dir is None else base_dir
     try:
-        pulse = make_pulse(config.pulse.name, **_pulse_params(config.pulse))
+        pulse = make_pulse(config.pulse.name, **_pulse_params(config.pulse, base_dir))
     except UnknownNameError as exc:
         raise ConfigError(f"pulse.name: {exc}") from None
     except EchocalError as exc:
