@@ -26,3 +26,17 @@ def test_atomic_path_leaves_the_process_umask_alone(tmp_path, monkeypatch):
     atomic_write_text(tmp_path / "b.txt", "y")
     assert (tmp_path / "b.txt").read_text() == "y"
     assert [p.name for p in tmp_path.iterdir()] == ["b.txt"]  # no temporary file left
+
+
+def test_json_ready_is_strict_json():
+    import json
+    from pathlib import Path
+
+    import numpy as np
+
+    from echocal.io import json_ready
+
+    data = {"a": np.float64("nan"), "b": [1.0, float("inf"), (np.int64(2), Path("x"))]}
+    data["c"] = np.array([0.5, -np.inf])
+    text = json.dumps(json_ready(data), allow_nan=False)  # raises on any NaN/inf left
+    assert json.loads(text) == {"a": None, "b": [1.0, None, [2, "x"]], "c": [0.5, None]}

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import secrets
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
-__all__ = ["atomic_path", "atomic_write_text"]
+__all__ = ["atomic_path", "atomic_write_text", "json_ready"]
 
 
 @contextlib.contextmanager
@@ -58,3 +60,26 @@ def atomic_write(path: str | os.PathLike[str], writer: Callable[[Path], object])
     """Call ``writer(tmp_path)`` and move the result onto ``path`` atomically."""
     with atomic_path(path) as tmp:
         writer(tmp)
+
+
+def json_ready(value: Any) -> Any:
+    """``value`` as strict-JSON-ready plain data, recursively through dicts, lists, tuples.
+
+    Numpy scalars and arrays become Python values, paths strings, and non-finite floats
+    ``None`` (JSON has no NaN or inf: ``null`` reads "no value" or "unlimited").
+    """
+    import numpy as np
+
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    elif isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_ready(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    return value

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -13,6 +12,7 @@ from rich.console import Console
 
 from echocal.errors import EchocalError
 from echocal.geometry import Pose
+from echocal.io import atomic_write_text, json_ready
 from echocal.units import parse_angle, parse_length
 
 console = Console(stderr=True)
@@ -66,30 +66,8 @@ def write_json(data: dict[str, Any], path: Path | None = None) -> None:
     NaN and ±inf (no echo, an unlimited bound) become ``null``: JSON has no such numbers,
     and strict parsers (``jq``, browsers) refuse Python's ``NaN``/``Infinity`` tokens.
     """
-    text = json.dumps(_json_ready(data), indent=None if path is None else 2, allow_nan=False)
+    text = json.dumps(json_ready(data), indent=None if path is None else 2, allow_nan=False)
     if path is None:
         sys.stdout.write(text + "\n")
         return
-    from echocal.io import atomic_write_text
-
     atomic_write_text(path, text + "\n")
-
-
-def _json_ready(value: Any) -> Any:
-    """``value`` with numpy scalars/arrays as Python values, paths as strings and
-    non-finite floats as None, recursively through dicts, lists and tuples."""
-    import numpy as np
-
-    if isinstance(value, np.ndarray):
-        value = value.tolist()
-    elif isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _json_ready(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_ready(v) for v in value]
-    if isinstance(value, Path):
-        return str(value)
-    return value

@@ -23,7 +23,6 @@ Measurement order: positions, then azimuths, then co-elevations, then repeats
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 from collections.abc import Mapping, Sequence
@@ -38,7 +37,7 @@ from echocal._validate import finite_array, positive_int
 from echocal.ascan import AScan
 from echocal.errors import DataFileError, EchocalValueError, LimitError
 from echocal.geometry import Pose
-from echocal.io import atomic_path, atomic_write_text
+from echocal.io import atomic_path, atomic_write_text, json_ready
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.replay import DIMS, FORMAT
 
@@ -152,17 +151,6 @@ def saved_count(path: str | os.PathLike[str]) -> int:
         return 0
 
 
-def _json_safe(value: Any) -> Any:
-    """Replace non-finite floats (unlimited axes) by None so the JSON is strict."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_safe(v) for v in value]
-    return value
-
-
 def recording_dataset(
     samples: NDArray[np.float64],
     grid: RecordingGrid,
@@ -200,7 +188,7 @@ def recording_dataset(
             "echocal_format": FORMAT,
             "fs": float(fs),
             "start_time": float(start_time),
-            "source": json.dumps(_json_safe(dict(source_info))),
+            "source": json.dumps(json_ready(dict(source_info))),
             "grid": json.dumps(grid.to_dict()),
             "echocal_version": echocal.__version__,
             "comment": "fs in Hz, start_time in s; samples dims "
