@@ -99,6 +99,25 @@ def test_shapes_without_kernel_take_the_generic_path():
     assert _kernel_table((plate,)) is not None
 
 
+def test_specimens_without_kernel_are_not_kept_alive_by_the_table_cache():
+    # The table cache holds its keys; a mesh (or any generic-path) specimen must not be one
+    # of them, or each mesh simulated would stay in memory for the life of the process.
+    import gc
+    import weakref
+
+    from echocal.specimen import TriangleMesh
+
+    mesh = TriangleMesh(
+        [[-0.02, -0.02, 0.0], [0.02, -0.02, 0.0], [0.0, 0.02, 0.0]], [[0, 1, 2]], engine="numpy"
+    )
+    gone = weakref.ref(mesh)
+    positions, frames = poses(2, seed=5)
+    echo_arrays(PROBE, Specimen([mesh]), positions, frames)
+    del mesh
+    gc.collect()
+    assert gone() is None
+
+
 def test_compiled_pseudo_energy_matches_numpy(monkeypatch):
     pulse = GaborPulse(center_frequency=5e6, bandwidth=60.0)
     window = RecordingWindow(fs=100e6, start=20e-6, n_samples=2048)

@@ -229,13 +229,20 @@ def _pose_chunk(n_rays: int) -> int:
 # --- fused lambertian kernel (numba) -----------------------------------------------------
 
 
-@lru_cache(maxsize=64)
 def _kernel_table(shapes: tuple[Shape, ...]) -> tuple[NDArray[np.int64], FloatArray] | None:
     """Codes ``(S,)`` and parameters ``(S, KERNEL_PARAMS)`` of the shapes, or None if any
-    shape has no compiled intersection (then the generic path is used)."""
-    entries = [s._kernel_params() for s in shapes]
-    if any(e is None for e in entries):
+    shape has no compiled intersection (then the generic path is used).
+
+    Only kernel-ready shapes (small planes and spheres) enter the cache: it holds its keys
+    alive, and a key holding a large mesh would pin its memory for the process's life."""
+    if any(s._kernel_params() is None for s in shapes):
         return None
+    return _kernel_table_cached(shapes)
+
+
+@lru_cache(maxsize=64)
+def _kernel_table_cached(shapes: tuple[Shape, ...]) -> tuple[NDArray[np.int64], FloatArray]:
+    entries = [s._kernel_params() for s in shapes]
     codes = np.array([e[0] for e in entries], dtype=np.int64)  # type: ignore[index]
     params = np.zeros((len(entries), KERNEL_PARAMS))
     for i, e in enumerate(entries):
