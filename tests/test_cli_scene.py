@@ -54,3 +54,23 @@ def test_pose_outside_the_positioner_limits_is_drawn_with_a_warning(tmp_path):
     assert result.exit_code == 0, result.output
     assert "out of the setup's positioner limits" in result.output and "z=-0.02" in result.output
     assert out.exists()
+
+
+def test_error_text_in_brackets_is_printed_verbatim():
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "echocal.cli",
+            "scene",
+            "--pose",
+            "0,0,20",
+            "--setup",
+            "no-[bold]such",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 2
+    assert "no-[bold]such" in result.stderr

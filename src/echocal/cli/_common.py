@@ -9,6 +9,7 @@ from typing import Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from echocal.errors import EchocalError
 from echocal.geometry import Pose
@@ -27,7 +28,7 @@ def run_cli(app: typer.Typer) -> None:
     try:
         app()
     except EchocalError as exc:
-        console.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
+        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
         sys.exit(2)
 
 
