@@ -129,3 +129,15 @@ def test_true_optimum_over_a_sphere_points_at_its_centre():
     expected = position - np.array([0.0, 0.0, -25 * MM])
     # Symmetric beam on a sphere: the echo peaks exactly there (search tol 1e-5°).
     assert angle_between(orientation_normal(az, coel), expected) < 1e-3
+
+
+def test_setup_is_frozen_so_its_cached_noise_cannot_go_stale():
+    import dataclasses
+
+    sim = setup(snr_db=20.0)
+    sigma = sim.noise_sigma
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        sim.receiver = ReceiverSettings(snr_db=40.0)
+    quieter = dataclasses.replace(sim, receiver=ReceiverSettings(snr_db=40.0))
+    # 20 dB more SNR = 10x smaller noise amplitude (same reference echo).
+    assert quieter.noise_sigma == pytest.approx(sigma / 10.0, rel=1e-9)

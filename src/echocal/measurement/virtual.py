@@ -22,7 +22,6 @@ import platform
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 import scipy.optimize
@@ -132,7 +131,7 @@ class ReceiverSettings:
             raise EchocalValueError("noise.adc_bits needs noise.full_scale (the ADC range)")
 
 
-@dataclass(eq=False, kw_only=True)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class VirtualSetup(BaseSource):
     """The simulator: specimen + transducer + pulse + recording window + receiver.
 
@@ -166,16 +165,17 @@ class VirtualSetup(BaseSource):
     name: str = "virtual setup"
 
     def __post_init__(self) -> None:
-        self.reference_position = finite_array(
-            "reference_position", self.reference_position, shape_tail=(3,)
-        ).reshape(3)
-        self.sound_speed = positive_float("sound_speed", self.sound_speed)
+        # Frozen: the cached reference echo, noise level and truth can never go stale.
+        # (dataclasses.replace makes a new setup with fresh caches.)
+        reference = finite_array("reference_position", self.reference_position, shape_tail=(3,))
+        object.__setattr__(self, "reference_position", reference.reshape(3))
+        object.__setattr__(self, "sound_speed", positive_float("sound_speed", self.sound_speed))
         lookup("reflection model", self.reflection, dict.fromkeys(reflection_model_names()))
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
-        self._generator = as_generator(self.rng)
-        self._closed = False
+        object.__setattr__(self, "_generator", as_generator(self.rng))
+        object.__setattr__(self, "_closed", False)
+        object.__setattr__(self, "_truth_cache", {})
         _raise_malloc_threshold()
-        self._truth_cache: dict[tuple[Any, ...], tuple[float, float]] = {}
 
     # ------------------------------------------------------------------ description
     @property
@@ -325,7 +325,7 @@ class VirtualSetup(BaseSource):
 
     def close(self) -> None:
         """Mark the setup closed; later measurements raise."""
-        self._closed = True
+        object.__setattr__(self, "_closed", True)
 
     # ------------------------------------------------------------------ ground truth
     def metric_values(
