@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike, as_generator
-from echocal._validate import nonnegative_float, positive_int
+from echocal._validate import nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.acquisition import Acquisition
 from echocal.calibrate.base import Optimizer
@@ -108,6 +108,42 @@ def build_optimizer(
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
 
 
+def _settle_test(
+    settle: tuple[float, int], objective: Objective
+) -> Callable[[ArrayLike, ArrayLike], bool]:
+    """A stateful test: True once the last ``patience`` recommendations [deg] lie within
+    ``tol`` [deg] of their mean — and, when the objective knows its noise, the values
+    measured in those iterations rose clearly (5 σ) above the noise floor, so a method
+    parked on pure noise is not taken for converged."""
+    try:
+        tol, patience = settle
+    except (TypeError, ValueError):
+        raise EchocalValueError(
+            f"settle must be a pair (tol [deg], patience); got {settle!r}"
+        ) from None
+    tol = positive_float("settle tol", tol)
+    patience = positive_int("settle patience", patience)
+    history: list[FloatArray] = []
+    peaks: list[float] = []
+
+    def test(recommendation: ArrayLike, values: ArrayLike) -> bool:
+        history.append(np.asarray(recommendation, dtype=np.float64))
+        finite = np.asarray(values, dtype=np.float64)
+        finite = finite[np.isfinite(finite)]
+        peaks.append(float(finite.max()) if finite.size else -np.inf)
+        if len(history) < patience:
+            return False
+        recent = np.array(history[-patience:])
+        if np.max(np.hypot(*(recent - recent.mean(axis=0)).T)) >= tol:
+            return False
+        floor, sigma = objective.noise_estimate()
+        if floor is None or sigma is None:
+            return True
+        return max(peaks[-patience:]) > floor + 5.0 * sigma
+
+    return test
+
+
 def calibrate(
     objective: Objective,
     method: str = "auto",
@@ -116,6 +152,7 @@ def calibrate(
     budget: int | None = None,
     max_iter: int | None = None,
     xtol: float | None = None,
+    settle: tuple[float, int] | None = None,
     rng: RngLike = None,
     callback: Callable[[CalibrationState], bool | None] | None = None,
     acquire: bool | Mapping[str, Any] = False,
@@ -136,6 +173,9 @@ def calibrate(
     max_iter : iteration limit (default: the preset's, else 100).
     xtol : [deg] stop when an iteration moves the estimate (or proposes a step) shorter
         than this (after at least 2 iterations).
+    settle : ``(tol [deg], patience)``: stop once the last ``patience`` recommendations
+        lie within ``tol`` of their mean — a convergence test that noise cannot fool the
+        way a single short step can (status 7).  None disables it.
     rng : seed or Generator (randomized methods; reproducible runs).
     callback : called with a :class:`CalibrationState` after each iteration; True stops.
     acquire : True (or a dict of :class:`Acquisition` options) puts an acquisition phase
@@ -161,6 +201,7 @@ def calibrate(
     opts.update(options)
     max_iter = default_iter if max_iter is None else positive_int("max_iter", max_iter)
     xtol = None if xtol is None else nonnegative_float("xtol", xtol)
+    settled = None if settle is None else _settle_test(settle, objective)
     final_check = int(final_check)
     if final_check < 0:
         raise EchocalValueError(f"final_check must be >= 0; got {final_check}")
@@ -222,6 +263,9 @@ def calibrate(
                 break
         if xtol is not None and opt.n_iterations >= 2 and moved < xtol:
             status = 0
+            break
+        if settled is not None and settled(opt.recommend(), vals):
+            status = 7
             break
 
     x = opt.recommend()

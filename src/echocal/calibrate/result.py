@@ -26,10 +26,11 @@ STATUS_MESSAGES: dict[int, str] = {
     4: "acquisition failed: no echo clearly above the noise floor within the search radius",
     5: "search complete",
     6: "no finite measurement: every value was NaN",
+    7: "converged: the recommendation settled (stayed within settle tolerance)",
 }
 """The one status table: status code -> message."""
 
-SUCCESS_STATUSES = frozenset({0, 1, 2, 3, 5})
+SUCCESS_STATUSES = frozenset({0, 1, 2, 3, 5, 7})
 """Statuses after which ``x`` is a usable estimate (check ``status`` for why the run stopped)."""
 
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")

@@ -40,6 +40,13 @@ def register(app: typer.Typer) -> None:
         specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = None,
         budget: Annotated[int | None, typer.Option(help="Maximum number of measurements.")] = None,
         max_iter: Annotated[int | None, typer.Option(help="Maximum iterations.")] = None,
+        settle: Annotated[
+            str,
+            typer.Option(
+                help="TOL,PATIENCE: stop once the last PATIENCE recommendations lie within "
+                "TOL degrees of their mean; 'none' runs to the budget or iteration limit."
+            ),
+        ] = "0.01,8",
         preset: Annotated[
             str | None, typer.Option(help="Method options preset, e.g. thesis-table-7.")
         ] = None,
@@ -69,6 +76,7 @@ def register(app: typer.Typer) -> None:
                 x0=parse_pair(x0, "--x0"),
                 budget=budget,
                 max_iter=max_iter,
+                settle=_parse_settle(settle),
                 preset=preset,
                 rng=seed,
             )
@@ -107,6 +115,21 @@ def register(app: typer.Typer) -> None:
             f"  stopped:  {escape(result.message)}\n"
             f"  saved to  {escape(str(out))}/"
         )
+
+
+def _parse_settle(text: str) -> tuple[float, int] | None:
+    if text.strip().lower() == "none":
+        return None
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        tol, patience = float(parts[0]), int(parts[1])
+    except (IndexError, ValueError):
+        raise typer.BadParameter(
+            f"--settle takes TOL,PATIENCE (degrees, iterations) or 'none'; got {text!r}"
+        ) from None
+    if len(parts) != 2:
+        raise typer.BadParameter(f"--settle takes exactly TOL,PATIENCE; got {text!r}")
+    return tol, patience
 
 
 def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:

@@ -55,7 +55,6 @@ from echocal._validate import (
     positive_int,
 )
 from echocal.calibrate import calibrate, method_names
-from echocal.calibrate.driver import CalibrationState
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import DataFileError, EchocalError, EchocalValueError
 from echocal.geometry import PARAMETERIZATIONS
@@ -85,20 +84,6 @@ def echo_snr(samples: ArrayLike, window: RecordingWindow, pulse: Pulse) -> Float
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(peak > 0, peak / median, np.nan)
     return ratio
-
-
-def _stopper(tol: float, patience: int) -> Callable[[CalibrationState], bool]:
-    """Stop once the last ``patience`` recommendations lie within ``tol`` [deg] of their mean."""
-    history: list[FloatArray] = []
-
-    def callback(state: CalibrationState) -> bool:
-        history.append(np.asarray(state.recommendation, dtype=np.float64))
-        if len(history) < patience:
-            return False
-        recent = np.array(history[-patience:])
-        return bool(np.max(np.hypot(*(recent - recent.mean(axis=0)).T)) < tol)
-
-    return callback
 
 
 def _predict(
@@ -224,7 +209,7 @@ def _measure_point(
             x0=x0,
             budget=ctx.budget - ctx.tof_repeats,
             rng=rng,
-            callback=_stopper(ctx.tol, ctx.patience),
+            settle=(ctx.tol, ctx.patience),
             **ctx.options,
         )
     except EchocalError as exc:
