@@ -162,6 +162,7 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
                 budget=case.budget,
                 max_iter=case.max_iter,
                 xtol=case.xtol,
+                settle=case.settle,
                 rng=method_seed,
                 preset=case.preset,
                 **{k: _thawed(v) for k, v in case.params},

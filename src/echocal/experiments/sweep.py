@@ -9,6 +9,7 @@ A sweep file names one setup and position and crosses everything else::
     budget = 120                          # measurements per run
     max_iter = 100
     xtol = 0.01                           # [deg] stop when a step is shorter (optional)
+    settle = [0.01, 8]                    # [deg, iterations] stop once settled (optional)
     tolerance = 0.1                       # [deg] success threshold
     seeds = 20                            # seeds 0..19, or a list
     snr_db = [30, 20, 10]                 # default: the setup's SNR; "none" = noiseless
@@ -123,6 +124,7 @@ class SweepSpec(_Model):
     budget: int | None = Field(default=None, ge=1)
     max_iter: int = Field(default=100, ge=1)
     xtol: float | None = Field(default=None, ge=0, allow_inf_nan=False)
+    settle: tuple[Annotated[float, Field(gt=0)], Annotated[int, Field(ge=1)]] | None = None
     tolerance: float = Field(default=0.1, gt=0, allow_inf_nan=False)
     seed: int = Field(default=0, ge=0)
     seeds: int | list[Annotated[int, Field(ge=0)]] = 1
@@ -142,6 +144,7 @@ class RunCase:
 
     setup : built-in setup name or absolute path; position : [m] (3,);
     xtol : [deg] convergence stop of :func:`~echocal.calibrate.calibrate` (None: off);
+    settle : (tol [deg], patience) settle stop of ``calibrate`` (None: off);
     tolerance : [deg]; snr_db : [dB] or None (noiseless); params : sorted (option, value)
     pairs; x0 : [deg] the start (``x0_kind="point"``) or the ``(lo, hi)`` distance range
     from the truth (``"offset"``); x0_index : which entry of the sweep's x0 list;
@@ -155,6 +158,7 @@ class RunCase:
     budget: int | None
     max_iter: int
     xtol: float | None
+    settle: tuple[float, int] | None
     tolerance: float
     sweep_seed: int
     method: str
@@ -420,6 +424,7 @@ def expand(spec: SweepSpec) -> list[RunCase]:
             budget=spec.budget,
             max_iter=spec.max_iter,
             xtol=spec.xtol,
+            settle=None if spec.settle is None else (float(spec.settle[0]), int(spec.settle[1])),
             tolerance=float(spec.tolerance),
             sweep_seed=spec.seed,
             method=method.name,
