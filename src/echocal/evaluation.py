@@ -20,9 +20,15 @@ from echocal.calibrate.objective import PARAMETERIZATIONS
 from echocal.calibrate.result import CalibrationResult
 from echocal.geometry import angle_between, convert_angles, orientation_normal
 from echocal.measurement.virtual import VirtualSetup
-from echocal.plots.calibration import CostMap
 
-__all__ = ["RunEvaluation", "angular_error", "cost_map", "evaluate_run", "nearest_equivalent"]
+__all__ = [
+    "CostMap",
+    "RunEvaluation",
+    "angular_error",
+    "cost_map",
+    "evaluate_run",
+    "nearest_equivalent",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -33,6 +39,23 @@ def angular_error(points: ArrayLike, truth: ArrayLike, parameterization: str) ->
     az, coel = convert_angles(pts[..., 0], pts[..., 1], parameterization, "azimuth-coelevation")
     taz, tcoel = convert_angles(truth[0], truth[1], parameterization, "azimuth-coelevation")
     return angle_between(orientation_normal(az, coel), orientation_normal(taz, tcoel))
+
+
+@dataclass(frozen=True, slots=True)
+class CostMap:
+    """A metric sampled on a grid of orientations (the heat-map background).
+
+    Attributes
+    ----------
+    a, b : [deg] grid axes, shapes ``(n_a,)`` and ``(n_b,)``.
+    values : metric at each grid orientation, shape ``(n_a, n_b)``.
+    names : names of the two angles (e.g. ``("tilt_x", "tilt_y")``).
+    """
+
+    a: FloatArray
+    b: FloatArray
+    values: FloatArray
+    names: tuple[str, str] = ("azimuth", "coelevation")
 
 
 @dataclass(frozen=True)

@@ -213,3 +213,14 @@ def test_pseudo_energy_equals_the_former_implementation(shape, window_length):
     total = np.sum(x * x, axis=-1)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * np.max(total))
     assert np.all(got > 0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 64, 4097])
+def test_analytic_signal_equals_scipy_hilbert(n):
+    from scipy.signal import hilbert
+
+    from echocal.signal.analytic import analytic_signal
+
+    x = np.random.default_rng(n).standard_normal((3, n))
+    # Same FFT algorithm, same weights: equal to double-precision round-off.
+    np.testing.assert_allclose(analytic_signal(x), hilbert(x, axis=-1), rtol=0, atol=1e-12)

@@ -9,34 +9,17 @@ against the number of measurements.  They only read results.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from echocal.calibrate.result import CalibrationResult
+from echocal.evaluation import CostMap
 
 __all__ = ["CostMap", "convergence_figure", "path_figure"]
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True, slots=True)
-class CostMap:
-    """A metric sampled on a grid of orientations (the heat-map background).
-
-    Attributes
-    ----------
-    a, b : [deg] grid axes, shapes ``(n_a,)`` and ``(n_b,)``.
-    values : metric at each grid orientation, shape ``(n_a, n_b)``.
-    names : names of the two angles (e.g. ``("tilt_x", "tilt_y")``).
-    """
-
-    a: FloatArray
-    b: FloatArray
-    values: FloatArray
-    names: tuple[str, str] = ("azimuth", "coelevation")
 
 
 def convergence_figure(

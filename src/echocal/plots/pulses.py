@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from echocal.signal.analytic import analytic_signal
 from echocal.signal.pulses import Pulse
 
 __all__ = ["plot_pulse"]
@@ -13,8 +14,6 @@ __all__ = ["plot_pulse"]
 def plot_pulse(pulse: Pulse, *, fs: float | None = None, title: str | None = None) -> Figure:
     """Three panels side by side: w(t) with its envelope (and samples at ``fs`` [Hz] if
     given), normalized autocorrelation R(ℓ)/R(0), and |W(f)|² in dB re its peak."""
-    from scipy.signal import hilbert
-
     s = pulse.support
     t = np.linspace(-s, s, 2001)
     w = pulse.waveform(t)
@@ -30,7 +29,7 @@ def plot_pulse(pulse: Pulse, *, fs: float | None = None, title: str | None = Non
     ax_w, ax_r, ax_p = fig.subplots(1, 3)
     us = 1e6
     ax_w.plot(t * us, w, lw=1.2, label="w(t)")
-    env = np.abs(hilbert(w))
+    env = np.abs(analytic_signal(w))
     ax_w.plot(t * us, env, "--", lw=0.9, color="0.4", label="envelope")
     if fs is not None:
         ts = np.arange(np.ceil(-s * fs), np.floor(s * fs) + 1) / fs

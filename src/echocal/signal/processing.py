@@ -15,12 +15,12 @@ from types import MappingProxyType
 import numpy as np
 import scipy.fft
 from numpy.typing import ArrayLike, NDArray
-from scipy import signal as sps
 
 from echocal._numba import compiled
 from echocal._validate import finite_array, finite_float, lookup, nonnegative_float
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import EchocalValueError
+from echocal.signal.analytic import analytic_signal
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
 
@@ -126,8 +126,8 @@ def matched_envelope(samples: ArrayLike, pulse: Pulse, fs: float) -> _F64:
 
 
 def envelope(samples: ArrayLike) -> _F64:
-    """Analytic-signal envelope |x + i·H{x}| (scipy.signal.hilbert), shape of ``samples``."""
-    return np.abs(sps.hilbert(_samples(samples), axis=-1))
+    """Analytic-signal envelope |x + i·H{x}|, shape of ``samples``."""
+    return np.abs(analytic_signal(_samples(samples)))
 
 
 def _peak_position(env: _F64) -> _F64:

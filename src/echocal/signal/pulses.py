@@ -24,11 +24,11 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import linalg, optimize
-from scipy import signal as sps
 
 from echocal._validate import finite_array, finite_float, lookup, positive_float, positive_int
 from echocal.constants import DEFAULT_CENTER_FREQUENCY
 from echocal.errors import DataFileError, EchocalValueError
+from echocal.signal.analytic import analytic_signal
 
 __all__ = [
     "WINDOW_NAMES",
@@ -187,7 +187,7 @@ class Pulse(ABC):
         s = self.support
         n = 16385
         t = np.linspace(-2.0 * s, 2.0 * s, n)
-        return t, np.abs(sps.hilbert(self.waveform(t)))
+        return t, np.abs(analytic_signal(self.waveform(t)))
 
     @property
     def duration(self) -> float:
@@ -520,7 +520,7 @@ class SampledPulse(Pulse):
         fs = positive_float("fs", self.fs)
         object.__setattr__(self, "fs", fs)
         if self.start_time is None:
-            k = int(np.argmax(np.abs(sps.hilbert(w))))
+            k = int(np.argmax(np.abs(analytic_signal(w))))
             object.__setattr__(self, "start_time", -k / fs)
         else:
             object.__setattr__(self, "start_time", finite_float("start_time", self.start_time))
