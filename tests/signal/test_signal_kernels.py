@@ -11,6 +11,7 @@ from numpy.polynomial import polynomial as P
 from numpy.testing import assert_allclose, assert_array_equal
 
 from echocal import EchocalValueError
+from echocal import _numba as N
 from echocal.signal import GaborPulse, RecordingWindow, synthesize
 from echocal.signal import _kernels as K
 from echocal.signal.synthesis import _kernel_parameters, _plan, _synthesize_unchecked
@@ -30,7 +31,7 @@ def rays(rng, shape):
 
 
 def test_numba_and_numpy_spread_the_same():
-    if not K.HAVE_NUMBA:
+    if not N.HAVE_NUMBA:
         pytest.skip("numba not installed")
     rng = np.random.default_rng(2)
     a, tau = rays(rng, (3, 1500))
@@ -44,7 +45,7 @@ def test_numba_and_numpy_spread_the_same():
     }
     g_numba = np.zeros((3, plan.sigma * plan.n_fft))
     g_numpy = np.zeros_like(g_numba)
-    counts_numba = K._compiled()(a, tau, grid=g_numba, **kw)
+    counts_numba = N.compiled(K._spread_loops)(a, tau, grid=g_numba, **kw)
     counts_numpy = K._spread_numpy(a, tau, grid=g_numpy, **kw)
     # Same products added in the same order: equal to the last bit (no FMA contraction
     # without fastmath); allow 1e-15 relative in case a compiler fuses them anyway.
@@ -59,7 +60,7 @@ def test_synthesize_same_with_and_without_numba(monkeypatch):
     rng = np.random.default_rng(3)
     a, tau = rays(rng, (2, 4096))
     with_numba = synthesize(a, tau, PULSE, WINDOW)
-    monkeypatch.setattr(K, "USE_NUMBA", False)
+    monkeypatch.setattr(N, "USE_NUMBA", False)
     without = synthesize(a, tau, PULSE, WINDOW)
     assert_allclose(with_numba, without, rtol=0, atol=1e-15 * np.max(np.abs(without)))
 

@@ -11,29 +11,22 @@ has to be close enough to keep its small Fourier tails (~1e-8 at the defaults).
 
 Both implementations of :func:`spread` add the same products in the same order (ray by
 ray, tap by tap), so they agree to the last bit up to the compiler's choice of fused
-multiply-adds; :data:`USE_NUMBA` selects one (tests switch it off to check the fallback).
+multiply-adds; :data:`echocal._numba.USE_NUMBA` selects one (tests switch it off to check
+the fallback).
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from collections.abc import Callable
-from functools import cache
-from typing import Any
 
 import numpy as np
 from numpy.polynomial import chebyshev as _cheb
 from numpy.polynomial import polynomial as _poly
 from numpy.typing import NDArray
 
-__all__ = ["HAVE_NUMBA", "USE_NUMBA", "horner_coefficients", "kernel_transform", "spread"]
+from echocal._numba import compiled
 
-HAVE_NUMBA = importlib.util.find_spec("numba") is not None
-"""Whether numba (the package's ``fast`` extra) is installed; it is imported on first use."""
-
-USE_NUMBA = HAVE_NUMBA
-"""Use the compiled kernel (set False to force the numpy fallback)."""
+__all__ = ["horner_coefficients", "kernel_transform", "spread"]
 
 NUMBA_MIN_RAYS = 256
 """Below this many rays × poses the numpy kernel is used (no JIT compile for tiny inputs)."""
@@ -131,7 +124,7 @@ _BLOCK = 512  # rays whose kernel weights are evaluated together (stays in L1)
 
 
 def _spread_loops(amps, taus, t_lo, t_hi, t0, scale, coefs, grid):
-    """:func:`spread` as plain loops, compiled by numba (see :func:`_compiled`).
+    """:func:`spread` as plain loops, compiled by numba (:func:`echocal._numba.compiled`).
 
     Per block of rays: gather the kept rays' offsets t, first taps j₀ and amplitudes;
     evaluate the tap polynomials for the whole block with the ray axis innermost (SIMD,
@@ -186,16 +179,6 @@ def _spread_loops(amps, taus, t_lo, t_hi, t0, scale, coefs, grid):
     return n_hit, n_keep
 
 
-@cache
-def _compiled() -> Callable[..., Any] | None:
-    """The numba-compiled :func:`_spread_loops` (cached on disk), or None without numba."""
-    try:
-        from numba import njit
-    except ImportError:  # pragma: no cover - depends on the environment
-        return None
-    return njit(cache=True, nogil=True)(_spread_loops)
-
-
 def spread(
     amps: _F64,
     taus: _F64,
@@ -223,8 +206,8 @@ def spread(
     -------
     (number of rays that hit, i.e. a ≠ 0 and finite τ; number of those kept).
     """
-    if USE_NUMBA and HAVE_NUMBA and amps.size >= NUMBA_MIN_RAYS:
-        kernel = _compiled()
+    if amps.size >= NUMBA_MIN_RAYS:
+        kernel = compiled(_spread_loops)
         if kernel is not None:
             n_hit, n_keep = kernel(amps, taus, t_lo, t_hi, t0, scale, coefs, grid)
             return int(n_hit), int(n_keep)
