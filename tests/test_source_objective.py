@@ -95,3 +95,20 @@ def test_ascan_freezes_a_copy_not_the_callers_array():
     frozen = np.zeros(8)
     frozen.setflags(write=False)
     assert AScan(samples=frozen, fs=1e6).samples is frozen  # read-only input: kept, no copy
+
+
+def test_detections_are_significant_at_the_echo(sim):
+    import dataclasses
+
+    noisy = dataclasses.replace(sim, receiver=ReceiverSettings(snr_db=20.0), rng=3)
+    objective = SourceObjective(noisy, POSITION)
+    # the plate's optimum (30°, 4°), then 15° away (this small probe's broad lobe still
+    # returns an echo there; pure noise is tested in tests/signal/test_signal_detection.py)
+    objective(np.array([[30.0, 4.0], [30.0, 19.0]]))
+    g = objective.detections()
+    assert g.shape == (2,)
+    # at the optimum the matched-filter SNR at 20 dB is ≈ 10·√(samples in the pulse) ≫ 10
+    assert g[0] > 10.0 and g[0] > g[1]
+    noiseless = SourceObjective(sim, POSITION)
+    noiseless(np.array([[30.0, 4.0]]))
+    assert noiseless.detections()[0] > 1e6  # σ from round-off only: enormous (or inf)

@@ -97,7 +97,7 @@ def test_acquisition_finds_a_narrow_peak_from_pure_noise(local):
 
 def test_auto_uses_the_noise_level_of_the_objective_and_reuses_the_first_ring():
     obj = FunctionObjective(gaussian, noise_sigma=SNR30, rng=1)
-    res = calibrate(obj, "auto", x0=OPT + np.array([1.0, 0.5]), max_iter=1, rng=0)
+    res = calibrate(obj, "auto", x0=OPT + np.array([1.0, 0.5]), max_iter=1, rng=0, confirm=False)
     # echo found in the first 7 points (x0 + hexagon), which double as the model's design:
     # one model-based iteration later the run has used exactly 8 measurements
     assert res.options["noise_sigma"] == SNR30 and res.n_measurements == 8
@@ -121,7 +121,7 @@ def test_acquisition_detection_false_alarm_and_averaging():
     assert acq.local is None and np.max(acq.scores()) < acq.threshold
     # a peak of only 2.5 sigma at x0, width = spacing: the score of x0 is the mean of
     # x0 and its 6 neighbours over sigma / sqrt(7) = 4.2 > 3 (first-ring threshold)
-    acq = Acquisition(np.zeros(2), spacing=1.0, noise_sigma=1.0, noise_floor=0.0)
+    acq = Acquisition(np.zeros(2), spacing=1.0, noise_sigma=1.0, noise_floor=0.0, confirm=False)
     pts = acq.ask()
     peak = 2.5 * np.exp(-np.sum(pts**2, axis=1) / 2.0)
     acq.tell(peak)  # noiseless values, so the score is exact
@@ -163,23 +163,25 @@ def test_model_based_subtracts_the_noise_floor_before_the_log_fit(floor):
         assert np.hypot(*(opt.recommend() - OPT)) < 1e-3
 
 
-def test_search_rings_coarse_outside_cover_the_annulus():
+@pytest.mark.parametrize(("growth", "cap"), [(0.5, 4.0), (2.0, 4.2)])
+def test_search_rings_coarse_outside_cover_the_whole_disc(growth, cap):
     from echocal.calibrate.acquisition import search_rings
 
-    rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, growth=0.5, max_spacing=4.0)
+    rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, growth=growth, max_spacing=cap)
     # inside fine_radius: the hexagonal lattice itself
     for a, b in zip(rings[:4], hex_spiral(np.zeros(2), 1.0, 3), strict=True):
         np.testing.assert_allclose(a, b)
     pts = np.vstack(rings)
-    assert np.hypot(*pts.T).max() <= 20.0 + 1e-9
-    # every direction and distance up to the last full circle is covered: the nearest
-    # search point is within 0.7 s(r) (a hexagonal lattice's covering radius is s/√3 =
-    # 0.577 s; circles add curvature and the stagger: 0.65 s measured)
-    q = np.random.default_rng(0).uniform(-17.0, 17.0, (4000, 2))
+    # the last circle may lie outside max_radius by at most its covering radius s/√3
+    assert np.hypot(*pts.T).max() <= 20.0 + cap / np.sqrt(3.0) + 1e-9
+    # every direction and distance up to max_radius is covered: the nearest search point
+    # is within 0.7 s(r) (a hexagonal lattice's covering radius is s/√3 = 0.577 s; circles
+    # add curvature and the stagger: 0.65 s measured)
+    q = np.random.default_rng(0).uniform(-20.0, 20.0, (5000, 2))
     r = np.hypot(*q.T)
-    q, r = q[(r > 3.0) & (r < 17.0)], r[(r > 3.0) & (r < 17.0)]
+    q, r = q[(r > 3.0) & (r < 20.0)], r[(r > 3.0) & (r < 20.0)]
     nearest = np.min(np.hypot(*(q[:, None, :] - pts[None, :, :]).transpose(2, 0, 1)), axis=1)
-    s = np.minimum(np.maximum(1.0, 0.5 * r), 4.0)
+    s = np.minimum(np.maximum(1.0, growth * r), cap)
     assert np.all(nearest <= 0.7 * s)
     # growth 0 (the Acquisition default) is the plain hexagonal lattice
     plain = search_rings(np.zeros(2), 1.0, 3.0)

@@ -13,7 +13,16 @@ where m_i is the mean of point i and its n_i − 1 measured lattice neighbours
 at 10 dB), the floor is the objective's ``noise_floor`` or the median of the
 values, and σ the objective's known noise level (``noise_sigma``, e.g. from the
 source's SNR) or else a robust estimate 1.4826 · MAD of the values measured
-so far (noise points are the majority while searching).  At least the first 7
+so far (noise points are the majority while searching).
+
+When the objective can say how significant each measurement's echo is (a
+``detector``: :meth:`~echocal.calibrate.Objective.detections`, which an
+A-scan source objective computes from the matched-filter peak, see
+:class:`~echocal.signal.detection.EchoDetector`), the test uses those
+Gaussian-equivalent significances g_i instead of the values, combined over
+the same neighbourhoods as Σg/√n_i (Stouffer) — a better detector than the
+energy (on the 5 MHz probe at 30 dB it finds the echo ≈ 2.5° from the peak
+instead of ≈ 2.1°).  At least the first 7
 points (x0 and ring 1) are measured before deciding.  Then the local method
 starts at the best point; if it accepts a warm start (``history``, the
 model-based method does) it receives every acquisition measurement, so none is
@@ -38,10 +47,16 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import get_method, register_method
 
-__all__ = ["Acquisition", "NoiseModel", "hex_spiral", "search_rings"]
+__all__ = ["Acquisition", "Detector", "NoiseModel", "hex_spiral", "search_rings"]
 
 NoiseModel = Callable[[], tuple[float | None, float | None]]
 """A live ``(noise_floor, noise_sigma)`` estimate [energy units] (either may be None)."""
+
+_SURE_MARGIN = 2.0
+"""A detection this many σ above ``threshold`` needs no confirmation."""
+
+Detector = Callable[[], "FloatArray | None"]
+"""The detection significances of the points just measured, shape (k,), or None."""
 
 
 def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatArray]:
@@ -75,7 +90,9 @@ def search_rings(
     and circle spacing grow with the radius r as ``max(spacing, growth · r)``, capped at
     ``max_spacing`` — the area a measurement must cover grows with the area to search.
 
-    Returns a list of arrays of shape (k_i, 2) (the first is ``center``), out to ``max_radius``.
+    Returns a list of arrays of shape (k_i, 2) (the first is ``center``); the last circle
+    is the first whose points lie within s/√3 (the covering radius of a staggered lattice
+    of spacing s) of ``max_radius``, so the whole disc of ``max_radius`` is covered.
     """
     n_fine = int(np.ceil(min(fine_radius, max_radius) / spacing)) if np.isfinite(fine_radius) else 0
     if not np.isfinite(fine_radius) or growth <= 0.0:
@@ -87,7 +104,7 @@ def search_rings(
     while True:
         s = min(max(spacing, growth * r), cap)
         r += 0.5 * np.sqrt(3.0) * s
-        if r > max_radius + 1e-9:
+        if r - s / np.sqrt(3.0) > max_radius + 1e-9:  # covers up to r + s/√3: done
             break
         n = int(np.ceil(2.0 * np.pi * r / s))
         ang = (np.arange(n) + 0.5 * (k % 2)) * 2.0 * np.pi / n
@@ -109,11 +126,18 @@ class Acquisition(Optimizer):
     max_radius : [deg] give up beyond this distance from x0.
     threshold : detection threshold in units of σ.
     first_threshold : the threshold while only x0 and the first ring are measured.
+    confirm : a marginal detection (score below ``threshold`` + 2) must survive one
+        re-measurement of its best point (one measurement more; the repeat joins that
+        point's neighbourhood, so a noise outlier averages away and the search goes on
+        instead of handing a local method pure noise).
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
     noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
         estimates (either may be None), consulted at every decision when the fixed values
         above are None — e.g. a source objective that measures the noise in each A-scan.
+    detector : callable returning the detection significances of the points just
+        measured, shape (k,), or None (then the values are tested) — e.g.
+        :meth:`~echocal.calibrate.Objective.detections`.
     batch : maximum points per acquisition ask (1 = stop at the first detection).
     fine_radius : [deg] the lattice of ``spacing`` is used out to this distance from x0;
         beyond it the search continues on coarser circles (see :func:`search_rings`).
@@ -133,9 +157,11 @@ class Acquisition(Optimizer):
         max_radius: float = 20.0,
         threshold: float = 4.5,
         first_threshold: float = 3.0,
+        confirm: bool = True,
         noise_sigma: float | None = None,
         noise_floor: float | None = None,
         noise_model: NoiseModel | None = None,
+        detector: Detector | None = None,
         batch: int = 1,
         fine_radius: float | None = None,
         growth: float = 0.0,
@@ -146,6 +172,8 @@ class Acquisition(Optimizer):
     ) -> None:
         super().__init__(x0, bounds=bounds, rng=rng, normalize="none")
         self.noise_model = noise_model
+        self.detector = detector
+        self._use_significance = detector is not None
         self._local_cls = get_method(local)
         if self._local_cls is Acquisition or issubclass(self._local_cls, Acquisition):
             from echocal.errors import EchocalValueError
@@ -158,6 +186,9 @@ class Acquisition(Optimizer):
         self.max_radius = positive_float("max_radius", max_radius)
         self.threshold = positive_float("threshold", threshold)
         self.first_threshold = positive_float("first_threshold", first_threshold)
+        self.confirm = bool(confirm)
+        self._confirming: FloatArray | None = None  # a detection's best point to re-measure
+        self._confirmed = 0  # re-measurements made
         self.noise_sigma = (
             None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
         )
@@ -185,7 +216,8 @@ class Acquisition(Optimizer):
         self._next = 0
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
-        self._sum = np.zeros(0)
+        self._g = np.zeros(0)  # detection significance per point (when a detector is used)
+        self._sum = np.zeros((0, 2))  # neighbourhood sums of (value, significance)
         self._cnt = np.zeros(0, dtype=np.int64)
         self.local: Optimizer | None = None
         """The local optimizer once the echo has been found."""
@@ -200,21 +232,37 @@ class Acquisition(Optimizer):
     def min_budget(self) -> int:
         return min(7, len(self._queue)) if len(self._queue) else 1
 
-    def _add(self, points: FloatArray, values: FloatArray) -> None:
+    def _add(self, points: FloatArray, values: FloatArray, significance: FloatArray) -> None:
         """Append measurements and update the neighbour sums (lattice neighbours: points
         within 1.01 spacing, each point being its own neighbour)."""
-        for p, v in zip(points, values, strict=True):
+        for p, v, g in zip(points, values, significance, strict=True):
             near = np.hypot(*(self._x - p).T) <= 1.01 * self.spacing if len(self._x) else []
-            self._sum[near] += v
+            self._sum[near] += (v, g)
             self._cnt[near] += 1
-            self._sum = np.append(self._sum, v + float(np.sum(self._y[near])))
+            own = np.array([v, g]) + np.stack([self._y[near], self._g[near]], axis=1).sum(axis=0)
+            self._sum = np.vstack([self._sum, own[None, :]])
             self._cnt = np.append(self._cnt, 1 + int(np.count_nonzero(near)))
             self._x = np.vstack([self._x, p[None, :]])
             self._y = np.append(self._y, v)
+            self._g = np.append(self._g, g)
+
+    def _significances(self, k: int) -> FloatArray | None:
+        """The detector's significances of the last k measured points, or None — after
+        which the values are tested for the rest of the search."""
+        if not self._use_significance or self.detector is None:
+            return None
+        sig = self.detector()
+        if sig is None or np.shape(sig) != (k,):
+            self._use_significance = False
+            return None
+        return np.asarray(sig, dtype=np.float64)
 
     def scores(self) -> FloatArray:
         """Detection statistic per measured point, shape (n,): z-score of the mean of the
-        point and its measured lattice neighbours above the noise floor."""
+        point and its measured lattice neighbours above the noise floor (with a detector:
+        their combined significance Σg/√n)."""
+        if self._use_significance:
+            return self._sum[:, 1] / np.sqrt(self._cnt)
         y = self._y
         floor, sigma = self.noise_floor, self.noise_sigma
         if self.noise_model is not None:
@@ -224,7 +272,7 @@ class Acquisition(Optimizer):
         floor = float(np.median(y)) if floor is None else floor
         if sigma is None:
             sigma = 1.4826 * float(np.median(np.abs(y - np.median(y))))
-        mean = self._sum / self._cnt
+        mean = self._sum[:, 0] / self._cnt
         if sigma <= 0.0:
             return np.where(mean > floor, np.inf, -np.inf)
         return (mean - floor) / (sigma / np.sqrt(self._cnt))
@@ -235,7 +283,7 @@ class Acquisition(Optimizer):
         # x0 and its first ring: only 7 tests, so a lower threshold keeps the false-alarm
         # rate as low (7 Q(3) = 1 %) as 4.5 sigma over a long search, and a start near
         # a weak peak hands over at once
-        thr = self.first_threshold if len(self._y) <= 7 else self.threshold
+        thr = self.first_threshold if len(self._y) - self._confirmed <= 7 else self.threshold
         return bool(np.max(self.scores()) > thr)
 
     def _start_local(self) -> None:
@@ -258,6 +306,8 @@ class Acquisition(Optimizer):
     def _ask(self) -> FloatArray:
         if self.local is not None:
             return self.local.ask()
+        if self._confirming is not None:
+            return self._confirming[None, :]
         n = self.batch
         if self._next == 0:
             n = max(n, min(7, len(self._queue)))
@@ -271,19 +321,29 @@ class Acquisition(Optimizer):
             if self.local.finished:
                 self.finished, self.finish_status = True, self.local.finish_status
             return done
-        self._next += len(points)
+        confirming = self._confirming is not None
+        if confirming:
+            self._confirming = None
+            self._confirmed += 1
+        else:
+            self._next += len(points)
         ok = ~self.last_nan
-        self._add(points[ok], values[ok])
+        sig = self._significances(len(points))
+        self._add(points[ok], values[ok], np.zeros(len(points))[ok] if sig is None else sig[ok])
         if len(self._y) and self._next < len(self._queue):
             # search first where the echo is strongest so far: within each ring, the points
             # nearest to the best value come first
-            best = self._x[int(np.argmax(self._y))]
+            best = self._x[int(np.argmax(self._g if self._use_significance else self._y))]
             rest = self._queue[self._next :]
             order = np.lexsort((np.hypot(*(rest - best).T), self._ring[self._next :]))
             self._queue[self._next :] = rest[order]
             self._ring[self._next :] = self._ring[self._next :][order]
         if self._detected():
-            self._start_local()
+            sure = float(np.max(self.scores())) > self.threshold + _SURE_MARGIN
+            if self.confirm and not confirming and not sure:
+                self._confirming = self._x[int(np.argmax(self.scores()))].copy()
+            else:
+                self._start_local()
         elif self._next >= len(self._queue):
             self.finished, self.finish_status = True, 4
             if len(self._y):

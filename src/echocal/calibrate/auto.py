@@ -56,7 +56,7 @@ from typing import Any
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal.calibrate.acquisition import Acquisition, NoiseModel
+from echocal.calibrate.acquisition import Acquisition, Detector, NoiseModel
 from echocal.calibrate.registry import register_method
 
 __all__ = ["Auto"]
@@ -77,13 +77,15 @@ class Auto(Acquisition):
         max_radius: float = 20.0,
         threshold: float = 4.5,
         first_threshold: float = 3.0,
+        confirm: bool = True,
         noise_sigma: float | None = None,
         noise_floor: float | None = None,
         noise_model: NoiseModel | None = None,
+        detector: Detector | None = None,
         batch: int = 1,
         fine_radius: float | None = 3.0,
-        growth: float = 0.5,
-        max_spacing: float | None = 4.0,
+        growth: float = 2.0,
+        max_spacing: float | None = 4.2,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -96,9 +98,11 @@ class Auto(Acquisition):
             max_radius=max_radius,
             threshold=threshold,
             first_threshold=first_threshold,
+            confirm=confirm,
             noise_sigma=noise_sigma,
             noise_floor=noise_floor,
             noise_model=noise_model,
+            detector=detector,
             batch=batch,
             fine_radius=fine_radius,
             growth=growth,

@@ -91,6 +91,7 @@ def build_optimizer(
         aknown.setdefault("noise_sigma", objective.noise_sigma)
         aknown.setdefault("noise_floor", objective.noise_floor)
         aknown.setdefault("noise_model", objective.noise_estimate)
+        aknown.setdefault("detector", objective.detections)
         if issubclass(cls, Acquisition):  # pragma: no cover - excluded above
             raise AssertionError
         used = {**known, "acquire": aknown}
@@ -105,6 +106,7 @@ def build_optimizer(
         known.setdefault("noise_sigma", objective.noise_sigma)
         known.setdefault("noise_floor", objective.noise_floor)
         known.setdefault("noise_model", objective.noise_estimate)
+        known.setdefault("detector", objective.detections)
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
 
 
@@ -309,4 +311,5 @@ def calibrate(
         parameterization=objective.parameterization,
         names=objective.names,
         times=times,
+        acquisition_measurements=getattr(opt, "found_at", None),
     )

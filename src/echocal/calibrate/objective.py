@@ -138,11 +138,17 @@ class Objective:
         self._times: list[FloatArray] = []
         self.n_measurements = 0
         self.n_nan = 0
+        self._last_significance: FloatArray | None = None
 
     # -- to override -------------------------------------------------------------------
     def _evaluate(self, points: FloatArray) -> ArrayLike:
         """Measure f at ``points`` [deg], shape (k, 2); return values, shape (k,)."""
         raise NotImplementedError
+
+    def _significance(self) -> FloatArray | None:
+        """Detection significance of each point of the last :meth:`_evaluate`, shape (k,),
+        or None when this objective cannot tell (the default)."""
+        return None
 
     # -- public ------------------------------------------------------------------------
     @property
@@ -166,6 +172,16 @@ class Objective:
         noise (e.g. from the quiet part of each A-scan) returns live estimates.
         """
         return self.noise_floor, self.noise_sigma
+
+    def detections(self) -> FloatArray | None:
+        """How surely each point of the last call shows an echo, shape (k,), or None.
+
+        Gaussian-equivalent significances (≈ N(0, 1) where there is only noise; see
+        :class:`~echocal.signal.detection.EchoDetector`), repeats combined as Σg/√n.
+        None when the objective has no such channel (e.g. an analytic function): the
+        acquisition phase then tests the values themselves.
+        """
+        return None if self._last_significance is None else self._last_significance.copy()
 
     def cost(self, n_points: int) -> int:
         """Measurements needed to evaluate ``n_points`` points (``n_points * repeats``)."""
@@ -210,6 +226,7 @@ class Objective:
                 f"budget={self.budget} remain"
             )
         reps = []
+        significances: list[FloatArray] = []
         for _ in range(self.repeats):
             vals = np.asarray(self._evaluate(pts.copy()), dtype=np.float64).reshape(-1)
             if vals.shape != (len(pts),):
@@ -223,6 +240,10 @@ class Objective:
             self.n_measurements += len(pts)
             self.n_nan += int(np.count_nonzero(np.isnan(vals)))
             reps.append(vals)
+            sig = self._significance()
+            if sig is not None:
+                significances.append(np.asarray(sig, dtype=np.float64).reshape(len(pts)))
+        self._last_significance = _stouffer(significances) if significances else None
         stack = np.stack(reps)
         finite = np.isfinite(stack)
         counts = finite.sum(axis=0)
@@ -230,6 +251,17 @@ class Objective:
         out = np.full(len(pts), np.nan)
         np.divide(sums, counts, out=out, where=counts > 0)
         return out
+
+
+def _stouffer(significances: list[FloatArray]) -> FloatArray:
+    """Σg/√n over the non-NaN entries of each column of a (n_repeats, k) list; NaN if none."""
+    stack = np.stack(significances)
+    finite = ~np.isnan(stack)
+    counts = finite.sum(axis=0)
+    total = np.where(finite, stack, 0.0).sum(axis=0)
+    out = np.full(stack.shape[1], np.nan)
+    np.divide(total, np.sqrt(counts), out=out, where=counts > 0)
+    return out
 
 
 class FunctionObjective(Objective):

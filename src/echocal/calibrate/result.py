@@ -57,6 +57,8 @@ class CalibrationResult:
     n_nan : measurements that returned NaN (replaced by the worst value seen, at most 0).
     parameterization, names : the angle convention of the objective.
     times : [s], shape (n_measurements,) — wall-clock time of each measurement.
+    acquisition_measurements : measurements the acquisition phase spent before it found
+        the echo and handed over (None without an acquisition phase or if it never did).
     """
 
     x: FloatArray
@@ -77,6 +79,7 @@ class CalibrationResult:
     parameterization: str = "azimuth-coelevation"
     names: tuple[str, str] = ("azimuth", "coelevation")
     times: FloatArray = field(default_factory=lambda: np.zeros(0))
+    acquisition_measurements: int | None = None
 
     @property
     def nfev(self) -> int:

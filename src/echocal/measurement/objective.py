@@ -10,6 +10,8 @@ Counting, logging, budget, bounds and repeats are the base class's.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -20,8 +22,15 @@ from echocal.errors import EchocalValueError
 from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
+from echocal.signal.detection import EchoDetector
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds"]
+
+
+@lru_cache(maxsize=8)
+def _detector(pulse: Pulse, fs: float, n_samples: int) -> EchoDetector:
+    """One calibrated detector per (pulse, sampling rate, A-scan length), shared."""
+    return EchoDetector(pulse, fs, n_samples)
 
 
 def default_bounds(source: MeasurementSource, parameterization: str) -> np.ndarray:
@@ -105,6 +114,7 @@ class SourceObjective(Objective):
         self._last_scan: AScan | None = None
         self._scan_sigmas: list[float] = []  # robust per-sample noise σ of each A-scan
         self._noise_cache: tuple[float, tuple[float, float]] | None = None
+        self._peaks = np.zeros(0)  # matched-envelope peak of each A-scan of the last batch
 
     def pose(self, a: float, b: float) -> Pose:
         """The pose measured for orientation ``(a, b)`` [deg]."""
@@ -113,14 +123,26 @@ class SourceObjective(Objective):
     def _evaluate(self, points: np.ndarray) -> np.ndarray:
         poses = [self.pose(a, b) for a, b in points]
         scans = self.source.measure_many(poses)
-        for scan in scans:
+        self._peaks = np.full(len(scans), np.nan)
+        for i, scan in enumerate(scans):
             if scan.is_finite:
                 x = scan.samples
                 self._scan_sigmas.append(1.4826 * float(np.median(np.abs(x - np.median(x)))))
+                self._peaks[i] = float(_detector(self.pulse, scan.fs, scan.n_samples).peak(x))
         self._last_scan = scans[-1] if scans else None
         return np.array(
             [ascan_metric(s, self.metric, self.pulse, self.window_length) for s in scans]
         )
+
+    def _significance(self) -> np.ndarray | None:
+        """Matched-filter peak significance of each A-scan of the last batch against the
+        receiver noise σ measured so far (median of the per-scan robust estimates)."""
+        scan = self._last_scan
+        if scan is None or not self._scan_sigmas:
+            return None
+        sigma = float(np.median(self._scan_sigmas))
+        detector = _detector(self.pulse, scan.fs, scan.n_samples)
+        return detector.significance_of_peak(self._peaks, sigma)
 
     def noise_estimate(self) -> tuple[float | None, float | None]:
         """Live ``(noise_floor, noise_sigma)`` of the metric, measured from the A-scans.
