@@ -96,6 +96,7 @@ def register(app: typer.Typer) -> None:
             "truth_deg": [float(v) for v in evaluation.truth],
             "error_deg": evaluation.error,
             "n_measurements": result.n_measurements,
+            "acquisition_measurements": result.acquisition_measurements,
             "n_iterations": result.n_iterations,
             "status": result.status,
             "message": result.message,
@@ -105,13 +106,15 @@ def register(app: typer.Typer) -> None:
             write_json(summary)
             return
         names = result.names
+        found = result.acquisition_measurements
+        search = "" if found is None else f" (echo found after {found})"
         console.print(
             f"[bold]{escape(result.method)}[/] on {escape(virtual.description)}\n"
             f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
             f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
             f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
-            f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}   "
-            f"iterations {result.n_iterations}\n"
+            f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}"
+            f"{search}   iterations {result.n_iterations}\n"
             f"  stopped:  {escape(result.message)}\n"
             f"  saved to  {escape(str(out))}/"
         )
