@@ -168,9 +168,38 @@ def test_newton_uses_the_corrected_h22():
     from echocal.calibrate._fd import nine_gradient_hessian, nine_points
 
     c, delta = np.array([0.2, 0.1]), 0.3
-    _g, h = nine_gradient_hessian(quadratic(nine_points(c, delta)), delta)
+    pts = nine_points(c, delta)
+    _g, h = nine_gradient_hessian(quadratic(pts), pts)
     # the Hessian of the quadratic is -2Q exactly (central differences are exact)
     np.testing.assert_allclose(h, -2.0 * np.array([[1.0, 0.3], [0.3, 2.0]]), atol=1e-9)
+
+
+def test_stencils_clipped_at_a_bound_use_the_real_spacing():
+    from conftest import _Q
+    from echocal.calibrate._fd import (
+        cross_gradient,
+        cross_points,
+        nine_gradient_hessian,
+        nine_points,
+    )
+
+    c, delta, hi = np.array([1.5, 0.9]), 0.4, np.array([1.7, 1.0])  # bounds cut + side
+    pts = np.minimum(nine_points(c, delta), hi)
+    assert not np.allclose(pts, nine_points(c, delta))
+    g, h = nine_gradient_hessian(quadratic(pts), pts)
+    # uneven 3-point differences are exact for a quadratic: ∇f = -2Q(c - x*), H = -2Q
+    np.testing.assert_allclose(g, -2.0 * _Q @ (c - OPT), atol=1e-9)
+    np.testing.assert_allclose(h, -2.0 * _Q, atol=1e-9)
+    # the cross: a secant over the real distance, exact on a linear function
+    cross = np.minimum(cross_points(c, delta), hi)
+    slope = np.array([2.0, -3.0])
+    np.testing.assert_allclose(cross_gradient(cross @ slope, cross), slope, atol=1e-12)
+    # an axis clipped onto the centre: one-sided gradient, no curvature claimed on that
+    # axis; the mixed term still spans a rectangle (δ × 2δ) and stays exact
+    flat = np.minimum(nine_points(c, delta), [c[0], np.inf])
+    g1, h1 = nine_gradient_hessian(quadratic(flat), flat)
+    assert h1[0, 0] == 0.0 and np.isfinite(g1).all()
+    np.testing.assert_allclose(h1[0, 1], -2.0 * _Q[0, 1], atol=1e-9)
 
 
 def test_bfgs_skips_updates_that_violate_the_curvature_condition():

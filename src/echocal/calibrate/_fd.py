@@ -28,9 +28,16 @@ def cross_points(center: FloatArray, delta: float) -> FloatArray:
     return center[None, :] + delta * _CROSS
 
 
-def cross_gradient(values: FloatArray, delta: float) -> FloatArray:
-    """Central-difference gradient, shape (2,), from :func:`cross_points` values (eqs. 38–39)."""
-    return np.array([values[0] - values[1], values[2] - values[3]]) / (2.0 * delta)
+def cross_gradient(values: FloatArray, points: FloatArray) -> FloatArray:
+    """Central-difference gradient, shape (2,), from :func:`cross_points` values (eqs. 38–39).
+
+    ``points`` [deg], shape (4, 2), are the points actually measured: near an angle bound
+    the stencil is clipped, and each difference is divided by the real distance of its
+    pair (2δ when nothing was clipped); a pair collapsed onto one point gives 0.
+    """
+    span = np.array([points[0, 0] - points[1, 0], points[2, 1] - points[3, 1]])
+    rise = np.array([values[0] - values[1], values[2] - values[3]])
+    return np.divide(rise, span, out=np.zeros(2), where=span > 0.0)
 
 
 def nine_points(center: FloatArray, delta: float) -> FloatArray:
@@ -38,17 +45,36 @@ def nine_points(center: FloatArray, delta: float) -> FloatArray:
     return center[None, :] + delta * _NINE
 
 
-def nine_gradient_hessian(values: FloatArray, delta: float) -> tuple[FloatArray, FloatArray]:
+def nine_gradient_hessian(values: FloatArray, points: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Gradient (2,) and Hessian (2, 2) from :func:`nine_points` values.
 
-    Eqs. 62–63 and 70–73 with the erratum h22 = (y+(2) − 2 y0 + y−(2)) / δ².
+    Eqs. 62–63 and 70–73 with the erratum h22 = (y+(2) − 2 y0 + y−(2)) / δ², written for
+    the points actually measured (``points`` [deg], shape (9, 2)): with a = x₊ − x₀ and
+    b = x₀ − x₋ along an axis (both δ unless a bound clipped the stencil)
+
+        g = (b²(y₊ − y₀) + a²(y₀ − y₋)) / (a b (a + b)),
+        h = 2((y₊ − y₀)/a − (y₀ − y₋)/b) / (a + b),
+
+    which reduce to the thesis's formulas for a = b = δ.  An axis clipped onto the centre
+    (a or b = 0) keeps a one-sided gradient and reports no curvature (h = 0, which Newton's
+    damping treats as not negative definite).
     """
     y0, y1p, y1m, y2p, y2m, y11, y12, y21, y22 = values
-    g = np.array([y1p - y1m, y2p - y2m]) / (2.0 * delta)
-    h11 = (y1p - 2.0 * y0 + y1m) / delta**2
-    h22 = (y2p - 2.0 * y0 + y2m) / delta**2
-    h12 = (y11 - y12 - y21 + y22) / (4.0 * delta**2)
-    return g, np.array([[h11, h12], [h12, h22]])
+    c = points[0]
+    g, h = np.zeros(2), np.zeros((2, 2))
+    for axis, (yp, ym, ip, im) in enumerate(((y1p, y1m, 1, 2), (y2p, y2m, 3, 4))):
+        a, b = points[ip, axis] - c[axis], c[axis] - points[im, axis]
+        if a > 0.0 and b > 0.0:
+            g[axis] = (b * b * (yp - y0) + a * a * (y0 - ym)) / (a * b * (a + b))
+            h[axis, axis] = 2.0 * ((yp - y0) / a - (y0 - ym) / b) / (a + b)
+        elif a > 0.0:
+            g[axis] = (yp - y0) / a
+        elif b > 0.0:
+            g[axis] = (y0 - ym) / b
+    area = (points[5, 0] - points[7, 0]) * (points[5, 1] - points[6, 1])
+    if area > 0.0:
+        h[0, 1] = h[1, 0] = (y11 - y12 - y21 + y22) / area
+    return g, h
 
 
 def cap_step(step: FloatArray, max_step: float | None) -> FloatArray:

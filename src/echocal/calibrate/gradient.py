@@ -70,7 +70,7 @@ class _FDAscent(Optimizer):
         return cross_points(self._center(), self.delta)
 
     def _tell(self, points: FloatArray, values: FloatArray) -> bool:
-        g = cross_gradient(values, self.delta)
+        g = cross_gradient(values, points)
         self.gradient = g
         if self.mu is None:
             norm = float(np.hypot(*g))

@@ -110,7 +110,7 @@ class Newton(Optimizer):
         self._candidate = self.clip(self._iterate + self._step)
 
     def _tell(self, points: FloatArray, values: FloatArray) -> bool:
-        g, h = nine_gradient_hessian(values, self.delta)
+        g, h = nine_gradient_hessian(values, points)
         y0 = float(values[0])
         if self._state is not None:
             y_old, g_old, _h_old = self._state

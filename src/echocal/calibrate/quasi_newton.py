@@ -103,7 +103,7 @@ class QuasiNewton(Optimizer):
         self._candidate = self.clip(self._iterate + step)
 
     def _tell(self, points: FloatArray, values: FloatArray) -> bool:
-        g = cross_gradient(values, self.delta)
+        g = cross_gradient(values, points)
         if self._g is None:
             self._g = g
             norm = float(np.hypot(*g))
