@@ -140,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
         text = [
             f"# Detection range and the cost of a blind search — {args.setup}",
             "",
-            __doc__.split("\n\n")[1].strip(),
+            "\n\n".join(__doc__.split("\n\n")[1:4]).strip().replace("band::", "band."),
             "",
             f"{draws} noise draws per angle over 8 directions; refinement after the "
             f"detection assumed to take {args.refine} measurements (measured for `auto`: 10–15).",
