@@ -1,49 +1,53 @@
 """``method="auto"``: acquisition phase + the best local method we measured (model-based).
 
-Evidence: ``benchmarks/bench_calibration.py`` (docs/benchmarks/calibration.md), one run
-of 15 seeded runs per cell (gp_minimize 5), budget 80, every method through the same
+Evidence: ``benchmarks/bench_calibration.py`` (docs/benchmarks/calibration.md), full run
+of 50 seeded runs per cell and method, budget 80, every method through the same
 SourceObjective; realistic setup immersion-5mhz (5 MHz, 12.7 mm probe, tilted plate:
 energy lobe σ ≈ 0.28°, half-energy at 0.33°), tilt parameterization.  "@n" = fraction
-of runs whose estimate is within the tolerance after n measurements; "n to 0.1°" =
-median measurements after which it stays within 0.1° (p90 in brackets):
+of runs whose estimate is within the tolerance after n measurements:
 
 ==================  ============  ============  ============  ==========================
 immersion-5mhz      near 30 dB    near 20 dB    near 10 dB    far (5-20°) 30 dB
-                    ≤0.05° @20    ≤0.1° @60     ≤0.1° @60     ≤0.1° @60 / @80
+                    ≤0.05° @20    ≤0.1° @80     ≤0.1° @60     ≤0.1° @80
 ==================  ============  ============  ============  ==========================
-auto                100 %         100 %         100 %         7 % / 20 %
-model-based         100 %         93 %          73 %          7 % / 7 %
-Py-BOBYQA (noisy)   47 %          93 %          20 %          0 % / 0 %
-Nelder-Mead         20 %          73 %          33 %          0 % / 0 %
-gp_minimize         0 %           80 %          0 %           20 % / 40 % (5 runs)
-NGOpt (noisy)       0 %           0 %           0 %           0 % / 0 %
-newton              0 %           20 %          0 %           0 % / 0 %
-others (5 thesis)   0 %           0 %           0 %           0 % / 0 %
+auto                100 %         100 %         100 %         66 %
+model-based         100 %         96 %          64 %          8 %
+Py-BOBYQA (noisy)   54 %          92 %          28 %          2 %
+Nelder-Mead         22 %          66 %          26 %          0 %
+scikit-optimize GP  4 %           98 %          42 %          40 %
+NGOpt (noisy)       0 %           0 %           0 %           0 %
 ==================  ============  ============  ============  ==========================
 
-n to 0.1° from 1-3° at 30 dB: auto 14 (16), model-based 13 (16), Py-BOBYQA 18 (30),
-Nelder-Mead 20 (27), gp_minimize 31 (62); at 10 dB auto 17 (33), every peer > 80.
-On the thesis's broad lobe from 1-3° at 30 dB: model-based 11 (13), auto 12 (14), the
-best peer (gp_minimize) 52; the six thesis methods do not reach 0.1° within 80 in most runs.
+Median measurements to 0.1° from 1-3°: auto 14 / 15 / 18 at 30 / 20 / 10 dB against the
+best peer's 18 (Py-BOBYQA) / 28.5 / 64.5 (GP).  On the thesis's broad lobe from 1-3° at
+30 dB: auto 11, no peer's median run within 80; the six thesis methods reach 0.1° within
+80 in at most 48 % of the runs of any cell.
 
-What changed for issue 5's targets: (1) the model-based fit subtracts the objective's
-live noise floor (``noise_estimate()``) before taking logs — at 10 dB the floor is ~10 %
-of the peak, and left in it made the lobe look broader than it is, so the refinement
-wandered (10 dB near: 50 % → 100 % within 0.1° @60); (2) beyond 3° from x0 the search
-continues on coarser circles (:func:`~echocal.calibrate.acquisition.search_rings`,
-spacing 0.5·r capped at 4°) instead of the 1° lattice.
+Why each part:
 
-Targets: ≥ 99 % within 0.05° @20 at 30 dB from 1-3°: met (100 %, 15 of 15 here;
-30 of 30 in a separate run).  ≥ 95 % within 0.1° @60 at 10 dB from 1-3°: met (100 %;
-30 of 30 separately).  ≥ 99 % within 60 from 5-20° at 30 dB: NOT met (7 %), and out of
-reach for this lobe: its energy falls to 0.0093 at 2° and 0.0022 at 3° from the peak
-(peak 10.1) against a per-measurement noise σ of 0.0015 at 30 dB, so one measurement
-detects the echo (4.5 σ) only within ≈ 2.3° of the peak.  Covering a 20° disk with
-detection disks of radius 2.3° needs ≥ π·20² / (2.6·2.3²) ≈ 90 measurements before any
-refinement; with 60 in all (~10 kept for refinement) at most ≈ 70 % of starts uniform in
-5-20° can be found.  A finer near-x0 lattice (needed at 10 dB, where the detection
-radius is ≈ 0.6°) spends 37 of them first; auto keeps it because the near-start targets
-are the common case.
+1. the model-based fit subtracts the objective's live noise floor (``noise_estimate()``)
+   before taking logs — at 10 dB the floor is ~10 % of the peak, and left in it made the
+   lobe look broader than it is (10 dB near: 50 % → 100 % within 0.1° @60);
+2. the acquisition phase (model-based alone: 8 % from 5-20°) tests each A-scan's
+   matched-filter peak significance (:class:`~echocal.signal.detection.EchoDetector`),
+   which sees the echo 2.4° from the peak at 30 dB where the pseudo-energy loses it at
+   2.0°, and re-measures a marginal detection once (false hand-overs to a local method
+   on noise were 2 of 40 far starts without it);
+3. beyond 3° from x0 the search runs on staggered circles of spacing up to 4.2° (√3 ×
+   the 2.4° detection radius) out to where they cover ``max_radius``; inside 3° it keeps
+   the 1° lattice that a 10 dB echo (detection radius ≈ 0.55°) needs.  Far starts at
+   30 dB (40-run check, budget 150): 23 % within 60, 62 % within 80, 95 % within 100,
+   100 % within 150 — previously 7 / 15 / 43 / 80 % at 60 / 80 / 100 / 120.
+
+Targets: ≥ 99 % within 0.05° @20 at 30 dB from 1-3°: met (100 %).  ≥ 95 % within 0.1°
+@60 at 10 dB from 1-3°: met (100 %).  ≥ 99 % within 60 from 5-20° at 30 dB: NOT met
+(22 %) and out of reach for any blind search on this probe: one A-scan detects the echo
+within ≈ 2.4° of the peak (``benchmarks/detection_range.py``), and covering a 20° disc
+with detection discs of that radius needs ≥ 2π/(3√3)·(20/2.4)² ≈ 84 measurements
+before refinement — at most ≈ 67 % of starts uniform in 5-20° can be found and refined
+within 60.  Deferring the 1° lattice's outer ring behind the first coarse circle would
+trade 10 points of far success at 60 (23 → 33 %) for 15 of near success at 10 dB by 40
+(97 → 82 %); auto keeps the near-start cases first.
 
 When the start is known to be near the echo, ``method="model-based"`` saves the
 acquisition.
