@@ -113,3 +113,31 @@ def test_iterations_to_matches_the_iterate_errors(thesis):
         assert ev.iterations_to(tol) == min(first, res.n_iterations)
         expected = res.n_measurements if first > res.n_iterations else first * 9
         assert ev.measurements_to(tol) == expected  # newton: 9 measurements per iteration
+
+
+def test_calibrate_command_search_radius_bounds_the_search(tmp_path):
+    # a start 16.6° from the realistic setup's optimum with a gradient method: a 2° search
+    # radius puts an acquisition phase in front that gives up (status 4) after the 1°
+    # lattice to 2° (1 + 6 + 12 = 19 measurements) when the echo is not within it
+    args = [
+        "calibrate",
+        "--setup",
+        "immersion-5mhz",
+        "--x0",
+        "12,12",
+        "--method",
+        "gradient",
+        "--search-radius",
+        "2",
+        "--out",
+        str(tmp_path),
+        "--no-plots",
+        "--json",
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["status"] == 4 and summary["n_measurements"] == 19
+    assert summary["acquisition_measurements"] is None
+    bad = CliRunner().invoke(app, [a if a != "2" else "nan" for a in args])
+    assert bad.exit_code != 0 and "--search-radius" in (bad.output + str(bad.exception))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -50,6 +50,14 @@ def register(app: typer.Typer) -> None:
         preset: Annotated[
             str | None, typer.Option(help="Method options preset, e.g. thesis-table-7.")
         ] = None,
+        search_radius: Annotated[
+            float | None,
+            typer.Option(
+                help="How far from x0 [deg] to search for a lost echo before giving up "
+                "(status 4, 'acquisition failed'): auto and acquisition search to 20 by "
+                "default; any other method gets this search in front of it."
+            ),
+        ] = None,
         seed: Annotated[int, typer.Option(help="Seed for noise and randomized methods.")] = 0,
         out: Annotated[Path, typer.Option(help="Folder for result.json and the plots.")] = Path(
             "echocal-out/calibrate"
@@ -68,6 +76,7 @@ def register(app: typer.Typer) -> None:
         where = parse_pose(position, "--position").position if position else None
         where = virtual.reference_position if where is None else where
         objective = SourceObjective(virtual, where, parameterization=parameterization)
+        search = _search_options(method, search_radius)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = calibrate(
@@ -79,6 +88,7 @@ def register(app: typer.Typer) -> None:
                 settle=_parse_settle(settle),
                 preset=preset,
                 rng=seed,
+                **search,
             )
         for warning in caught:
             console.print(f"[yellow]warning:[/] {escape(str(warning.message))}")
@@ -118,6 +128,20 @@ def register(app: typer.Typer) -> None:
             f"  stopped:  {escape(result.message)}\n"
             f"  saved to  {escape(str(out))}/"
         )
+
+
+def _search_options(method: str, radius: float | None) -> dict[str, Any]:
+    """calibrate() keywords for ``--search-radius``: the method's own ``max_radius`` if it
+    searches, else an acquisition phase in front of it."""
+    if radius is None:
+        return {}
+    from echocal._validate import positive_float
+    from echocal.calibrate import Acquisition, get_method
+
+    radius = positive_float("--search-radius", radius)
+    if issubclass(get_method(method), Acquisition):
+        return {"max_radius": radius}
+    return {"acquire": {"max_radius": radius}}
 
 
 def _parse_settle(text: str) -> tuple[float, int] | None:
