@@ -4,7 +4,7 @@ Run from the repository root::
 
     python benchmarks/bench_ascan.py            # full run (about 5-15 min on 2 cores)
     python benchmarks/bench_ascan.py --quick    # reduced sizes, about a minute
-    python benchmarks/bench_ascan.py --smoke    # one repeat of the smallest cases (CI)
+    python benchmarks/bench_ascan.py --smoke    # one repeat of the smallest cases (CI runs --quick)
     python benchmarks/bench_ascan.py --json out.json --out-md table.md
 
 The default setup: a 10 × 10 mm pinhole transducer with 64 × 64 rays (focal length 20 mm,

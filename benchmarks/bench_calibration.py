@@ -2,9 +2,11 @@
 
 Run from the repository root::
 
-    python benchmarks/bench_calibration.py            # full run (~22 min on 2 cores)
-    python benchmarks/bench_calibration.py --quick    # ~10 runs per cell, fewer cells
-    python benchmarks/bench_calibration.py --smoke    # 2 runs of one cell (CI)
+    python benchmarks/bench_calibration.py            # full run (20 min on 2 cores)
+    python benchmarks/bench_calibration.py --quick    # 10 runs per cell, 30/10 dB (~3 min)
+    python benchmarks/bench_calibration.py --smoke    # 2 runs of one cell (seconds)
+    # CI: --quick on one cell
+    python benchmarks/bench_calibration.py --quick --cases thesis --starts near --snr 30 --runs 2
     python benchmarks/bench_calibration.py --methods auto,model-based --runs 20
 
 Cases (the simulator knows the truth; the methods do not):
@@ -603,7 +605,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--quick", action="store_true", help="~10 runs per cell, SNR 30 and 10 dB")
-    g.add_argument("--smoke", action="store_true", help="2 runs of one cell (CI)")
+    g.add_argument("--smoke", action="store_true", help="2 runs of one cell")
     ap.add_argument("--runs", type=int, default=None, help="runs per cell")
     ap.add_argument("--methods", default=None, help="comma-separated subset of methods")
     ap.add_argument("--cases", default=None, help="comma-separated subset of cases")

@@ -1,5 +1,6 @@
-"""Smoke test of the calibration benchmark script: it runs ``--smoke``, prints its headline
-and writes consistent JSON and Markdown.  No thresholds on the numbers (2 runs say nothing
+"""Smoke test of the calibration benchmark script: it runs ``--quick`` on one cell with 2
+runs (the full ``--quick`` takes ~3 min), prints its headline and writes consistent JSON
+and Markdown.  No thresholds on the numbers (2 runs say nothing
 about success rates; the numbers are the benchmark's report)."""
 
 from __future__ import annotations
@@ -20,7 +21,15 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
         [
             sys.executable,
             str(SCRIPT),
-            "--smoke",
+            "--quick",
+            "--cases",
+            "thesis",
+            "--starts",
+            "near",
+            "--snr",
+            "30",
+            "--runs",
+            "2",
             "--workers",
             "1",
             "--json",
@@ -40,7 +49,7 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
     assert "HEADLINE total time" in proc.stdout
 
     data = json.loads(out_json.read_text(encoding="utf-8"))
-    assert data["mode"] == "smoke"
+    assert data["mode"] == "quick" and data["runs_per_cell"] == 2
     # every peer is either run or reported as skipped (optional dependencies)
     ours = {"auto", "model-based", "newton", "quasi-newton", "spsa", "gradient"}
     assert ours <= set(data["methods"])

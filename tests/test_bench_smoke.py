@@ -1,5 +1,6 @@
-"""Smoke test of the simulator benchmark script: it runs, prints its headline and writes
-consistent JSON and Markdown.  No timing thresholds (speed is the benchmark's report)."""
+"""Smoke test of the simulator benchmark script: it runs ``--quick`` (~10 s), prints its
+headline and writes consistent JSON and Markdown.  No timing thresholds (speed is the
+benchmark's report)."""
 
 from __future__ import annotations
 
@@ -31,10 +32,10 @@ def test_bench_ascan_smoke_runs_and_reports(tmp_path):
     out_json = tmp_path / "ascan.json"
     out_md = tmp_path / "ascan.md"
     proc = subprocess.run(
-        [sys.executable, str(SCRIPT), "--smoke", "--json", str(out_json), "--out-md", str(out_md)],
+        [sys.executable, str(SCRIPT), "--quick", "--json", str(out_json), "--out-md", str(out_md)],
         capture_output=True,
         text=True,
-        timeout=300,  # a loaded 2-core machine; the smoke run itself takes a few seconds
+        timeout=300,  # a loaded 2-core machine; the --quick run itself takes ~10 s
         cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -42,7 +43,7 @@ def test_bench_ascan_smoke_runs_and_reports(tmp_path):
         assert line in proc.stdout, f"missing {line!r} in:\n{proc.stdout}"
 
     data = json.loads(out_json.read_text(encoding="utf-8"))
-    assert data["mode"] == "smoke"
+    assert data["mode"] == "quick"
     assert data["machine"]["cores"] >= 1
     head = data["headline"]
     assert _positive(head["fast"]["median"]) and _positive(head["direct"]["median"])
