@@ -141,3 +141,16 @@ def test_calibrate_command_search_radius_bounds_the_search(tmp_path):
     assert summary["acquisition_measurements"] is None
     bad = CliRunner().invoke(app, [a if a != "2" else "nan" for a in args])
     assert bad.exit_code != 0 and "--search-radius" in (bad.output + str(bad.exception))
+
+
+def test_calibrate_command_passes_method_options(tmp_path):
+    base = ["calibrate", "--setup", "thesis", "--position", "10,0,22", "--max-iter", "3"]
+    args = [*base, "--option", "fine_radius=1", "--option", "local=newton", "--out", str(tmp_path)]
+    result = CliRunner().invoke(app, [*args, "--no-plots", "--json"])
+    assert result.exit_code == 0, result.output
+    saved = json.loads((tmp_path / "result.json").read_text(encoding="utf-8"))
+    # a JSON number stays a number, anything else is a string
+    assert saved["options"]["fine_radius"] == 1 and saved["options"]["local"] == "newton"
+    for bad in ("budget=3", "no-equals-sign"):
+        res = CliRunner().invoke(app, [*base, "--option", bad, "--out", str(tmp_path)])
+        assert res.exit_code != 0 and "--option" in res.output

@@ -61,6 +61,22 @@ def parse_pair(text: str, option: str) -> tuple[float, float]:
     return parse_angle(f"{option}[0]", parts[0]), parse_angle(f"{option}[1]", parts[1])
 
 
+def parse_options(items: list[str] | None, option: str) -> dict[str, Any]:
+    """Parse repeated ``KEY=VALUE`` options; a VALUE that reads as JSON (``1``, ``0.5``,
+    ``true``, ``[1, 2]``) is taken as such, anything else as a string."""
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or not key.isidentifier():
+            raise typer.BadParameter(f"{option} takes KEY=VALUE (e.g. fine_radius=1); got {item!r}")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value.strip()
+    return out
+
+
 def write_json(data: dict[str, Any], path: Path | None = None) -> None:
     """Print ``data`` as one JSON object on stdout, or write it atomically to ``path``.
 

@@ -10,7 +10,7 @@ import numpy as np
 import typer
 from rich.markup import escape
 
-from echocal.cli._common import console, parse_pair, parse_pose, write_json
+from echocal.cli._common import console, parse_options, parse_pair, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 
 
@@ -50,6 +50,14 @@ def register(app: typer.Typer) -> None:
         preset: Annotated[
             str | None, typer.Option(help="Method options preset, e.g. thesis-table-7.")
         ] = None,
+        option: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--option",
+                help="KEY=VALUE method option, repeatable (see `echocal methods` and the "
+                "method's docstring), e.g. --option fine_radius=1 for auto at high SNR.",
+            ),
+        ] = None,
         search_radius: Annotated[
             float | None,
             typer.Option(
@@ -77,6 +85,13 @@ def register(app: typer.Typer) -> None:
         where = virtual.reference_position if where is None else where
         objective = SourceObjective(virtual, where, parameterization=parameterization)
         search = _search_options(method, search_radius)
+        extra = parse_options(option, "--option")
+        taken = sorted(set(extra) & {*_DRIVER_KEYWORDS, *search})
+        if taken:
+            raise typer.BadParameter(
+                f"--option {', '.join(taken)}: set by its own command-line option "
+                "(--budget, --max-iter, --settle, --preset, --seed, --search-radius)"
+            )
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = calibrate(
@@ -89,6 +104,7 @@ def register(app: typer.Typer) -> None:
                 preset=preset,
                 rng=seed,
                 **search,
+                **extra,
             )
         for warning in caught:
             console.print(f"[yellow]warning:[/] {escape(str(warning.message))}")
@@ -128,6 +144,23 @@ def register(app: typer.Typer) -> None:
             f"  stopped:  {escape(result.message)}\n"
             f"  saved to  {escape(str(out))}/"
         )
+
+
+_DRIVER_KEYWORDS = (
+    "objective",
+    "method",
+    "x0",
+    "budget",
+    "max_iter",
+    "xtol",
+    "settle",
+    "rng",
+    "callback",
+    "acquire",
+    "preset",
+    "final_check",
+)
+"""calibrate()'s own parameters: not method options."""
 
 
 def _search_options(method: str, radius: float | None) -> dict[str, Any]:
