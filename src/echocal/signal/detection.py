@@ -4,23 +4,25 @@ While searching for a lost echo the question is not "how much energy" but "is
 anything above the noise".  The best single-A-scan answer is the matched filter's
 peak: a flaw detector's gate on the filtered trace.  For white Gaussian noise of
 per-sample standard deviation σ the matched-filter envelope is a correlated
-Rayleigh process of scale σ·s (``s`` = the filter's noise gain); its maximum over
-the window behaves like the maximum of ``N_eff`` independent Rayleigh cells, so the
-normalized peak Z = max(envelope) / (σ·s) of pure noise follows
+Rayleigh process of scale σ·s (``s`` = the filter's noise gain), which crosses a
+high level t at a rate ∝ t·e^{−t²/2} (Rice's formula), so the normalized peak
+Z = max(envelope) / (σ·s) of pure noise over the window follows
 
-    P(Z ≤ t) = exp(−N_eff · exp(−t²/2))          (Gumbel limit of the Rayleigh maximum).
+    P(Z ≤ t) = exp(−M · t · exp(−t²/2))           (t ≥ 1; every peak below 1 is "noise").
 
-:class:`EchoDetector` measures ``s`` and ``N_eff`` once per (pulse, fs, n_samples)
+:class:`EchoDetector` measures ``s`` and ``M`` once per (pulse, fs, n_samples)
 on unit-variance synthetic noise (a fixed internal seed) and returns for each A-scan
 the *Gaussian-equivalent significance*
 
     g = Φ⁻¹(P(Z ≤ t_observed))                    (≈ N(0, 1) for pure noise),
 
-so thresholds read as "σ": g > 4 happens by chance about 3·10⁻⁵ of the time, and
-independent significances combine as Σg/√n (Stouffer).  On the realistic 5 MHz probe
-at 30 dB the peak detector finds the echo ≈ 2.5° from the optimum where the
-pseudo-energy (an energy sum around the same peak, but over raw unfiltered samples)
-loses it at ≈ 2.1° at the same false-alarm rate.
+so thresholds read as "σ": g > 4 happens by chance about 3·10⁻⁵ of the time (the
+Gumbel form with a fixed cell count understated the tail 1.3–1.7×; Rice's form
+matches it, see tests/signal/test_signal_detection.py), and independent significances
+combine as Σg/√n (Stouffer).  On the realistic 5 MHz probe at 30 dB the peak detector
+sees the echo (90 % of the time at g > 4.5) 2.4° from the optimum; the pseudo-energy
+(an energy sum around the same peak, but over raw unfiltered samples, 4.5 σ above its
+noise mean) 2.0° (``benchmarks/detection_range.py``).
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import ndtri
 
-from echocal._validate import nonnegative_float
+from echocal._validate import nonnegative_float, positive_float
+from echocal.errors import EchocalValueError
 from echocal.signal.processing import _samples, matched_envelope
 from echocal.signal.pulses import Pulse
 
@@ -42,6 +45,8 @@ _CALIBRATION_SCANS = 1024  # N_eff from the median to ≈ 2 %: mean significance
 _CALIBRATION_CHUNK = 128
 _CALIBRATION_SEED = 20261122
 _FAR_TAIL = -650.0  # ln P below which the tail probability leaves double precision
+_FLOOR = -8.2  # ≈ Φ⁻¹ of 1e-16: the least significant value
+_MIN_SAMPLES = 16
 
 
 @dataclass(frozen=True)
@@ -57,7 +62,7 @@ class EchoDetector:
     Attributes (measured on unit-σ noise at construction)
     ----------
     noise_gain : [a.u. per a.u. of σ] Rayleigh scale of the matched envelope per unit σ.
-    n_cells : N_eff, the number of independent noise cells of the window.
+    n_cells : M, the level-crossing constant of Rice's law for this window (∝ its length).
     """
 
     pulse: Pulse
@@ -67,6 +72,10 @@ class EchoDetector:
     n_cells: float = field(init=False)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "fs", positive_float("fs", self.fs))
+        n = self.n_samples
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < _MIN_SAMPLES:
+            raise EchocalValueError(f"n_samples must be an integer >= {_MIN_SAMPLES}; got {n!r}")
         rng = np.random.default_rng(_CALIBRATION_SEED)
         power, peaks = 0.0, []
         for _ in range(_CALIBRATION_SCANS // _CALIBRATION_CHUNK):
@@ -77,34 +86,49 @@ class EchoDetector:
         # Rayleigh scale from the mean power: E|z|² = 2 s² (every cell, not only the peaks)
         gain = float(np.sqrt(power / (_CALIBRATION_SCANS // _CALIBRATION_CHUNK) / 2.0))
         peaks = np.concatenate(peaks) / gain
-        # median of the Gumbel law: exp(−N e^{−t²/2}) = 1/2  →  N = ln 2 · e^{t²/2}
-        cells = float(np.log(2.0) * np.exp(0.5 * np.median(peaks) ** 2))
+        # at the median: exp(−M t e^{−t²/2}) = 1/2  →  M = ln 2 · e^{t²/2} / t
+        median = float(np.median(peaks))
+        cells = float(np.log(2.0) * np.exp(0.5 * median**2) / median)
         object.__setattr__(self, "noise_gain", gain)
         object.__setattr__(self, "n_cells", cells)
 
     def peak(self, samples: ArrayLike) -> _F64:
-        """[a.u.] maximum of the matched-filter envelope of each A-scan, shape ``(...,)``."""
-        return matched_envelope(_samples(samples), self.pulse, self.fs).max(axis=-1)
+        """[a.u.] maximum of the matched-filter envelope of each A-scan, shape ``(...,)``.
+
+        ``samples`` : shape ``(..., n_samples)`` — the length this detector was calibrated for.
+        """
+        x = _samples(samples)
+        if x.shape[-1] != self.n_samples:
+            raise EchocalValueError(
+                f"samples must have n_samples = {self.n_samples} on the last axis (the "
+                f"length this detector was calibrated for); got shape {x.shape}"
+            )
+        return matched_envelope(x, self.pulse, self.fs).max(axis=-1)
 
     def significance_of_peak(self, peak: ArrayLike, sigma: float) -> _F64:
         """Gaussian-equivalent significance of envelope peaks ``peak`` [a.u.], shape ``(...,)``,
         against white noise of per-sample standard deviation ``sigma`` [a.u.].
 
-        σ = 0 (noiseless) gives +∞ where the peak is positive and −∞ where it is zero.
+        Significances lie in [−8.2, ∞): +∞ for an infinite peak or, when σ = 0 (noiseless),
+        any positive peak; −8.2 (Φ⁻¹ of the smallest tail) for a zero peak; NaN stays NaN.
         """
         sigma = nonnegative_float("sigma", sigma)
-        p = np.asarray(peak, dtype=np.float64)
+        p = np.maximum(np.asarray(peak, dtype=np.float64), 0.0)  # envelopes are >= 0
         if sigma == 0.0:
-            return np.where(p > 0.0, np.inf, -8.2)
-        t = p / (sigma * self.noise_gain)
-        log_tail = np.log(self.n_cells) - 0.5 * t * t  # ln(N e^{−t²/2})
+            return np.where(p > 0.0, np.inf, np.where(np.isnan(p), np.nan, _FLOOR))
+        with np.errstate(invalid="ignore", over="ignore"):
+            t = np.maximum(p / (sigma * self.noise_gain), 1.0)  # Rice's law holds for t >= 1
+            log_tail = np.log(self.n_cells) + np.log(t) - 0.5 * t * t  # ln(M t e^{−t²/2})
         with np.errstate(over="ignore", under="ignore"):
             upper = -np.expm1(-np.exp(log_tail))  # P(Z > t) under noise
-            g = -ndtri(np.clip(upper, 1e-300, 1.0 - 1e-16))  # g in [−8.2, 37]
-        # far tail: P ≈ N e^{−t²/2}; Φ⁻¹(1 − P) ≈ √(L − ln L − ln 2π), L = −2 ln P
-        big = -2.0 * np.minimum(log_tail, _FAR_TAIL)
-        asymptotic = np.sqrt(big - np.log(big) - np.log(2.0 * np.pi))
-        return np.asarray(np.where(log_tail < _FAR_TAIL, asymptotic, g), dtype=np.float64)
+            g = -ndtri(np.clip(upper, 1e-300, 1.0 - 1e-16))  # g in [_FLOOR, 37]
+        # far tail: P ≈ M t e^{−t²/2}; Φ⁻¹(1 − P) ≈ √(L − ln L − ln 2π), L = −2 ln P
+        with np.errstate(invalid="ignore"):
+            big = -2.0 * np.minimum(log_tail, _FAR_TAIL)
+            asymptotic = np.sqrt(big - np.log(big) - np.log(2.0 * np.pi))
+        out = np.where(log_tail < _FAR_TAIL, asymptotic, g)
+        out = np.where(np.isposinf(p), np.inf, out)
+        return np.asarray(np.where(np.isnan(p), np.nan, out), dtype=np.float64)
 
     def significance(self, samples: ArrayLike, sigma: float) -> _F64:
         """Gaussian-equivalent significance of each A-scan's strongest echo, shape ``(...,)``.
