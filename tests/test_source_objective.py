@@ -112,3 +112,24 @@ def test_detections_are_significant_at_the_echo(sim):
     noiseless = SourceObjective(sim, POSITION)
     noiseless(np.array([[30.0, 4.0]]))
     assert noiseless.detections()[0] > 1e6  # σ from round-off only: enormous (or inf)
+
+
+def test_scan_noise_sigma_from_gaussian_and_from_coarsely_quantized_noise():
+    from echocal.measurement.objective import scan_noise_sigma
+
+    rng = np.random.default_rng(0)
+    noise = rng.standard_normal(4096)
+    echo = np.zeros(4096)
+    echo[2000:2100] = 50.0 * np.sin(np.arange(100))
+    # robust to the echo: 1.4826 MAD of 4096 samples has a ~2 % standard error; 6 % allowed
+    sigma, coarse = scan_noise_sigma(2.0 * noise + echo)
+    assert abs(sigma - 2.0) < 0.12 and not coarse
+    # noise of 0.3 ADC steps: most samples on one level (MAD 0); the estimate is the RMS of
+    # the quantized noise itself, within 10 % (sampling error ~3 % on ~10 % non-zero samples)
+    step = 1.0
+    quantized = np.round((0.3 * noise) / step) * step
+    sigma, coarse = scan_noise_sigma(quantized + np.round(echo))
+    assert coarse and abs(sigma - quantized.std()) < 0.1 * quantized.std()
+    # a noiseless float trace (zeros and an echo) is not "quantized"; a constant says nothing
+    assert scan_noise_sigma(echo)[1] is False
+    assert scan_noise_sigma(np.zeros(64)) == (None, False)

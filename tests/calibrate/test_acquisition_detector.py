@@ -39,7 +39,7 @@ def _marginal_start() -> tuple[Acquisition, _Scripted]:
     det = _Scripted()
     acq = Acquisition(np.zeros(2), spacing=1.0, detector=det)
     pts = acq.ask()
-    det.next = np.full(len(pts), 1.3)  # x0's neighbourhood: 1.3·√7 = 3.44, in (3, 5): marginal
+    det.next = np.full(len(pts), 1.3)  # x0's neighbourhood: 1.3·√7 = 3.44 in (3, 6.5): marginal
     acq.tell(np.zeros(len(pts)))
     assert acq.local is None
     return acq, det
@@ -91,3 +91,38 @@ def test_the_driver_wires_the_objective_detector_into_auto():
     assert res.options["detector"] == obj.detections
     assert res.status == 4  # nothing significant: the lattice to 2° searched in vain
     assert res.n_measurements == 19 and res.acquisition_measurements is None
+
+
+def test_a_failed_confirmation_is_not_a_confirmation():
+    acq, det = _marginal_start()
+    acq.ask()
+    det.next = np.array([np.nan])
+    acq.tell(np.array([np.nan]))  # the repeat returned NaN: no evidence either way
+    assert acq.local is None
+    assert np.hypot(*acq.ask()[0]) > 1.5  # the search goes on with ring 2
+
+
+def test_a_nan_significance_does_not_blind_the_search():
+    det = _Scripted()
+    acq = Acquisition(np.zeros(2), spacing=1.0, detector=det, confirm=False)
+    pts = acq.ask()
+    det.next = np.array([np.nan, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # value finite, g unknown
+    acq.tell(np.zeros(len(pts)))
+    assert np.all(np.isfinite(acq.scores()))
+    pts = acq.ask()
+    det.next = np.full(len(pts), 50.0)  # then a strong echo
+    acq.tell(np.zeros(len(pts)))
+    assert acq.local is not None
+
+
+def test_acquisition_measurements_count_repeats():
+    def peak(p):
+        return 10.0 * np.exp(-np.sum((np.atleast_2d(p) - [2.0, 0.0]) ** 2, axis=1) / 0.5)
+
+    counts = {}
+    for repeats in (1, 3):
+        obj = FunctionObjective(peak, noise_sigma=0.01, noise_floor=0.0, rng=0, repeats=repeats)
+        res = calibrate(obj, "auto", x0=(0.0, 0.0), max_iter=2, rng=0)
+        counts[repeats] = res.acquisition_measurements
+    # the same points are searched; each costs `repeats` measurements
+    assert counts[3] == 3 * counts[1] and counts[1] >= 7

@@ -35,6 +35,7 @@ Acquisition batches are not counted as iterations.
 from __future__ import annotations
 
 import inspect
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -253,9 +254,17 @@ class Acquisition(Optimizer):
             return None
         sig = self.detector()
         if sig is None or np.shape(sig) != (k,):
+            if sig is not None:
+                warnings.warn(
+                    f"the detector returned shape {np.shape(sig)} for {k} measured point(s); "
+                    "the acquisition tests the values instead for the rest of the search",
+                    UserWarning,
+                    stacklevel=4,
+                )
             self._use_significance = False
             return None
-        return np.asarray(sig, dtype=np.float64)
+        sig = np.asarray(sig, dtype=np.float64)
+        return np.where(np.isnan(sig), 0.0, sig)  # NaN (e.g. no noise estimate yet): no evidence
 
     def scores(self) -> FloatArray:
         """Detection statistic per measured point, shape (n,): z-score of the mean of the
@@ -277,17 +286,19 @@ class Acquisition(Optimizer):
             return np.where(mean > floor, np.inf, -np.inf)
         return (mean - floor) / (sigma / np.sqrt(self._cnt))
 
+    def _threshold(self) -> float:
+        # x0 and its first ring: only 7 tests, so a lower threshold keeps the false-alarm
+        # rate low (7 Q(3) ≈ 1 %, neighbourhoods overlapping) and a start near a weak
+        # peak hands over at once; repeats made to confirm do not count as new points
+        return self.first_threshold if len(self._y) - self._confirmed <= 7 else self.threshold
+
     def _detected(self) -> bool:
         if len(self._y) < min(7, len(self._queue)) or len(self._y) == 0:
             return False
-        # x0 and its first ring: only 7 tests, so a lower threshold keeps the false-alarm
-        # rate as low (7 Q(3) = 1 %) as 4.5 sigma over a long search, and a start near
-        # a weak peak hands over at once
-        thr = self.first_threshold if len(self._y) - self._confirmed <= 7 else self.threshold
-        return bool(np.max(self.scores()) > thr)
+        return bool(np.max(self.scores()) > self._threshold())
 
-    def _start_local(self) -> None:
-        best = self._x[int(np.argmax(self.scores()))]
+    def _start_local(self, best: FloatArray | None = None) -> None:
+        best = self._x[int(np.argmax(self.scores()))] if best is None else best
         opts = dict(self.local_options)
         params = inspect.signature(self._local_cls.__init__).parameters
         if "history" in params:
@@ -324,12 +335,19 @@ class Acquisition(Optimizer):
         confirming = self._confirming is not None
         if confirming:
             self._confirming = None
-            self._confirmed += 1
         else:
             self._next += len(points)
         ok = ~self.last_nan
         sig = self._significances(len(points))
         self._add(points[ok], values[ok], np.zeros(len(points))[ok] if sig is None else sig[ok])
+        if confirming:
+            if not ok.any():
+                return False  # the repeat failed (NaN): search on; a detection asks again
+            self._confirmed += 1
+            # the repeat joined the neighbourhood it was to confirm: that one must still pass
+            if self.scores()[-1] > self._threshold():
+                self._start_local(self._x[-1].copy())
+                return False
         if len(self._y) and self._next < len(self._queue):
             # search first where the echo is strongest so far: within each ring, the points
             # nearest to the best value come first
@@ -340,7 +358,7 @@ class Acquisition(Optimizer):
             self._ring[self._next :] = self._ring[self._next :][order]
         if self._detected():
             sure = float(np.max(self.scores())) > self.threshold + _SURE_MARGIN
-            if self.confirm and not confirming and not sure:
+            if self.confirm and not sure:
                 self._confirming = self._x[int(np.argmax(self.scores()))].copy()
             else:
                 self._start_local()

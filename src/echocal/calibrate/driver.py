@@ -110,6 +110,12 @@ def build_optimizer(
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
 
 
+def _acquisition_cost(opt: Optimizer, objective: Objective) -> int | None:
+    """Measurements the acquisition phase spent until it handed over (points x repeats)."""
+    found = getattr(opt, "found_at", None)
+    return None if found is None else objective.cost(found)
+
+
 def _settle_test(
     settle: tuple[float, int], objective: Objective
 ) -> Callable[[ArrayLike, ArrayLike], bool]:
@@ -311,5 +317,5 @@ def calibrate(
         parameterization=objective.parameterization,
         names=objective.names,
         times=times,
-        acquisition_measurements=getattr(opt, "found_at", None),
+        acquisition_measurements=_acquisition_cost(opt, objective),
     )

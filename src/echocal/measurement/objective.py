@@ -10,6 +10,7 @@ Counting, logging, budget, bounds and repeats are the base class's.
 
 from __future__ import annotations
 
+import warnings
 from functools import lru_cache
 
 import numpy as np
@@ -24,13 +25,39 @@ from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import EchoDetector
 
-__all__ = ["SourceObjective", "ascan_metric", "default_bounds"]
+__all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
 
 
 @lru_cache(maxsize=8)
 def _detector(pulse: Pulse, fs: float, n_samples: int) -> EchoDetector:
     """One calibrated detector per (pulse, sampling rate, A-scan length), shared."""
     return EchoDetector(pulse, fs, n_samples)
+
+
+def scan_noise_sigma(samples: np.ndarray) -> tuple[float | None, bool]:
+    """[a.u.] the receiver's per-sample noise σ estimated from one A-scan (None if it
+    cannot tell), and whether the noise is below the ADC step.
+
+    The echo fills a small part of a recording, so 1.4826 · MAD of the samples is a robust
+    estimate.  When the noise is below the ADC step Δ most samples share one level and the
+    MAD is 0; then the RMS deviation of the samples within ±3 Δ of that level measures the
+    quantized noise the receiver actually delivers (the echo's large samples excluded).
+    σ is None for a constant trace (nothing to tell).  "Below the ADC step" means the
+    MAD is 0 and the sample values lie on a grid (an ADC's levels).
+    """
+    centre = np.median(samples)
+    dev = samples - centre
+    mad = float(np.median(np.abs(dev)))
+    if mad > 0.0:
+        return 1.4826 * mad, False
+    levels = np.unique(samples)
+    if levels.size < 2:
+        return None, False
+    step = float(np.min(np.diff(levels)))
+    near = np.abs(dev) <= 3.0 * step
+    # an ADC's levels lie on a grid of its step; a noiseless float trace's do not
+    on_grid = np.allclose(levels / step, np.round(levels / step), rtol=0.0, atol=1e-6)
+    return float(np.sqrt(np.mean(dev[near] ** 2))), bool(on_grid)
 
 
 def default_bounds(source: MeasurementSource, parameterization: str) -> np.ndarray:
@@ -115,6 +142,7 @@ class SourceObjective(Objective):
         self._scan_sigmas: list[float] = []  # robust per-sample noise σ of each A-scan
         self._noise_cache: tuple[float, tuple[float, float]] | None = None
         self._peaks = np.zeros(0)  # matched-envelope peak of each A-scan of the last batch
+        self._warned_coarse = False
 
     def pose(self, a: float, b: float) -> Pose:
         """The pose measured for orientation ``(a, b)`` [deg]."""
@@ -127,7 +155,20 @@ class SourceObjective(Objective):
         for i, scan in enumerate(scans):
             if scan.is_finite:
                 x = scan.samples
-                self._scan_sigmas.append(1.4826 * float(np.median(np.abs(x - np.median(x)))))
+                sigma, coarse = scan_noise_sigma(x)
+                if sigma is not None:
+                    self._scan_sigmas.append(sigma)
+                if coarse and not self._warned_coarse:
+                    self._warned_coarse = True
+                    warnings.warn(
+                        f"the A-scans from {self.source.description} are quantized more "
+                        "coarsely than their noise (most samples share one ADC level): the "
+                        "noise is then impulsive, not Gaussian, and the echo detection of the "
+                        "acquisition phase may fire on noise; raise the receiver gain or the "
+                        "ADC resolution so the noise spans a few ADC steps",
+                        UserWarning,
+                        stacklevel=4,
+                    )
                 self._peaks[i] = float(_detector(self.pulse, scan.fs, scan.n_samples).peak(x))
         self._last_scan = scans[-1] if scans else None
         return np.array(
@@ -138,9 +179,11 @@ class SourceObjective(Objective):
         """Matched-filter peak significance of each A-scan of the last batch against the
         receiver noise σ measured so far (median of the per-scan robust estimates)."""
         scan = self._last_scan
-        if scan is None or not self._scan_sigmas:
+        if scan is None:
             return None
-        sigma = float(np.median(self._scan_sigmas))
+        sigma = float(np.median(self._scan_sigmas)) if self._scan_sigmas else 0.0
+        if sigma <= 0.0:  # no noise measured yet: no evidence either way
+            return np.full(len(self._peaks), np.nan)
         detector = _detector(self.pulse, scan.fs, scan.n_samples)
         return detector.significance_of_peak(self._peaks, sigma)
 
