@@ -55,6 +55,8 @@ NoiseModel = Callable[[], tuple[float | None, float | None]]
 
 _SURE_MARGIN = 2.0
 """A detection this many σ above ``threshold`` needs no confirmation."""
+_CONFIRM_LEVEL = 1.0
+"""The repeat's own significance must exceed this (noise does so 16 % of the time)."""
 
 Detector = Callable[[], "FloatArray | None"]
 """The detection significances of the points just measured, shape (k,), or None."""
@@ -128,9 +130,10 @@ class Acquisition(Optimizer):
     threshold : detection threshold in units of σ.
     first_threshold : the threshold while only x0 and the first ring are measured.
     confirm : a marginal detection (score below ``threshold`` + 2) must survive one
-        re-measurement of its best point (one measurement more; the repeat joins that
-        point's neighbourhood, so a noise outlier averages away and the search goes on
-        instead of handing a local method pure noise).
+        re-measurement of its best point (one measurement more): the repeat joins that
+        point's neighbourhood, which must still pass, and with a detector the repeat's own
+        significance must exceed 1 — so a noise excursion is dropped and the search goes
+        on instead of handing a local method pure noise.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
     noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
@@ -344,8 +347,10 @@ class Acquisition(Optimizer):
             if not ok.any():
                 return False  # the repeat failed (NaN): search on; a detection asks again
             self._confirmed += 1
-            # the repeat joined the neighbourhood it was to confirm: that one must still pass
-            if self.scores()[-1] > self._threshold():
+            # the repeat joined the neighbourhood it was to confirm: that one must still pass,
+            # and (with a detector) the repeat itself must look like an echo, not like noise
+            own = self._g[-1] > _CONFIRM_LEVEL if self._use_significance else True
+            if own and self.scores()[-1] > self._threshold():
                 self._start_local(self._x[-1].copy())
                 return False
         if len(self._y) and self._next < len(self._queue):
