@@ -151,6 +151,6 @@ def test_calibrate_command_passes_method_options(tmp_path):
     saved = json.loads((tmp_path / "result.json").read_text(encoding="utf-8"))
     # a JSON number stays a number, anything else is a string
     assert saved["options"]["fine_radius"] == 1 and saved["options"]["local"] == "newton"
-    for bad in ("budget=3", "no-equals-sign"):
+    for bad in ("budget=3", "no-equals-sign", "detector=x"):
         res = CliRunner().invoke(app, [*base, "--option", bad, "--out", str(tmp_path)])
         assert res.exit_code != 0 and "--option" in res.output

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import warnings
 from pathlib import Path
 from typing import Annotated, Any
@@ -86,6 +87,12 @@ def register(app: typer.Typer) -> None:
         objective = SourceObjective(virtual, where, parameterization=parameterization)
         search = _search_options(method, search_radius)
         extra = parse_options(option, "--option")
+        unsettable = sorted(set(extra) & set(_OBJECT_OPTIONS))
+        if unsettable:
+            raise typer.BadParameter(
+                f"--option {', '.join(unsettable)}: takes a Python object, which the command "
+                "line cannot give (the source objective supplies it); use the API"
+            )
         taken = sorted(set(extra) & {*_DRIVER_KEYWORDS, *search})
         if taken:
             raise typer.BadParameter(
@@ -162,6 +169,9 @@ _DRIVER_KEYWORDS = (
 )
 """calibrate()'s own parameters: not method options."""
 
+_OBJECT_OPTIONS = ("detector", "noise_model", "history", "bounds", "rng")
+"""Method options that take Python objects, not values."""
+
 
 def _search_options(method: str, radius: float | None) -> dict[str, Any]:
     """calibrate() keywords for ``--search-radius``: the method's own ``max_radius`` if it
@@ -169,12 +179,15 @@ def _search_options(method: str, radius: float | None) -> dict[str, Any]:
     if radius is None:
         return {}
     from echocal._validate import positive_float
-    from echocal.calibrate import Acquisition, get_method
+    from echocal.calibrate import Acquisition, Auto, get_method
 
     radius = positive_float("--search-radius", radius)
     if issubclass(get_method(method), Acquisition):
         return {"max_radius": radius}
-    return {"acquire": {"max_radius": radius}}
+    # the same search as auto's: the fine lattice near x0, coarse circles beyond
+    auto = inspect.signature(Auto.__init__).parameters
+    geometry = {k: auto[k].default for k in ("fine_radius", "growth", "max_spacing")}
+    return {"acquire": {"max_radius": radius, **geometry}}
 
 
 def _parse_settle(text: str) -> tuple[float, int] | None:
