@@ -18,12 +18,13 @@ from detection_range import HEX_COVER, ceiling, cover, radius  # noqa: E402
 def test_covering_arithmetic():
     # a regular hexagon of covering radius r has area (3√3/2) r²: π R² / that = HEX_COVER R²/r²
     assert HEX_COVER == pytest.approx(np.pi / (1.5 * np.sqrt(3.0)))
-    assert cover(20.0, 2.0) == pytest.approx(HEX_COVER * 100.0)
-    # 48 search measurements reach r·√(48/1.209) = 6.3 r; with r = 2: 12.6° of a 5–20° band
-    assert ceiling(60, 12, 2.0, (5.0, 20.0)) == pytest.approx(
-        (2 * np.sqrt(48 / HEX_COVER) - 5) / 15
-    )
+    assert cover((0.0, 20.0), 2.0) == pytest.approx(HEX_COVER * 100.0)
+    assert cover((5.0, 20.0), 2.0) == pytest.approx(HEX_COVER * 375.0 / 4.0)
+    # a band search with 48 measurements reaches R: 1.209 (R² − 25) / 4 = 48
+    reach = np.sqrt(48 * 4.0 / HEX_COVER + 25.0)
+    assert ceiling(60, 12, 2.0, (5.0, 20.0)) == pytest.approx((reach - 5.0) / 15.0)
     assert ceiling(10, 12, 2.0, (5.0, 20.0)) == 0.0
+    assert ceiling(10_000, 12, 2.0, (5.0, 20.0)) == 1.0
 
 
 def test_radius_interpolates_the_90_percent_crossing():
