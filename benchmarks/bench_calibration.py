@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    python benchmarks/bench_calibration.py            # full run (20 min on 2 cores)
+    python benchmarks/bench_calibration.py            # full run (21 min on 2 cores)
     python benchmarks/bench_calibration.py --quick    # 10 runs per cell, 30/10 dB (~3 min)
     python benchmarks/bench_calibration.py --smoke    # 2 runs of one cell (seconds)
     # CI: --quick on one cell
