@@ -224,3 +224,20 @@ def test_analytic_signal_equals_scipy_hilbert(n):
     x = np.random.default_rng(n).standard_normal((3, n))
     # Same FFT algorithm, same weights: equal to double-precision round-off.
     np.testing.assert_allclose(analytic_signal(x), hilbert(x, axis=-1), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("use_numba", [True, False])
+def test_pseudo_energy_with_peak_is_both_quantities_from_one_filter(monkeypatch, use_numba):
+    import echocal._numba as N
+    from echocal.signal import RecordingWindow, make_pulse, matched_envelope, pseudo_energy
+    from echocal.signal.processing import pseudo_energy_with_peak
+
+    monkeypatch.setattr(N, "USE_NUMBA", use_numba)
+    pulse = make_pulse("gabor", center_frequency=5e6)
+    window = RecordingWindow(fs=100e6, start=0.0, n_samples=1024)
+    x = np.random.default_rng(4).standard_normal((3, 2, 1024))
+    energy, peak = pseudo_energy_with_peak(x, window, pulse)
+    # the same numbers the separate functions compute (round-off only)
+    np.testing.assert_allclose(energy, pseudo_energy(x, window, pulse), rtol=1e-12)
+    np.testing.assert_allclose(peak, matched_envelope(x, pulse, window.fs).max(-1), rtol=1e-12)
+    assert energy.shape == peak.shape == (3, 2)

@@ -24,6 +24,7 @@ from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import EchoDetector
+from echocal.signal.processing import pseudo_energy_with_peak
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
 
@@ -151,29 +152,43 @@ class SourceObjective(Objective):
     def _evaluate(self, points: np.ndarray) -> np.ndarray:
         poses = [self.pose(a, b) for a, b in points]
         scans = self.source.measure_many(poses)
+        values = np.full(len(scans), np.nan)
         self._peaks = np.full(len(scans), np.nan)
         for i, scan in enumerate(scans):
             if scan.is_finite:
-                x = scan.samples
-                sigma, coarse = scan_noise_sigma(x)
-                if sigma is not None:
-                    self._scan_sigmas.append(sigma)
-                if coarse and not self._warned_coarse:
-                    self._warned_coarse = True
-                    warnings.warn(
-                        f"the A-scans from {self.source.description} are quantized more "
-                        "coarsely than their noise (most samples share one ADC level): the "
-                        "noise is then impulsive, not Gaussian, and the echo detection of the "
-                        "acquisition phase may fire on noise; raise the receiver gain or the "
-                        "ADC resolution so the noise spans a few ADC steps",
-                        UserWarning,
-                        stacklevel=4,
-                    )
-                self._peaks[i] = float(_detector(self.pulse, scan.fs, scan.n_samples).peak(x))
+                self._note_noise(scan.samples)
+                values[i], self._peaks[i] = self._metric_and_peak(scan)
         self._last_scan = scans[-1] if scans else None
-        return np.array(
-            [ascan_metric(s, self.metric, self.pulse, self.window_length) for s in scans]
-        )
+        return values
+
+    def _metric_and_peak(self, scan: AScan) -> tuple[float, float]:
+        """The metric of one finite A-scan and its matched-filter envelope peak [a.u.]
+        (one matched filter for both when the metric is the pseudo-energy)."""
+        if self.metric == "pseudo-energy":
+            window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
+            energy, peak = pseudo_energy_with_peak(
+                scan.samples, window, self.pulse, self.window_length
+            )
+            return float(energy), float(peak)
+        value = ascan_metric(scan, self.metric, self.pulse, self.window_length)
+        return value, float(_detector(self.pulse, scan.fs, scan.n_samples).peak(scan.samples))
+
+    def _note_noise(self, samples: np.ndarray) -> None:
+        """Record the A-scan's noise σ; warn once if its noise is below the ADC step."""
+        sigma, coarse = scan_noise_sigma(samples)
+        if sigma is not None:
+            self._scan_sigmas.append(sigma)
+        if coarse and not self._warned_coarse:
+            self._warned_coarse = True
+            warnings.warn(
+                f"the A-scans from {self.source.description} are quantized more "
+                "coarsely than their noise (most samples share one ADC level): the "
+                "noise is then impulsive, not Gaussian, and the echo detection of the "
+                "acquisition phase may fire on noise; raise the receiver gain or the "
+                "ADC resolution so the noise spans a few ADC steps",
+                UserWarning,
+                stacklevel=5,
+            )
 
     def _significance(self) -> np.ndarray | None:
         """Matched-filter peak significance of each A-scan of the last batch against the

@@ -39,7 +39,7 @@ def signal_power(
     window_length: float | None = None,
 ) -> NDArray[np.float64]:
     """[a.u.²] mean power of the reference echo inside its pseudo-energy window, ``(...,)``."""
-    energy, count = _energy_window(reference_samples, window, pulse, window_length)
+    energy, count, _peak = _energy_window(reference_samples, window, pulse, window_length)
     return energy / np.maximum(count, 1)
 
 

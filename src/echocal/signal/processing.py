@@ -36,6 +36,7 @@ __all__ = [
     "metric_names",
     "peak_amplitude",
     "pseudo_energy",
+    "pseudo_energy_with_peak",
     "register_metric",
     "time_of_flight",
 ]
@@ -269,8 +270,9 @@ _ENERGY_CHUNK = 1 << 15  # samples of A-scans processed at once (temporaries sta
 
 def _energy_window(
     samples: ArrayLike, window: RecordingWindow, pulse: Pulse, window_length: float | None
-) -> tuple[_F64, NDArray[np.int64]]:
-    """(Σx² in the window centred on the matched-filter peak, number of samples summed)."""
+) -> tuple[_F64, NDArray[np.int64], _F64]:
+    """(Σx² in the window centred on the matched-filter peak, number of samples summed,
+    the matched-filter envelope's peak [a.u.]) — one matched filter for all three."""
     x = _samples(samples, window)
     length = 2.0 * pulse.duration if window_length is None else window_length
     length = finite_float("window_length", length)
@@ -282,39 +284,45 @@ def _energy_window(
     rows = x.reshape(-1, n)
     energy = np.empty(rows.shape[0])
     count = np.empty(rows.shape[0], dtype=np.int64)
+    peak = np.empty(rows.shape[0])
     step = max(1, _ENERGY_CHUNK // n)
     for lo in range(0, rows.shape[0], step):
         sl = slice(lo, lo + step)
-        energy[sl], count[sl] = _window_sums(rows[sl], pulse, window.fs, half)
-    return energy.reshape(batch), count.reshape(batch)
+        energy[sl], count[sl], peak[sl] = _window_sums(rows[sl], pulse, window.fs, half)
+    return energy.reshape(batch), count.reshape(batch), peak.reshape(batch)
 
 
-def _window_sums(x: _F64, pulse: Pulse, fs: float, half: int) -> tuple[_F64, NDArray[np.int64]]:
-    """Σx² over [peak − half, peak + half] of rows ``x`` (n_rows, n), and the counts."""
+def _window_sums(
+    x: _F64, pulse: Pulse, fs: float, half: int
+) -> tuple[_F64, NDArray[np.int64], _F64]:
+    """Σx² over [peak − half, peak + half] of rows ``x`` (n_rows, n), the counts, and the
+    matched-filter envelope's peak value of each row."""
     n = x.shape[-1]
     z = _analytic(x, pulse, fs)
+    energy = np.empty(x.shape[0])
+    count = np.empty(x.shape[0], dtype=np.int64)
+    peak_power = np.empty(x.shape[0])
     kernel = compiled(_peak_window_loops)
     if kernel is not None:
-        energy = np.empty(x.shape[0])
-        count = np.empty(x.shape[0], dtype=np.int64)
-        kernel(z, x, half, energy, count)
-        return energy, count
+        kernel(z, x, half, energy, count, peak_power)
+        return energy, count, np.sqrt(peak_power)
     z = z[:, :n]
     power = z.real * z.real
     power += z.imag * z.imag  # |z|²: the same peak as the envelope |z|
     centre = np.argmax(power, axis=-1)
+    peak_power = np.take_along_axis(power, centre[:, None], axis=-1)[:, 0]
     lo = np.clip(centre - half, 0, n)
     hi = np.clip(centre + half + 1, 0, n)
-    energy = np.empty(x.shape[0])
     for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist(), strict=True)):
         seg = x[i, a:b]
         energy[i] = seg @ seg  # a few dozen samples: cheaper per row than any gather
-    return energy, hi - lo
+    return energy, hi - lo, np.sqrt(peak_power)
 
 
-def _peak_window_loops(z, x, half, energy, count):
+def _peak_window_loops(z, x, half, energy, count, peak_power):
     """Compiled :func:`_window_sums` after the FFTs: per row, the first maximum of |z|² over
-    the ``n`` samples of ``x`` (n_rows, n), then Σx² over [peak − half, peak + half]."""
+    the ``n`` samples of ``x`` (n_rows, n) (kept in ``peak_power``), then Σx² over
+    [peak − half, peak + half]."""
     n = x.shape[1]
     for i in range(x.shape[0]):
         best = -1.0
@@ -332,6 +340,7 @@ def _peak_window_loops(z, x, half, energy, count):
             acc += x[i, m] * x[i, m]
         energy[i] = acc
         count[i] = hi - lo
+        peak_power[i] = best
 
 
 def pseudo_energy(
@@ -348,6 +357,18 @@ def pseudo_energy(
     samples (no 1/fs factor), as in eq. 79; it is clipped at the ends of the A-scan.
     """
     return _energy_window(samples, window, pulse, window_length)[0]
+
+
+def pseudo_energy_with_peak(
+    samples: ArrayLike,
+    window: RecordingWindow,
+    pulse: Pulse,
+    window_length: float | None = None,
+) -> tuple[_F64, _F64]:
+    """:func:`pseudo_energy` and the matched-filter envelope's peak [a.u.] (the value
+    :func:`matched_envelope` peaks at), both shape ``(...,)``, from one matched filter."""
+    energy, _count, peak = _energy_window(samples, window, pulse, window_length)
+    return energy, peak
 
 
 def peak_amplitude(
