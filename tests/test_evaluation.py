@@ -154,3 +154,18 @@ def test_calibrate_command_passes_method_options(tmp_path):
     for bad in ("budget=3", "no-equals-sign", "detector=x"):
         res = CliRunner().invoke(app, [*base, "--option", bad, "--out", str(tmp_path)])
         assert res.exit_code != 0 and "--option" in res.output
+
+
+def test_methods_command_lists_the_registry_and_one_methods_defaults():
+    from echocal.calibrate import method_names
+    from echocal.calibrate.auto import AUTO_SEARCH
+
+    listing = json.loads(CliRunner().invoke(app, ["methods", "--json"]).stdout)
+    assert sorted(listing["methods"]) == sorted(method_names())
+    auto = json.loads(CliRunner().invoke(app, ["methods", "auto", "--json"]).stdout)
+    # auto differs from acquisition only by its search geometry defaults
+    acquisition = json.loads(CliRunner().invoke(app, ["methods", "acquisition", "--json"]).stdout)
+    assert {k: auto["options"][k] for k in AUTO_SEARCH} == AUTO_SEARCH
+    assert set(auto["options"]) == set(acquisition["options"])
+    bad = CliRunner().invoke(app, ["methods", "magic"])
+    assert bad.exit_code != 0 and "magic" in (bad.output + str(bad.exception))

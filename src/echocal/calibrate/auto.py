@@ -59,63 +59,38 @@ acquisition.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 from numpy.typing import ArrayLike
 
-from echocal._rng import RngLike
-from echocal.calibrate.acquisition import Acquisition, Detector, NoiseModel
+from echocal.calibrate.acquisition import Acquisition
 from echocal.calibrate.registry import register_method
 
-__all__ = ["Auto"]
+__all__ = ["AUTO_SEARCH", "Auto"]
+
+AUTO_SEARCH: dict[str, float] = {"fine_radius": 3.0, "growth": 2.0, "max_spacing": 4.2}
+"""auto's search geometry [deg, -, deg] — its only difference from ``acquisition``: the 1°
+lattice within 3° of x0, then circles of spacing up to 4.2° (see the evidence above)."""
 
 
 @register_method("auto")
 class Auto(Acquisition):
     """Acquisition (only spends measurements beyond x0's hexagon when the echo is not
-    there) followed by the model-based local method, which reuses every measurement."""
+    there) followed by the model-based local method, which reuses every measurement.
 
-    def __init__(
-        self,
-        x0: ArrayLike,
-        *,
-        local: str = "model-based",
-        local_options: dict[str, Any] | None = None,
-        spacing: float = 1.0,
-        max_radius: float = 20.0,
-        threshold: float = 4.5,
-        first_threshold: float = 3.0,
-        confirm: bool = True,
-        noise_sigma: float | None = None,
-        noise_floor: float | None = None,
-        noise_model: NoiseModel | None = None,
-        detector: Detector | None = None,
-        batch: int = 1,
-        fine_radius: float | None = 3.0,
-        growth: float = 2.0,
-        max_spacing: float | None = 4.2,
-        bounds: ArrayLike | None = None,
-        rng: RngLike = None,
-        normalize: str = "none",
-    ) -> None:
-        super().__init__(
-            x0,
-            local=local,
-            local_options=local_options,
-            spacing=spacing,
-            max_radius=max_radius,
-            threshold=threshold,
-            first_threshold=first_threshold,
-            confirm=confirm,
-            noise_sigma=noise_sigma,
-            noise_floor=noise_floor,
-            noise_model=noise_model,
-            detector=detector,
-            batch=batch,
-            fine_radius=fine_radius,
-            growth=growth,
-            max_spacing=max_spacing,
-            bounds=bounds,
-            rng=rng,
-            normalize=normalize,
-        )
+    Takes every :class:`Acquisition` option; only the search geometry defaults differ
+    (:data:`AUTO_SEARCH`).
+    """
+
+    def __init__(self, x0: ArrayLike, **options: Any) -> None:
+        super().__init__(x0, **{**AUTO_SEARCH, **options})
+
+
+# The driver and the CLI read a method's options and defaults from its signature.
+Auto.__init__.__signature__ = inspect.signature(Acquisition.__init__).replace(  # type: ignore[attr-defined]
+    parameters=[
+        p.replace(default=AUTO_SEARCH.get(name, p.default))
+        for name, p in inspect.signature(Acquisition.__init__).parameters.items()
+    ]
+)

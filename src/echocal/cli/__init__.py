@@ -28,6 +28,7 @@ _COMMAND_MODULES = (
     "echocal.cli.scene",
     "echocal.cli.simulate",
     "echocal.cli.calibrate",
+    "echocal.cli.methods",
     "echocal.cli.setup",
     "echocal.cli.record",
     "echocal.cli.instrument",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 import warnings
 from pathlib import Path
 from typing import Annotated, Any
@@ -179,15 +178,13 @@ def _search_options(method: str, radius: float | None) -> dict[str, Any]:
     if radius is None:
         return {}
     from echocal._validate import positive_float
-    from echocal.calibrate import Acquisition, Auto, get_method
+    from echocal.calibrate import Acquisition, get_method
+    from echocal.calibrate.auto import AUTO_SEARCH
 
     radius = positive_float("--search-radius", radius)
     if issubclass(get_method(method), Acquisition):
         return {"max_radius": radius}
-    # the same search as auto's: the fine lattice near x0, coarse circles beyond
-    auto = inspect.signature(Auto.__init__).parameters
-    geometry = {k: auto[k].default for k in ("fine_radius", "growth", "max_spacing")}
-    return {"acquire": {"max_radius": radius, **geometry}}
+    return {"acquire": {"max_radius": radius, **AUTO_SEARCH}}  # auto's search geometry
 
 
 def _parse_settle(text: str) -> tuple[float, int] | None:

@@ -1,0 +1,59 @@
+"""``echocal methods [NAME]``: the calibration methods, and one method's options."""
+
+from __future__ import annotations
+
+import inspect
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from echocal.cli._common import console, write_json
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command of this module to ``app``."""
+
+    @app.command("methods")
+    def methods(
+        name: Annotated[
+            str | None, typer.Argument(help="A method: list its options and defaults.")
+        ] = None,
+        json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    ) -> None:
+        """List the calibration methods, or one method's options (for --option KEY=VALUE)."""
+        from echocal.calibrate import get_method, method_names
+        from echocal.calibrate.driver import _accepted
+
+        if name is None:
+            summary = {m: _first_line(get_method(m)) for m in method_names()}
+            if json_output:
+                write_json({"methods": summary})
+                return
+            for m, line in summary.items():
+                console.print(f"[bold]{m:14s}[/] {escape(line)}")
+            return
+        cls = get_method(name)  # unknown names list the valid ones
+        params = inspect.signature(cls.__init__).parameters
+        options = {k: params[k].default for k in params if k in _accepted(cls)}
+        if json_output:
+            write_json({"method": name, "options": {k: _plain(v) for k, v in options.items()}})
+            return
+        console.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
+        for key, default in options.items():
+            note = "  (supplied by the objective)" if key in _FROM_OBJECTIVE else ""
+            console.print(f"  {key:18s} default {escape(repr(default))}{note}")
+
+
+_FROM_OBJECTIVE = ("noise_sigma", "noise_floor", "noise_model", "detector", "history")
+"""Options the driver fills from the objective unless given."""
+
+
+def _first_line(cls: type) -> str:
+    """The first paragraph of the class docstring, on one line."""
+    return " ".join((inspect.getdoc(cls) or "").split("\n\n")[0].split())
+
+
+def _plain(value: object) -> object:
+    """JSON-ready default: numbers, strings, booleans and None as they are, else repr."""
+    return value if value is None or isinstance(value, (bool, int, float, str)) else repr(value)
