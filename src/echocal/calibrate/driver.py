@@ -88,10 +88,7 @@ def build_optimizer(
             stacklevel=3,
         )
     if wrap:
-        aknown.setdefault("noise_sigma", objective.noise_sigma)
-        aknown.setdefault("noise_floor", objective.noise_floor)
-        aknown.setdefault("noise_model", objective.noise_estimate)
-        aknown.setdefault("detector", objective.detections)
+        aknown = {**_search_inputs(objective), **aknown}
         if issubclass(cls, Acquisition):  # pragma: no cover - excluded above
             raise AssertionError
         used = {**known, "acquire": aknown}
@@ -103,11 +100,19 @@ def build_optimizer(
         known.setdefault("noise_model", objective.noise_estimate)
     if issubclass(cls, Acquisition):
         known.update({k: v for k, v in acq_opts.items() if k in _accepted(cls)})
-        known.setdefault("noise_sigma", objective.noise_sigma)
-        known.setdefault("noise_floor", objective.noise_floor)
-        known.setdefault("noise_model", objective.noise_estimate)
-        known.setdefault("detector", objective.detections)
+        known = {**_search_inputs(objective), **known}
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
+
+
+def _search_inputs(objective: Objective) -> dict[str, Any]:
+    """What an acquisition phase takes from the objective unless told otherwise: its noise
+    level and floor, the live noise estimate and the echo detector."""
+    return {
+        "noise_sigma": objective.noise_sigma,
+        "noise_floor": objective.noise_floor,
+        "noise_model": objective.noise_estimate,
+        "detector": objective.detections,
+    }
 
 
 def _acquisition_cost(opt: Optimizer, objective: Objective) -> int | None:
