@@ -104,15 +104,20 @@ def build_optimizer(
     return cls(x0, bounds=objective.bounds, rng=rng, **known), known
 
 
+OBJECTIVE_INPUTS = ("noise_sigma", "noise_floor", "noise_model", "detector")
+"""Acquisition options the driver takes from the objective unless they are given."""
+
+
 def _search_inputs(objective: Objective) -> dict[str, Any]:
-    """What an acquisition phase takes from the objective unless told otherwise: its noise
-    level and floor, the live noise estimate and the echo detector."""
-    return {
-        "noise_sigma": objective.noise_sigma,
-        "noise_floor": objective.noise_floor,
-        "noise_model": objective.noise_estimate,
-        "detector": objective.detections,
-    }
+    """The :data:`OBJECTIVE_INPUTS` of ``objective``: its noise level and floor, the live
+    noise estimate and the echo detector."""
+    values = (
+        objective.noise_sigma,
+        objective.noise_floor,
+        objective.noise_estimate,
+        objective.detections,
+    )
+    return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
 
 
 def _acquisition_cost(opt: Optimizer, objective: Objective) -> int | None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import warnings
 from pathlib import Path
 from typing import Annotated, Any
@@ -92,7 +93,8 @@ def register(app: typer.Typer) -> None:
                 f"--option {', '.join(unsettable)}: takes a Python object, which the command "
                 "line cannot give (the source objective supplies it); use the API"
             )
-        taken = sorted(set(extra) & {*_DRIVER_KEYWORDS, *search})
+        driver = set(inspect.signature(calibrate).parameters) - {"options"}
+        taken = sorted(set(extra) & {*driver, *search})
         if taken:
             raise typer.BadParameter(
                 f"--option {', '.join(taken)}: set by its own command-line option "
@@ -151,22 +153,6 @@ def register(app: typer.Typer) -> None:
             f"  saved to  {escape(str(out))}/"
         )
 
-
-_DRIVER_KEYWORDS = (
-    "objective",
-    "method",
-    "x0",
-    "budget",
-    "max_iter",
-    "xtol",
-    "settle",
-    "rng",
-    "callback",
-    "acquire",
-    "preset",
-    "final_check",
-)
-"""calibrate()'s own parameters: not method options."""
 
 _OBJECT_OPTIONS = ("detector", "noise_model", "history", "bounds", "rng")
 """Method options that take Python objects, not values."""

@@ -23,7 +23,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """List the calibration methods, or one method's options (for --option KEY=VALUE)."""
         from echocal.calibrate import get_method, method_names
-        from echocal.calibrate.driver import _accepted
+        from echocal.calibrate.driver import OBJECTIVE_INPUTS, _accepted
 
         if name is None:
             summary = {m: _first_line(get_method(m)) for m in method_names()}
@@ -41,12 +41,8 @@ def register(app: typer.Typer) -> None:
             return
         console.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
         for key, default in options.items():
-            note = "  (supplied by the objective)" if key in _FROM_OBJECTIVE else ""
+            note = "  (supplied by the objective)" if key in OBJECTIVE_INPUTS else ""
             console.print(f"  {key:18s} default {escape(repr(default))}{note}")
-
-
-_FROM_OBJECTIVE = ("noise_sigma", "noise_floor", "noise_model", "detector", "history")
-"""Options the driver fills from the objective unless given."""
 
 
 def _first_line(cls: type) -> str:
