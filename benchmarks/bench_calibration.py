@@ -95,6 +95,7 @@ from _common import machine_info, markdown_table  # noqa: E402
 from echocal.calibrate import calibrate  # noqa: E402
 from echocal.errors import BudgetExhaustedError  # noqa: E402
 from echocal.evaluation import angular_error  # noqa: E402
+from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
 
@@ -728,9 +729,9 @@ def main(argv: list[str] | None = None) -> int:
         md_path = md_path or DOCS / "calibration.md"
         png_path = png_path or DOCS / "calibration.png"
     if json_path:
-        json_path.write_text(json.dumps(data, indent=None), encoding="utf-8")
+        atomic_write_text(json_path, json.dumps(data, indent=None))
     if md_path:
-        md_path.write_text(md, encoding="utf-8")
+        atomic_write_text(md_path, md)
     if png_path:
         plot_ecdf(per_case, png_path)
     return 0

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 from _common import markdown_table
 
+from echocal.io import atomic_write_text
 from echocal.measurement.virtual import _pose_arrays
 from echocal.setups import load_setup
 from echocal.signal.detection import EchoDetector
@@ -160,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
             "",
             *curves_md,
         ]
-        args.out_md.write_text("\n".join(text) + "\n", encoding="utf-8")
+        atomic_write_text(args.out_md, "\n".join(text) + "\n")
     return 0
 
 
