@@ -97,6 +97,7 @@ from echocal.errors import BudgetExhaustedError  # noqa: E402
 from echocal.evaluation import angular_error  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
+from echocal.plots import save_figure  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -502,7 +503,7 @@ def plot_ecdf(per_case: dict[str, dict[str, dict[str, Any]]], path: Path) -> Non
         ax.grid(alpha=0.3)
     axes[0][-1].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, formats=("png",), dpi=110)
     plt.close(fig)
 
 
