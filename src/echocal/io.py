@@ -10,6 +10,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+from echocal.errors import DataFileError
+
 __all__ = ["atomic_path", "atomic_write_text", "json_ready"]
 
 
@@ -22,14 +24,26 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     untouched.
     """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _create_unique(target)
+    if target.is_dir():
+        raise DataFileError(f"cannot write {target}: it is a directory; give a file path")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = _create_unique(target)
+    except OSError as exc:
+        raise _unwritable(target, exc) from None
     try:
         yield tmp
-        os.replace(tmp, target)
+        try:
+            os.replace(tmp, target)
+        except OSError as exc:
+            raise _unwritable(target, exc) from None
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def _unwritable(target: Path, exc: OSError) -> DataFileError:
+    return DataFileError(f"cannot write {target}: {exc.strerror or exc}; choose a writable path")
 
 
 def _create_unique(target: Path) -> Path:

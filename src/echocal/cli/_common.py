@@ -21,15 +21,23 @@ console = Console(stderr=True)
 
 
 def run_cli(app: typer.Typer) -> None:
-    """Run ``app``; echocal errors become one red line and exit code 2, not a traceback.
+    """Run ``app``; echocal errors (and paths the operating system refuses) become one red
+    line and exit code 2, not a traceback.
 
     Usage errors (bad options) are reported by typer itself, also with exit code 2.
     """
     try:
         app()
     except EchocalError as exc:
-        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
-        sys.exit(2)
+        _fail(str(exc))
+    except OSError as exc:  # a path the operating system refused (permissions, not a dir, ...)
+        where = f" {exc.filename}" if exc.filename else ""
+        _fail(f"cannot access{where}: {exc.strerror or exc}; check the path and its permissions")
+
+
+def _fail(message: str) -> None:
+    console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
+    sys.exit(2)
 
 
 def parse_pose(text: str, option: str = "--pose") -> Pose:

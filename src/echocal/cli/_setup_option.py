@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from echocal.errors import EchocalValueError
 from echocal.measurement.virtual import VirtualSetup
 from echocal.setups import setup_with_overrides
@@ -18,10 +20,16 @@ SNR_HELP = (
 def resolve_setup(
     setup: str, *, specimen: str | None = None, snr: str | None = None, seed: int | None = None
 ) -> VirtualSetup:
-    """Load ``setup`` with the command-line overrides (``snr`` as typed: dB or 'none')."""
+    """Load ``setup`` with the command-line overrides (``snr`` as typed: dB or 'none').
+
+    Without ``seed`` the setup file's seed is used, and without that 0, so a command
+    repeated as typed gives the same noise; ``virtual.rng`` is then that seed.
+    """
     if snr is None:
-        return setup_with_overrides(setup, specimen=specimen, seed=seed)
-    return setup_with_overrides(setup, specimen=specimen, snr_db=_parse_snr(snr), seed=seed)
+        virtual = setup_with_overrides(setup, specimen=specimen, seed=seed)
+    else:
+        virtual = setup_with_overrides(setup, specimen=specimen, snr_db=_parse_snr(snr), seed=seed)
+    return virtual if virtual.rng is not None else dataclasses.replace(virtual, rng=0)
 
 
 def _parse_snr(text: str) -> float | None:
