@@ -40,3 +40,54 @@ def test_json_ready_is_strict_json():
     data["c"] = np.array([0.5, -np.inf])
     text = json.dumps(json_ready(data), allow_nan=False)  # raises on any NaN/inf left
     assert json.loads(text) == {"a": None, "b": [1.0, None, [2, "x"]], "c": [0.5, None]}
+
+
+def test_unwritable_targets_are_data_file_errors_naming_the_path(tmp_path):
+    import pytest
+
+    from echocal.errors import DataFileError
+
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(DataFileError, match=r"cannot write .*file/out\.txt"):
+        atomic_write_text(blocker / "out.txt", "y")  # parent is a file, not a directory
+    (tmp_path / "dir").mkdir()
+    with pytest.raises(DataFileError, match="is a directory"):
+        atomic_write_text(tmp_path / "dir", "y")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dir", "file"]  # nothing left behind
+
+
+def test_cli_turns_os_errors_into_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
+    import sys
+
+    import pytest
+    import typer
+
+    from echocal.cli._common import run_cli
+
+    app = typer.Typer()
+
+    @app.command()
+    def read() -> None:
+        (tmp_path / "missing" / "x.txt").read_text()  # the OSError is the point
+
+    monkeypatch.setattr(sys, "argv", ["echocal"])  # a one-command app runs it directly
+    with pytest.raises(SystemExit) as exit_info:
+        run_cli(app)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "cannot access" in err and "missing" in err and "Traceback" not in err
+
+
+def test_version_flag_and_info_print_real_versions():
+    from importlib.metadata import version
+
+    from typer.testing import CliRunner
+
+    import echocal
+    from echocal.cli import app
+
+    result = CliRunner().invoke(app, ["--version"])
+    assert result.exit_code == 0 and result.output.strip() == echocal.__version__
+    info = CliRunner().invoke(app, ["info"])
+    assert info.exit_code == 0 and f"numpy      {version('numpy')}" in info.output

@@ -8,10 +8,12 @@ is doable from Python through the public API.
 from __future__ import annotations
 
 import importlib
+from typing import Annotated
 
 import typer
 
 from echocal.cli._common import run_cli
+from echocal.cli.info import version_callback
 
 app = typer.Typer(
     name="echocal",
@@ -20,6 +22,22 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version",
+            callback=version_callback,
+            is_eager=True,
+            help="Print the version and exit.",
+        ),
+    ] = False,
+) -> None:
+    """Ultrasonic immersion simulator and transducer-orientation calibration."""
+
 
 # Command modules, in the order their commands appear in --help.
 _COMMAND_MODULES = (

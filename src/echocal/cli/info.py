@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
+import importlib.metadata
 import platform
 
 import typer
@@ -23,5 +23,19 @@ def register(app: typer.Typer) -> None:
         """Print versions and which optional fast engines (embreex, numba) are available."""
         typer.echo(f"echocal {echocal.__version__} on Python {platform.python_version()}")
         for module in ("numpy", "scipy", "trimesh", "embreex", "numba", "dask"):
-            spec = importlib.util.find_spec(module)
-            typer.echo(f"  {module:10s} {'available' if spec else 'not installed'}")
+            typer.echo(f"  {module:10s} {_installed_version(module)}")
+
+
+def _installed_version(distribution: str) -> str:
+    """The installed version of ``distribution``, or 'not installed'."""
+    try:
+        return importlib.metadata.version(distribution)
+    except importlib.metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def version_callback(value: bool) -> None:
+    """``echocal --version``: print the version and exit."""
+    if value:
+        typer.echo(echocal.__version__)
+        raise typer.Exit()
