@@ -98,7 +98,8 @@ class SourceObjective(Objective):
     position : [m] where the transducer stays while its orientation is calibrated, shape (3,).
     metric : metric name (``pseudo-energy``, ``peak-amplitude``, ``energy-db``).
     pulse : the transmitted pulse, the matched filter's template; defaults to
-        ``source.pulse`` when the source has one (the simulator and replay files do).
+        ``source.pulse`` when the source has one (the simulator does; pass it for a replay
+        or a rig).
     parameterization : ``"azimuth-coelevation"`` or ``"tilt"``.
     bounds : [deg] (2, 2) angle bounds; default from the source's limits.
     window_length : [s] pseudo-energy window; default tied to the pulse duration.
