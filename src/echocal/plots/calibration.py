@@ -73,16 +73,37 @@ def path_figure(
     x0: Sequence[float] | None = None,
     truth: Sequence[float] | None = None,
     title: str | None = None,
+    db_floor: float | None = None,
+    show_measurements: bool = False,
 ) -> Figure:
-    """Paths of the iterates over the cost-function heat map, x0 and truth marked."""
+    """Paths of the iterates over the cost-function heat map, x0 and truth marked.
+
+    ``db_floor`` [dB, < 0]: draw the map as 10·log10(value / max), clipped at this floor —
+    a narrow main lobe and its side lobes stay visible on a map many lobe widths wide
+    (default: the linear metric, as in the thesis's figures).  ``show_measurements``: also
+    mark every measured pose (an acquisition's search pattern, finite-difference stencils).
+    """
     fig = Figure(figsize=(6.8, 5.6), constrained_layout=True)
     ax = fig.add_subplot()
-    mesh = ax.pcolormesh(cost_map.a, cost_map.b, cost_map.values.T, shading="auto", cmap="viridis")
-    fig.colorbar(mesh, ax=ax, label="metric")
-    for label, result in runs.items():
+    values, label = cost_map.values.T, "metric"
+    if db_floor is not None:
+        if not db_floor < 0.0:
+            from echocal.errors import EchocalValueError
+
+            raise EchocalValueError(f"db_floor must be a negative level in dB; got {db_floor}")
+        peak = float(np.nanmax(values))
+        ratio = np.clip(values / peak, 10.0 ** (db_floor / 10.0), None) if peak > 0 else values
+        values, label = 10.0 * np.log10(ratio), "metric / max [dB]"
+    mesh = ax.pcolormesh(cost_map.a, cost_map.b, values, shading="auto", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=label)
+    for name, result in runs.items():
+        if show_measurements and len(result.points):
+            ax.plot(*result.points.T, ls="", marker=".", ms=2.5, color="0.85", alpha=0.8)
         path = result.iterates
-        ax.plot(path[:, 0], path[:, 1], marker=".", ms=4, lw=1.2, label=label)
+        ax.plot(path[:, 0], path[:, 1], marker=".", ms=4, lw=1.2, label=name)
         ax.plot(*result.x, marker="x", color="w", ms=6)
+    if show_measurements:
+        ax.plot([], [], ls="", marker=".", color="0.85", label="measured poses")
     if x0 is not None:
         ax.plot(*x0, marker="o", mfc="none", mec="w", ms=10, mew=1.5, ls="", label="initial guess")
     if truth is not None:
