@@ -19,54 +19,112 @@ re-exported here: the name would shadow that subpackage.
 
 from __future__ import annotations
 
-from echocal.ascan import AScan
-from echocal.calibrate import CalibrationResult, method_names
-from echocal.constants import MM, SOUND_SPEED_WATER, US
-from echocal.errors import (
-    BudgetExhaustedError,
-    ConfigError,
-    DataFileError,
-    EchocalError,
-    EchocalValueError,
-    GeometryError,
-    InstrumentError,
-    LimitError,
-    UnknownNameError,
-)
-from echocal.evaluation import angular_error, evaluate_run
-from echocal.geometry import (
-    Pose,
-    angle_between,
-    normal_to_orientation,
-    orientation_frame,
-    orientation_normal,
-    orientation_to_tilt,
-    tilt_normal,
-    tilt_to_orientation,
-)
-from echocal.measurement import (
-    HardwareSource,
-    MeasurementSource,
-    PositionerLimits,
-    ReplaySource,
-    SourceObjective,
-    VirtualSetup,
-    record,
-)
-from echocal.raytrace import Hits, cast
-from echocal.setups import builtin_setup_names, load_setup
-from echocal.signal import (
-    RecordingWindow,
-    get_metric,
-    make_pulse,
-    metric_names,
-    pseudo_energy,
-    pulse_names,
-    synthesize,
-    time_of_flight,
-)
-from echocal.specimen import Specimen, builtin_specimen, specimen_names
-from echocal.transducer import Transducer, make_directivity
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the same names, eagerly, for type checkers and IDEs
+    from echocal.ascan import AScan
+    from echocal.calibrate import CalibrationResult, method_names
+    from echocal.constants import MM, SOUND_SPEED_WATER, US
+    from echocal.errors import (
+        BudgetExhaustedError,
+        ConfigError,
+        DataFileError,
+        EchocalError,
+        EchocalValueError,
+        GeometryError,
+        InstrumentError,
+        LimitError,
+        UnknownNameError,
+    )
+    from echocal.evaluation import angular_error, evaluate_run
+    from echocal.geometry import (
+        Pose,
+        angle_between,
+        normal_to_orientation,
+        orientation_frame,
+        orientation_normal,
+        orientation_to_tilt,
+        tilt_normal,
+        tilt_to_orientation,
+    )
+    from echocal.measurement import (
+        HardwareSource,
+        MeasurementSource,
+        PositionerLimits,
+        ReplaySource,
+        SourceObjective,
+        VirtualSetup,
+        record,
+    )
+    from echocal.raytrace import Hits, cast
+    from echocal.setups import builtin_setup_names, load_setup
+    from echocal.signal import (
+        RecordingWindow,
+        get_metric,
+        make_pulse,
+        metric_names,
+        pseudo_energy,
+        pulse_names,
+        synthesize,
+        time_of_flight,
+    )
+    from echocal.specimen import Specimen, builtin_specimen, specimen_names
+    from echocal.transducer import Transducer, make_directivity
+
+_LAZY: dict[str, str] = {
+    "AScan": "echocal.ascan",
+    "BudgetExhaustedError": "echocal.errors",
+    "CalibrationResult": "echocal.calibrate",
+    "ConfigError": "echocal.errors",
+    "DataFileError": "echocal.errors",
+    "EchocalError": "echocal.errors",
+    "EchocalValueError": "echocal.errors",
+    "GeometryError": "echocal.errors",
+    "HardwareSource": "echocal.measurement",
+    "Hits": "echocal.raytrace",
+    "InstrumentError": "echocal.errors",
+    "LimitError": "echocal.errors",
+    "MM": "echocal.constants",
+    "MeasurementSource": "echocal.measurement",
+    "Pose": "echocal.geometry",
+    "PositionerLimits": "echocal.measurement",
+    "RecordingWindow": "echocal.signal",
+    "ReplaySource": "echocal.measurement",
+    "SOUND_SPEED_WATER": "echocal.constants",
+    "SourceObjective": "echocal.measurement",
+    "Specimen": "echocal.specimen",
+    "Transducer": "echocal.transducer",
+    "US": "echocal.constants",
+    "UnknownNameError": "echocal.errors",
+    "VirtualSetup": "echocal.measurement",
+    "angle_between": "echocal.geometry",
+    "angular_error": "echocal.evaluation",
+    "builtin_setup_names": "echocal.setups",
+    "builtin_specimen": "echocal.specimen",
+    "cast": "echocal.raytrace",
+    "evaluate_run": "echocal.evaluation",
+    "get_metric": "echocal.signal",
+    "load_setup": "echocal.setups",
+    "make_directivity": "echocal.transducer",
+    "make_pulse": "echocal.signal",
+    "method_names": "echocal.calibrate",
+    "metric_names": "echocal.signal",
+    "normal_to_orientation": "echocal.geometry",
+    "orientation_frame": "echocal.geometry",
+    "orientation_normal": "echocal.geometry",
+    "orientation_to_tilt": "echocal.geometry",
+    "pseudo_energy": "echocal.signal",
+    "pulse_names": "echocal.signal",
+    "record": "echocal.measurement",
+    "specimen_names": "echocal.specimen",
+    "synthesize": "echocal.signal",
+    "tilt_normal": "echocal.geometry",
+    "tilt_to_orientation": "echocal.geometry",
+    "time_of_flight": "echocal.signal",
+}
+"""Public name -> the module that defines it, imported on first use (PEP 562): `import
+echocal` and the command line's start stay fast."""
 
 __version__ = "0.1.0"
 
@@ -122,3 +180,16 @@ __all__ = [
     "tilt_to_orientation",
     "time_of_flight",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'echocal' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
