@@ -166,3 +166,35 @@ def test_single_pose_arrays_match_the_vectorized_frames(az, coel):
     assert_allclose(positions, [[0.01, 0.02, 0.03]])
     # np.cos/np.sin vs math.cos/math.sin: both correctly rounded to about 1 ulp.
     assert_allclose(frames[0], orientation_frame(az, coel), atol=1e-15)
+
+
+CONVERSIONS = [
+    lambda a, b: tilt_to_orientation(a, b),
+    lambda a, b: orientation_to_tilt(a, b),
+    lambda a, b: normal_to_orientation(tilt_normal(a, b)),
+    lambda a, b: normal_to_tilt(orientation_normal(a, b)),
+]
+
+
+@pytest.mark.parametrize("convert", CONVERSIONS)
+@pytest.mark.parametrize("a, b", [(0.0, 0.0), (0.0, -0.0), (180.0, 0.0), (1.0, 2.0), (0, -3)])
+def test_conversions_return_one_scalar_type_and_no_negative_zero(convert, a, b):
+    # scalar angles in: two numpy.float64 scalars out (not a 0-d array and a float)
+    out = convert(a, b)
+    assert all(type(v) is np.float64 for v in out), [type(v) for v in out]
+    assert not any(v == 0.0 and np.signbit(v) for v in out), out
+
+
+@pytest.mark.parametrize("convert", CONVERSIONS)
+def test_conversions_of_arrays_return_arrays_of_the_broadcast_shape(convert):
+    a, b = np.zeros((2, 3)), np.array([0.0, -0.0, 5.0])
+    for v in convert(a, b):
+        assert isinstance(v, np.ndarray) and v.shape == (2, 3)
+        assert not np.any((v == 0.0) & np.signbit(v))
+
+
+def test_convert_angles_to_the_same_parameterization_is_consistent_too():
+    from echocal.geometry import convert_angles
+
+    out = convert_angles(-0.0, 1, "tilt", "tilt")
+    assert all(type(v) is np.float64 for v in out) and not np.signbit(out[0])

@@ -145,6 +145,12 @@ def _unit(name: str, vectors: ArrayLike) -> FloatArray:
     return v / norm
 
 
+def _angles_out(values: FloatArray) -> FloatArray:
+    """Angles [deg] as returned by the conversions here: a ``numpy.float64`` for one
+    orientation (shape ``()``), else an array of shape ``(...)``; never −0.0."""
+    return (np.asarray(values, dtype=np.float64) + 0.0)[()]  # −0.0 + 0.0 is +0.0
+
+
 def normal_to_orientation(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Inverse of :func:`orientation_normal` with θ ∈ [0, 180] and φ ∈ (−180, 180].
 
@@ -152,7 +158,8 @@ def normal_to_orientation(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
 
     Returns
     -------
-    azimuth, coelevation : [deg], shape ``(...)``
+    azimuth, coelevation : [deg], shape ``(...)``: ``numpy.float64`` scalars for one
+        normal of shape ``(3,)``, arrays otherwise; never −0.0.
     """
     n = _unit("normal", normal)
     horizontal = np.hypot(n[..., 0], n[..., 1])
@@ -160,7 +167,7 @@ def normal_to_orientation(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
     azimuth = np.rad2deg(np.arctan2(n[..., 1], n[..., 0]))
     azimuth = np.where(horizontal > 1e-15, azimuth, 0.0)
     azimuth = np.where(azimuth <= -180.0, azimuth + 360.0, azimuth)
-    return azimuth, coelevation
+    return _angles_out(azimuth), _angles_out(coelevation)
 
 
 def normal_to_tilt(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -168,23 +175,32 @@ def normal_to_tilt(normal: ArrayLike) -> tuple[FloatArray, FloatArray]:
 
     Returns
     -------
-    tilt_x, tilt_y : [deg], shape ``(...)``
+    tilt_x, tilt_y : [deg], shape ``(...)``: ``numpy.float64`` scalars for one normal of
+        shape ``(3,)``, arrays otherwise; never −0.0.
     """
     n = _unit("normal", normal)
     tilt_x = np.rad2deg(np.arcsin(np.clip(-n[..., 1], -1.0, 1.0)))
     tilt_y = np.rad2deg(np.arctan2(n[..., 0], n[..., 2]))
-    return tilt_x, tilt_y
+    return _angles_out(tilt_x), _angles_out(tilt_y)
 
 
 def orientation_to_tilt(
     azimuth: ArrayLike, coelevation: ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
-    """(azimuth, co-elevation) [deg] → (tilt_x, tilt_y) [deg] of the same beam."""
+    """(azimuth, co-elevation) [deg] → (tilt_x, tilt_y) [deg] of the same beam.
+
+    Broadcasts; returns ``numpy.float64`` scalars for scalar angles, arrays of the
+    broadcast shape otherwise (as :func:`normal_to_tilt`); never −0.0.
+    """
     return normal_to_tilt(orientation_normal(azimuth, coelevation))
 
 
 def tilt_to_orientation(tilt_x: ArrayLike, tilt_y: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    """(tilt_x, tilt_y) [deg] → canonical (azimuth, co-elevation) [deg] of the same beam."""
+    """(tilt_x, tilt_y) [deg] → canonical (azimuth, co-elevation) [deg] of the same beam.
+
+    Broadcasts; returns ``numpy.float64`` scalars for scalar angles, arrays of the
+    broadcast shape otherwise (as :func:`normal_to_orientation`); never −0.0.
+    """
     return normal_to_orientation(tilt_normal(tilt_x, tilt_y))
 
 
@@ -332,13 +348,16 @@ def angles_of(pose: Pose, parameterization: str) -> tuple[float, float]:
 def convert_angles(
     a: ArrayLike, b: ArrayLike, source: str, target: str
 ) -> tuple[FloatArray, FloatArray]:
-    """Convert orientation angles [deg] between parameterizations (vectorized)."""
+    """Convert orientation angles [deg] between parameterizations (vectorized).
+
+    Returns ``numpy.float64`` scalars for scalar angles, arrays otherwise; never −0.0.
+    """
     one_of("parameterization", source, PARAMETERIZATIONS)
     one_of("parameterization", target, PARAMETERIZATIONS)
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     if source == target:
-        return a, b
+        return _angles_out(a), _angles_out(b)
     if source == "tilt":
         return tilt_to_orientation(a, b)
     return orientation_to_tilt(a, b)
