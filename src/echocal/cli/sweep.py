@@ -41,7 +41,15 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option("--json", help="Print the summary as one JSON object.")
         ] = False,
     ) -> None:
-        """Run every unfinished run of SWEEP into --out, then print its summary."""
+        """Run every unfinished run of SWEEP into --out, then print its summary.
+
+        The sweep and every run configuration are checked first (as `sweep check`
+        does); nothing is written when they are refused.
+
+        Exit codes: 0 every run completed; 1 some runs failed (their error is in
+        runs.parquet's `message`; the most common one is printed); 2 the sweep, an
+        option or --out was refused (nothing was run).
+        """
         from echocal.experiments import run_sweep
 
         results = run_sweep(
@@ -55,13 +63,22 @@ def register(app: typer.Typer) -> None:
         skipped = results.n_cases - results.n_new
         if json_output:
             write_json(_summary_json(results, skipped=skipped))
-            return
-        resumed = f", {skipped} already done" if skipped else ""
-        console.print(
-            f"sweep [bold]{escape(results.spec.name)}[/]: {results.n_new} run(s) computed"
-            f"{resumed}; results in {escape(str(out))}/ (runs.parquet, history.parquet)"
-        )
-        _print_table(results)
+        else:
+            resumed = f", {skipped} already done" if skipped else ""
+            console.print(
+                f"sweep [bold]{escape(results.spec.name)}[/]: {results.n_new} run(s) computed"
+                f"{resumed}; results in {escape(str(out))}/ (runs.parquet, history.parquet)"
+            )
+            _print_table(results)
+        if results.n_failed:
+            message, count = results.most_common_failure() or ("?", 0)
+            console.print(
+                f"[bold red]{results.n_failed} of {len(results.runs)} run(s) failed[/]; "
+                f"most common error ({count} run(s)): {escape(message)}",
+                highlight=False,
+                soft_wrap=True,
+            )
+            raise typer.Exit(1)
 
     @sweep_app.command("summary")
     def summary_command(
@@ -86,7 +103,13 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option("--json", help="Print the resolved sweep as one JSON object.")
         ] = False,
     ) -> None:
-        """Validate a sweep file and count its runs (nothing is run)."""
+        """Validate a sweep file and every run configuration, and count its runs.
+
+        Nothing is measured: the setup is built at every SNR, the position and the
+        starts are checked against the limits, and each method is set up with its
+        options and the budget (what `calibrate` checks before its first measurement).
+        Every problem is reported at once. Exit code 0: valid; 2: refused.
+        """
         from echocal.experiments import expand, load_sweep, spec_hash
 
         spec = load_sweep(sweep)
@@ -136,6 +159,8 @@ def _summary_json(results, *, skipped: int | None = None) -> dict[str, Any]:
         "hash": results.hash,
         "n_cases": results.n_cases,
         "n_finished": len(results.runs),
+        "n_failed": results.n_failed,
+        "most_common_failure": _failure_json(results),
         "tolerance_deg": results.spec.tolerance,
         "files": {"runs": str(results.runs_path), "history": str(results.history_path)},
         "summary": rows,
@@ -143,6 +168,11 @@ def _summary_json(results, *, skipped: int | None = None) -> dict[str, Any]:
     if skipped is not None:
         data["n_new"], data["n_skipped"] = results.n_new, skipped
     return data
+
+
+def _failure_json(results) -> dict[str, Any] | None:
+    common = results.most_common_failure()
+    return None if common is None else {"message": common[0], "runs": common[1]}
 
 
 def _fmt(value: Any, spec: str = ".3g") -> str:

@@ -25,6 +25,7 @@ from echocal.experiments.sweep import (
     builtin_sweep_names,
     expand,
     load_sweep,
+    run_problems,
     spec_hash,
 )
 
@@ -41,6 +42,7 @@ __all__ = [
     "load_results",
     "load_sweep",
     "run_case",
+    "run_problems",
     "run_sweep",
     "spec_hash",
     "summarize",

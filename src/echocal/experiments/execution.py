@@ -89,6 +89,21 @@ class SweepResults:
         """:func:`~echocal.experiments.summary.summarize` of :attr:`runs`."""
         return summarize(self.runs)
 
+    @property
+    def n_failed(self) -> int:
+        """Stored runs that raised an error (``status`` -1; the error is in ``message``)."""
+        return int((self.runs["status"] == FAILED).sum())
+
+    def most_common_failure(self) -> tuple[str, int] | None:
+        """The most frequent error of the failed runs (its first line) and how many runs
+        raised it; None when no run failed."""
+        failed = self.runs.loc[self.runs["status"] == FAILED, "message"]
+        if failed.empty:
+            return None
+        first_lines = failed.fillna("").map(lambda m: m.strip().splitlines()[0] if m else "?")
+        counts = first_lines.value_counts(sort=True)
+        return str(counts.index[0]), int(counts.iloc[0])
+
 
 def load_results(out_dir: str | Path) -> SweepResults:
     """The results of the sweep stored in ``out_dir`` (finished or interrupted)."""
@@ -123,17 +138,27 @@ def run_sweep(
     overwrite : delete the results of another sweep found in ``out_dir``.
     callback : called with each finished run's row after it is stored.
     """
+    # everything is checked (the sweep, its runs, the workers, the scheduler) before the
+    # results folder is touched: a refused call leaves no output behind
+    n = DEFAULT_WORKERS if workers is None else positive_int("workers", workers)
+    if scheduler is not None:
+        _check_scheduler(scheduler)
     spec = load_sweep(spec_or_path)
     cases = expand(spec)
-    digest = storage.prepare_folder(out_dir, spec, len(cases), overwrite=overwrite)
-    done = storage.finished_case_ids(out_dir)
+    client = None if scheduler is None else _connect(scheduler)
+    try:
+        digest = storage.prepare_folder(out_dir, spec, len(cases), overwrite=overwrite)
+        done = storage.finished_case_ids(out_dir)
+    except BaseException:
+        if client is not None:
+            client.close()
+        raise
     todo = [case for case in cases if case.case_id not in done]
     # back ends start before the progress bar's thread: worker processes fork from a
     # single-threaded parent
-    if scheduler is not None:
-        outcomes, close = _dask_outcomes(todo, scheduler, digest)
+    if client is not None:
+        outcomes, close = _dask_outcomes(todo, client, digest)
     else:
-        n = DEFAULT_WORKERS if workers is None else positive_int("workers", workers)
         outcomes, close = _local_outcomes(todo, n)
     try:
         with _SweepBar(spec.name, len(cases), len(cases) - len(todo), progress) as bar:
@@ -174,24 +199,37 @@ def _local_outcomes(cases: Sequence[RunCase], workers: int) -> tuple[Iterator[Ou
     return results(), lambda: pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _dask_outcomes(
-    cases: Sequence[RunCase], scheduler: str, digest: str
-) -> tuple[Iterator[Outcome], Closer]:
-    """Results in completion order from a Dask distributed cluster at ``scheduler``."""
+def _check_scheduler(scheduler: str) -> None:
+    """Refuse a scheduler that is not an address (before anything is written)."""
+    if not isinstance(scheduler, str) or not scheduler.startswith(
+        ("tcp://", "tls://", "inproc://", "ws://", "wss://")
+    ):
+        raise EchocalValueError(
+            f"scheduler must be an address like tcp://HOST:PORT; got {scheduler!r}"
+        )
+
+
+def _connect(scheduler: str) -> Any:
+    """A Dask distributed client of ``scheduler`` (EchocalValueError if unreachable)."""
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:  # pragma: no cover - distributed is a dependency
         raise EchocalValueError(
             "scheduler needs dask.distributed; install it (pip install distributed)"
         ) from None
-    if not scheduler.startswith(("tcp://", "tls://", "inproc://", "ws://", "wss://")):
-        raise EchocalValueError(
-            f"scheduler must be an address like tcp://HOST:PORT; got {scheduler!r}"
-        )
+    _check_scheduler(scheduler)
     try:
-        client = Client(scheduler, timeout="20s")
+        return Client(scheduler, timeout="20s")
     except OSError as exc:
         raise EchocalValueError(f"scheduler {scheduler}: cannot connect: {exc}") from None
+
+
+def _dask_outcomes(
+    cases: Sequence[RunCase], client: Any, digest: str
+) -> tuple[Iterator[Outcome], Closer]:
+    """Results in completion order from the Dask distributed cluster of ``client``."""
+    from distributed import as_completed
+
     keys = [f"echocal-run-{digest[:12]}-{storage.part_key(c.case_id)}" for c in cases]
     futures = client.map(run_case, list(cases), key=keys, pure=False) if cases else []
 

@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from echocal.errors import EchocalError
-from echocal.experiments.sweep import RunCase
+from echocal.experiments.sweep import RunCase, _thawed
 
 __all__ = ["HISTORY_COLUMNS", "RUN_COLUMNS", "history_frame", "run_case", "runs_frame"]
 
@@ -220,7 +220,3 @@ def _failed(message: str) -> dict[str, Any]:
         "truth_a": np.nan,
         "truth_b": np.nan,
     }
-
-
-def _thawed(value: Any) -> Any:
-    return [_thawed(v) for v in value] if isinstance(value, tuple) else value

@@ -35,7 +35,8 @@ import importlib.resources
 import itertools
 import json
 import tomllib
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -52,6 +53,7 @@ __all__ = [
     "builtin_sweep_names",
     "expand",
     "load_sweep",
+    "run_problems",
     "spec_hash",
 ]
 
@@ -286,27 +288,97 @@ def load_sweep(
         raw, file_base, where = _read(source)
         base_dir = file_base if base_dir is None else base_dir
     base = Path.cwd() if base_dir is None else Path(base_dir)
+    problems: list[str] = []
     try:
-        spec = SweepSpec.model_validate(raw)
+        spec: SweepSpec | None = SweepSpec.model_validate(raw)
+        part = _Partial(index=list(range(len(spec.methods))))  # type: ignore[union-attr]
     except ValidationError as exc:
-        _raise(where, _format_errors(exc, hint="see docs/sweeps.md"))
-    problems = _check(spec)
+        problems += _format_errors(exc, hint="see docs/sweeps.md")
+        spec, part = _salvage(raw, exc)
+    if spec is None:  # nothing more can be checked
+        _raise(where, problems)
+    assert spec is not None
+    found, bad_methods = _check(spec, part)
+    problems += found
+    resolved = None
+    if "setup" not in part.dropped:
+        try:
+            resolved = _resolve(spec, base)
+        except EchocalError as exc:
+            problems.append(f"setup: {exc}")
+    if resolved is not None:
+        problems += run_problems(resolved, _part=part, _skip=bad_methods)
     if problems:
         _raise(where, problems)
-    return _resolve(spec, base, where)
+    assert resolved is not None
+    return resolved
+
+
+@dataclass
+class _Partial:
+    """What of a sweep could be validated (private): ``index`` maps the kept methods to
+    their entries in the file; ``dropped`` names the fields (``"x0.offset"`` for a
+    sub-field) whose value was invalid and replaced by its default for the later checks."""
+
+    index: list[int]
+    dropped: set[str] = field(default_factory=set)
+
+    def touched(self, name: str) -> bool:
+        """True when ``name`` or one of its sub-fields was dropped."""
+        return any(d == name or d.startswith(name + ".") for d in self.dropped)
+
+
+def _salvage(raw: Any, exc: ValidationError) -> tuple[SweepSpec | None, _Partial]:
+    """The sweep without its invalid values, so that the checks beyond the schema can report
+    their problems in the same error (a bad budget does not hide a misspelt method)."""
+    part = _Partial(index=[])
+    if not isinstance(raw, dict):
+        return None, part
+    data = dict(raw)
+    bad_methods: set[int] = set()
+    x0 = dict(raw["x0"]) if isinstance(raw.get("x0"), dict) else None
+    for error in exc.errors():
+        loc = error["loc"]
+        if not loc:
+            return None, part
+        top = str(loc[0])
+        if top == "methods" and len(loc) > 1 and isinstance(loc[1], int):
+            bad_methods.add(loc[1])
+        elif top == "x0" and x0 is not None and len(loc) > 1 and isinstance(loc[1], str):
+            x0.pop(loc[1], None)
+            part.dropped.add(f"x0.{loc[1]}")
+        else:
+            data.pop(top, None)
+            part.dropped.add(top)
+    if x0 is not None and "x0" not in part.dropped:
+        data["x0"] = x0
+    methods = data.get("methods")
+    if isinstance(methods, list):
+        part.index = [i for i in range(len(methods)) if i not in bad_methods]
+        data["methods"] = [methods[i] for i in part.index]
+        if bad_methods:
+            part.dropped.add("methods.*")
+    try:
+        return SweepSpec.model_validate(data), part
+    except ValidationError:
+        return None, part
 
 
 def _raise(where: str, problems: list[str]) -> None:
     raise ConfigError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
 
 
-def _check(spec: SweepSpec) -> list[str]:
-    """Problems pydantic cannot see: methods, options, presets and empty grids."""
+def _check(spec: SweepSpec, part: _Partial) -> tuple[list[str], set[int]]:
+    """Problems pydantic cannot see: methods, options, presets and empty grids.
+
+    Returns the problems and the positions (in ``spec.methods``) of the methods with one.
+    """
     from echocal.calibrate import get_method, preset_names
     from echocal.calibrate.driver import _accepted
 
     problems = []
-    if not spec.methods:
+    bad: set[int] = set()
+    if not spec.methods and not part.touched("methods"):
         problems.append("methods: at least one [[methods]] entry is needed (empty grid)")
     if isinstance(spec.seeds, int) and spec.seeds < 1:
         problems.append(f"seeds: must be >= 1 (empty grid), got {spec.seeds}")
@@ -318,7 +390,7 @@ def _check(spec: SweepSpec) -> list[str]:
         problems.append("snr_db: empty list (empty grid)")
     if spec.snr_db is not None and len(set(spec.snr_db)) != len(spec.snr_db):
         problems.append(f"snr_db: duplicate values in {spec.snr_db}")
-    if not spec.x0.points and spec.x0.offset is None:
+    if not spec.x0.points and spec.x0.offset is None and not part.touched("x0"):
         problems.append("x0: give points and/or offset (empty grid)")
     if spec.x0.offset is not None and not 0 <= spec.x0.offset[0] <= spec.x0.offset[1]:
         problems.append(
@@ -326,11 +398,13 @@ def _check(spec: SweepSpec) -> list[str]:
         )
     labels: dict[str, int] = {}
     for i, method in enumerate(spec.methods):
-        at = f"methods.{i}"
+        at = f"methods.{part.index[i]}"
+        n_before = len(problems)
         try:
             cls = get_method(method.name)
         except UnknownNameError as exc:
             problems.append(f"{at}.name: {exc}")
+            bad.add(i)
             continue
         if method.preset is not None and method.preset not in preset_names():
             problems.append(
@@ -354,25 +428,130 @@ def _check(spec: SweepSpec) -> list[str]:
                 f"{at}: same method and preset as methods.{labels[key]}; give one a `label` "
                 "or merge their options into one grid"
             )
-        labels[key] = i
-    return problems
+        labels[key] = part.index[i]
+        if len(problems) > n_before:
+            bad.add(i)
+    return problems, bad
 
 
-def _resolve(spec: SweepSpec, base: Path, where: str) -> SweepSpec:
+def _resolve(spec: SweepSpec, base: Path) -> SweepSpec:
     setup = spec.setup
     if setup not in builtin_setup_names():
         path = Path(setup)
         setup = str((path if path.is_absolute() else base / path).resolve())
-    try:
-        config, _ = load_setup_config(setup)
-    except EchocalError as exc:
-        raise ConfigError(f"{where}: setup: {exc}") from None
+    config, _ = load_setup_config(setup)
     update: dict[str, Any] = {"setup": setup}
     if spec.position is None:
         update["position"] = tuple(float(v) for v in config.positioner.reference_position)
     if spec.snr_db is None:
         update["snr_db"] = [config.noise.snr_db]
     return spec.model_copy(update=update)
+
+
+class _Reached(Exception):
+    """A dry run got as far as its first measurement: the run's configuration is valid."""
+
+
+def run_problems(
+    spec: SweepSpec,
+    *,
+    _part: _Partial | None = None,
+    _skip: set[int] | frozenset[int] = frozenset(),
+) -> list[str]:
+    """Problems that would make runs of a resolved sweep fail, found without measuring.
+
+    Builds the setup at every SNR of the sweep, checks the position against the
+    positioner's limits and every explicit start against the angle bounds, and runs
+    :func:`~echocal.calibrate.calibrate` for every method and option combination up to
+    (not including) its first measurement, so that what ``calibrate`` refuses before
+    measuring — option values the method rejects, a budget below what one iteration of
+    the method needs — is reported here, one line each with its field path.
+    """
+    import numpy as np
+
+    from echocal.calibrate import calibrate
+    from echocal.measurement.objective import SourceObjective
+    from echocal.setups import setup_with_overrides
+
+    part = _part or _Partial(index=list(range(len(spec.methods))))
+    problems: list[str] = []
+    setups = []
+    for k, snr in enumerate(spec.snr_db or [None]):
+        try:
+            setups.append(setup_with_overrides(spec.setup, snr_db=snr, seed=0))
+        except EchocalError as exc:
+            problems.append(f"snr_db.{k}: the setup at {snr} dB cannot be built: {exc}")
+    if not setups:
+        return problems
+    virtual = setups[0]
+    position = np.asarray(spec.position, dtype=np.float64)
+    limits = virtual.limits
+    outside = [
+        f"{name}={value * 1e3:g} mm outside [{low * 1e3:g}, {high * 1e3:g}] mm"
+        for name, value in zip("xyz", position, strict=True)
+        for low, high in [getattr(limits, name)]
+        if not low <= value <= high
+    ]
+    if outside and not part.touched("position"):
+        problems.append(
+            f"position: outside the positioner limits of setup {spec.setup!r}: "
+            f"{'; '.join(outside)}; choose a reachable position"
+        )
+
+    class DryRun(SourceObjective):
+        def _evaluate(self, points: Any) -> Any:
+            raise _Reached
+
+    def objective() -> SourceObjective:
+        return DryRun(virtual, position, parameterization=spec.parameterization)
+
+    bounds = objective().bounds
+    starts = []
+    if not part.touched("parameterization"):
+        for j, point in enumerate(spec.x0.points):
+            try:
+                starts.append(objective().check_point("x0", point))
+            except EchocalError as exc:
+                problems.append(f"x0.points.{j}: {exc}; choose a start inside the bounds")
+    start = starts[0] if starts else bounds.mean(axis=1)
+    for i, method in enumerate(spec.methods):
+        if i in _skip:
+            continue
+        seen: set[str] = set()
+        for params in _grid(method.options):
+            options = {k: _thawed(v) for k, v in params}
+            label = method.label or method.name
+            if params:
+                label += " " + json.dumps(_plain(options), sort_keys=True)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    calibrate(
+                        objective(),
+                        method.name,
+                        start,
+                        budget=None if part.touched("budget") else spec.budget,
+                        max_iter=spec.max_iter,
+                        xtol=spec.xtol,
+                        settle=spec.settle,
+                        rng=0,
+                        preset=method.preset,
+                        **options,
+                    )
+            except _Reached:
+                continue
+            except EchocalError as exc:
+                message = str(exc)
+            except Exception as exc:  # a method's own check that is not an echocal error
+                message = f"{type(exc).__name__}: {exc}"
+            if message not in seen:
+                seen.add(message)
+                problems.append(f"methods.{part.index[i]} ({label}): {message}")
+    return problems
+
+
+def _thawed(value: Any) -> Any:
+    return [_thawed(v) for v in value] if isinstance(value, tuple) else value
 
 
 def spec_hash(spec: SweepSpec) -> str:

@@ -1,0 +1,179 @@
+"""Sweeps that cannot run are refused before anything runs, every problem at once; a sweep
+whose runs failed ends with exit code 1 and names the most common error."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+import echocal.cli
+import echocal.evaluation
+from echocal.errors import ConfigError, EchocalValueError
+from echocal.experiments import expand, load_sweep, run_case, run_problems, run_sweep
+
+OK = {
+    "name": "ok",
+    "setup": "thesis",
+    "budget": 12,
+    "max_iter": 3,
+    "seeds": 1,
+    "snr_db": [30],
+    "methods": [{"name": "model-based"}],
+}
+
+
+def _problems(data: dict) -> list[str]:
+    with pytest.raises(ConfigError) as info:
+        load_sweep(data)
+    return [line.strip() for line in str(info.value).splitlines()[1:]]
+
+
+def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
+    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
+    monkeypatch.setattr(sys, "argv", ["echocal", *args])
+    with pytest.raises(SystemExit) as exit_info:
+        echocal.cli.main()
+    out, err = capsys.readouterr()
+    code = exit_info.value.code
+    return (0 if code is None else int(code)), out, err
+
+
+def test_runs_that_cannot_run_are_refused_with_every_reason():
+    # each of these passed `sweep check` and failed every run before
+    problems = _problems(
+        {
+            **OK,
+            "position": [0, 0, "500 mm"],  # thesis positioner: z in [5, 100] mm
+            "budget": 3,  # newton needs 9 measurements per iteration
+            "x0": {"points": [[100, 0]]},  # the tilt bounds are about ±32.8°
+            "methods": [{"name": "newton"}, {"name": "auto", "options": {"fine_radius": "abc"}}],
+        }
+    )
+    assert len(problems) == 4, problems
+    position, x0, newton, auto = problems
+    assert position.startswith("position:") and "z=500 mm outside [5, 100] mm" in position
+    assert x0.startswith("x0.points.0:") and "tilt_x=100" in x0
+    assert newton.startswith("methods.0 (newton):") and "budget >= 9" in newton
+    assert auto.startswith("methods.1 (auto") and "fine_radius" in auto and "'abc'" in auto
+
+
+def test_schema_and_method_problems_are_reported_together():
+    problems = _problems(
+        {
+            **OK,
+            "budget": 0,
+            "tolerance": -1,
+            "snr_db": ["abc"],
+            "x0": {"offset": [5, 2]},
+            "methods": [{"name": "spsaa"}, {"name": "spsa", "options": {"epsilon": 1}}],
+        }
+    )
+    fields = [p.split(":")[0] for p in problems]
+    assert fields == [
+        "budget",
+        "tolerance",
+        "snr_db.0",
+        "x0.offset",
+        "methods.0.name",
+        "methods.1.options.epsilon",
+    ]
+
+
+def test_a_malformed_method_entry_keeps_the_other_methods_checked():
+    problems = _problems({**OK, "methods": [{"name": "spsa", "options": "eps"}, {"name": "nope"}]})
+    assert [p.split(":")[0] for p in problems] == ["methods.0.options", "methods.1.name"]
+
+
+def test_the_budget_at_the_methods_minimum_passes_and_runs():
+    # the check's bound is calibrate's own: one short of it is refused, at it the run works
+    (problem,) = _problems({**OK, "budget": 8, "methods": [{"name": "newton"}]})
+    assert "budget >= 9" in problem
+    spec = load_sweep({**OK, "budget": 9, "methods": [{"name": "newton"}]})
+    assert run_problems(spec) == []
+    row, _ = run_case(expand(spec)[0])
+    assert row["status"] >= 0, row["message"]
+    assert 0 < row["n_measurements"] <= 9
+
+
+def test_check_cli_lists_the_problems_and_exits_2(tmp_path, capsys, monkeypatch):
+    sweep = tmp_path / "s.toml"
+    sweep.write_text(
+        'setup = "thesis"\nbudget = 3\n[[methods]]\nname = "newton"\n', encoding="utf-8"
+    )
+    code, out, err = run_main(["sweep", "check", str(sweep)], capsys, monkeypatch)
+    assert code == 2 and out == ""
+    assert "Traceback" not in err and "budget >= 9" in err
+
+
+@pytest.mark.parametrize(
+    ("sweep", "options", "expected"),
+    [
+        ("quick", ["--workers", "0"], "workers must be >= 1"),
+        ("quick", ["--scheduler", "localhost:8786"], "tcp://HOST:PORT"),
+        ("bad", [], "budget >= 9"),
+    ],
+)
+def test_run_refuses_before_writing_anything(
+    tmp_path, capsys, monkeypatch, sweep, options, expected
+):
+    if sweep == "bad":
+        sweep = str(tmp_path / "bad.toml")
+        Path(sweep).write_text(
+            'setup = "thesis"\nbudget = 3\n[[methods]]\nname = "newton"\n', encoding="utf-8"
+        )
+    out = tmp_path / "out"
+    code, _, err = run_main(
+        ["sweep", "run", sweep, "--out", str(out), *options], capsys, monkeypatch
+    )
+    assert code == 2, err
+    assert expected in err and "Traceback" not in err
+    assert not out.exists()  # no sweep.json, no parts/
+
+
+def _break_judging(monkeypatch) -> None:
+    def broken(*args, **kwargs):
+        raise EchocalValueError("judging failed")
+
+    monkeypatch.setattr(echocal.evaluation, "evaluate_run", broken)
+
+
+def test_run_with_failed_runs_exits_1_and_names_the_error(tmp_path, capsys, monkeypatch):
+    sweep = tmp_path / "ok.toml"
+    sweep.write_text(
+        'setup = "thesis"\nbudget = 12\nmax_iter = 2\nseeds = 2\n[[methods]]\nname = "spsa"\n',
+        encoding="utf-8",
+    )
+    args = ["sweep", "run", str(sweep), "--workers", "1", "--no-progress"]
+    code, _, err = run_main([*args, "--out", str(tmp_path / "good")], capsys, monkeypatch)
+    assert code == 0, err
+    _break_judging(monkeypatch)
+    code, _, err = run_main([*args, "--out", str(tmp_path / "bad")], capsys, monkeypatch)
+    assert code == 1
+    text = " ".join(err.split())
+    assert "2 of 2 run(s) failed" in text and "(2 run(s)): judging failed" in text
+    code, out, _ = run_main(
+        ["sweep", "run", str(sweep), "--out", str(tmp_path / "bad2"), "--workers", "1", "--json"],
+        capsys,
+        monkeypatch,
+    )
+    data = json.loads(out)
+    assert code == 1
+    assert data["n_failed"] == 2
+    assert data["most_common_failure"] == {"message": "judging failed", "runs": 2}
+
+
+def test_run_help_documents_the_exit_codes():
+    from typer.testing import CliRunner
+
+    result = CliRunner().invoke(echocal.cli.app, ["sweep", "run", "--help"])
+    text = " ".join(result.output.split())
+    assert "Exit codes: 0" in text and "1 some runs failed" in text and "2 the sweep" in text
+
+
+def test_run_sweep_library_checks_workers_before_writing(tmp_path):
+    with pytest.raises(EchocalValueError, match="workers"):
+        run_sweep(OK, tmp_path / "x", workers=0, progress=False)
+    assert not (tmp_path / "x").exists()
