@@ -169,3 +169,117 @@ def test_normalize_makes_fixed_gains_scale_free(normalize):
         for s in (1e-3, 1e3)
     ]
     np.testing.assert_allclose(runs[0].iterates, runs[1].iterates, rtol=1e-9, atol=1e-12)
+
+
+# -- option types, names and the options recorded in the result -----------------------------
+@pytest.mark.parametrize(
+    ("method", "options", "match"),
+    [
+        ("auto", {"confirm": "False"}, "'confirm' of method 'auto' must be true or false"),
+        ("auto", {"confirm": "maybe"}, "'confirm' .* true or false; got 'maybe'"),
+        ("auto", {"confirm": 0}, "'confirm' .* true or false; got 0"),
+        ("auto", {"local_options": "abc"}, "'local_options' .* must be a dict"),
+        ("auto", {"spacing": "1"}, "'spacing' of method 'auto' must be a number; got '1'"),
+        ("gradient", {"mu": "0.05"}, "'mu' of method 'gradient' must be a number or none"),
+        ("gradient", {"mu": True}, "'mu' .* a number or none; got True"),
+        ("spsa", {"n_gain_estimates": 2.5}, "'n_gain_estimates' .* an integer"),
+        ("model-based", {"space": 1}, "'space' .* a name"),
+        ("acquisition", {"local": 3}, "'local' .* a name"),
+    ],
+)
+def test_an_option_of_the_wrong_type_is_refused_before_measuring(
+    method, options, match, gauss_objective
+):
+    # bool("False") is True: a string must never reach a boolean option
+    obj = gauss_objective()
+    with pytest.raises(EchocalValueError, match=match):
+        calibrate(obj, method, x0=X0, max_iter=2, **options)
+    assert obj.n_measurements == 0
+
+
+def test_acquisition_options_and_local_options_are_checked_when_built(gauss_objective):
+    from echocal.calibrate import Acquisition
+
+    with pytest.raises(EchocalValueError, match="confirm must be true or false; got 'no'"):
+        Acquisition(np.zeros(2), confirm="no")
+    with pytest.raises(EchocalValueError, match=r"'raduis' .*did you mean radius\?"):
+        Acquisition(np.zeros(2), local_options={"raduis": 1.0})
+    with pytest.raises(EchocalValueError, match="'radius' of method 'model-based'.*a number"):
+        Acquisition(np.zeros(2), local_options={"radius": "1"})
+    with pytest.raises(
+        EchocalValueError, match="'threshold' of the acquisition phase must be a number"
+    ):
+        calibrate(gauss_objective(), "gradient", x0=X0, acquire={"threshold": "4"})
+    with pytest.raises(EchocalValueError, match="acquire must be true, false or a dict"):
+        calibrate(gauss_objective(), "gradient", x0=X0, acquire="yes")
+    with pytest.raises(EchocalValueError, match="final_check must be an integer"):
+        calibrate(gauss_objective(), "gradient", x0=X0, final_check="2")
+
+
+def test_an_unknown_option_warning_suggests_the_nearest_name(gauss_objective):
+    with pytest.warns(UserWarning, match=r"fine_raduis \(did you mean fine_radius\?\)"):
+        calibrate(gauss_objective(), "auto", x0=X0, max_iter=1, fine_raduis=1.0)
+
+
+def test_a_grid_too_large_to_measure_is_refused_before_it_is_built():
+    from echocal.calibrate import GridSearch
+    from echocal.calibrate.grid import MAX_GRID_POINTS
+
+    # unbounded, span 1e9 at step 0.5: 4e9 nodes per axis (the old code allocated 30 GiB)
+    with pytest.raises(EchocalValueError, match=r"span=1e\+09 deg with step=0.5 deg"):
+        GridSearch(np.zeros(2), span=1e9)
+    with pytest.raises(EchocalValueError, match=f"at most {MAX_GRID_POINTS}"):
+        GridSearch(np.zeros(2), span=5.0, step=1e-3)
+    # within bounds the same span is clipped to them: nodes -21, -20.5, ..., 21 per axis
+    grid = GridSearch(np.zeros(2), span=1e9, bounds=[[-21, 21], [-21, 21]])
+    assert grid.n_points == 85 * 85
+    np.testing.assert_array_equal(grid.axes[0], np.arange(-42, 43) * 0.5)
+
+
+@pytest.mark.parametrize(
+    ("x0", "span", "step", "bounds"),
+    [((0.3, -1.7), 2.0, 0.3, None), ((4.9, -4.9), 3.0, 0.5, [[-5, 5], [-5, 5]])],
+)
+def test_grid_axes_are_the_clipped_lattice(x0, span, step, bounds):
+    from echocal.calibrate import GridSearch
+
+    # independent construction: every node x0 ± k·step, clipped to the bounds, deduplicated
+    lim = np.array([[-np.inf, np.inf]] * 2) if bounds is None else np.array(bounds, float)
+    n = int(np.floor(span / step + 1e-9))
+    grid = GridSearch(np.array(x0), span=span, step=step, bounds=bounds)
+    for axis, c, (lo, hi) in zip(grid.axes, x0, lim, strict=True):
+        expected = np.unique(np.clip(c + np.arange(-n, n + 1) * step, lo, hi))
+        np.testing.assert_array_equal(axis, expected)
+
+
+def test_a_grid_larger_than_the_budget_warns(gauss_objective):
+    with pytest.warns(UserWarning, match="441 points to measure but the budget allows 100"):
+        res = calibrate(gauss_objective(), "grid", x0=X0, budget=100)
+    assert res.status == 2
+
+
+def test_the_recorded_options_are_the_effective_ones_and_plain_json(gauss_objective):
+    import json
+
+    def my_noise_model():
+        return None, None
+
+    res = calibrate(gauss_objective(noise_sigma=0.05, rng=1), "auto", x0=X0, max_iter=2, rng=0)
+    opts = res.options
+    # defaults included (auto's search geometry), objective-supplied inputs named
+    assert opts["fine_radius"] == 3.0 and opts["threshold"] == 4.5 and opts["confirm"] is True
+    assert opts["noise_model"] == "objective" and opts["detector"] == "objective"
+    assert opts["noise_sigma"] == 0.05
+    local = opts["local_options"]
+    assert local["radius"] == 1.0 and local["history"] == "acquisition"
+    assert local["noise_model"] == "objective"
+    res = calibrate(gauss_objective(), "model-based", x0=X0, max_iter=2, noise_model=my_noise_model)
+    # a None default the method resolves (max_radius = 4 x radius) is recorded resolved
+    assert res.options["max_radius"] == 4.0 and res.options["min_radius"] == 0.1
+    text = json.dumps(res.to_dict()["options"])
+    assert "0x" not in text and "bound method" not in text
+    assert "my_noise_model" in text
+    res = calibrate(gauss_objective(), "gradient", x0=X0, max_iter=1, acquire={"spacing": 0.5})
+    assert res.options["delta"] == 0.25 and res.options["acquire"]["spacing"] == 0.5
+    assert res.options["acquire"]["detector"] == "objective"
+    json.dumps(res.to_dict())  # every entry serializable

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import inspect
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -45,8 +45,15 @@ from numpy.typing import ArrayLike
 from echocal._rng import RngLike
 from echocal._validate import finite_float, nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate._options import (
+    accepted_options,
+    check_option_types,
+    strict_bool,
+    suggestion,
+)
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import get_method, register_method
+from echocal.errors import EchocalValueError
 
 __all__ = ["Acquisition", "Detector", "NoiseModel", "hex_spiral", "search_rings"]
 
@@ -60,6 +67,29 @@ _CONFIRM_LEVEL = 1.0
 
 Detector = Callable[[], "FloatArray | None"]
 """The detection significances of the points just measured, shape (k,), or None."""
+
+
+def _local_options(
+    local: str, cls: type[Optimizer], options: Mapping[str, Any] | None
+) -> dict[str, Any]:
+    """``local_options`` checked now, not when the echo is found: a dict whose names the
+    local method accepts and whose values have the right types."""
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise EchocalValueError(
+            f"local_options must be a dict of options for the local method {local!r} "
+            f'(e.g. {{"radius": 0.5}}); got {options!r}'
+        )
+    valid = accepted_options(cls)
+    for key in options:
+        if key not in valid:
+            raise EchocalValueError(
+                f"local_options: unknown option {key!r} of method {local!r}"
+                f"{suggestion(str(key), valid)}; accepted: {', '.join(sorted(valid))}"
+            )
+    check_option_types(cls, options, where=f"method {local!r} (local_options)")
+    return dict(options)
 
 
 def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatArray]:
@@ -126,17 +156,19 @@ class Acquisition(Optimizer):
     Parameters
     ----------
     local : name of the local method (default ``"model-based"``).
-    local_options : options for the local method.
+    local_options : dict of options for the local method, checked at construction (an
+        unknown name or a value of the wrong type raises EchocalValueError).
     spacing : [deg] lattice spacing (≈ the peak width: a peak of width w stays
         detectable up to ~1.7 w from its centre at 30 dB with threshold 6).
     max_radius : [deg] give up beyond this distance from x0.
     threshold : detection threshold in units of σ.
     first_threshold : the threshold while only x0 and the first ring are measured.
-    confirm : a marginal detection (score below ``threshold`` + 2) must survive one
-        re-measurement of its best point (one measurement more): the repeat joins that
-        point's neighbourhood, which must still pass, and with a detector the repeat's own
-        significance must exceed 1 — so a noise excursion is dropped and the search goes
-        on instead of handing a local method pure noise.
+    confirm : (true or false; other values are refused) a marginal detection (score
+        below ``threshold`` + 2) must survive one re-measurement of its best point (one
+        measurement more): the repeat joins that point's neighbourhood, which must still
+        pass, and with a detector the repeat's own significance must exceed 1 — so a noise
+        excursion is dropped and the search goes on instead of handing a local method pure
+        noise.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
     noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
@@ -182,19 +214,19 @@ class Acquisition(Optimizer):
         self.noise_model = noise_model
         self.detector = detector
         self._use_significance = detector is not None
+        if not isinstance(local, str):
+            raise EchocalValueError(f"local must be a method name; got {local!r}")
         self._local_cls = get_method(local)
         if self._local_cls is Acquisition or issubclass(self._local_cls, Acquisition):
-            from echocal.errors import EchocalValueError
-
             raise EchocalValueError(f"local must be a local method, not {local!r}")
         self.local_name = local
-        self.local_options = dict(local_options or {})
+        self.local_options = _local_options(local, self._local_cls, local_options)
         self._local_normalize = normalize
         self.spacing = positive_float("spacing", spacing)
         self.max_radius = positive_float("max_radius", max_radius)
         self.threshold = positive_float("threshold", threshold)
         self.first_threshold = positive_float("first_threshold", first_threshold)
-        self.confirm = bool(confirm)
+        self.confirm = strict_bool("confirm", confirm)
         self._confirming: FloatArray | None = None  # a detection's best point to re-measure
         self._confirmed = 0  # re-measurements made
         self.noise_sigma = (
@@ -304,19 +336,32 @@ class Acquisition(Optimizer):
             return False
         return bool(np.max(self.scores()) > self._threshold())
 
-    def _start_local(self, best: FloatArray | None = None) -> None:
-        best = self._x[int(np.argmax(self.scores()))] if best is None else best
+    @property
+    def local_class(self) -> type[Optimizer]:
+        """The class of the local method (``local``)."""
+        return self._local_cls
+
+    def local_setup(self) -> dict[str, Any]:
+        """The options the local method will be built with, apart from the warm-start
+        ``history`` (this phase's measurements, handed over when the echo is found):
+        ``local_options`` plus what this phase supplies — its spacing as the design
+        ``radius`` of a warm-started method, its noise model and floor, ``normalize``."""
         opts = dict(self.local_options)
         params = inspect.signature(self._local_cls.__init__).parameters
-        if "history" in params:
-            opts.setdefault("history", (self._x.copy(), self._y.copy()))
-            if "radius" in params:
-                opts.setdefault("radius", self.spacing)
+        if "history" in params and "radius" in params:
+            opts.setdefault("radius", self.spacing)
         if "noise_model" in params and self.noise_model is not None:
             opts.setdefault("noise_model", self.noise_model)
         if "noise_floor" in params and self.noise_floor is not None:
             opts.setdefault("noise_floor", self.noise_floor)
         opts.setdefault("normalize", self._local_normalize)
+        return opts
+
+    def _start_local(self, best: FloatArray | None = None) -> None:
+        best = self._x[int(np.argmax(self.scores()))] if best is None else best
+        opts = self.local_setup()
+        if "history" in inspect.signature(self._local_cls.__init__).parameters:
+            opts.setdefault("history", (self._x.copy(), self._y.copy()))
         self.local = self._local_cls(best, bounds=self.bounds, rng=self.rng, **opts)
         self._iterate = best.copy()
         self.found_at = self.n_told

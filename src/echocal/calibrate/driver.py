@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 import time
 import warnings
 from collections.abc import Callable, Mapping
@@ -15,6 +14,12 @@ from numpy.typing import ArrayLike
 from echocal._rng import RngLike, as_generator
 from echocal._validate import nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate._options import (
+    accepted_options,
+    check_option_types,
+    option_defaults,
+    suggestion,
+)
 from echocal.calibrate.acquisition import Acquisition
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.objective import Objective
@@ -24,8 +29,6 @@ from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, Calibrat
 from echocal.errors import BudgetExhaustedError, EchocalValueError
 
 __all__ = ["CalibrationState", "build_optimizer", "calibrate"]
-
-_RESERVED = {"self", "x0", "bounds", "rng"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,7 +48,8 @@ class CalibrationState:
 
 
 def _accepted(cls: type[Optimizer]) -> set[str]:
-    return set(inspect.signature(cls.__init__).parameters) - _RESERVED
+    """The options ``cls`` accepts (see :func:`echocal.calibrate._options.accepted_options`)."""
+    return accepted_options(cls)
 
 
 def _split(cls: type[Optimizer], options: Mapping[str, Any]) -> tuple[dict, list[str]]:
@@ -65,43 +69,89 @@ def build_optimizer(
 ) -> tuple[Optimizer, dict[str, Any]]:
     """Instantiate ``method`` (optionally behind an acquisition phase) for ``objective``.
 
-    Unknown options raise a warning naming them and are ignored.  Returns the
-    optimizer and the options actually used.
+    Unknown options raise a warning naming them (with the nearest valid name) and are
+    ignored; an option of the wrong type (a string for a number or a boolean, ...) raises
+    EchocalValueError naming it.  Returns the optimizer and the options it runs with, as
+    recorded in the result: every option of the method with its effective value,
+    defaults included, and ``"objective"`` for the inputs the objective supplies (its
+    live noise estimate and its echo detector).
     """
     cls = get_method(method)
     options = dict(options or {})
+    if not isinstance(acquire, bool | np.bool_ | Mapping):
+        raise EchocalValueError(
+            f"acquire must be true, false or a dict of acquisition options; got {acquire!r}"
+        )
     acq_opts = dict(acquire) if isinstance(acquire, Mapping) else {}
     wrap = bool(acquire) and not issubclass(cls, Acquisition)
     known, unknown = _split(cls, options)
+    check_option_types(cls, known, where=f"method {method!r}")
     if wrap:
         aknown, aunknown = _split(Acquisition, acq_opts)
         for key in ("local", "local_options", "normalize"):  # these come from the method
             if key in aknown:
                 del aknown[key]
                 aunknown.append(key)
+        check_option_types(Acquisition, aknown, where="the acquisition phase")
+        unknown += [f"acquire.{k}" for k in aunknown]
+    elif issubclass(cls, Acquisition):
+        acq_opts, aunknown = _split(cls, acq_opts)
+        check_option_types(cls, acq_opts, where=f"method {method!r}")
         unknown += [f"acquire.{k}" for k in aunknown]
     if unknown:
+        hints = "; ".join(
+            f"{k}{suggestion(k.removeprefix('acquire.'), _accepted(cls))}" for k in unknown
+        )
         warnings.warn(
-            f"unknown option(s) for method {method!r} ignored: {', '.join(unknown)}; "
+            f"unknown option(s) for method {method!r} ignored: {hints}; "
             f"accepted: {', '.join(sorted(_accepted(cls)))}",
             UserWarning,
             stacklevel=3,
         )
     if wrap:
         aknown = {**_search_inputs(objective), **aknown}
-        if issubclass(cls, Acquisition):  # pragma: no cover - excluded above
-            raise AssertionError
-        used = {**known, "acquire": aknown}
         opt = Acquisition(
             x0, local=method, local_options=known, bounds=objective.bounds, rng=rng, **aknown
         )
-        return opt, used
+        record = _record(opt, {"local": method, "local_options": known, **aknown}, objective)
+        local = record.pop("local_options")
+        del record["local"]
+        return opt, {**local, "acquire": record}
     if "noise_model" in _accepted(cls) and not issubclass(cls, Acquisition):
         known.setdefault("noise_model", objective.noise_estimate)
     if issubclass(cls, Acquisition):
-        known.update({k: v for k, v in acq_opts.items() if k in _accepted(cls)})
+        known.update(acq_opts)
         known = {**_search_inputs(objective), **known}
-    return cls(x0, bounds=objective.bounds, rng=rng, **known), known
+    opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
+    return opt, _record(opt, known, objective)
+
+
+def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> dict[str, Any]:
+    """Every option of ``opt``'s method with its effective value (defaults included, a
+    None default the method resolved to a number — e.g. a radius derived from another —
+    as that number); the objective's own callables named ``"objective"``; an
+    acquisition's ``local_options`` expanded the same way (its warm-start ``history``
+    named ``"acquisition"``)."""
+    supplied = {objective.noise_estimate: "objective", objective.detections: "objective"}
+
+    def name(value: Any) -> Any:
+        if callable(value) and not isinstance(value, type):
+            for fn, label in supplied.items():
+                if value == fn:
+                    return label
+        return value
+
+    out = {k: name(v) for k, v in {**option_defaults(type(opt)), **given}.items()}
+    for key, value in out.items():  # a None default the method resolved to a number
+        resolved = getattr(opt, key, None) if value is None else None
+        if isinstance(resolved, int | float) and not isinstance(resolved, bool):
+            out[key] = resolved if np.isfinite(resolved) else None
+    if isinstance(opt, Acquisition):
+        local = {**option_defaults(opt.local_class), **opt.local_setup()}
+        if "history" in local and "history" not in opt.local_options:
+            local["history"] = "acquisition"
+        out["local_options"] = {k: name(v) for k, v in local.items()}
+    return out
 
 
 OBJECTIVE_INPUTS = ("noise_sigma", "noise_floor", "noise_model", "detector")
@@ -202,7 +252,9 @@ def calibrate(
         ...); explicit ``options`` override them.
     final_check : measure the estimate this many times at the end (counted) and report
         their mean as ``fun``.
-    **options : method options; unknown names are warned about and ignored.
+    **options : method options (see ``echocal methods NAME``); unknown names are warned
+        about (with the nearest valid name) and ignored; a value of the wrong type (e.g. a
+        string for a number or a boolean) raises EchocalValueError naming the option.
     """
     t0 = time.perf_counter()
     if not isinstance(objective, Objective):
@@ -220,6 +272,8 @@ def calibrate(
     max_iter = default_iter if max_iter is None else positive_int("max_iter", max_iter)
     xtol = None if xtol is None else nonnegative_float("xtol", xtol)
     settled = None if settle is None else _settle_test(settle, objective)
+    if isinstance(final_check, bool) or not isinstance(final_check, int | np.integer):
+        raise EchocalValueError(f"final_check must be an integer >= 0; got {final_check!r}")
     final_check = int(final_check)
     if final_check < 0:
         raise EchocalValueError(f"final_check must be >= 0; got {final_check}")
@@ -234,6 +288,15 @@ def calibrate(
         raise EchocalValueError(
             f"budget={limit} is smaller than one iteration of method {method!r} needs "
             f"({need} measurements); allowed: budget >= {need}"
+        )
+    planned = getattr(opt, "n_points", None)  # a method that measures a fixed set (grid)
+    if planned is not None and limit is not None and objective.cost(planned) > limit:
+        warnings.warn(
+            f"method {method!r} has {planned} points to measure but the budget allows "
+            f"{limit} measurements: only part of it will be searched (use a smaller span "
+            "or a larger step, or a larger budget)",
+            UserWarning,
+            stacklevel=2,
         )
 
     start = objective.n_measurements

@@ -18,13 +18,50 @@ from echocal._validate import positive_float
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
+from echocal.errors import EchocalValueError
 
-__all__ = ["GridSearch"]
+__all__ = ["MAX_GRID_POINTS", "GridSearch"]
+
+
+MAX_GRID_POINTS = 100_000
+"""The largest grid a grid search accepts: 100 000 measurements are hours on an instrument
+(and a larger grid usually means a mistyped span or step)."""
+
+
+def _inside(center: float, n: float, step: float, lo: float, hi: float) -> tuple[float, float]:
+    """The range k_min..k_max (floats) of the nodes ``center + k·step``, |k| <= n, that lie
+    within [lo, hi] (k_min > k_max when none does)."""
+    k_lo = -n if not np.isfinite(lo) else max(-n, np.ceil((lo - center) / step))
+    k_hi = n if not np.isfinite(hi) else min(n, np.floor((hi - center) / step))
+    return float(k_lo), float(k_hi)
+
+
+def _axis_count(center: float, n: float, step: float, lo: float, hi: float) -> float:
+    """Upper bound on the nodes of one axis (computed without building it): the nodes
+    within the bounds, plus the two bounds where nodes beyond them are clipped."""
+    k_lo, k_hi = _inside(center, n, step, lo, hi)
+    return max(0.0, k_hi - k_lo + 1.0) + float(k_lo > -n) + float(k_hi < n)
+
+
+def _axis(center: float, n: int, step: float, lo: float, hi: float) -> FloatArray:
+    """The nodes ``center + k·step``, |k| <= n, clipped to [lo, hi] and deduplicated, built
+    from the nodes inside the bounds only (the same values as clipping all 2n + 1)."""
+    k_lo, k_hi = (int(k) for k in _inside(center, float(n), step, lo, hi))
+    k_lo, k_hi = max(k_lo - 1, -n), min(k_hi + 1, n)  # floating point at the bounds
+    offs = np.arange(k_lo, k_hi + 1) * step
+    nodes = np.clip(center + offs, lo, hi)
+    extra = [lo] * (k_lo > -n) + [hi] * (k_hi < n)  # clipped nodes beyond the bounds
+    return np.unique(np.concatenate([nodes, extra]))
 
 
 @register_method("grid")
 class GridSearch(Optimizer):
-    """Row-by-row grid search over x0 ± span with spacing step [deg]."""
+    """Row-by-row grid search over x0 ± span with spacing step [deg].
+
+    The grid is clipped to the bounds; one of more than :data:`MAX_GRID_POINTS` nodes
+    inside them is refused (EchocalValueError naming span and step) before anything is
+    allocated or measured.
+    """
 
     def __init__(
         self,
@@ -39,12 +76,22 @@ class GridSearch(Optimizer):
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
         self.span = positive_float("span", span)
         self.step = positive_float("step", step)
-        n = int(np.floor(self.span / self.step + 1e-9))
-        offs = np.arange(-n, n + 1) * self.step
-        a0 = np.unique(np.clip(self.x0[0] + offs, *self.bounds[0]))
-        a1 = np.unique(np.clip(self.x0[1] + offs, *self.bounds[1]))
-        self.axes = [a0, a1]
-        self.values = np.full((len(a1), len(a0)), np.nan)
+        n = np.floor(self.span / self.step + 1e-9)  # nodes each side of x0 (a float: may be huge)
+        counts = [
+            _axis_count(c, n, self.step, *b) for c, b in zip(self.x0, self.bounds, strict=True)
+        ]
+        total = counts[0] * counts[1]
+        if not total <= MAX_GRID_POINTS:
+            raise EchocalValueError(
+                f"grid: span={self.span:g} deg with step={self.step:g} deg makes "
+                f"{counts[0]:.4g} x {counts[1]:.4g} = {total:.4g} grid points inside the "
+                f"bounds; a grid search measures every one, so at most {MAX_GRID_POINTS} are "
+                f"allowed: use a smaller span or a larger step (span=5, step=0.5: 441 points)"
+            )
+        self.axes = [
+            _axis(c, int(n), self.step, *b) for c, b in zip(self.x0, self.bounds, strict=True)
+        ]
+        self.values = np.full((len(self.axes[1]), len(self.axes[0])), np.nan)
         """Measured grid [energy units, normalized], shape (n_axis1, n_axis0); NaN = not yet."""
         self._row = 0
 

@@ -52,7 +52,9 @@ class CalibrationResult:
     values : [energy units], shape (n_measurements,) — raw values, NaN kept.
     iterates : [deg], shape (n_iterations + 1, 2) — x0 then the iterate after each iteration.
     iteration_measurements : shape (n_iterations + 1,) — cumulative measurements at each iterate.
-    method, options : the method name and the options it ran with.
+    method, options : the method name and the options it ran with: every option of the
+        method with its effective value (defaults included); inputs the objective supplied
+        (its noise estimate, its echo detector) are named ``"objective"``.
     wall_time : [s] duration of the run.
     n_nan : measurements that returned NaN (replaced by the worst value seen, at most 0).
     parameterization, names : the angle convention of the objective.
@@ -163,4 +165,8 @@ def _jsonable(v: Any) -> Any:
         return None
     if v is None or isinstance(v, bool | int | float | str):
         return v
-    return repr(v)
+    if callable(v):  # a user's callable option: its name, not a memory address
+        name = getattr(v, "__qualname__", type(v).__qualname__)
+        return f"callable {getattr(v, '__module__', None) or '?'}.{name}"
+    text = repr(v)
+    return text if " at 0x" not in text else f"<{type(v).__module__}.{type(v).__qualname__}>"
