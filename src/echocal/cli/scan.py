@@ -43,6 +43,14 @@ def _say(text: str) -> None:
     console.print(text, soft_wrap=True, highlight=False)
 
 
+def _seed_of(source) -> int:
+    """The effective seed of a source from ``resolve_setup`` (its ``rng``; 0 if none)."""
+    import numpy as np
+
+    rng = getattr(source, "rng", None)
+    return int(rng) if isinstance(rng, int | np.integer) and not isinstance(rng, bool) else 0
+
+
 def _fmt(value: float | None, scale: float, unit: str, digits: int = 3) -> str:
     return "n/a" if value is None else f"{value * scale:.{digits}g} {unit}"
 
@@ -59,51 +67,66 @@ def register(app: typer.Typer) -> None:
         z: str = typer.Option("25", "--z", help="Probe stand-off height, mm unless a unit."),
         method: str = typer.Option("auto", "--method", help="Calibration method per point."),
         budget_per_point: int = typer.Option(
-            80, "--budget-per-point", min=3, help="Measurement cap per point."
+            80,
+            "--budget-per-point",
+            min=1,
+            help="Measurement cap per point: at least one iteration of the method plus the "
+            "2 time-of-flight A-scans (auto: 9, grid: 23).",
         ),
         cold: bool = typer.Option(
             False, "--cold", help="Also run a cold-start scan (no warm starts) to compare."
         ),
         snr: str | None = typer.Option(None, "--snr", help=SNR_HELP),
-        seed: int | None = typer.Option(None, "--seed", help="Noise and calibration seed."),
+        seed: int | None = typer.Option(
+            None,
+            "--seed",
+            min=0,
+            help="Noise and calibration seed (default: the setup file's seed, else 0).",
+        ),
+        overwrite: bool = typer.Option(
+            False, "--overwrite", help="Replace a finished scan in --out made with other settings."
+        ),
         figures: bool = typer.Option(True, "--figures/--no-figures", help="Save figures."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar."),
         as_json: bool = typer.Option(False, "--json", help="Print one JSON object on stdout."),
     ) -> None:
         """Scan a specimen: surface normal and distance at every raster point.
 
-        Ctrl-C keeps the finished points; the same command again resumes.
+        Ctrl-C keeps the finished points; the same command again resumes. A finished
+        scan in --out with the same settings is reported, not measured again; one with
+        other settings is refused unless --overwrite. Settings that would make every
+        point fail (a height outside the positioner's limits, a budget below what the
+        method needs) are refused before anything is written.
         """
         import numpy as np
 
         from echocal.cli._common import write_json
         from echocal.cli._setup_option import resolve_setup
-        from echocal.scanning import ScanGrid, partial_path, scan_surface
+        from echocal.errors import DataFileError
+        from echocal.scanning import ScanGrid, check_scan, partial_path, scan_surface
+        from echocal.scanning.store import saved_points
         from echocal.units import parse_length
 
         gx, gy = parse_grid(grid)
         scan_grid = ScanGrid.regular(x=gx, y=gy, z=parse_length("--z", z))
+        base = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
+        # one effective seed for the noise and the calibration: --seed, else the setup's
+        effective = seed if seed is not None else _seed_of(base)
+        check_scan(base, scan_grid, method=method, budget_per_point=budget_per_point)
+        if out.exists() and not out.is_dir():
+            raise DataFileError(f"--out {out}: exists and is not a folder")
         out.mkdir(parents=True, exist_ok=True)
         runs = {"warm": True, "cold": False} if cold else {"warm": True}
         results = {}
         for label, warm in runs.items():
             path = out / ("scan.nc" if warm else "scan-cold.nc")
             sidecar = partial_path(path)
-            if path.exists() and not sidecar.exists():
-                path.unlink()  # a finished earlier run in this folder is replaced
-            done = 0
-            if sidecar.exists():
-                done = (
-                    sum(1 for _ in (sidecar / "points.jsonl").open())
-                    if (sidecar / "points.jsonl").exists()
-                    else 0
-                )
-                _say(f"resuming {path}: {done} point(s) already saved in {sidecar}")
-            run_seed = seed
-            if seed is not None and done:
+            done = saved_points(path) if sidecar.exists() else 0
+            source = base
+            if done:
                 # a fresh process restarts the noise: do not repeat the first points' draws
-                run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
-            source = resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
+                run_seed = int(np.random.SeedSequence([effective, done]).generate_state(1)[0])
+                source = resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
             try:
                 results[label] = scan_surface(
                     source,
@@ -111,10 +134,12 @@ def register(app: typer.Typer) -> None:
                     method=method,
                     budget_per_point=budget_per_point,
                     warm_start=warm,
-                    rng=seed,
+                    rng=effective,
                     progress=progress,
                     out=path,
-                    metadata={"setup": setup, "specimen": source.specimen.name, "seed": seed},
+                    metadata={"setup": setup, "specimen": source.specimen.name, "seed": effective},
+                    overwrite=overwrite,
+                    log=_say,
                 )
             except KeyboardInterrupt:
                 _say(
@@ -146,6 +171,10 @@ def register(app: typer.Typer) -> None:
         lines = [
             f"scanned {summary['points']} points: {summary['found']} found, "
             f"{summary['missing']} missing {summary['missing_by_status'] or ''}".rstrip(),
+            *(
+                f"  {name}: {message}"
+                for name, message in summary.get("missing_messages", {}).items()
+            ),
             f"measurements: {summary['measurements_total']} total, "
             f"{summary['measurements_per_point']:.1f} per point "
             f"(median {summary['measurements_per_point_median']:g})",
@@ -162,6 +191,6 @@ def register(app: typer.Typer) -> None:
                 f"{report['cold']['found']} found; warm starts save a factor "
                 f"{report['cold_over_warm_measurements']:.2f}"
             )
-        lines.append(f"wrote {out / 'scan.nc'}" + (" and figures" if figures else ""))
+        lines.append(f"results: {out / 'scan.nc'}" + (" and figures" if figures else ""))
         for line in lines:
             _say(line)

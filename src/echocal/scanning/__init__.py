@@ -9,16 +9,18 @@
 
 from echocal.scanning.dataset import FORMAT, STATUS, SurfaceScan, surface_dataset
 from echocal.scanning.grid import ScanGrid, axis_values
-from echocal.scanning.scan import echo_snr, scan_surface
+from echocal.scanning.scan import CONVERGED_STATUSES, check_scan, echo_snr, scan_surface
 from echocal.scanning.store import PointStore, partial_path
 
 __all__ = [
+    "CONVERGED_STATUSES",
     "FORMAT",
     "STATUS",
     "PointStore",
     "ScanGrid",
     "SurfaceScan",
     "axis_values",
+    "check_scan",
     "echo_snr",
     "partial_path",
     "scan_surface",

@@ -16,14 +16,16 @@ surface_x/_y/_z    m       probe position + distance · (−n)
 echo_snr           1       matched-envelope peak / its median (detection statistic)
 n_measurements     1       A-scans used at the point (calibration + time of flight)
 status             1       0 found, see ``flag_meanings``
+message            -       why a point is missing ("" where found)
 found              bool    status == 0
 warm               bool    the point started from its neighbours
 normal_error       deg     vs the true normal below the measured point (truth)
 height_error       m       measured z − true surface z below the point (with a truth)
 =================  ======  ===================================================
 
-Summaries (in ``attrs`` and :attr:`SurfaceScan.summary`): points found/missing,
-total and per-point measurements, median / p90 / max of both errors.
+Summaries (in ``attrs`` and :attr:`SurfaceScan.summary`): points found/missing (by
+status, with the most common message of each), total and per-point measurements,
+median / p90 / max of both errors.
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ STATUS: dict[str, int] = {
     "at-limit": 3,
     "no-tof": 4,
     "source-error": 5,
+    "unconverged": 6,
 }
 """Per-point status codes: 0 found, else why the point is missing."""
 
@@ -103,6 +106,13 @@ def _quantiles(values: FloatArray) -> dict[str, float | None]:
         "p90": float(np.percentile(v, 90)),
         "max": float(np.max(v)),
     }
+
+
+def _most_common(messages: NDArray[Any]) -> str:
+    """The most frequent of ``messages`` (the first seen among equals)."""
+    values, first, counts = np.unique(messages.astype(str), return_index=True, return_counts=True)
+    best = max(range(len(values)), key=lambda i: (counts[i], -first[i]))
+    return str(values[best])
 
 
 @dataclass(frozen=True)
@@ -165,8 +175,11 @@ def surface_dataset(
     n_meas = np.zeros(shape, dtype=np.int64)
     status = np.full(shape, -1, dtype=np.int64)
     warm = np.zeros(shape, dtype=bool)
+    message = np.full(shape, "", dtype=object)
     for (iy, ix), rec in records.items():
         status[iy, ix] = int(rec["status"])
+        if rec["status"] != 0:
+            message[iy, ix] = str(rec.get("message") or "")
         n_meas[iy, ix] = int(rec["n_measurements"])
         warm[iy, ix] = bool(rec.get("warm", False))
         snr[iy, ix] = rec["snr"] if rec["snr"] is not None else np.nan
@@ -201,6 +214,7 @@ def surface_dataset(
         "echo_snr": (dims, snr),
         "n_measurements": (dims, n_meas),
         "status": (dims, status),
+        "message": (dims, message.astype(str)),
         "found": (dims, found.astype(np.int8)),
         "warm": (dims, warm.astype(np.int8)),
     }
@@ -211,6 +225,11 @@ def surface_dataset(
         "missing": int(grid.size - n_found),
         "missing_by_status": {
             name: int(np.count_nonzero(status == code))
+            for name, code in STATUS.items()
+            if code and np.any(status == code)
+        },
+        "missing_messages": {
+            name: _most_common(message[status == code])
             for name, code in STATUS.items()
             if code and np.any(status == code)
         },
@@ -236,6 +255,7 @@ def surface_dataset(
     ds["x"].attrs["units"] = ds["y"].attrs["units"] = "m"
     ds["status"].attrs["flag_values"] = np.array(list(STATUS.values()), dtype=np.int64)
     ds["status"].attrs["flag_meanings"] = " ".join(n.replace("-", "_") for n in STATUS)
+    ds["message"].attrs["long_name"] = "why the point is missing (empty where found)"
     ds["found"].attrs["units"] = ds["warm"].attrs["units"] = "1"
     ds["found"].attrs["long_name"] = "1 where the surface was found (status 0)"
     ds["warm"].attrs["long_name"] = "1 where the point started from its neighbours"

@@ -35,6 +35,7 @@ The result (:class:`SurfaceScan`) is an xarray Dataset on dims (y, x); see
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from collections.abc import Callable, Mapping
@@ -54,19 +55,30 @@ from echocal._validate import (
     positive_float,
     positive_int,
 )
-from echocal.calibrate import calibrate, method_names
+from echocal.calibrate import build_optimizer, calibrate, method_names
 from echocal.constants import SOUND_SPEED_WATER
-from echocal.errors import DataFileError, EchocalError, EchocalValueError
+from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import PARAMETERIZATIONS
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.objective import SourceObjective
 from echocal.scanning.dataset import STATUS, SurfaceScan, surface_dataset
 from echocal.scanning.grid import ScanGrid
-from echocal.scanning.store import PointStore, partial_path
+from echocal.scanning.store import (
+    PointStore,
+    partial_path,
+    setting_differences,
+    settings_digest,
+)
 from echocal.signal import Pulse, RecordingWindow, matched_envelope, time_of_flight
 from echocal.specimen import Specimen
 
-__all__ = ["echo_snr", "scan_surface"]
+__all__ = ["CONVERGED_STATUSES", "check_scan", "echo_snr", "scan_surface"]
+
+CONVERGED_STATUSES = frozenset({0, 5, 7})
+"""Calibration statuses (:data:`echocal.calibrate.STATUS_MESSAGES`) after which a point's
+orientation is trusted: the method's own convergence (a short step, a complete search,
+a settled recommendation).  A run stopped by the budget or the iteration limit is
+``unconverged``: its estimate is wherever the method happened to be."""
 
 FloatArray = NDArray[np.float64]
 
@@ -162,6 +174,15 @@ def _settings(source: MeasurementSource, grid: ScanGrid, options: dict[str, Any]
     return {"grid": grid.to_dict(), "source": source.description, **options}
 
 
+def _stored_settings(path: Path) -> dict[str, Any] | None:
+    """The settings of the finished scan in ``path`` (None if it does not record them)."""
+    attrs = SurfaceScan.load(path).dataset.attrs
+    try:
+        return json.loads(attrs["settings"])
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
 @dataclass
 class _Context:
     """Everything one point's measurement needs (private)."""
@@ -222,6 +243,12 @@ def _measure_point(
     record["a"], record["b"] = (float(v) for v in result.x)
     if result.status in (4, 6):
         record.update(status=STATUS["no-echo"], message=result.message)
+    elif result.status not in CONVERGED_STATUSES:
+        record.update(
+            status=STATUS["unconverged"],
+            message=f"{result.message} after {result.n_measurements} measurements, before "
+            f"the method converged; raise budget_per_point ({ctx.budget})",
+        )
     elif np.any(np.isclose(result.x, objective.bounds.ravel()[[0, 2]], atol=1e-6)) or np.any(
         np.isclose(result.x, objective.bounds.ravel()[[1, 3]], atol=1e-6)
     ):
@@ -257,6 +284,87 @@ def _measure_point(
     return record
 
 
+def check_scan(
+    source: MeasurementSource,
+    grid: ScanGrid,
+    *,
+    method: str = "auto",
+    parameterization: str = "tilt",
+    budget_per_point: int = 80,
+    tof_repeats: int = 2,
+    x0: ArrayLike = (0.0, 0.0),
+    pulse: Pulse | None = None,
+    method_options: Mapping[str, Any] | None = None,
+) -> None:
+    """Refuse a scan whose every point would fail, before anything is measured or written.
+
+    Checks the method and parameterization names, the probe heights against the
+    positioner's z limits, that some grid point lies within its x/y limits (a point
+    outside them is a per-point ``source-error``, as at a part's edge), and that
+    ``budget_per_point`` covers one iteration of ``method`` (with ``method_options``)
+    plus the ``tof_repeats`` time-of-flight A-scans.  Raises
+    :class:`~echocal.errors.EchocalValueError` or :class:`~echocal.errors.LimitError`
+    naming the setting and what is allowed.
+    """
+    one_of("parameterization", parameterization, PARAMETERIZATIONS)
+    one_of("method", method, method_names())
+    budget = positive_int("budget_per_point", budget_per_point)
+    tof_repeats = positive_int("tof_repeats", tof_repeats)
+    start = finite_array("x0", x0)
+    if start.shape != (2,):
+        raise EchocalValueError(f"x0 must be 2 angles [deg], shape (2,); got shape {start.shape}")
+    limits = source.limits
+    heights = grid.heights()
+    (z_lo, z_hi), (x_lo, x_hi), (y_lo, y_hi) = limits.z, limits.x, limits.y
+    low, high = heights < z_lo, heights > z_hi
+    if np.any(low | high):
+        z = float(heights[low | high][0])
+        raise LimitError(
+            f"probe height z={z * 1e3:g} mm is outside the positioner's z limits "
+            f"[{z_lo * 1e3:g}, {z_hi * 1e3:g}] mm ({np.count_nonzero(low | high)} of "
+            f"{grid.size} points): every such point would fail; choose a stand-off "
+            "within the limits (--z)"
+        )
+    positions = grid.positions().reshape(-1, 3)
+    reach = (
+        (positions[:, 0] >= x_lo)
+        & (positions[:, 0] <= x_hi)
+        & (positions[:, 1] >= y_lo)
+        & (positions[:, 1] <= y_hi)
+    )
+    if not np.any(reach):
+        raise LimitError(
+            f"no grid point lies within the positioner's limits x in [{x_lo * 1e3:g}, "
+            f"{x_hi * 1e3:g}] mm, y in [{y_lo * 1e3:g}, {y_hi * 1e3:g}] mm; move the grid "
+            "(--grid)"
+        )
+    objective = SourceObjective(
+        source, positions[int(np.argmax(reach))], parameterization=parameterization, pulse=pulse
+    )
+    start = np.clip(start, objective.bounds[:, 0], objective.bounds[:, 1])
+    try:
+        opt, _ = build_optimizer(
+            objective,
+            method,
+            start,
+            rng=np.random.default_rng(0),
+            options=dict(method_options or {}),
+        )
+    except EchocalError:
+        raise
+    except Exception as exc:  # a method's own check that is not an echocal error
+        raise EchocalValueError(
+            f"method_options for method {method!r}: {type(exc).__name__}: {exc}"
+        ) from None
+    need = objective.cost(opt.min_budget)
+    if budget < need + tof_repeats:
+        raise EchocalValueError(
+            f"budget_per_point={budget} is too small: method {method!r} needs {need} "
+            f"measurements for one iteration, plus {tof_repeats} time-of-flight A-scans; "
+            f"allowed: budget_per_point >= {need + tof_repeats} (--budget-per-point)"
+        )
+
+
 def scan_surface(
     source: MeasurementSource,
     grid: ScanGrid,
@@ -282,6 +390,8 @@ def scan_surface(
     metadata: Mapping[str, Any] | None = None,
     on_point: Callable[[int, int], None] | None = None,
     start: str = "centre",
+    overwrite: bool = False,
+    log: Callable[[str], None] | None = None,
 ) -> SurfaceScan:
     """Scan ``grid`` with ``source``: surface normal and distance at every point.
 
@@ -316,18 +426,27 @@ def scan_surface(
         (:meth:`ScanGrid.order`).
     on_point : called with (points done, total) after each point (e.g. to interrupt
         a scan in tests or drive another progress display).
+    overwrite : replace a finished scan in ``out`` made with other settings (without
+        it that is refused); a finished scan with the same settings is returned as
+        stored (nothing measured) unless ``overwrite``.
+    log : called with one line of news (resuming, already finished).
+
+    Whole-run mistakes (:func:`check_scan`) are refused before anything is written.
     """
-    one_of("parameterization", parameterization, PARAMETERIZATIONS)
-    one_of("method", method, method_names())
-    budget = positive_int("budget_per_point", budget_per_point)
-    tof_repeats = positive_int("tof_repeats", tof_repeats)
+    check_scan(
+        source,
+        grid,
+        method=method,
+        parameterization=parameterization,
+        budget_per_point=budget_per_point,
+        tof_repeats=tof_repeats,
+        x0=x0,
+        pulse=pulse,
+        method_options=method_options,
+    )
+    budget = int(budget_per_point)
+    tof_repeats = int(tof_repeats)
     x0 = finite_array("x0", x0)
-    if x0.shape != (2,):
-        raise EchocalValueError(f"x0 must be 2 angles [deg], shape (2,); got shape {x0.shape}")
-    if budget <= tof_repeats:
-        raise EchocalValueError(
-            f"budget_per_point ({budget}) must exceed tof_repeats ({tof_repeats})"
-        )
     c0 = sound_speed if sound_speed is not None else getattr(source, "sound_speed", None)
     ctx = _Context(
         source=source,
@@ -374,11 +493,24 @@ def scan_surface(
     records: dict[tuple[int, int], dict[str, Any]] = {}
     if out is not None:
         out = Path(out)
-        if out.exists() and not partial_path(out).exists():
-            raise DataFileError(f"{out} already exists; remove it or choose another output")
+        if out.is_dir():
+            raise DataFileError(f"{out} is a folder; give the scan file's path (.nc)")
+        if out.exists() and not partial_path(out).exists() and not overwrite:
+            stored = _stored_settings(out)
+            differ = setting_differences(stored, settings)
+            if not differ:
+                if log is not None:
+                    log(f"{out} already holds this scan (finished): nothing to measure")
+                return SurfaceScan.load(out)
+            raise DataFileError(
+                f"{out} holds a finished scan with other settings ({', '.join(differ)}); "
+                "pass --overwrite (overwrite=True) to replace it, or choose another output"
+            )
         store = PointStore(out, settings)
         for rec in store.open():
             records[(int(rec["iy"]), int(rec["ix"]))] = rec
+        if records and log is not None:
+            log(f"resuming {out}: {len(records)} point(s) already saved in {store.directory}")
     resumed = len(records)
 
     xy = grid.positions()[..., :2]
@@ -452,6 +584,8 @@ def scan_surface(
         **dict(metadata or {}),
         "resumed_points": resumed,
         "wall_time": wall,
+        "settings": json.dumps(settings, sort_keys=True, default=str),
+        "settings_digest": settings_digest(settings),
     }
     result = surface_dataset(
         grid,

@@ -26,7 +26,14 @@ from typing import Any
 from echocal.errors import DataFileError
 from echocal.io import atomic_write_text
 
-__all__ = ["PARTIAL_FORMAT", "PointStore", "partial_path"]
+__all__ = [
+    "PARTIAL_FORMAT",
+    "PointStore",
+    "partial_path",
+    "saved_points",
+    "setting_differences",
+    "settings_digest",
+]
 
 PARTIAL_FORMAT = "surface-scan-partial/1"
 """Format name in the manifest of an unfinished scan."""
@@ -38,9 +45,29 @@ def partial_path(path: str | os.PathLike[str]) -> Path:
     return target.with_name(target.name + ".partial")
 
 
-def _digest(settings: dict[str, Any]) -> str:
+def settings_digest(settings: dict[str, Any]) -> str:
+    """SHA-256 of a scan's settings (what defines the scan: grid, source, method, ...)."""
     text = json.dumps(settings, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def setting_differences(old: dict[str, Any] | None, new: dict[str, Any]) -> list[str]:
+    """The names of the settings that differ between two scans (sorted; ``"all"`` when the
+    old ones are unknown)."""
+    if not isinstance(old, dict):
+        return ["all"]
+    same = json.loads(json.dumps(new, default=str))  # as stored: tuples become lists
+    return sorted(k for k in old.keys() | same.keys() if old.get(k) != same.get(k))
+
+
+def saved_points(out: str | os.PathLike[str]) -> int:
+    """Points saved by an unfinished scan of ``out`` (0 if none), without checking that it
+    is the same scan (:meth:`PointStore.open` does)."""
+    try:
+        with (partial_path(out) / "points.jsonl").open("rb") as fh:
+            return sum(1 for line in fh if line.endswith(b"\n"))
+    except OSError:
+        return 0
 
 
 class PointStore:
@@ -55,12 +82,16 @@ class PointStore:
     def __init__(self, out: str | os.PathLike[str], settings: dict[str, Any]) -> None:
         self.directory = partial_path(out)
         self.settings = settings
-        self.digest = _digest(settings)
+        self.digest = settings_digest(settings)
         self._manifest = self.directory / "manifest.json"
         self._points = self.directory / "points.jsonl"
 
     def open(self) -> list[dict[str, Any]]:
-        """Create the store or reopen a matching one; return the records already saved."""
+        """Create the store or reopen a matching one; return the records already saved.
+
+        A store of another scan raises :class:`~echocal.errors.DataFileError` naming the
+        settings that differ.
+        """
         if self.directory.exists():
             try:
                 manifest = json.loads(self._manifest.read_text(encoding="utf-8"))
@@ -69,9 +100,11 @@ class PointStore:
                     f"{self.directory}: unreadable partial scan ({exc}); delete it to start over"
                 ) from None
             if manifest.get("format") != PARTIAL_FORMAT or manifest.get("digest") != self.digest:
+                differ = setting_differences(manifest.get("settings"), self.settings)
                 raise DataFileError(
-                    f"{self.directory} holds a different unfinished scan (other grid, setup or "
-                    "settings); refusing to resume it — delete it or choose another --out"
+                    f"{self.directory} holds a different unfinished scan (other "
+                    f"{', '.join(differ)}); refusing to resume it — delete it or choose "
+                    "another --out"
                 )
             return self._read()
         self.directory.mkdir(parents=True)

@@ -1,0 +1,172 @@
+"""``echocal scan`` refuses whole-run mistakes before writing anything, is reproducible
+without --seed, never replaces a finished scan silently, and says why a point is missing.
+
+Grids are 1-3 points on a side so that the module runs in a few seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import echocal.cli
+import echocal.scanning.scan as scan_module
+from echocal.scanning import STATUS, ScanGrid, SurfaceScan, check_scan, scan_surface
+from echocal.setups import load_setup
+
+MM = 1e-3
+BASE = ["scan", "--setup", "scan-5mhz", "--specimen", "sphere", "--no-figures", "--no-progress"]
+
+
+def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
+    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
+    monkeypatch.setattr(sys, "argv", ["echocal", *args])
+    with pytest.raises(SystemExit) as exit_info:
+        echocal.cli.main()
+    out, err = capsys.readouterr()
+    code = exit_info.value.code
+    return (0 if code is None else int(code)), out, err
+
+
+def _flat(text: str) -> str:
+    return " ".join(text.split())
+
+
+@pytest.mark.parametrize(
+    ("options", "expected"),
+    [
+        (["--method", "nosuch"], "unknown method 'nosuch'"),
+        (["--seed", "-1"], "--seed"),
+        (["--snr", "abc"], "--snr must be a number"),
+        # scan-5mhz's positioner: z in [5, 100] mm
+        (["--z", "-5"], "z=-5 mm is outside the positioner's z limits [5, 100] mm"),
+        # auto needs 7 measurements for its first iteration, plus 2 for the time of flight
+        (["--budget-per-point", "3"], "budget_per_point >= 9"),
+        (["--budget-per-point", "8"], "budget_per_point >= 9"),
+        (["--method", "grid", "--budget-per-point", "22"], "budget_per_point >= 23"),
+        (["--grid", "70:80:10,0:0:1"], "no grid point lies within the positioner's limits"),
+    ],
+)
+def test_whole_run_mistakes_are_refused_before_any_output(
+    tmp_path, capsys, monkeypatch, options, expected
+):
+    out = tmp_path / "out"
+    args = [*BASE, "--grid", "0:0:1,0:0:1", "--out", str(out), *options]
+    code, stdout, err = run_main(args, capsys, monkeypatch)
+    assert code == 2
+    assert expected in _flat(err) and "Traceback" not in err
+    assert stdout == ""
+    assert not out.exists()
+
+
+def test_the_budget_minimum_is_the_methods_real_need():
+    # at the stated minimum nothing is refused and no point fails for lack of budget to
+    # even start: the calibration gets its one iteration and the time of flight its two
+    setup = load_setup("scan-5mhz", seed=0)
+    grid = ScanGrid.regular(x=(0.0, 0.0, MM), y=(0.0, 0.0, MM), z=25 * MM)
+    check_scan(setup, grid, method="auto", budget_per_point=9)
+    scan = scan_surface(setup, grid, budget_per_point=9, rng=0, progress=False)
+    assert int(scan.dataset["status"].values[0, 0]) != STATUS["source-error"]
+    assert 7 <= int(scan.dataset["n_measurements"].values[0, 0]) <= 9
+
+
+def test_two_runs_without_seed_are_identical_and_use_the_setup_seed(tmp_path, capsys, monkeypatch):
+    grid = ["--grid", "-3:3:3,0:0:1"]
+    runs = {}
+    for name, extra in (("a", []), ("b", []), ("seed0", ["--seed", "0"])):  # scan-5mhz: seed = 0
+        code, stdout, err = run_main(
+            [*BASE, *grid, "--out", str(tmp_path / name), "--json", *extra], capsys, monkeypatch
+        )
+        assert code == 0, err
+        runs[name] = json.loads(stdout)["scan"]
+    assert runs["a"] == runs["b"] == runs["seed0"]
+    datasets = [SurfaceScan.load(tmp_path / n / "scan.nc").dataset for n in ("a", "b", "seed0")]
+    for ds in datasets[1:]:
+        for name in ("tilt_x", "tilt_y", "tof", "n_measurements"):
+            np.testing.assert_array_equal(ds[name].values, datasets[0][name].values)
+    assert datasets[0].attrs["seed"] == 0
+
+
+def test_a_finished_scan_is_kept_refused_or_replaced(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "out"
+    first = [*BASE, "--grid", "0:0:1,0:0:1", "--out", str(out), "--seed", "1"]
+    assert run_main(first, capsys, monkeypatch)[0] == 0
+    stored = (out / "scan.nc").read_bytes()
+    calls = []
+    original = scan_module._measure_point
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(scan_module, "_measure_point", counting)
+    # the same scan again: reported, not measured again
+    code, _, err = run_main(first, capsys, monkeypatch)
+    assert code == 0 and "already holds this scan" in _flat(err) and calls == []
+    # another grid: refused, the stored scan untouched
+    other = [*BASE, "--grid", "-3:3:3,0:0:1", "--out", str(out), "--seed", "1"]
+    code, _, err = run_main(other, capsys, monkeypatch)
+    assert code == 2 and "other settings (grid)" in _flat(err) and "--overwrite" in err
+    assert (out / "scan.nc").read_bytes() == stored and calls == []
+    # --overwrite replaces it
+    code, _, err = run_main([*other, "--overwrite"], capsys, monkeypatch)
+    assert code == 0, err
+    assert SurfaceScan.load(out / "scan.nc").summary["points"] == 3
+
+
+def test_refusing_to_resume_says_nothing_about_resuming(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "out"
+    original = scan_module._measure_point
+    calls = []
+
+    def interrupted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(scan_module, "_measure_point", interrupted)
+    args = [*BASE, "--grid", "-3:3:3,0:0:1", "--out", str(out)]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code == 130 and (out / "scan.nc.partial").is_dir()
+    monkeypatch.setattr(scan_module, "_measure_point", original)
+    code, _, err = run_main(
+        [*BASE, "--grid", "-3:3:3,-3:0:3", "--out", str(out)], capsys, monkeypatch
+    )
+    assert code == 2
+    assert "different unfinished scan (other grid)" in _flat(err)
+    assert "resuming" not in err
+    code, _, err = run_main(args, capsys, monkeypatch)  # the same scan resumes, and says so
+    assert code == 0, err
+    assert "resuming" in err and "1 point(s) already saved" in _flat(err)
+
+
+def test_missing_points_keep_their_message(tmp_path):
+    # x = 70 mm lies beyond the positioner (x in [-60, 60] mm): that point alone fails
+    setup = load_setup("scan-5mhz", seed=0)
+    grid = ScanGrid.regular(x=(50 * MM, 70 * MM, 20 * MM), y=(0.0, 0.0, MM), z=25 * MM)
+    scan = scan_surface(setup, grid, rng=0, progress=False, out=tmp_path / "s.nc")
+    with xr.open_dataset(tmp_path / "s.nc", engine="h5netcdf") as ds:
+        status, message = ds["status"].values[0], ds["message"].values[0]
+    assert status[1] == STATUS["source-error"]
+    assert "x=0.07 outside [-0.06, 0.06]" in str(message[1])
+    assert (status[0] == 0) == (message[0] == "")
+    assert scan.summary["missing_messages"]["source-error"] == str(message[1])
+
+
+def test_a_point_stopped_by_the_budget_is_unconverged_not_found():
+    # the grid method's 21 x 21 nodes do not fit in 60 measurements: it stops on the
+    # budget (calibrate status 2) having searched three rows; that is no estimate
+    setup = load_setup("scan-5mhz", seed=0)
+    grid = ScanGrid.regular(x=(0.0, 0.0, MM), y=(0.0, 0.0, MM), z=25 * MM)
+    with pytest.warns(UserWarning, match="only part of it will be searched"):
+        scan = scan_surface(setup, grid, method="grid", budget_per_point=60, rng=0, progress=False)
+    ds = scan.dataset
+    assert int(ds["status"].values[0, 0]) == STATUS["unconverged"]
+    assert "measurement budget exhausted" in str(ds["message"].values[0, 0])
+    assert np.isnan(ds["tilt_x"].values[0, 0])  # missing, not guessed
+    assert scan.summary["missing_by_status"] == {"unconverged": 1}
