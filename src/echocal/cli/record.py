@@ -113,7 +113,13 @@ def register(app: typer.Typer) -> None:
         from echocal.cli._common import write_json
         from echocal.cli._setup_option import resolve_setup
         from echocal.errors import DataFileError, EchocalError
-        from echocal.measurement.recording import RecordingGrid, partial_path, record, saved_count
+        from echocal.measurement.recording import (
+            RecordingGrid,
+            check_recording_size,
+            partial_path,
+            record,
+            saved_count,
+        )
         from echocal.setups import load_setup_config
 
         az = parse_axis(azimuth, "--azimuth")
@@ -121,6 +127,10 @@ def register(app: typer.Typer) -> None:
         positions = [parse_position(p) for p in position or []]
         config, _ = load_setup_config(setup)
         seed = config.seed if seed is None else seed
+        if not positions:
+            positions = [tuple(float(v) for v in config.positioner.reference_position)]
+        grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
+        total = check_recording_size(grid, repeats, config.window.n_samples)
         sidecar = partial_path(out)
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
@@ -131,10 +141,6 @@ def register(app: typer.Typer) -> None:
             # resumed measurements do not repeat the noise draws of the first ones.
             run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
         source = resolve_setup(setup, snr=snr, seed=run_seed)
-        if not positions:
-            positions = [tuple(float(v) for v in source.reference_position)]
-        grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
-        total = len(grid.poses()) * repeats
         if done:
             _say(f"resuming {out}: {done} of {total} measurements already saved in {sidecar}")
         try:

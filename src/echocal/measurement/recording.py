@@ -42,8 +42,12 @@ from echocal.measurement.base import MeasurementSource
 from echocal.measurement.replay import DIMS, FORMAT
 
 __all__ = [
+    "MAX_RECORDING_ASCANS",
+    "MAX_RECORDING_BYTES",
+    "MIN_POSITION_DISTANCE",
     "PARTIAL_FORMAT",
     "RecordingGrid",
+    "check_recording_size",
     "partial_path",
     "record",
     "recording_dataset",
@@ -52,6 +56,18 @@ __all__ = [
 
 PARTIAL_FORMAT = "replay-partial/1"
 """Format name in the manifest of a partial recording."""
+
+MAX_RECORDING_ASCANS = 1_000_000
+"""The most A-scans one recording may hold (poses × repeats): a million A-scans are days
+on an instrument, and a larger count is almost always a mistyped COUNT."""
+
+MAX_RECORDING_BYTES = 8 * 2**30
+"""[bytes] the largest recording (A-scans × samples × 8 bytes): the final file is
+assembled in memory before it is written, so it must fit in RAM."""
+
+MIN_POSITION_DISTANCE = 1e-6
+"""[m] recording positions closer than this are the same position (a replay could not
+tell them apart; 1 µm is also a replay's position tolerance with one position)."""
 
 
 def _axis(name: str, values: ArrayLike) -> tuple[float, ...]:
@@ -84,7 +100,25 @@ class RecordingGrid:
         if len(self.positions) == 0:
             raise EchocalValueError("grid.positions must hold at least one (x, y, z) [m]")
         pos = finite_array("grid.positions", self.positions, shape_tail=(3,)).reshape(-1, 3)
+        if len(pos) > 1:
+            dist = np.linalg.norm(pos[:, None] - pos[None], axis=-1)
+            i, j = np.triu_indices(len(pos), 1)
+            close = dist[i, j] < MIN_POSITION_DISTANCE
+            if np.any(close):
+                a, b = int(i[close][0]), int(j[close][0])
+                where = ", ".join(f"{1e3 * c:g}" for c in pos[a])
+                raise EchocalValueError(
+                    f"grid.positions #{a} and #{b} are the same position ({where}) mm "
+                    f"(closer than {MIN_POSITION_DISTANCE * 1e3:g} mm); give each recording "
+                    "position once (--position)"
+                )
         object.__setattr__(self, "positions", tuple(tuple(float(c) for c in p) for p in pos))
+
+    @property
+    def size(self) -> int:
+        """Number of poses (positions × azimuths × co-elevations)."""
+        n_p, n_a, n_c = self.shape
+        return n_p * n_a * n_c
 
     @classmethod
     def regular(
@@ -129,6 +163,35 @@ class RecordingGrid:
         return cls(
             azimuth=data["azimuth"], coelevation=data["coelevation"], positions=data["positions"]
         )
+
+
+def check_recording_size(grid: RecordingGrid, repeats: int, n_samples: int | None) -> int:
+    """Refuse a recording too large to make; return its number of A-scans.
+
+    ``n_samples`` : samples per A-scan (None if the source does not say: then only the
+    count is checked).  Raises :class:`~echocal.errors.EchocalValueError` stating the
+    computed count or size and the cap (:data:`MAX_RECORDING_ASCANS`,
+    :data:`MAX_RECORDING_BYTES`) before anything is measured or written.
+    """
+    repeats = positive_int("repeats", repeats)
+    n_p, n_a, n_c = grid.shape
+    count = grid.size * repeats
+    shape = f"{n_p} position(s) x {n_a} azimuths x {n_c} co-elevations x {repeats} repeat(s)"
+    if count > MAX_RECORDING_ASCANS:
+        raise EchocalValueError(
+            f"the recording would hold {count:,} A-scans ({shape}); the cap is "
+            f"{MAX_RECORDING_ASCANS:,}: use fewer grid points (COUNT) or repeats"
+        )
+    if n_samples is not None:
+        size = count * int(n_samples) * 8
+        if size > MAX_RECORDING_BYTES:
+            raise EchocalValueError(
+                f"the recording would be {size / 2**30:.1f} GiB ({count:,} A-scans of "
+                f"{int(n_samples)} samples, {shape}); the cap is "
+                f"{MAX_RECORDING_BYTES / 2**30:g} GiB (the file is assembled in memory): use "
+                "fewer grid points (COUNT), repeats or samples"
+            )
+    return count
 
 
 def partial_path(path: str | os.PathLike[str]) -> Path:
@@ -311,6 +374,7 @@ def record(
     DataFileError : the final file exists (without ``overwrite``) or a partial recording
         there was made with a different grid/repeats/source.
     LimitError : a grid pose lies outside ``source.limits`` (nothing is measured).
+    EchocalValueError : the recording is too large (:func:`check_recording_size`).
     """
     from rich.console import Console
     from rich.progress import (
@@ -330,6 +394,8 @@ def record(
         raise DataFileError(f"{target} is a directory; give the replay file's path (.nc)")
     if target.exists() and not sidecar.exists() and not overwrite:
         raise DataFileError(f"{target} already exists; pass overwrite=True to record it again")
+    window = getattr(source, "window", None)
+    check_recording_size(grid, repeats, getattr(window, "n_samples", None))
     poses = grid.poses()
     bad = [(i, v) for i, p in enumerate(poses) if (v := source.limits.violations(p))]
     if bad:

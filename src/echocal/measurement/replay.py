@@ -37,7 +37,9 @@ Tolerance: a pose may lie outside the recorded grid by at most half a grid step
 azimuth is also tried shifted by ±360°.  The position must lie within
 ``position_tolerance`` [m] of a recorded position (default: half the smallest
 distance between recorded positions, or 1 µm if there is only one).  ``limits``
-is the recorded grid's extent.
+is the recorded grid's extent.  A file with two identical recorded positions is
+refused (naming the file and the positions) unless ``position_tolerance`` is given;
+then the first of them answers.
 """
 
 from __future__ import annotations
@@ -152,7 +154,17 @@ class ReplaySource(BaseSource):
         if position_tolerance is None:
             if len(self.positions) > 1:
                 d = np.linalg.norm(self.positions[:, None] - self.positions[None], axis=-1)
-                position_tolerance = 0.5 * float(np.min(d[np.triu_indices(len(d), 1)]))
+                i, j = np.triu_indices(len(d), 1)
+                k = int(np.argmin(d[i, j]))
+                if not d[i[k], j[k]] > 0:
+                    a, b = int(i[k]), int(j[k])
+                    where = ", ".join(f"{c:g}" for c in self.positions[a])
+                    raise DataFileError(
+                        f"{path}: recorded positions #{a} and #{b} are the same point "
+                        f"({where}) m, so a measurement there cannot be told apart; record "
+                        "each position once, or pass position_tolerance to use the first"
+                    )
+                position_tolerance = 0.5 * float(d[i[k], j[k]])
             else:
                 position_tolerance = 1e-6
         self.position_tolerance = positive_float("position_tolerance", position_tolerance)
