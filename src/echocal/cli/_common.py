@@ -69,19 +69,38 @@ def parse_pair(text: str, option: str) -> tuple[float, float]:
     return parse_angle(f"{option}[0]", parts[0]), parse_angle(f"{option}[1]", parts[1])
 
 
+_WORDS: dict[str, bool | None] = {
+    "true": True,
+    "yes": True,
+    "false": False,
+    "no": False,
+    "none": None,
+    "null": None,
+}
+"""Option values read as booleans or None whatever their case (``False``, ``NO``, ``None``)."""
+
+
 def parse_options(items: list[str] | None, option: str) -> dict[str, Any]:
-    """Parse repeated ``KEY=VALUE`` options; a VALUE that reads as JSON (``1``, ``0.5``,
-    ``true``, ``[1, 2]``) is taken as such, anything else as a string."""
+    """Parse repeated ``KEY=VALUE`` options.
+
+    ``true``/``yes`` and ``false``/``no`` (any case) are booleans and ``none``/``null``
+    is None; a VALUE that reads as JSON (``1``, ``0.5``, ``[1, 2]``, ``{"radius": 0.5}``)
+    is taken as such; anything else is a string (which the receiving function checks:
+    a string is never taken for a number or a boolean).
+    """
     out: dict[str, Any] = {}
     for item in items or []:
         key, sep, value = item.partition("=")
-        key = key.strip()
+        key, value = key.strip(), value.strip()
         if not sep or not key.isidentifier():
             raise typer.BadParameter(f"{option} takes KEY=VALUE (e.g. fine_radius=1); got {item!r}")
+        if value.lower() in _WORDS:
+            out[key] = _WORDS[value.lower()]
+            continue
         try:
             out[key] = json.loads(value)
         except json.JSONDecodeError:
-            out[key] = value.strip()
+            out[key] = value
     return out
 
 

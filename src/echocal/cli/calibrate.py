@@ -31,7 +31,8 @@ def register(app: typer.Typer) -> None:
             str | None,
             typer.Option(
                 help="X,Y,Z of the probe (mm unless a unit is given); default: the "
-                "setup's reference position."
+                "setup's reference position.  Only the position: the angles are what "
+                "calibrate finds (start them with --x0)."
             ),
         ] = None,
         parameterization: Annotated[
@@ -55,8 +56,11 @@ def register(app: typer.Typer) -> None:
             list[str] | None,
             typer.Option(
                 "--option",
-                help="KEY=VALUE method option, repeatable (see `echocal methods` and the "
-                "method's docstring), e.g. --option fine_radius=1 for auto at high SNR.",
+                help="KEY=VALUE method option, repeatable (see `echocal methods NAME`), e.g. "
+                "--option fine_radius=1 for auto at high SNR; true/false/yes/no and none "
+                '(any case) are booleans and None, JSON values (1, 0.5, {"radius": 0.5}) '
+                "are taken as such.  Also the run keywords xtol=DEG and final_check=N.  An "
+                "unknown name or a value of the wrong type is an error.",
             ),
         ] = None,
         search_radius: Annotated[
@@ -67,7 +71,13 @@ def register(app: typer.Typer) -> None:
                 "default; any other method gets this search in front of it."
             ),
         ] = None,
-        seed: Annotated[int, typer.Option(help="Seed for noise and randomized methods.")] = 0,
+        seed: Annotated[
+            int | None,
+            typer.Option(
+                help="Seed for the noise and randomized methods; default: the setup "
+                "file's seed, else 0."
+            ),
+        ] = None,
         out: Annotated[Path, typer.Option(help="Folder for result.json and the plots.")] = Path(
             "echocal-out/calibrate"
         ),
@@ -76,30 +86,22 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option("--json", help="Print the result as one JSON object.")
         ] = False,
     ) -> None:
-        """Calibrate the orientation at one position and compare with the true optimum."""
+        """Calibrate the orientation at one position and compare with the true optimum.
+
+        Exit status: 0 when the method returned an estimate; 1 when no echo was found
+        (the acquisition search failed, or every measurement failed) — the result files
+        are still written; 2 for bad input.
+        """
         from echocal.calibrate import calibrate
         from echocal.evaluation import evaluate_run
         from echocal.measurement.objective import SourceObjective
 
         virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
-        where = parse_pose(position, "--position").position if position else None
-        where = virtual.reference_position if where is None else where
+        where = _parse_position(position) if position else virtual.reference_position
         objective = SourceObjective(virtual, where, parameterization=parameterization)
         search = _search_options(method, search_radius)
         extra = parse_options(option, "--option")
-        unsettable = sorted(set(extra) & set(_OBJECT_OPTIONS))
-        if unsettable:
-            raise typer.BadParameter(
-                f"--option {', '.join(unsettable)}: takes a Python object, which the command "
-                "line cannot give (the source objective supplies it); use the API"
-            )
-        driver = set(inspect.signature(calibrate).parameters) - {"options"}
-        taken = sorted(set(extra) & {*driver, *search})
-        if taken:
-            raise typer.BadParameter(
-                f"--option {', '.join(taken)}: set by its own command-line option "
-                "(--budget, --max-iter, --settle, --preset, --seed, --search-radius)"
-            )
+        run_keywords = _check_options(method, extra, search)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = calibrate(
@@ -110,9 +112,10 @@ def register(app: typer.Typer) -> None:
                 max_iter=max_iter,
                 settle=_parse_settle(settle),
                 preset=preset,
-                rng=seed,
+                rng=virtual.rng,  # the effective seed: --seed, else the setup file's, else 0
+                **run_keywords,
                 **search,
-                **extra,
+                **{k: v for k, v in extra.items() if k not in run_keywords},
             )
         for warning in caught:
             console.print(f"[yellow]warning:[/] {escape(str(warning.message))}")
@@ -120,15 +123,18 @@ def register(app: typer.Typer) -> None:
         out.mkdir(parents=True, exist_ok=True)
         result.save_json(out / "result.json")
         figures = _save_plots(virtual, where, evaluation, out) if plots else {}
+        found = result.success
         summary = {
             "setup": virtual.name,
+            "seed": virtual.rng if isinstance(virtual.rng, int) else None,
             "position_m": [float(v) for v in where],
             "method": result.method,
             "parameterization": parameterization,
             "names": list(result.names),
-            "estimate_deg": [float(v) for v in result.x],
+            "success": found,
+            "estimate_deg": [float(v) for v in result.x] if found else None,
             "truth_deg": [float(v) for v in evaluation.truth],
-            "error_deg": evaluation.error,
+            "error_deg": evaluation.error if found else None,
             "n_measurements": result.n_measurements,
             "acquisition_measurements": result.acquisition_measurements,
             "n_iterations": result.n_iterations,
@@ -138,24 +144,118 @@ def register(app: typer.Typer) -> None:
         }
         if json_output:
             write_json(summary)
-            return
-        names = result.names
-        found = result.acquisition_measurements
-        search = "" if found is None else f" (echo found after {found})"
-        console.print(
-            f"[bold]{escape(result.method)}[/] on {escape(virtual.description)}\n"
-            f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
-            f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
-            f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
-            f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}"
-            f"{search}   iterations {result.n_iterations}\n"
-            f"  stopped:  {escape(result.message)}\n"
-            f"  saved to  {escape(str(out))}/"
+        elif found:
+            _print_estimate(result, evaluation, virtual, out)
+        else:
+            _print_failure(result, out)
+        if not found:
+            raise typer.Exit(code=EXIT_NO_ECHO)
+
+
+EXIT_NO_ECHO = 1
+"""Exit status of a calibration that found no echo (result files written all the same)."""
+
+
+def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> None:
+    names = result.names
+    found = result.acquisition_measurements
+    search = "" if found is None else f" (echo found after {found})"
+    console.print(
+        f"[bold]{escape(result.method)}[/] on {escape(virtual.description)}\n"
+        f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
+        f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
+        f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
+        f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}"
+        f"{search}   iterations {result.n_iterations}\n"
+        f"  stopped:  {escape(result.message)}\n"
+        f"  saved to  {escape(str(out))}/"
+    )
+
+
+def _print_failure(result: Any, out: Path) -> None:
+    console.print(
+        f"[bold red]no echo found[/] ({escape(result.method)}, "
+        f"{result.n_measurements} measurements): {escape(result.message)}.\n"
+        "  Nothing was calibrated.  Start nearer the echo (--x0), search farther "
+        "(--search-radius) or check the setup (position, SNR).\n"
+        f"  saved to  {escape(str(out))}/ (status {result.status})"
+    )
+
+
+_OWN_OPTION = {
+    "budget": "--budget",
+    "max_iter": "--max-iter",
+    "settle": "--settle",
+    "preset": "--preset",
+    "rng": "--seed",
+    "acquire": "--search-radius",
+    "x0": "--x0",
+    "method": "--method",
+    "objective": "--setup and --position",
+}
+"""calibrate() keywords that have a command-line option of their own."""
+
+_RUN_KEYWORDS = ("xtol", "final_check")
+"""calibrate() keywords with no option of their own, accepted by --option."""
+
+_API_ONLY = {
+    "history": "is a warm start from earlier measurements (arrays of their points and "
+    "values), which the command line cannot pass; use the Python API "
+    "(calibrate(objective, 'model-based', history=(points, values)))",
+    "detector": "is the source objective's echo detector, supplied automatically; to "
+    "replace it with another Python callable use the Python API",
+    "noise_model": "is the source objective's live noise estimate, supplied automatically; "
+    "to replace it with another Python callable use the Python API",
+    "callback": "is a Python function called after each iteration; use the Python API",
+    "bounds": "are the positioner's angle limits, taken from the setup",
+}
+"""Options the command line cannot give, and why."""
+
+
+def _check_options(method: str, extra: dict[str, Any], search: dict[str, Any]) -> dict[str, Any]:
+    """Refuse ``--option`` names the method does not take (naming the valid ones and the
+    nearest), those set by their own option, and those only Python can give; return the
+    run keywords (xtol, final_check) among them."""
+    from echocal.calibrate import calibrate, get_method
+    from echocal.calibrate._options import accepted_options, suggestion
+    from echocal.errors import EchocalValueError, UnknownNameError
+
+    accepted = accepted_options(get_method(method))  # an unknown method lists the valid ones
+    driver = set(inspect.signature(calibrate).parameters) - {"options"}
+    valid = sorted(accepted - set(_API_ONLY) - set(search))
+    run: dict[str, Any] = {}
+    for key, value in extra.items():
+        if key in search:
+            raise EchocalValueError(f"--option {key}: set by --search-radius; give it once")
+        if key in _OWN_OPTION:
+            raise EchocalValueError(
+                f"--option {key}: set by its own option {_OWN_OPTION[key]}; use that instead"
+            )
+        if key in _API_ONLY:
+            raise EchocalValueError(f"--option {key}: {key} {_API_ONLY[key]}")
+        if key in _RUN_KEYWORDS:
+            run[key] = value
+        elif key in driver or key not in accepted:
+            raise UnknownNameError(
+                f"--option {key}: unknown option of method {method!r}"
+                f"{suggestion(key, [*valid, *_RUN_KEYWORDS])}; valid: {', '.join(valid)} "
+                f"(see `echocal methods {method}`), and the run keywords "
+                f"{', '.join(_RUN_KEYWORDS)}"
+            )
+    return run
+
+
+def _parse_position(text: str) -> Any:
+    """``--position X,Y,Z`` [m] (mm unless a unit is given); refuses orientation angles."""
+    from echocal.errors import EchocalValueError
+
+    if len(text.split(",")) != 3:
+        raise EchocalValueError(
+            "--position takes X,Y,Z of the probe (lengths in mm unless a unit is given), "
+            "without angles: the orientation is what calibrate finds (give its start with "
+            f"--x0 A,B); got {text!r}"
         )
-
-
-_OBJECT_OPTIONS = ("detector", "noise_model", "history", "bounds", "rng")
-"""Method options that take Python objects, not values."""
+    return parse_pose(text, "--position").position
 
 
 def _search_options(method: str, radius: float | None) -> dict[str, Any]:

@@ -22,8 +22,8 @@ def register(app: typer.Typer) -> None:
         json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     ) -> None:
         """List the calibration methods, or one method's options (for --option KEY=VALUE)."""
-        from echocal.calibrate import get_method, method_names
-        from echocal.calibrate.driver import OBJECTIVE_INPUTS, _accepted
+        from echocal.calibrate import Acquisition, get_method, method_names
+        from echocal.calibrate.driver import _accepted
 
         if name is None:
             summary = {m: _first_line(get_method(m)) for m in method_names()}
@@ -41,8 +41,21 @@ def register(app: typer.Typer) -> None:
             return
         console.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
         for key, default in options.items():
-            note = "  (supplied by the objective)" if key in OBJECTIVE_INPUTS else ""
+            note = _note(key, issubclass(cls, Acquisition))
             console.print(f"  {key:18s} default {escape(repr(default))}{note}")
+
+
+def _note(key: str, searches: bool) -> str:
+    """Where an option's value comes from when it is not the default or --option."""
+    from echocal.calibrate.driver import OBJECTIVE_INPUTS
+
+    if key in ("noise_model", "detector"):
+        return "  (supplied by the objective; Python API only)"
+    if key == "history":
+        return "  (warm start from earlier measurements; Python API only)"
+    if key in OBJECTIVE_INPUTS and searches:
+        return "  (default: the objective's)"
+    return ""
 
 
 def _first_line(cls: type) -> str:
