@@ -11,7 +11,7 @@ import typer
 
 from echocal.cli._common import console, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
-from echocal.io import atomic_path, atomic_write_text
+from echocal.io import atomic_path, atomic_write_text, json_ready
 from echocal.units import parse_quantity
 
 
@@ -30,13 +30,19 @@ def register(app: typer.Typer) -> None:
         setup: Annotated[str, typer.Option(help=SETUP_HELP)] = "thesis",
         specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = None,
         snr: Annotated[str | None, typer.Option(help=SNR_HELP)] = None,
-        seed: Annotated[int, typer.Option(help="Noise seed (reproducible A-scans).")] = 0,
+        seed: Annotated[
+            int | None,
+            typer.Option(
+                help="Noise seed (reproducible A-scans); default: the setup file's seed, else 0."
+            ),
+        ] = None,
         gate: Annotated[
             str | None,
             typer.Option(
-                help="START,WIDTH of the gate (µs unless a unit is given): the time of "
-                "flight is that of the strongest echo inside it; default: no gate (the "
-                "plot shows the pseudo-energy window around the strongest echo)."
+                help="START,WIDTH of the gate (µs unless a unit is given): the echo is "
+                "looked for, and its time of flight taken, inside it; default: no gate (the "
+                "whole recording window; the plot shades the pseudo-energy window around "
+                "the strongest echo)."
             ),
         ] = None,
         out: Annotated[Path, typer.Option(help="Folder for the A-scan file and plot.")] = Path(
@@ -49,7 +55,13 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option("--json", help="Print the result as one JSON object.")
         ] = False,
     ) -> None:
-        """Simulate one A-scan; print time of flight, distance and pseudo-energy; save it."""
+        """Simulate one A-scan; print time of flight, distance and pseudo-energy; save it.
+
+        With receiver noise, the echo counts as present only when its matched-filter peak
+        is significant (g > 4.5, see echocal.signal.detection.EchoDetector); otherwise
+        "no echo detected" is printed with g, and the time of flight and distance are
+        null in the JSON output ("detected": false).
+        """
         from echocal.plots import plot_ascan, save_figure
         from echocal.signal import (
             distance,
@@ -67,11 +79,16 @@ def register(app: typer.Typer) -> None:
         window, pulse = virtual.window, virtual.pulse
         user_gate = _parse_gate(gate, window) if gate else None
         # as on a flaw detector, a gate restricts the time of flight to the echo inside it
-        tof = float(time_of_flight(scan.samples, window, pulse, gate=user_gate))
-        chosen = user_gate or _default_gate(tof, pulse.duration, window)
+        peak_tof = float(time_of_flight(scan.samples, window, pulse, gate=user_gate))
+        significance = _significance(scan.samples, virtual, user_gate)
+        detected = bool(np.isfinite(peak_tof)) and (
+            significance is None or significance > DETECTION_THRESHOLD
+        )
+        tof = peak_tof if detected else float("nan")
         energy = float(pseudo_energy(scan.samples, window, pulse))
         summary: dict[str, Any] = {
             "setup": virtual.name,
+            "seed": virtual.rng if isinstance(virtual.rng, int) else None,
             "pose": {
                 "x_m": target.x,
                 "y_m": target.y,
@@ -80,33 +97,102 @@ def register(app: typer.Typer) -> None:
                 "coelevation_deg": target.coelevation,
             },
             "snr_db": virtual.receiver.snr_db,
+            "detected": detected,
+            "significance": significance,
+            "detection_threshold": None if significance is None else DETECTION_THRESHOLD,
             "tof_s": tof,
             "distance_m": float(distance(tof, virtual.sound_speed)),
             "pseudo_energy": energy,
             "energy_db": float(energy_db(scan.samples, window, pulse)),
             "peak_amplitude": float(peak_amplitude(scan.samples)),
-            "gate_s": [chosen.start, chosen.width],
         }
+        if user_gate is not None:
+            summary["gate_s"] = [user_gate.start, user_gate.width]
+        energy_window = _energy_window(scan.samples, window, pulse)
+        if energy_window is not None:
+            summary["energy_window_s"] = list(energy_window)
         out.mkdir(parents=True, exist_ok=True)
         data_path = out / f"ascan.{fmt}"
         _save_ascan(data_path, scan, summary)
         fig = plot_ascan(
-            scan.samples, window, pulse=pulse, gate=chosen, title=f"A-scan at {_label(target)}"
+            scan.samples,
+            window,
+            pulse=pulse if detected else None,  # no time-of-flight line on pure noise
+            gate=user_gate,
+            title=f"A-scan at {_label(target)}",
         )
+        if energy_window is not None:
+            label = "pseudo-energy window" + ("" if detected else " (noise: no echo)")
+            _shade(fig, energy_window, label)
         plots = save_figure(fig, out / "ascan.png")
         summary["files"] = {"ascan": str(data_path), "plot": [str(p) for p in plots]}
         if json_output:
             write_json(summary)
             return
-        if np.isnan(tof):
-            where = "gate" if user_gate else "recording window"
+        where = "gate" if user_gate else "recording window"
+        if significance is not None and not detected:
+            console.print(
+                f"[yellow]no echo detected in the {where}[/] (significance g = "
+                f"{significance:.2f}, an echo needs g > {DETECTION_THRESHOLD:g})"
+            )
+        elif np.isnan(tof):
             console.print(f"[yellow]no echo in the {where}[/]")
+        seen = "" if significance is None else f"   (significance g = {significance:.1f})"
         console.print(
-            f"time of flight  {tof * 1e6:10.4f} µs\n"
-            f"distance        {summary['distance_m'] * 1e3:10.4f} mm\n"
+            f"time of flight  {_show(tof * 1e6, 'µs')}{seen if detected else ''}\n"
+            f"distance        {_show(summary['distance_m'] * 1e3, 'mm')}\n"
             f"pseudo-energy   {energy:10.4g}\n"
             f"saved           {data_path}, {plots[0]}"
         )
+
+
+DETECTION_THRESHOLD = 4.5
+"""Significance g (Gaussian-equivalent σ) above which an A-scan shows an echo: pure noise
+exceeds it about 3·10⁻⁶ of the time; the acquisition phase uses the same level."""
+
+
+def _show(value: float, unit: str) -> str:
+    return "         —" if np.isnan(value) else f"{value:10.4f} {unit}"
+
+
+def _significance(samples: np.ndarray, virtual: Any, gate: Any) -> float | None:
+    """Matched-filter peak significance g of the A-scan (inside ``gate`` if given) against
+    the receiver's noise σ; None for a noiseless receiver (any echo is then certain).
+
+    With a gate the detector's false-alarm law is still that of the whole window, which
+    overstates the chance that noise alone made the peak: g is then conservative.
+    """
+    from echocal.signal.detection import EchoDetector
+    from echocal.signal.processing import matched_envelope
+
+    sigma = float(virtual.noise_sigma)
+    if sigma <= 0.0:
+        return None
+    window = virtual.window
+    detector = EchoDetector(virtual.pulse, window.fs, window.n_samples)
+    env = matched_envelope(samples, virtual.pulse, window.fs)
+    if gate is not None:
+        env = np.where(gate.mask(window), env, 0.0)
+    return float(detector.significance_of_peak(float(np.max(env)), sigma))
+
+
+def _energy_window(samples: np.ndarray, window: Any, pulse: Any) -> tuple[float, float] | None:
+    """[s] (start, width) of the pseudo-energy window: two pulse durations centred on the
+    strongest matched-filter peak of the whole recording; None for an all-zero A-scan."""
+    from echocal.signal import time_of_flight
+
+    peak = float(time_of_flight(samples, window, pulse))
+    if np.isnan(peak):
+        return None
+    return peak - pulse.duration, 2.0 * pulse.duration
+
+
+def _shade(fig: Any, span: tuple[float, float], label: str) -> None:
+    """Shade ``span`` [s] (start, width) on the A-scan figure, with a legend entry."""
+    ax = fig.axes[0]
+    start, width = span
+    ax.axvspan(start * 1e6, (start + width) * 1e6, color="C2", alpha=0.15, label=label)
+    ax.legend(fontsize=8, loc="upper right")
 
 
 def _label(pose: Any) -> str:
@@ -136,18 +222,10 @@ def _parse_gate(text: str, window: Any) -> Any:
     return chosen
 
 
-def _default_gate(tof: float, duration: float, window: Any) -> Any:
-    from echocal.signal import Gate
-
-    if np.isnan(tof):
-        return Gate(start=window.start, width=window.duration)
-    return Gate(start=tof - duration, width=2.0 * duration)
-
-
 def _save_ascan(path: Path, scan: Any, summary: dict[str, Any]) -> None:
     """Write the A-scan as CSV (time_s, amplitude) or NetCDF with units, atomically."""
     if path.suffix == ".csv":
-        lines = ["# " + json.dumps(summary), "time_s,amplitude"]
+        lines = ["# " + json.dumps(json_ready(summary), allow_nan=False), "time_s,amplitude"]
         lines += [f"{t:.9e},{x:.9e}" for t, x in zip(scan.times, scan.samples, strict=True)]
         atomic_write_text(path, "\n".join(lines) + "\n")
         return
@@ -156,7 +234,11 @@ def _save_ascan(path: Path, scan: Any, summary: dict[str, Any]) -> None:
     ds = xr.Dataset(
         {"amplitude": ("time", scan.samples, {"units": "a.u.", "long_name": "A-scan"})},
         coords={"time": ("time", scan.times, {"units": "s"})},
-        attrs={"fs_hz": scan.fs, "summary": json.dumps(summary), "echocal_format": "ascan/1"},
+        attrs={
+            "fs_hz": scan.fs,
+            "summary": json.dumps(json_ready(summary), allow_nan=False),
+            "echocal_format": "ascan/1",
+        },
     )
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
