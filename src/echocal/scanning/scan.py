@@ -16,8 +16,11 @@ from the centre out (:meth:`~echocal.scanning.ScanGrid.order`):
    p + d · (−n).
 3. **Missing, not guessed.**  A point is *missing* (NaN, and never a warm start for
    its neighbours) when the calibration found no echo (acquisition failed, every
-   value NaN), when the estimate sits on the positioner's angle limits (the true
-   optimum is out of reach), when the echo at the estimate is not clearly above
+   value NaN), when it stopped on the budget or the iteration limit before the
+   method's own convergence (``unconverged``: see :data:`CONVERGED_STATUSES`; no
+   time of flight is measured then), when the estimate sits on the positioner's
+   angle limits (the true optimum is out of reach), when the echo at the estimate
+   is not clearly above
    noise (matched-envelope peak < ``min_snr`` × its median over the window, a
    robust noise level every source provides), when the time of flight is NaN, or
    when the source raised an echocal error at that point.
@@ -247,7 +250,8 @@ def _measure_point(
         record.update(
             status=STATUS["unconverged"],
             message=f"{result.message} after {result.n_measurements} measurements, before "
-            f"the method converged; raise budget_per_point ({ctx.budget})",
+            f"the method converged: no clear echo here, or budget_per_point ({ctx.budget}) "
+            "too small",
         )
     elif np.any(np.isclose(result.x, objective.bounds.ravel()[[0, 2]], atol=1e-6)) or np.any(
         np.isclose(result.x, objective.bounds.ravel()[[1, 3]], atol=1e-6)
