@@ -12,7 +12,26 @@ import re
 
 from echocal.errors import EchocalValueError
 
-__all__ = ["parse_angle", "parse_length", "parse_quantity"]
+__all__ = [
+    "SAMPLING_RANGE",
+    "SOUND_SPEED_RANGE",
+    "ULTRASONIC_RANGE",
+    "format_frequency",
+    "parse_angle",
+    "parse_length",
+    "parse_quantity",
+    "plausible_frequency",
+    "plausible_speed",
+]
+
+ULTRASONIC_RANGE = (20e3, 1e9)
+"""[Hz] plausible centre frequencies of an ultrasonic probe or pulse (20 kHz to 1 GHz)."""
+
+SAMPLING_RANGE = (20e3, 100e9)
+"""[Hz] plausible sampling frequencies of a digitizer (20 kHz to 100 GHz)."""
+
+SOUND_SPEED_RANGE = (100.0, 20_000.0)
+"""[m/s] plausible sound speeds of a coupling medium or part (gases to diamond)."""
 
 _SCALES: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "in": 0.0254},
@@ -22,9 +41,17 @@ _SCALES: dict[str, dict[str, float]] = {
     "angle": {"deg": 1.0, "°": 1.0, "rad": 180.0 / math.pi},
 }
 _NUMBER_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\s\d].*)?\s*$")
+_INFINITY = re.compile(r"^\s*([-+]?)(?:inf|infinity)\s*([^\s\d].*)?\s*$", re.IGNORECASE)
 
 
-def parse_quantity(field: str, text: str | float | int, kind: str, default_unit: str) -> float:
+def parse_quantity(
+    field: str,
+    text: str | float | int,
+    kind: str,
+    default_unit: str,
+    *,
+    allow_infinite: bool = False,
+) -> float:
     """Parse ``text`` (number with optional unit) into SI for a quantity of ``kind``.
 
     Parameters
@@ -33,10 +60,12 @@ def parse_quantity(field: str, text: str | float | int, kind: str, default_unit:
     text : ``"12.7 mm"``, ``"5MHz"``, ``0.02`` (a bare number is in ``default_unit``).
     kind : one of ``length``, ``time``, ``frequency``, ``speed``, ``angle``.
     default_unit : unit of a bare number, e.g. ``"mm"`` on the CLI, ``"m"`` in files.
+    allow_infinite : accept ``inf``/``-inf`` (also as text, ``"inf"``, ``"-inf mm"``), e.g.
+        for the limits of an unlimited axis.  NaN is always refused.
 
     Returns
     -------
-    value in SI units (degrees for angles), finite.
+    value in SI units (degrees for angles), finite unless ``allow_infinite``.
     """
     scales = _SCALES[kind]
     if isinstance(text, bool):
@@ -45,6 +74,10 @@ def parse_quantity(field: str, text: str | float | int, kind: str, default_unit:
         number, unit = float(text), default_unit
     else:
         match = _NUMBER_UNIT.match(str(text))
+        if match is None and allow_infinite:
+            match = _INFINITY.match(str(text))
+            if match is not None:  # "inf", "-inf", "+inf mm": a number group of ±inf
+                return _infinite(field, text, match, scales, default_unit, kind)
         if match is None:
             raise EchocalValueError(
                 f"{field} must be a number with an optional {kind} unit "
@@ -53,14 +86,95 @@ def parse_quantity(field: str, text: str | float | int, kind: str, default_unit:
         number = float(match.group(1))
         # the Greek letter mu (U+03BC) looks like the micro sign (U+00B5): accept both
         unit = (match.group(2) or default_unit).strip().replace("\u03bc", "\u00b5")
+    value = number * scales[_unit_key(field, unit, kind, scales)]
+    if math.isnan(value) or (math.isinf(value) and not allow_infinite):
+        raise EchocalValueError(f"{field} must be finite; got {text!r}")
+    return value
+
+
+def _article(word: str) -> str:
+    return "an" if word[:1] in "aeiou" else "a"
+
+
+def _unit_key(field: str, unit: str, kind: str, scales: dict[str, float]) -> str:
     key = unit if unit in scales else unit.lower()
     if key not in scales:
         raise EchocalValueError(
-            f"{field}: unit {unit!r} is not a {kind} unit; use one of {', '.join(scales)}"
+            f"{field}: unit {unit!r} is not {_article(kind)} {kind} unit; "
+            f"use one of {', '.join(scales)}"
         )
-    value = number * scales[key]
-    if not math.isfinite(value):
-        raise EchocalValueError(f"{field} must be finite; got {text!r}")
+    return key
+
+
+def _infinite(
+    field: str,
+    text: str,
+    match: re.Match[str],
+    scales: dict[str, float],
+    default_unit: str,
+    kind: str,
+) -> float:
+    unit = (match.group(2) or default_unit).strip().replace("\u03bc", "\u00b5")
+    _unit_key(field, unit, kind, scales)  # "inf MHz" for a length is still the wrong kind
+    return -math.inf if match.group(1) == "-" else math.inf
+
+
+def format_frequency(value: float) -> str:
+    """``5e6`` → ``"5 MHz"``: a frequency [Hz] with the largest unit that keeps it >= 1."""
+    for unit, scale in (("GHz", 1e9), ("MHz", 1e6), ("kHz", 1e3)):
+        if abs(value) >= scale:
+            return f"{value / scale:.4g} {unit}"
+    return f"{value:.4g} Hz"
+
+
+def _frequency_hint(value: float, low: float, high: float) -> str:
+    """`` — did you mean '5 MHz'?`` when ``value`` [Hz] read in a larger unit is plausible."""
+    if value <= 0 or value >= low:
+        return ""
+    for unit, scale in (("MHz", 1e6), ("kHz", 1e3), ("GHz", 1e9)):
+        if low <= value * scale <= high:
+            return f"; numbers without a unit are in Hz — did you mean '{value:g} {unit}'?"
+    return ""
+
+
+def plausible_frequency(
+    field: str,
+    value: float,
+    *,
+    plausible: tuple[float, float] = ULTRASONIC_RANGE,
+    what: str = "an ultrasonic frequency",
+) -> float:
+    """Return ``value`` [Hz] if it lies in ``plausible``; otherwise refuse it with a hint.
+
+    ``plausible_frequency("pulse.center_frequency", 5)`` refuses 5 Hz (``... is implausible
+    for an ultrasonic frequency (20 kHz to 1 GHz); ... did you mean '5 MHz'?``).  A value
+    outside the range would make the simulator sample seconds-long pulses at MHz rates
+    (GiB of memory, hours of work).
+    """
+    low, high = plausible
+    if not low <= value <= high:
+        raise EchocalValueError(
+            f"{field}: {format_frequency(value)} is implausible for {what} "
+            f"({format_frequency(low)} to {format_frequency(high)})"
+            + _frequency_hint(value, low, high)
+        )
+    return value
+
+
+def plausible_speed(field: str, value: float) -> float:
+    """Return ``value`` [m/s] if it lies in :data:`SOUND_SPEED_RANGE`; else refuse it with a hint.
+
+    ``1.48`` (km/s or mm/µs typed as m/s) suggests ``'1.48 mm/us'``.
+    """
+    low, high = SOUND_SPEED_RANGE
+    if not low <= value <= high:
+        hint = ""
+        if low <= value * 1e3 <= high:
+            hint = f"; numbers without a unit are in m/s — did you mean '{value:g} mm/us'?"
+        raise EchocalValueError(
+            f"{field}: {value:g} m/s is implausible for a sound speed "
+            f"({low:g} to {high:g} m/s){hint}"
+        )
     return value
 
 

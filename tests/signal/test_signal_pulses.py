@@ -123,7 +123,7 @@ def test_sinc_spectrum_is_rect_in_band(window):
 def test_continuous_windows_match_scipy(name):
     n = 33
     z = 2 * np.arange(n) / (n - 1) - 1
-    p = SincPulse(center_frequency=1e6, bandwidth=1e3, window=name, length=2.0)
+    p = SincPulse(center_frequency=5e6, bandwidth=1e6, window=name)  # only its kaiser_beta
     from echocal.signal.pulses import _WINDOWS
 
     spec = ("kaiser", p.kaiser_beta) if name == "kaiser" else name
@@ -185,7 +185,7 @@ def test_registry():
         make_pulse("triangle")
     with pytest.raises(EchocalValueError, match="already registered"):
         register_pulse("gabor", GaborPulse)
-    with pytest.raises(EchocalValueError, match="bad parameters"):
+    with pytest.raises(EchocalValueError, match="bandwidth: unknown option for ricker; valid: "):
         make_pulse("ricker", bandwidth=3)
     with pytest.raises(EchocalValueError, match="not both"):
         make_pulse("gabor", alpha=1e13, bandwidth=50)

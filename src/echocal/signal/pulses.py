@@ -12,6 +12,7 @@ Registry: :func:`make_pulse` ``(name, **params)`` and :func:`pulse_names`.
 
 from __future__ import annotations
 
+import inspect
 import math
 import warnings
 from abc import ABC, abstractmethod
@@ -29,8 +30,11 @@ from echocal._validate import finite_array, finite_float, lookup, positive_float
 from echocal.constants import DEFAULT_CENTER_FREQUENCY
 from echocal.errors import DataFileError, EchocalValueError
 from echocal.signal.analytic import analytic_signal
+from echocal.units import ULTRASONIC_RANGE, format_frequency, parse_quantity
 
 __all__ = [
+    "MAX_PULSE_CYCLES",
+    "MAX_SAMPLED_PULSE_SAMPLES",
     "WINDOW_NAMES",
     "GaborPulse",
     "Pulse",
@@ -38,7 +42,9 @@ __all__ = [
     "SampledPulse",
     "SincPulse",
     "make_pulse",
+    "parse_bandwidth",
     "pulse_names",
+    "pulse_options",
     "register_pulse",
 ]
 
@@ -50,6 +56,15 @@ HIGHEST_FREQUENCY_LEVEL = 1e-3
 
 DURATION_LEVEL = 0.1
 """``duration`` is the full width of the envelope above this fraction (−20 dB) of its peak."""
+
+MAX_PULSE_CYCLES = 256
+"""Longest pulse whose spectrum is computed numerically (:class:`SincPulse`), in carrier
+cycles 2T·(f_c + B).  The work of its spectral scans grows with the square of this number:
+256 cycles take about 15 s, the thousands a unit slip gives (B = 60 Hz for 60 kHz) hours."""
+
+MAX_SAMPLED_PULSE_SAMPLES = 4096
+"""Most samples a :class:`SampledPulse` may hold: its spectrum is computed numerically at a
+cost that grows with the square of the sample count (4096 samples take about 15 s)."""
 
 _LN2 = math.log(2.0)
 _F64 = NDArray[np.float64]
@@ -65,6 +80,20 @@ def _composite_gauss(a: float, b: float, n_nodes: int) -> tuple[_F64, _F64]:
     nodes = (mid[:, None] + half[:, None] * _GL_NODES).ravel()
     weights = (half[:, None] * _GL_WEIGHTS).ravel()
     return nodes, weights
+
+
+def _center_frequency(value: Any) -> float:
+    """A centre frequency [Hz] > 0; outside the ultrasonic range it is legal but doubtful."""
+    fc = positive_float("center_frequency", value)
+    low, high = ULTRASONIC_RANGE
+    if not low <= fc <= high:
+        warnings.warn(
+            f"center_frequency = {format_frequency(fc)} lies outside the ultrasonic range "
+            f"({format_frequency(low)} to {format_frequency(high)}); frequencies are in Hz",
+            UserWarning,
+            stacklevel=4,
+        )
+    return fc
 
 
 class Pulse(ABC):
@@ -248,9 +277,7 @@ class GaborPulse(Pulse):
     name: ClassVar[str] = "gabor"
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "center_frequency", positive_float("center_frequency", self.center_frequency)
-        )
+        object.__setattr__(self, "center_frequency", _center_frequency(self.center_frequency))
         bw = positive_float("bandwidth", self.bandwidth)
         if bw > 200.0:
             raise EchocalValueError(f"bandwidth must lie in (0, 200] %; got {bw:g}")
@@ -376,7 +403,7 @@ class SincPulse(Pulse):
     name: ClassVar[str] = "sinc"
 
     def __post_init__(self) -> None:
-        fc = positive_float("center_frequency", self.center_frequency)
+        fc = _center_frequency(self.center_frequency)
         b = positive_float("bandwidth", self.bandwidth)
         object.__setattr__(self, "center_frequency", fc)
         object.__setattr__(self, "bandwidth", b)
@@ -391,6 +418,21 @@ class SincPulse(Pulse):
                 f"bandwidth B = {b:g} Hz exceeds center_frequency = {fc:g} Hz: the passband "
                 "reaches negative frequencies",
                 stacklevel=3,
+            )
+        cycles = 2.0 * self.half_length * (fc + b)
+        if cycles > MAX_PULSE_CYCLES:
+            if self.length is not None:
+                raise EchocalValueError(
+                    f"length: {self.length:g} s makes the sinc pulse {cycles:.3g} carrier cycles "
+                    f"long (2T·(f_c + B)); at most {MAX_PULSE_CYCLES} can be computed — give a "
+                    "shorter length (it is in seconds)"
+                )
+            raise EchocalValueError(
+                f"bandwidth: B = {format_frequency(b)} makes the sinc pulse {cycles:.3g} carrier "
+                f"cycles long (T = lobes / 2B = {self.half_length:.3g} s); at most "
+                f"{MAX_PULSE_CYCLES} can be computed — B is the one-sided bandwidth in Hz "
+                f"(e.g. {format_frequency(0.3 * fc)} = 30 % of f_c), not a percentage; or use "
+                "fewer lobes"
             )
 
     @property
@@ -437,9 +479,7 @@ class RickerPulse(Pulse):
     name: ClassVar[str] = "ricker"
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "center_frequency", positive_float("center_frequency", self.center_frequency)
-        )
+        object.__setattr__(self, "center_frequency", _center_frequency(self.center_frequency))
 
     def waveform(self, t: ArrayLike) -> _F64:
         u = (np.pi * self.center_frequency * np.asarray(t, dtype=np.float64)) ** 2
@@ -510,6 +550,12 @@ class SampledPulse(Pulse):
         if w.ndim != 1 or w.size < 4:
             raise EchocalValueError(
                 f"samples must be a 1-D array of at least 4 values; got shape {w.shape}"
+            )
+        if w.size > MAX_SAMPLED_PULSE_SAMPLES:
+            raise EchocalValueError(
+                f"samples: a sampled pulse holds at most {MAX_SAMPLED_PULSE_SAMPLES} samples; "
+                f"got {w.size} — cut the recording to the pulse (its spectrum is computed "
+                "numerically, at a cost growing as the square of the length)"
             )
         peak = float(np.max(np.abs(w)))
         if peak == 0.0:
@@ -696,10 +742,68 @@ def make_pulse(name: str, **params: Any) -> Pulse:
     Example: ``make_pulse("gabor", center_frequency=5e6, bandwidth=60)``.
     """
     factory = lookup("pulse", name, _PULSES)
+    valid = pulse_options(name)
+    if valid is not None:
+        for key in params:
+            if key not in valid:
+                raise EchocalValueError(
+                    f"{key}: unknown option for {name}; valid: {', '.join(valid)}"
+                )
     try:
         return factory(**params)
     except TypeError as exc:
         raise EchocalValueError(f"bad parameters for pulse {name!r}: {exc}") from None
+
+
+def pulse_options(name: str) -> tuple[str, ...] | None:
+    """Keyword options of the pulse registered as ``name``, sorted (None: any keyword).
+
+    ``pulse_options("gabor")`` is ``("alpha", "bandwidth", "center_frequency", "phase")``.
+    """
+    factory = lookup("pulse", name, _PULSES)
+    try:
+        signature = inspect.signature(factory)
+    except (TypeError, ValueError):  # a builtin or C callable: cannot tell
+        return None
+    kinds = (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in signature.parameters.values()):
+        return None
+    return tuple(sorted(p.name for p in signature.parameters.values() if p.kind in kinds))
+
+
+def parse_bandwidth(
+    name: str, value: Any, center_frequency: float, field: str = "bandwidth"
+) -> float:
+    """A ``bandwidth`` as typed by a user → the value the pulse ``name`` takes.
+
+    The pulses disagree on units: ``gabor``/``gaussian`` take the fractional −6 dB
+    bandwidth in %, ``sinc`` the one-sided baseband bandwidth B in Hz.  So:
+
+    * ``"60%"`` is 60 % for gabor; for sinc the −6 dB passband 2B is 60 % of
+      ``center_frequency`` [Hz] (B = 0.3·f_c);
+    * a frequency with a unit (``"3 MHz"``) is the full −6 dB width for gabor
+      (converted to % of f_c) and B for sinc;
+    * a bare number is % for gabor and Hz for sinc.
+
+    Other pulses and non-numbers are returned unchanged (the pulse refuses them by name).
+    """
+    gabor = name in ("gabor", "gaussian")
+    if not (gabor or name == "sinc") or isinstance(value, bool):
+        return value
+    if isinstance(value, int | float):
+        return float(value)
+    if not isinstance(value, str):
+        return value
+    text = value.strip()
+    if text.endswith("%"):
+        pct = parse_quantity(field, text[:-1], "frequency", "Hz")  # a plain number
+        return pct if gabor else pct / 100.0 * center_frequency / 2.0
+    if gabor:
+        try:
+            return float(text)  # bare number: percent
+        except ValueError:
+            return 100.0 * parse_quantity(field, text, "frequency", "Hz") / center_frequency
+    return parse_quantity(field, text, "frequency", "Hz")
 
 
 register_pulse("gabor", _gabor_factory)
