@@ -3,8 +3,8 @@
 :func:`run_demo` builds the thesis setup, reruns the Table 7 comparison
 (``table-7`` scenario: the six thesis methods with the thesis presets, echocal's
 model-based and auto beyond the thesis, and the thesis methods with automatic
-gains), runs the short sweep ``echocal/data/sweeps/quick.toml`` (SPSA, Newton,
-model-based at 30 and 15 dB from random starts, several seeds) and writes
+gains), runs the short sweep ``echocal/data/sweeps/quick.toml`` (SPSA, quasi-Newton,
+model-based and auto at 30 and 15 dB from random starts 2-4° off, several seeds) and writes
 ``OUT/report.html``::
 
     OUT/table-7/        the scenario folder (findings.json, figures, tables)
