@@ -18,6 +18,7 @@ position (:meth:`VirtualSetup.true_optimum`) — but keeps it apart from
 from __future__ import annotations
 
 import functools
+import math
 import platform
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -66,8 +67,9 @@ from echocal.signal import (
 from echocal.signal.synthesis import _synthesize_unchecked
 from echocal.specimen import Specimen
 from echocal.transducer import Transducer
+from echocal.units import format_frequency
 
-__all__ = ["ReceiverSettings", "VirtualSetup"]
+__all__ = ["MAX_SIMULATED_SAMPLES", "ReceiverSettings", "VirtualSetup"]
 
 FloatArray = NDArray[np.float64]
 
@@ -78,6 +80,11 @@ than a single pose (measured on 64² rays × 4096 samples: in one piece, 100 pos
 about twice as much per pose as chunks of 4)."""
 
 _MALLOC_WARMUP_BYTES = 16 << 20
+
+MAX_SIMULATED_SAMPLES = 1 << 20
+"""Most samples one simulated A-scan may need: the window plus the pulse's support on both
+sides at ``fs`` (the synthesis pads by it).  A pulse of seconds sampled at MHz rates — 5 Hz
+typed for 5 MHz — would otherwise allocate GiB; 2^20 samples are 10 ms at 100 MHz."""
 
 
 @functools.cache
@@ -175,7 +182,49 @@ class VirtualSetup(BaseSource):
         object.__setattr__(self, "_generator", as_generator(self.rng))
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})
+        object.__setattr__(self, "_has_closed_shapes", any(s.closed for s in self.specimen))
+        self._check_sample_count()
+        self._check_outside(reference[None], what="reference_position")
         _raise_malloc_threshold()
+
+    def _check_sample_count(self) -> None:
+        """Refuse a pulse/window pair whose A-scans would need more than MAX_SIMULATED_SAMPLES."""
+        fs = self.window.fs
+        pad = math.ceil(min(self.pulse.support * fs, 1e300))
+        needed = self.window.n_samples + 2 * pad
+        if needed > MAX_SIMULATED_SAMPLES:
+            fc = self.pulse.parameters().get("center_frequency")
+            given = f"center_frequency = {format_frequency(fc)}, " if fc is not None else ""
+            raise EchocalValueError(
+                f"pulse: an A-scan would need {needed:.4g} samples (window.n_samples "
+                f"{self.window.n_samples} + the {self.pulse.name} pulse's support "
+                f"±{self.pulse.support:.3g} s at window.fs = {format_frequency(fs)}); at most "
+                f"{MAX_SIMULATED_SAMPLES} — check the pulse ({given}frequencies are in Hz) "
+                "and window.fs"
+            )
+
+    def _check_outside(
+        self, positions: FloatArray, *, poses: Sequence[Pose] | None = None, what: str = "pose"
+    ) -> None:
+        """Refuse probe positions [m] ``(P, 3)`` inside a closed shape of the specimen."""
+        if not self._has_closed_shapes:
+            return
+        unique, first = np.unique(positions, axis=0, return_index=True)
+        inside = self.specimen.containing(unique)
+        if not np.any(inside >= 0):
+            return
+        k = int(np.argmax(inside >= 0))
+        shape = self.specimen[int(inside[k])]
+        x, y, z = (1e3 * v for v in unique[k])
+        where = f"({x:g}, {y:g}, {z:g}) mm"
+        if poses is not None:
+            pose = poses[int(first[k])]
+            where = f"{where}, azimuth {pose.azimuth:g} deg, co-elevation {pose.coelevation:g} deg"
+        raise GeometryError(
+            f"{what} {where} is inside {shape.kind} {shape.name!r} of specimen "
+            f"{self.specimen.name!r}: the probe must be outside the part, in the coupling "
+            "medium; move it above the surface"
+        )
 
     # ------------------------------------------------------------------ description
     @property
@@ -209,7 +258,9 @@ class VirtualSetup(BaseSource):
         positions : [m] shape ``(n_poses, 3)``.
         frames : transducer frames ``[x', y', n]``, shape ``(n_poses, 3, 3)``.
         """
-        return self._ideal(*check_pose_arrays(positions, frames))
+        positions, frames = check_pose_arrays(positions, frames)
+        self._check_outside(positions, what="position")
+        return self._ideal(positions, frames)
 
     def _ideal(self, positions: FloatArray, frames: FloatArray) -> FloatArray:
         """:meth:`ideal_samples` of checked arrays, in cache-sized chunks of poses."""
@@ -247,7 +298,10 @@ class VirtualSetup(BaseSource):
         ``noise=False`` gives the ideal A-scans.  Noise draws from ``rng`` if given,
         else from the setup's own generator.
         """
-        samples = self._ideal(*poses_to_arrays(list(poses)))  # Pose values are already finite
+        poses = list(poses)
+        positions, frames = poses_to_arrays(poses)  # Pose values are already finite
+        self._check_outside(positions, poses=poses)
+        samples = self._ideal(positions, frames)
         if noise:
             generator = self._generator if rng is None else as_generator(rng)
             samples = self._receiver._receive_unchecked(samples, generator)
@@ -348,6 +402,7 @@ class VirtualSetup(BaseSource):
         one_of("parameterization", parameterization, PARAMETERIZATIONS)
         a, b = np.broadcast_arrays(finite_array("a", a), finite_array("b", b))
         position = finite_array("position", position, shape_tail=(3,)).reshape(3)
+        self._check_outside(position[None], what="position")
         positions, frames = _pose_arrays(position, a.ravel(), b.ravel(), parameterization)
         generator = None
         if noise:

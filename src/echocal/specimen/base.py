@@ -66,6 +66,25 @@ class Shape(abc.ABC):
     def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Kernel: ``o``, ``d`` (3, M), ``d`` unit -> distance (M,), normal (3, M)."""
 
+    @property
+    def closed(self) -> bool:
+        """True when the shape bounds a solid, so a probe cannot be inside (:meth:`contains`)."""
+        return False
+
+    def contains(self, points: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each point [m], shape ``(M, 3)``, lies strictly inside the solid, ``(M,)``.
+
+        Open surfaces (planes, bores, open meshes) bound no solid: always False.
+        """
+        pts = finite_array("points", points, shape_tail=(3,)).reshape(-1, 3)
+        if not self.closed:
+            return np.zeros(len(pts), dtype=bool)
+        return self._contains(pts)
+
+    def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
+        """Kernel of :meth:`contains` for a closed shape: checked ``(M, 3)`` points."""
+        return np.zeros(len(points), dtype=bool)
+
     def _kernel_params(self) -> tuple[int, FloatArray] | None:
         """``(code, parameters (KERNEL_PARAMS,))`` for the simulator's compiled ray kernel.
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import one_of
 from echocal.geometry import orientation_normal
@@ -84,6 +84,19 @@ class Cylinder(Shape):
         disc = self.radius * np.sqrt(np.clip(1.0 - a * a, 0.0, 1.0))
         ext = half + disc
         return np.stack([self.center - ext, self.center + ext])
+
+    @property
+    def closed(self) -> bool:
+        """The ``"outside"`` wall bounds a solid rod (with or without drawn caps); a bore's
+        wall (``"inside"``) bounds the hole the probe may enter, not a solid."""
+        return self.surface == "outside"
+
+    def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
+        f = points - self.center
+        axial = f @ self.axis
+        radial = f - axial[:, None] * self.axis
+        inside_wall = np.einsum("ij,ij->i", radial, radial) < self.radius**2
+        return inside_wall & (np.abs(axial) < 0.5 * self.length)
 
     def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         a, r, half = self.axis, self.radius, 0.5 * self.length

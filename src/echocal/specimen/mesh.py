@@ -137,6 +137,7 @@ class TriangleMesh(Shape):
         )
         self._hierarchy = _build_hierarchy(tri, pad=1e-9 * max(scale, 1.0))
         self._embree = None
+        self._closed: bool | None = None  # watertight? computed on first use
 
     # ------------------------------------------------------------- construction
     @classmethod
@@ -200,6 +201,39 @@ class TriangleMesh(Shape):
 
     def bounds(self) -> FloatArray:
         return self._bounds.copy()
+
+    @property
+    def closed(self) -> bool:
+        """True when the mesh is watertight: every edge (vertices merged by position) is
+        shared by exactly two faces, so the mesh bounds a solid."""
+        if self._closed is None:
+            verts = np.round(self.vertices / max(self._embree_near, 1e-300) * 1e3)
+            _, merged = np.unique(verts, axis=0, return_inverse=True)
+            f = merged.reshape(-1)[self.faces]
+            edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+            edges.sort(axis=1)
+            _, counts = np.unique(edges, axis=0, return_counts=True)
+            self._closed = bool(np.all(counts == 2))
+        return self._closed
+
+    def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
+        """Ray parity: a point is inside when a ray from it crosses the surface an odd
+        number of times (an irregular direction, so edges and vertices are not hit)."""
+        out = np.zeros(len(points), dtype=bool)
+        lo, hi = self._bounds
+        candidates = np.nonzero(np.all((points > lo) & (points < hi), axis=1))[0]
+        direction = np.array([0.5773, 0.5771, 0.5776])
+        direction /= np.linalg.norm(direction)
+        all_faces = np.arange(self.n_faces)
+        for i in candidates:
+            crossings = 0
+            for start in range(0, self.n_faces, _PAIR_CHUNK):
+                face = all_faces[start : start + _PAIR_CHUNK]
+                o = np.broadcast_to(points[i][:, None], (3, len(face)))
+                d = np.broadcast_to(direction[:, None], (3, len(face)))
+                crossings += int(np.count_nonzero(self._moller_trumbore(o, d, face) < np.inf))
+            out[i] = crossings % 2 == 1
+        return out
 
     def intersect_faces(
         self, origins: ArrayLike, directions: ArrayLike

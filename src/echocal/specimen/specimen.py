@@ -6,7 +6,7 @@ from collections.abc import Iterable, Iterator
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_array
 from echocal.errors import EchocalValueError
@@ -80,6 +80,21 @@ class Specimen:
             return np.zeros((2, 3))
         boxes = np.stack([s.bounds() for s in self._shapes])
         return np.stack([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+
+    def containing(self, points: ArrayLike) -> NDArray[np.int64]:
+        """Index of the closed shape each point [m] ``(M, 3)`` lies inside, −1 if none, ``(M,)``.
+
+        Only closed shapes (spheres, solid cylinders, watertight meshes) bound a solid; a
+        probe position inside one is impossible (see :attr:`Shape.closed`).
+        """
+        pts = finite_array("points", points, shape_tail=(3,)).reshape(-1, 3)
+        out = np.full(len(pts), -1, dtype=np.int64)
+        for index, shape in enumerate(self._shapes):
+            if shape.closed:
+                free = out < 0
+                inside = shape.contains(pts[free])
+                out[np.nonzero(free)[0][inside]] = index
+        return out
 
     def cast(self, origins: ArrayLike, directions: ArrayLike) -> Hits:
         """Closest hits of rays ``(..., N, 3)``; see :func:`echocal.raytrace.cast`."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from echocal.specimen.base import (
     KERNEL_PARAMS,
@@ -48,6 +48,15 @@ class Sphere(Shape):
 
     def bounds(self) -> FloatArray:
         return np.stack([self.center - self.radius, self.center + self.radius])
+
+    @property
+    def closed(self) -> bool:
+        """A sphere bounds a ball: a probe cannot be inside it."""
+        return True
+
+    def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
+        d = points - self.center
+        return np.einsum("ij,ij->i", d, d) < self.radius**2
 
     def _intersect_soa(self, o: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         r = self.radius
