@@ -15,6 +15,8 @@ import xarray as xr
 
 import echocal.cli
 import echocal.scanning.scan as scan_module
+from echocal.errors import LimitError
+from echocal.geometry import Pose
 from echocal.scanning import STATUS, ScanGrid, SurfaceScan, check_scan, scan_surface
 from echocal.setups import load_setup
 
@@ -153,7 +155,10 @@ def test_missing_points_keep_their_message(tmp_path):
     with xr.open_dataset(tmp_path / "s.nc", engine="h5netcdf") as ds:
         status, message = ds["status"].values[0], ds["message"].values[0]
     assert status[1] == STATUS["source-error"]
-    assert "x=0.07 outside [-0.06, 0.06]" in str(message[1])
+    # the stored message is the positioner's own refusal of that position
+    with pytest.raises(LimitError) as refusal:
+        setup.limits.check(Pose(0.07, 0.0, 0.025, 0.0, 0.0))
+    assert str(refusal.value) in str(message[1])
     assert (status[0] == 0) == (message[0] == "")
     assert scan.summary["missing_messages"]["source-error"] == str(message[1])
 

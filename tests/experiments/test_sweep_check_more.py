@@ -55,7 +55,7 @@ def test_runs_that_cannot_run_are_refused_with_every_reason():
     assert len(problems) == 4, problems
     position, x0, newton, auto = problems
     assert position.startswith("position:") and "z=500 mm outside [5, 100] mm" in position
-    assert x0.startswith("x0.points.0:") and "tilt_x=100" in x0
+    assert x0.startswith("x0.points.0:") and "tilt_x" in x0 and "100" in x0
     assert newton.startswith("methods.0 (newton):") and "budget >= 9" in newton
     assert auto.startswith("methods.1 (auto") and "fine_radius" in auto and "'abc'" in auto
 
