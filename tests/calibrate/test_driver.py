@@ -283,3 +283,28 @@ def test_the_recorded_options_are_the_effective_ones_and_plain_json(gauss_object
     assert res.options["delta"] == 0.25 and res.options["acquire"]["spacing"] == 0.5
     assert res.options["acquire"]["detector"] == "objective"
     json.dumps(res.to_dict())  # every entry serializable
+
+
+@pytest.mark.parametrize(
+    ("method", "option"),
+    [
+        ("gradient", "mu"),
+        ("momentum", "momentum"),
+        ("spsa", "c"),
+        ("newton", "delta"),
+        ("quasi-newton", "lam"),
+        ("model-based", "radius"),
+        ("grid", "step"),
+        ("acquisition", "spacing"),
+        ("auto", "threshold"),
+    ],
+)
+def test_methods_built_directly_refuse_numbers_given_as_text(method, option):
+    from echocal.calibrate import get_method
+
+    cls = get_method(method)
+    with pytest.raises(EchocalValueError, match=f"{option} must be a number; got '0.5'"):
+        cls(np.zeros(2), **{option: "0.5"})
+    with pytest.raises(EchocalValueError, match=f"{option} must be a number; got True"):
+        cls(np.zeros(2), **{option: True})
+    cls(np.zeros(2), **{option: 0.5})  # the number itself is fine

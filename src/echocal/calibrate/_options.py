@@ -6,7 +6,8 @@ user gives against those declarations *before* anything is measured: a string wh
 number or a boolean belongs is refused with the option's name (``bool("False")`` is
 True, so a boolean option must never take a string), and an unknown name gets the
 nearest valid one suggested.  Ranges (> 0, within [0, 1), ...) are each method's own
-checks.
+checks, with the strict number checks below (text and booleans refused) so that a method
+built directly is as strict as one built by the driver.
 """
 
 from __future__ import annotations
@@ -21,13 +22,19 @@ from typing import Any
 
 import numpy as np
 
+from echocal import _validate
 from echocal.errors import EchocalValueError
 
 __all__ = [
     "RESERVED",
     "accepted_options",
     "check_option_types",
+    "finite_float",
+    "in_range",
+    "nonnegative_float",
     "option_defaults",
+    "positive_float",
+    "positive_int",
     "strict_bool",
     "suggestion",
 ]
@@ -76,6 +83,39 @@ def strict_bool(name: str, value: Any) -> bool:
     if isinstance(value, bool | np.bool_):
         return bool(value)
     raise EchocalValueError(f"{name} must be true or false; got {value!r}")
+
+
+def _number(name: str, value: Any) -> Any:
+    """``value`` unless it is text or a boolean, which a number option refuses (``float``
+    would take ``"0.5"``, and ``True`` as 1)."""
+    if isinstance(value, str | bytes | bool | np.bool_):
+        raise EchocalValueError(f"{name} must be a number; got {value!r}")
+    return value
+
+
+def finite_float(name: str, value: Any) -> float:
+    """:func:`echocal._validate.finite_float` that refuses text and booleans."""
+    return _validate.finite_float(name, _number(name, value))
+
+
+def positive_float(name: str, value: Any) -> float:
+    """:func:`echocal._validate.positive_float` that refuses text and booleans."""
+    return _validate.positive_float(name, _number(name, value))
+
+
+def nonnegative_float(name: str, value: Any) -> float:
+    """:func:`echocal._validate.nonnegative_float` that refuses text and booleans."""
+    return _validate.nonnegative_float(name, _number(name, value))
+
+
+def positive_int(name: str, value: Any) -> int:
+    """:func:`echocal._validate.positive_int` (which already refuses text and booleans)."""
+    return _validate.positive_int(name, _number(name, value))
+
+
+def in_range(name: str, value: Any, low: float, high: float) -> float:
+    """:func:`echocal._validate.in_range` that refuses text and booleans."""
+    return _validate.in_range(name, _number(name, value), low, high)
 
 
 def _hints(cls: type) -> dict[str, Any]:

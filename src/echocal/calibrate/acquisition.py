@@ -43,11 +43,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import finite_float, nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import (
     accepted_options,
     check_option_types,
+    finite_float,
+    nonnegative_float,
+    positive_float,
+    positive_int,
     strict_bool,
     suggestion,
 )

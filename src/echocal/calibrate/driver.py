@@ -12,12 +12,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike, as_generator
-from echocal._validate import nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import (
     accepted_options,
     check_option_types,
+    nonnegative_float,
     option_defaults,
+    positive_float,
+    positive_int,
     suggestion,
 )
 from echocal.calibrate.acquisition import Acquisition

@@ -20,8 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import in_range, positive_float
 from echocal.calibrate._fd import FloatArray, cap_step, cross_gradient, cross_points
+from echocal.calibrate._options import in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 

@@ -14,8 +14,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import positive_float
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate._options import positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 from echocal.errors import EchocalValueError

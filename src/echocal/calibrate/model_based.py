@@ -40,8 +40,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import finite_float, in_range, one_of, positive_float
+from echocal._validate import one_of
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import one_of, positive_float
+from echocal._validate import one_of
 from echocal.calibrate._fd import (
     FloatArray,
     cap_step,
@@ -29,6 +29,7 @@ from echocal.calibrate._fd import (
     nine_points,
     trapezoid_rise,
 )
+from echocal.calibrate._options import positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 

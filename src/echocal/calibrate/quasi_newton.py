@@ -23,7 +23,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import positive_float
 from echocal.calibrate._fd import (
     FloatArray,
     cap_step,
@@ -31,6 +30,7 @@ from echocal.calibrate._fd import (
     cross_points,
     trapezoid_rise,
 )
+from echocal.calibrate._options import positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 

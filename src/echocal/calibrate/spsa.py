@@ -19,8 +19,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
-from echocal._validate import nonnegative_float, positive_float, positive_int
 from echocal.calibrate._fd import FloatArray, cap_step
+from echocal.calibrate._options import nonnegative_float, positive_float, positive_int
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import register_method
 
