@@ -91,3 +91,20 @@ def test_version_flag_and_info_print_real_versions():
     assert result.exit_code == 0 and result.output.strip() == echocal.__version__
     info = CliRunner().invoke(app, ["info"])
     assert info.exit_code == 0 and f"numpy      {version('numpy')}" in info.output
+
+
+def test_usage_errors_are_one_line_with_exit_2(capsys, monkeypatch):
+    import sys
+
+    import pytest
+
+    from echocal.cli import app
+    from echocal.cli._common import run_cli
+
+    monkeypatch.setattr(sys, "argv", ["echocal", "simulate", "--pos", "1"])
+    with pytest.raises(SystemExit) as exit_info:
+        run_cli(app)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "No such option: --pos" in err
+    assert "echocal simulate --help" in err  # where to look

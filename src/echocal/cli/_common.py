@@ -16,23 +16,40 @@ from echocal.geometry import Pose
 from echocal.io import atomic_write_text, json_ready
 from echocal.units import parse_angle, parse_length
 
+try:  # recent typer vendors click as typer._click; older ones use click itself
+    from typer._click import exceptions as click_exceptions
+except ImportError:  # pragma: no cover - depends on the installed typer
+    from click import exceptions as click_exceptions  # type: ignore[no-redef]
+_NO_ARGS_IS_HELP = getattr(click_exceptions, "NoArgsIsHelpError", ())  # click >= 8.2
+
 console = Console(stderr=True)
 """Console for human-oriented messages (stderr, so stdout stays clean for --json)."""
 
 
 def run_cli(app: typer.Typer) -> None:
-    """Run ``app``; echocal errors (and paths the operating system refuses) become one red
-    line and exit code 2, not a traceback.
-
-    Usage errors (bad options) are reported by typer itself, also with exit code 2.
+    """Run ``app``; usage errors (a misspelt option, a missing value), echocal errors and
+    paths the operating system refuses become one red line and exit code 2, not a traceback
+    or a box; Ctrl-C ends with "aborted" and exit code 1.
     """
     try:
-        app()
+        code = app(standalone_mode=False)
+    except _NO_ARGS_IS_HELP as exc:
+        exc.show()  # a bare group (`echocal`, `echocal sweep`): its help
+        sys.exit(exc.exit_code)
+    except click_exceptions.UsageError as exc:
+        hint = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
+        _fail(exc.format_message() + hint)
+    except click_exceptions.ClickException as exc:  # e.g. a file the parser could not open
+        _fail(exc.format_message())
+    except typer.Abort:  # Ctrl-C
+        console.print("aborted", highlight=False)
+        sys.exit(1)
     except EchocalError as exc:
         _fail(str(exc))
     except OSError as exc:  # a path the operating system refused (permissions, not a dir, ...)
         where = f" {exc.filename}" if exc.filename else ""
         _fail(f"cannot access{where}: {exc.strerror or exc}; check the path and its permissions")
+    sys.exit(code if isinstance(code, int) else 0)
 
 
 def _fail(message: str) -> None:
