@@ -301,7 +301,7 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         optimum_value=1.0,
         title=f"{label}: pseudo-energy of the estimate",
     )
-    points = np.vstack([result.iterates, evaluation.truth[None, :]])
+    points = np.vstack([result.iterates, result.points, evaluation.truth[None, :]])
     span = max(3.0, 1.3 * float(np.max(np.abs(points - evaluation.truth))))
     centre = evaluation.truth
     cmap = cost_map(
@@ -310,14 +310,16 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         parameterization=result.parameterization,
         a_range=(centre[0] - span, centre[0] + span),
         b_range=(centre[1] - span, centre[1] + span),
-        n=41,
+        n=61,
     )
     path = path_figure(
         cmap,
         {label: result},
         x0=result.iterates[0],
         truth=evaluation.truth,
-        title=f"{label}: path over the cost map",
+        title=f"{label}: path over the cost map (every measured pose in grey)",
+        db_floor=-40.0,
+        show_measurements=True,
     )
     return {
         name: str(save_figure(fig, out / f"{name}.png", formats=("png",), dpi=110)[0])
