@@ -125,7 +125,7 @@ def test_unknown_pulse_is_a_clean_error(tmp_path):
 @pytest.mark.parametrize(
     ("args", "field"),
     [
-        (["gabor", "--fc", "0MHz"], "center_frequency"),
+        (["gabor", "--fc", "0MHz"], "--fc"),
         (["gabor", "--bandwidth", "-5%"], "bandwidth"),
         (["ricker", "--window", "hann"], "--window"),
         (["gabor", "--fc", "5 mm"], "--fc"),

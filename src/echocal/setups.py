@@ -25,16 +25,34 @@ import importlib.resources
 import json
 import math
 import tomllib
+import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
+import numpy as np
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+)
 
-from echocal.constants import SOUND_SPEED_WATER
+from echocal.constants import DEFAULT_CENTER_FREQUENCY, SOUND_SPEED_WATER
+from echocal.echo import reflection_model_names
 from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownNameError
-from echocal.measurement.limits import PositionerLimits
-from echocal.measurement.virtual import ReceiverSettings, VirtualSetup
-from echocal.signal import RecordingWindow, make_pulse
+from echocal.measurement.limits import PositionerLimits, limit_problems
+from echocal.measurement.virtual import (
+    MAX_SIMULATED_SAMPLES,
+    ReceiverSettings,
+    VirtualSetup,
+    check_sample_count,
+)
+from echocal.signal import Pulse, RecordingWindow, make_pulse, pulse_names
+from echocal.signal.pulses import parse_bandwidth, plausible_bandwidth, pulse_options
+from echocal.signal.window import check_window
 from echocal.specimen import (
     Cylinder,
     FinitePlane,
@@ -44,39 +62,73 @@ from echocal.specimen import (
     builtin_specimen,
     specimen_names,
 )
-from echocal.transducer import Transducer, make_directivity
-from echocal.units import parse_quantity
+from echocal.transducer import Transducer, directivity_names, make_directivity
+from echocal.units import (
+    SAMPLING_RANGE,
+    parse_quantity,
+    plausible_frequency,
+    plausible_speed,
+)
 
 __all__ = [
     "SetupConfig",
     "builtin_setup_names",
     "load_setup",
     "load_setup_config",
+    "load_setup_with_config",
     "setup_with_overrides",
     "validate_setup_file",
 ]
 
 
 # ---------------------------------------------------------------- unit-aware fields
-def _quantity(kind: str, plausible_max: float | None = None):
+def _quantity(
+    kind: str,
+    plausible_max: float | None = None,
+    *,
+    allow_infinite: bool = False,
+    check: Callable[[str, float], float] | None = None,
+):
+    """A BeforeValidator: text with a unit → SI; implausible numbers refused with a hint.
+
+    ``plausible_max`` [SI] bounds bare numbers only (``12.7`` for a probe width was meant in
+    mm; ``"2 m"`` is deliberate); ``check(field, value)`` — a plausible range, e.g. of
+    frequencies — applies to every finite value.  Infinite values are left to the field
+    (refused unless it allows them).
+    """
+
     def parse(value: Any) -> Any:
+        bare = not isinstance(value, str)
         if isinstance(value, str):
-            return parse_quantity("value", value, kind, _SI_UNIT[kind])
-        if (
-            plausible_max is not None
-            and isinstance(value, int | float)
-            and not isinstance(value, bool)
-            and abs(value) > plausible_max
-        ):
+            value = parse_quantity(
+                "value", value, kind, _SI_UNIT[kind], allow_infinite=allow_infinite
+            )
+        elif isinstance(value, bool) or not isinstance(value, int | float):
+            return value  # the field reports the wrong type
+        if not math.isfinite(value):
+            return value
+        if bare and plausible_max is not None and abs(value) > plausible_max:
             raise ValueError(
                 f"{value:g} {_SI_UNIT[kind]} is implausible here; numbers are SI "
                 f"({_SI_UNIT[kind]}) — did you mean '{value:g} mm'?"
                 if kind == "length"
                 else f"{value:g} is implausible here; give a unit, e.g. '{value:g} MHz'"
             )
+        if check is not None:
+            check("", value)
         return value
 
     return BeforeValidator(parse)
+
+
+def _not_nan(value: float) -> float:
+    if math.isnan(value):
+        raise ValueError("must be a number or ±inf (unlimited), not NaN")
+    return value
+
+
+def _sampling_rate(field: str, value: float) -> float:
+    return plausible_frequency(field, value, plausible=SAMPLING_RANGE, what="a sampling rate")
 
 
 _SI_UNIT = {"length": "m", "time": "s", "frequency": "Hz", "speed": "m/s", "angle": "deg"}
@@ -85,10 +137,22 @@ ProbeLength = Annotated[
     float, _quantity("length", plausible_max=1.0), Field(gt=0, allow_inf_nan=False)
 ]
 Position = Annotated[float, _quantity("length", plausible_max=10.0), Field(allow_inf_nan=False)]
+LimitBound = Annotated[
+    float, _quantity("length", plausible_max=10.0, allow_infinite=True), AfterValidator(_not_nan)
+]
+"""A positioner limit [m]: ``inf``/``-inf`` (bare or as text) means unlimited."""
 Size = Annotated[float, _quantity("length", plausible_max=10.0), Field(gt=0, allow_inf_nan=False)]
-Frequency = Annotated[float, _quantity("frequency"), Field(gt=0, allow_inf_nan=False)]
+Frequency = Annotated[
+    float, _quantity("frequency", check=plausible_frequency), Field(gt=0, allow_inf_nan=False)
+]
+"""An ultrasonic frequency [Hz], 20 kHz to 1 GHz (5 Hz for 5 MHz is refused with a hint)."""
+SamplingRate = Annotated[
+    float, _quantity("frequency", check=_sampling_rate), Field(gt=0, allow_inf_nan=False)
+]
 Time = Annotated[float, _quantity("time", plausible_max=1.0), Field(allow_inf_nan=False)]
-Speed = Annotated[float, _quantity("speed"), Field(gt=0, allow_inf_nan=False)]
+Speed = Annotated[
+    float, _quantity("speed", check=plausible_speed), Field(gt=0, allow_inf_nan=False)
+]
 Angle = Annotated[float, _quantity("angle"), Field(allow_inf_nan=False)]
 Point = tuple[Position, Position, Position]
 
@@ -98,7 +162,7 @@ class _Model(BaseModel):
 
 
 class MediumConfig(_Model):
-    """The coupling medium."""
+    """The coupling medium (sound speed 100 to 20 000 m/s)."""
 
     sound_speed: Speed = SOUND_SPEED_WATER
 
@@ -167,9 +231,9 @@ class PulseConfig(BaseModel):
 class WindowConfig(_Model):
     """The receiver's recording window."""
 
-    fs: Frequency = 100e6
+    fs: SamplingRate = 100e6
     start: Time = 0.0
-    n_samples: int = Field(default=4096, ge=16, le=1 << 22)
+    n_samples: int = Field(default=4096, ge=16, le=MAX_SIMULATED_SAMPLES)
 
 
 def _none_word(value: Any) -> Any:
@@ -183,8 +247,10 @@ class NoiseConfig(_Model):
     snr_db: Annotated[float | None, BeforeValidator(_none_word)] = Field(
         default=30.0, allow_inf_nan=False
     )
-    adc_bits: int | None = Field(default=None, ge=1, le=32)
-    full_scale: float | None = Field(default=None, gt=0)
+    adc_bits: Annotated[int | None, BeforeValidator(_none_word)] = Field(default=None, ge=1, le=32)
+    full_scale: Annotated[float | None, BeforeValidator(_none_word)] = Field(
+        default=None, gt=0, allow_inf_nan=False
+    )
 
 
 class EchoConfig(_Model):
@@ -195,12 +261,16 @@ class EchoConfig(_Model):
 
 
 class PositionerConfig(_Model):
-    """Reference position (for the SNR) and the positioner's limits."""
+    """Reference position (for the SNR) and the positioner's limits.
+
+    Position limits [m] may be infinite (``inf``, ``-inf`` or ``"inf"``: unlimited); angle
+    limits [deg] must lie within [-360, 360] (azimuth) and [-90, 90] (co-elevation).
+    """
 
     reference_position: Point = (0.0, 0.0, 0.02)
-    x: tuple[Position, Position] = (-math.inf, math.inf)
-    y: tuple[Position, Position] = (-math.inf, math.inf)
-    z: tuple[Position, Position] = (-math.inf, math.inf)
+    x: tuple[LimitBound, LimitBound] = (-math.inf, math.inf)
+    y: tuple[LimitBound, LimitBound] = (-math.inf, math.inf)
+    z: tuple[LimitBound, LimitBound] = (-math.inf, math.inf)
     azimuth: tuple[Angle, Angle] = (-180.0, 180.0)
     coelevation: tuple[Angle, Angle] = (-60.0, 60.0)
 
@@ -222,14 +292,83 @@ class SetupConfig(_Model):
 
 
 # ---------------------------------------------------------------- building
-def _pulse_params(config: PulseConfig, base_dir: Path) -> dict[str, Any]:
+# Each part of a setup is built and checked on its own, so that one run reports every
+# problem; a check that needs another part (the transducer's piston needs the pulse's
+# frequency, the reference echo needs everything) runs only when that part is valid.
+
+_PULSE_KINDS = {
+    "center_frequency": "frequency",
+    "fs": "frequency",
+    "phase": "angle",
+    "length": "time",
+    "start_time": "time",
+}
+"""Unit kind of the pulse options that carry one (the rest: numbers, names, paths)."""
+
+
+class _FileProblem(str):
+    """A problem with a file the setup refers to (mesh, pulse samples): a
+    :class:`~echocal.errors.DataFileError` when it is the only kind of problem."""
+
+
+def _problem(field: str, exc: Exception, options: tuple[str, ...] = ()) -> str:
+    """``field: message`` of an error; an option named first moves into the field path:
+    ``pulse`` + ``"phase must be finite"`` → ``pulse.phase: must be finite``."""
+    message = str(exc)
+    kind = _FileProblem if isinstance(exc, DataFileError) else str
+    for option in options:
+        for sep in (": ", " "):
+            if message.startswith(option + sep):
+                return kind(f"{field}.{option}: {message[len(option) + len(sep) :]}")
+    return kind(f"{field}: {message}")
+
+
+def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dict, list[str]]:
+    """The pulse ``name``'s keyword parameters from the ``[pulse]`` table, in SI, and problems."""
+    options = pulse_options(name)
     params: dict[str, Any] = {}
-    for key, value in (config.model_extra or {}).items():
-        if key == "file":  # a sampled pulse's file: relative to the setup file, as a mesh
-            params[key] = base_dir / Path(str(value))  # (an absolute path stays as it is)
+    problems = []
+    for key, value in extra.items():
+        field = f"pulse.{key}"
+        if options is not None and key not in options:
+            problems.append(f"{field}: unknown option for {name}; valid: {', '.join(options)}")
             continue
-        params[key] = _parse_any(f"pulse.{key}", value) if isinstance(value, str) else value
-    return params
+        try:
+            if key == "file":  # relative to the setup file, as a mesh (absolute stays)
+                params[key] = base_dir / Path(str(value))
+            elif key == "bandwidth":
+                continue  # after center_frequency: a percentage may refer to it
+            elif key in _PULSE_KINDS and not isinstance(value, bool | list):
+                kind = _PULSE_KINDS[key]
+                number = parse_quantity(field, value, kind, _SI_UNIT[kind])
+                if key == "center_frequency":
+                    plausible_frequency(field, number)
+                elif key == "fs":
+                    _sampling_rate(field, number)
+                params[key] = number
+            else:
+                params[key] = _parse_any(field, value) if isinstance(value, str) else value
+        except EchocalError as exc:
+            problems.append(str(exc))
+    if "bandwidth" in extra and (options is None or "bandwidth" in options):
+        value = extra["bandwidth"]
+        fc = params.get("center_frequency", DEFAULT_CENTER_FREQUENCY)
+        try:
+            bandwidth = parse_bandwidth(name, value, fc, field="pulse.bandwidth")
+            if isinstance(bandwidth, float):
+                lobes = params.get("lobes", 4)
+                plausible_bandwidth(
+                    name,
+                    bandwidth,
+                    fc,
+                    field="pulse.bandwidth",
+                    bare=isinstance(value, int | float),
+                    lobes=lobes if isinstance(lobes, int) and lobes > 0 else 4,
+                )
+            params["bandwidth"] = bandwidth
+        except EchocalError as exc:
+            problems.append(str(exc))
+    return params, problems
 
 
 def _parse_any(field: str, text: str) -> Any:
@@ -242,44 +381,95 @@ def _parse_any(field: str, text: str) -> Any:
     return text
 
 
-def _build_specimen(config: SpecimenConfig, base_dir: Path) -> Specimen:
+def _build_pulse(config: PulseConfig, base_dir: Path) -> tuple[Pulse | None, list[str]]:
+    if config.name not in pulse_names():
+        return None, [
+            f"pulse.name: unknown pulse {config.name!r}; choose one of: {', '.join(pulse_names())}"
+        ]
+    params, problems = _pulse_params(config.name, dict(config.model_extra or {}), base_dir)
+    if problems:
+        return None, problems
+    try:
+        return make_pulse(config.name, **params), []
+    except EchocalError as exc:
+        return None, [_problem("pulse", exc, pulse_options(config.name) or ())]
+
+
+def _ignored(field: str, reason: str) -> None:
+    warnings.warn(f"{field} is ignored: {reason}", UserWarning, stacklevel=4)
+
+
+def _build_specimen(config: SpecimenConfig, base_dir: Path) -> tuple[Specimen | None, list[str]]:
     given = [k for k in ("builtin", "shapes", "mesh") if getattr(config, k) is not None]
     if len(given) != 1:
-        raise ConfigError(
+        return None, [
             "specimen: give exactly one of builtin, shapes or mesh; "
             f"got {', '.join(given) if given else 'none'}"
-        )
+        ]
+    if "mesh_scale" in config.model_fields_set and config.mesh is None:
+        _ignored("specimen.mesh_scale", f"it scales a mesh file; this specimen has {given[0]}")
     if config.builtin is not None:
         if config.builtin not in specimen_names():
-            raise ConfigError(
+            return None, [
                 f"specimen.builtin: unknown specimen {config.builtin!r}; "
                 f"choose one of: {', '.join(specimen_names())}"
-            )
-        return builtin_specimen(config.builtin)
+            ]
+        return builtin_specimen(config.builtin), []
     if config.mesh is not None:
         path = Path(config.mesh)
         path = path if path.is_absolute() else base_dir / path
         if not path.is_file():
-            raise DataFileError(f"specimen.mesh: mesh file not found: {path}")
-        mesh = TriangleMesh.load(path, scale=config.mesh_scale)
-        return Specimen([mesh], name=config.name or path.stem)
-    shapes = []
+            return None, [_FileProblem(f"specimen.mesh: mesh file not found: {path}")]
+        try:
+            mesh = TriangleMesh.load(path, scale=config.mesh_scale)
+        except EchocalError as exc:
+            return None, [_problem("specimen.mesh", exc)]
+        return Specimen([mesh], name=config.name or path.stem), []
+    shapes, problems = [], []
+    if not config.shapes:
+        problems.append("specimen.shapes: at least one shape is needed")
     for i, shape in enumerate(config.shapes or []):
+        where = f"specimen.shapes.{i}"
+        used = _SHAPE_FIELDS[shape.kind]
+        for key in sorted(shape.model_fields_set - set(used) - {"kind", "center", "name"}):
+            _ignored(f"{where}.{key}", f"a {shape.kind} takes {', '.join(used)}")
         kwargs: dict[str, Any] = {"center": shape.center, "name": shape.name or f"{shape.kind}{i}"}
-        for key in _SHAPE_FIELDS[shape.kind]:
-            value = getattr(shape, key)
-            if value is None:
-                raise ConfigError(f"specimen.shapes.{i}.{key}: required for a {shape.kind}")
-            kwargs[key] = value
+        missing = [key for key in used if getattr(shape, key) is None]
+        problems += [f"{where}.{key}: required for a {shape.kind}" for key in missing]
+        if missing:
+            continue
+        kwargs.update({key: getattr(shape, key) for key in used})
         cls = {"plane": FinitePlane, "sphere": Sphere, "cylinder": Cylinder}[shape.kind]
-        shapes.append(cls(**kwargs))
-    if not shapes:
-        raise ConfigError("specimen.shapes: at least one shape is needed")
-    return Specimen(shapes, name=config.name or "custom")
+        try:
+            shapes.append(cls(**kwargs))
+        except EchocalError as exc:
+            problems.append(f"{where}: {exc}")
+    if problems:
+        return None, problems
+    return Specimen(shapes, name=config.name or "custom"), []
 
 
-def _build_transducer(config: TransducerConfig, pulse_frequency: float, c0: float) -> Transducer:
+_DIRECTIVITY_PARAMS = {
+    "none": (),
+    "gaussian": ("opening_angle",),
+    "piston": ("radius", "frequency"),
+}
+
+
+def _build_transducer(
+    config: TransducerConfig, pulse_frequency: float, c0: float
+) -> tuple[Transducer | None, list[str]]:
     d = config.directivity
+    where = "transducer.directivity"
+    if d.model not in directivity_names():
+        return None, [
+            f"{where}.model: unknown directivity model {d.model!r}; "
+            f"choose one of: {', '.join(directivity_names())}"
+        ]
+    used = _DIRECTIVITY_PARAMS.get(d.model, ())
+    for key in sorted(d.model_fields_set - set(used) - {"model"}):
+        takes = ", ".join(used) if used else "no parameters"
+        _ignored(f"{where}.{key}", f"the {d.model} directivity takes {takes}")
     params: dict[str, float] = {}
     if d.model == "gaussian" and d.opening_angle is not None:
         params["opening_angle"] = d.opening_angle
@@ -289,51 +479,139 @@ def _build_transducer(config: TransducerConfig, pulse_frequency: float, c0: floa
             "frequency": d.frequency if d.frequency is not None else pulse_frequency,
             "sound_speed": c0,
         }
-    return Transducer(
-        width=config.width,
-        height=config.height if config.height is not None else config.width,
-        n_h=config.n_h,
-        n_v=config.n_v if config.n_v is not None else config.n_h,
-        focal_length=config.focal_length,
-        aperture=config.aperture,
-        directivity=make_directivity(d.model, **params),
+    try:
+        directivity = make_directivity(d.model, **params)
+    except EchocalError as exc:
+        return None, [_problem(where, exc, ("directivity",))]
+    try:
+        return Transducer(
+            width=config.width,
+            height=config.height if config.height is not None else config.width,
+            n_h=config.n_h,
+            n_v=config.n_v if config.n_v is not None else config.n_h,
+            focal_length=config.focal_length,
+            aperture=config.aperture,
+            directivity=directivity,
+        ), []
+    except EchocalError as exc:
+        return None, [str(exc)]
+
+
+def _build_parts(
+    config: SetupConfig, base_dir: Path, *, invalid: frozenset[str] = frozenset()
+) -> tuple[dict[str, Any], list[str]]:
+    """Every part of the setup that can be built, and every problem found on the way.
+
+    ``invalid`` names the sections whose schema already failed: they (and the checks
+    that need them) are skipped, the others are still checked.
+    """
+    parts: dict[str, Any] = {}
+    problems: list[str] = []
+
+    def run(section: str, build: Callable[[], tuple[Any, list[str]]]) -> None:
+        if section in invalid:
+            return
+        part, found = build()
+        problems.extend(found)
+        if part is not None and not found:
+            parts[section] = part
+
+    c0 = config.medium.sound_speed
+    run("pulse", lambda: _build_pulse(config.pulse, base_dir))
+    pulse = parts.get("pulse")
+    # the piston's default frequency is the pulse's; a broken pulse leaves the default
+    fc = pulse.center_frequency if pulse is not None else DEFAULT_CENTER_FREQUENCY
+    run("specimen", lambda: _build_specimen(config.specimen, base_dir))
+    run("transducer", lambda: _build_transducer(config.transducer, fc, c0))
+    run("window", lambda: _wrap("window", lambda: RecordingWindow(**config.window.model_dump())))
+    run(
+        "noise",
+        lambda: _wrap("noise", lambda: ReceiverSettings(**config.noise.model_dump())),
     )
+    run("echo", lambda: _check_echo(config.echo))
+    run("positioner", lambda: _build_limits(config.positioner))
+    if "pulse" in parts and "window" in parts:
+        for check in (check_sample_count, lambda p, w: check_window(w, p)):
+            try:
+                check(parts["pulse"], parts["window"])
+            except EchocalError as exc:
+                problems.append(_problem("window", exc, ("fs",)))
+                parts.pop("window")
+                break
+    if "specimen" in parts and "positioner" in parts:
+        problems.extend(_reference_problems(parts["specimen"], config.positioner))
+    return parts, problems
+
+
+def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
+    try:
+        return build(), []
+    except EchocalError as exc:
+        message = str(exc)
+        return None, [message if message.startswith(field + ".") else f"{field}: {message}"]
+
+
+def _check_echo(config: EchoConfig) -> tuple[EchoConfig | None, list[str]]:
+    if config.reflection not in reflection_model_names():
+        return None, [
+            f"echo.reflection: unknown reflection model {config.reflection!r}; "
+            f"choose one of: {', '.join(reflection_model_names())}"
+        ]
+    return config, []
+
+
+def _build_limits(config: PositionerConfig) -> tuple[PositionerLimits | None, list[str]]:
+    axes = {n: getattr(config, n) for n in ("x", "y", "z", "azimuth", "coelevation")}
+    problems = [f"positioner.{p}" for p in limit_problems(**axes)]
+    return (None, problems) if problems else (PositionerLimits(**axes), [])
+
+
+def _reference_problems(specimen: Specimen, config: PositionerConfig) -> list[str]:
+    """The reference position must be outside every closed shape and above the part."""
+    ref = np.asarray(config.reference_position, dtype=np.float64)
+    where = "positioner.reference_position"
+    shown = ", ".join(f"{1e3 * v:g}" for v in ref)
+    inside = int(specimen.containing(ref[None])[0])
+    if inside >= 0:
+        shape = specimen[inside]
+        return [
+            f"{where}: ({shown}) mm is inside {shape.kind} {shape.name!r} of specimen "
+            f"{specimen.name!r}; the probe must be outside the part — move it above the surface"
+        ]
+    if not bool(specimen.surface_below(ref[0], ref[1]).hit):
+        return [
+            f"{where}: ({shown}) mm is not above the specimen {specimen.name!r}; "
+            "move it over the part"
+        ]
+    return []
 
 
 def build_setup(config: SetupConfig, *, base_dir: Path | None = None, seed: int | None = None):
     """A :class:`~echocal.measurement.virtual.VirtualSetup` from a validated config.
 
-    ``seed`` overrides the file's seed (noise reproducibility).
+    ``seed`` overrides the file's seed (noise reproducibility).  Raises
+    :class:`~echocal.errors.ConfigError` listing every problem with its field path.
     """
     base_dir = Path.cwd() if base_dir is None else base_dir
-    try:
-        pulse = make_pulse(config.pulse.name, **_pulse_params(config.pulse, base_dir))
-    except UnknownNameError as exc:
-        raise ConfigError(f"pulse.name: {exc}") from None
-    except EchocalError as exc:
-        raise ConfigError(f"pulse: {exc}") from None
-    c0 = config.medium.sound_speed
-    p = config.positioner
+    parts, problems = _build_parts(config, base_dir)
+    if problems:
+        _raise_problems(config.name, problems)
+    return _assemble(config, parts, seed)
+
+
+def _assemble(config: SetupConfig, parts: dict[str, Any], seed: int | None) -> VirtualSetup:
     try:
         return VirtualSetup(
-            specimen=_build_specimen(config.specimen, base_dir),
-            transducer=_build_transducer(config.transducer, pulse.center_frequency, c0),
-            pulse=pulse,
-            window=RecordingWindow(
-                fs=config.window.fs, start=config.window.start, n_samples=config.window.n_samples
-            ),
-            receiver=ReceiverSettings(
-                snr_db=config.noise.snr_db,
-                adc_bits=config.noise.adc_bits,
-                full_scale=config.noise.full_scale,
-            ),
-            reference_position=p.reference_position,
-            sound_speed=c0,
+            specimen=parts["specimen"],
+            transducer=parts["transducer"],
+            pulse=parts["pulse"],
+            window=parts["window"],
+            receiver=parts["noise"],
+            reference_position=config.positioner.reference_position,
+            sound_speed=config.medium.sound_speed,
             reflection=config.echo.reflection,
             synthesis=config.echo.synthesis,
-            limits=PositionerLimits(
-                x=p.x, y=p.y, z=p.z, azimuth=p.azimuth, coelevation=p.coelevation
-            ),
+            limits=parts["positioner"],
             rng=seed if seed is not None else config.seed,
             name=config.name,
         )
@@ -360,7 +638,12 @@ def _format_errors(
         message = item["msg"]
         if item["type"] == "extra_forbidden":
             message = f"unknown key (check the spelling; {hint})"
-        elif "input" in item and item["type"] not in ("missing",):
+        elif (
+            "input" in item
+            and item["type"] not in ("missing",)
+            and "got " not in message  # our own messages quote the value already
+            and "implausible" not in message
+        ):
             message = f"{message}, got {item['input']!r}"
         message = message.replace("Value error, ", "").replace("Input should be", "must be")
         lines.append(f"{where}: {message}")
@@ -405,10 +688,61 @@ def load_setup_config(name_or_path: str | Path) -> tuple[SetupConfig, Path]:
         ) from None
 
 
+def _check(
+    name_or_path: str | Path,
+) -> tuple[SetupConfig | None, Path, dict[str, Any], list[str]]:
+    """Config, folder, built parts and EVERY problem of a setup (schema and build together).
+
+    Sections whose schema fails are left out of the build checks (and so are the checks
+    needing them); all other sections are still built and checked.
+    """
+    raw, base_dir = _resolve(name_or_path)
+    try:
+        config = SetupConfig.model_validate(raw)
+    except ValidationError as exc:
+        problems = _format_errors(exc)
+        invalid = frozenset(str(item["loc"][0]) for item in exc.errors() if item["loc"])
+    else:
+        return _build_checked(config, base_dir, frozenset())
+    try:
+        config = SetupConfig.model_validate({k: v for k, v in raw.items() if k not in invalid})
+    except ValidationError:  # a top-level problem the schema could not pin to a key
+        return None, base_dir, {}, problems
+    _, _, parts, found = _build_checked(config, base_dir, invalid)
+    return config, base_dir, parts, problems + found
+
+
+def _build_checked(
+    config: SetupConfig, base_dir: Path, invalid: frozenset[str]
+) -> tuple[SetupConfig, Path, dict[str, Any], list[str]]:
+    parts, problems = _build_parts(config, base_dir, invalid=invalid)
+    return config, base_dir, parts, problems
+
+
+def _raise_problems(name_or_path: str | Path, problems: list[str]) -> None:
+    only_files = problems and all(isinstance(p, _FileProblem) for p in problems)
+    raise (DataFileError if only_files else ConfigError)(
+        f"{name_or_path}: {len(problems)} problem(s):\n  " + "\n  ".join(problems)
+    )
+
+
 def load_setup(name_or_path: str | Path, *, seed: int | None = None) -> VirtualSetup:
-    """The :class:`~echocal.measurement.virtual.VirtualSetup` of a built-in name or TOML file."""
-    config, base_dir = load_setup_config(name_or_path)
-    return build_setup(config, base_dir=base_dir, seed=seed)
+    """The :class:`~echocal.measurement.virtual.VirtualSetup` of a built-in name or TOML file.
+
+    Raises :class:`~echocal.errors.ConfigError` listing every problem with its field path.
+    """
+    return load_setup_with_config(name_or_path, seed=seed)[2]
+
+
+def load_setup_with_config(
+    name_or_path: str | Path, *, seed: int | None = None
+) -> tuple[SetupConfig, Path, VirtualSetup]:
+    """:func:`load_setup`, also returning the validated config and the setup's folder."""
+    config, base_dir, parts, problems = _check(name_or_path)
+    if problems or config is None:
+        _raise_problems(name_or_path, problems)
+    assert config is not None
+    return config, base_dir, _assemble(config, parts, seed)
 
 
 _KEEP: Any = object()
@@ -443,14 +777,17 @@ def setup_with_overrides(
 def validate_setup_file(name_or_path: str | Path) -> list[str]:
     """Every problem of a setup file, one line each with its field path (empty if valid).
 
-    Schema problems are all reported together; if the schema is valid the setup
-    is also built (meshes loaded, pulse made, reference echo simulated) so that
-    problems only visible then are reported too.
+    Schema problems and build problems (unknown names, pulse parameters, positioner
+    limits, a reference position inside the part, ...) are all reported together; a
+    check that needs another, broken part is skipped.  If there is no problem the
+    reference echo is simulated too, so that an empty recording window is reported.
+    Warnings (a setting that is ignored) are issued with :func:`warnings.warn`.
     """
     try:
-        config, base_dir = load_setup_config(name_or_path)
-        setup = build_setup(config, base_dir=base_dir)
-        _ = setup.noise_sigma  # simulates the reference echo: catches an empty window
+        config, _, parts, problems = _check(name_or_path)
+        if problems or config is None:
+            return problems
+        _ = _assemble(config, parts, None).noise_sigma  # simulates the reference echo
     except ConfigError as exc:
         lines = str(exc).splitlines()
         return [line.strip() for line in lines[1:]] if len(lines) > 1 else lines

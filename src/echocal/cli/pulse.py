@@ -9,7 +9,13 @@ import typer
 
 from echocal.cli._common import console, write_json
 from echocal.errors import EchocalError, EchocalValueError
-from echocal.units import parse_angle, parse_quantity
+from echocal.units import (
+    SAMPLING_RANGE,
+    format_frequency,
+    parse_angle,
+    parse_quantity,
+    plausible_frequency,
+)
 
 _OPTIONS_BY_PULSE = {
     "gabor": {"fc", "bandwidth", "alpha", "phase"},
@@ -20,22 +26,28 @@ _OPTIONS_BY_PULSE = {
 }
 
 
-def _bandwidth(text: str, name: str, fc: float) -> float:
+MAX_DRAWN_SAMPLES = 1_000_000
+"""Most samples ``echocal pulse`` draws at ``--fs`` over the pulse's support."""
+
+
+def _bandwidth(text: str, name: str, fc: float, lobes: int | None) -> float:
     """Gabor: fractional −6 dB bandwidth [%]; sinc: one-sided baseband B [Hz].
 
     ``60%`` or a bare number is a percentage of fc for gabor; a frequency (``3MHz``) is the
-    full −6 dB width for gabor and B for sinc.  For sinc, ``60%`` means 2B = 0.6·fc.
+    full −6 dB width for gabor and B for sinc.  For sinc, ``60%`` means 2B = 0.6·fc, and a
+    bare number is B in Hz — refused below 1 kHz with a hint (``--bandwidth 60``).
     """
-    text = text.strip()
-    if text.endswith("%"):
-        pct = parse_quantity("--bandwidth", text[:-1], "frequency", "Hz")
-        return pct if name != "sinc" else pct / 100.0 * fc / 2.0
-    if name == "sinc":
-        return parse_quantity("--bandwidth", text, "frequency", "Hz")
+    from echocal.signal.pulses import parse_bandwidth, plausible_bandwidth
+
+    value = parse_bandwidth(name, text, fc, field="--bandwidth")
     try:
-        return float(text)  # bare number: percent for gabor
+        float(text)
+        bare = True  # no unit, no %
     except ValueError:
-        return 100.0 * parse_quantity("--bandwidth", text, "frequency", "Hz") / fc
+        bare = False
+    return plausible_bandwidth(
+        name, value, fc, field="--bandwidth", bare=bare, lobes=lobes if lobes else 4
+    )
 
 
 def register(app: typer.Typer) -> None:
@@ -92,7 +104,7 @@ def _run(
     svg: bool,
 ) -> dict[str, Any]:
     from echocal._validate import lookup
-    from echocal.plots import save_figure
+    from echocal.plots import figure_formats, save_figure
     from echocal.plots.pulses import plot_pulse
     from echocal.signal import make_pulse, pulse_names
 
@@ -112,15 +124,19 @@ def _run(
                 f"--{key} does not apply to the {name} pulse; it takes "
                 + (", ".join(f"--{k}" for k in sorted(allowed)) or "no options")
             )
+    formats = figure_formats(out, ("svg",) if svg else ())  # before any work
     fs = parse_quantity("--fs", fs_text, "frequency", "Hz")
+    plausible_frequency("--fs", fs, plausible=SAMPLING_RANGE, what="a sampling rate")
     params: dict[str, Any] = {}
     if fc is not None:
-        params["center_frequency"] = parse_quantity("--fc", fc, "frequency", "Hz")
+        params["center_frequency"] = plausible_frequency(
+            "--fc", parse_quantity("--fc", fc, "frequency", "Hz")
+        )
     if bandwidth is not None:
         from echocal.constants import DEFAULT_CENTER_FREQUENCY
 
         params["bandwidth"] = _bandwidth(
-            bandwidth, name, params.get("center_frequency", DEFAULT_CENTER_FREQUENCY)
+            bandwidth, name, params.get("center_frequency", DEFAULT_CENTER_FREQUENCY), lobes
         )
     if alpha is not None:
         params["alpha"] = alpha
@@ -149,13 +165,16 @@ def _run(
             f"frequency ({pulse.highest_frequency / 1e6:.4g} MHz): sampling would alias",
             soft_wrap=True,
         )
+    drawn = 2.0 * pulse.support * fs
+    if drawn > MAX_DRAWN_SAMPLES:
+        raise EchocalValueError(
+            f"--fs {format_frequency(fs)} over the {name} pulse's support "
+            f"(±{pulse.support:.3g} s) would draw {drawn:.3g} samples; at most "
+            f"{MAX_DRAWN_SAMPLES} — check the pulse's options (--fc, --bandwidth, --alpha; "
+            "numbers without a unit are Hz) and --fs"
+        )
     fig = plot_pulse(pulse, fs=fs)
-    written = save_figure(
-        fig,
-        out,
-        formats=(out.suffix.lstrip(".") or "png",)
-        + (("svg",) if svg and out.suffix != ".svg" else ()),
-    )
+    written = save_figure(fig, out, formats=formats)
     summary = pulse.summary()
     summary.update(
         fs_hz=fs, aliased=aliased, figure=str(written[0]), files=[str(p) for p in written]

@@ -32,9 +32,10 @@ def register(app: typer.Typer) -> None:
         ),
     ) -> None:
         """Save a 3D view of specimen, transducer and a subsample of rays with their hits."""
-        from echocal.plots import save_figure
+        from echocal.plots import figure_formats, save_figure
         from echocal.plots.scene import scene_figure
 
+        formats = figure_formats(out)  # a format matplotlib cannot write: refused first
         virtual = resolve_setup(setup, specimen=specimen)
         poses = [parse_pose(p) for p in pose]
         for text, target in zip(pose, poses, strict=True):
@@ -45,6 +46,16 @@ def register(app: typer.Typer) -> None:
                     highlight=False,
                     soft_wrap=True,
                 )
+        inside = virtual.specimen.containing([p.position for p in poses])
+        for text, index in zip(pose, inside, strict=True):
+            if index >= 0:
+                shape = virtual.specimen[int(index)]
+                console.print(
+                    f"[yellow]warning:[/] --pose {text} is inside {shape.kind} {shape.name!r} "
+                    f"of the specimen; `echocal simulate` would refuse it",
+                    highlight=False,
+                    soft_wrap=True,
+                )
         fig = scene_figure(
             virtual.specimen,
             virtual.transducer,
@@ -52,5 +63,5 @@ def register(app: typer.Typer) -> None:
             n_rays=rays,
             reflection=virtual.reflection,
         )
-        written = save_figure(fig, out, formats=(out.suffix.lstrip(".") or "png",), dpi=130)
+        written = save_figure(fig, out, formats=formats, dpi=130)
         console.print(f"scene saved to [bold]{written[0]}[/]")

@@ -69,7 +69,7 @@ from echocal.specimen import Specimen
 from echocal.transducer import Transducer
 from echocal.units import format_frequency
 
-__all__ = ["MAX_SIMULATED_SAMPLES", "ReceiverSettings", "VirtualSetup"]
+__all__ = ["MAX_SIMULATED_SAMPLES", "ReceiverSettings", "VirtualSetup", "check_sample_count"]
 
 FloatArray = NDArray[np.float64]
 
@@ -107,6 +107,30 @@ _METRIC_ELEMENTS = 262144
 """Samples per metric call in :meth:`VirtualSetup.metric_values` (64 A-scans of 4096)."""
 
 
+def check_sample_count(pulse: Pulse, window: RecordingWindow) -> int:
+    """Samples one simulated A-scan needs: the window plus the pulse's support on both sides.
+
+    Raises
+    ------
+    EchocalValueError
+        when that exceeds :data:`MAX_SIMULATED_SAMPLES` (a pulse of seconds at MHz rates:
+        usually a frequency typed without its unit), naming the pulse and ``window.fs``.
+    """
+    fs = window.fs
+    needed = window.n_samples + 2 * math.ceil(min(pulse.support * fs, 1e300))
+    if needed > MAX_SIMULATED_SAMPLES:
+        fc = pulse.parameters().get("center_frequency")
+        given = f"center_frequency = {format_frequency(fc)}; " if fc is not None else ""
+        raise EchocalValueError(
+            f"pulse: an A-scan would need {needed:.4g} samples (window.n_samples "
+            f"{window.n_samples} + the {pulse.name} pulse's support ±{pulse.support:.3g} s on "
+            f"both sides at window.fs = {format_frequency(fs)}); at most "
+            f"{MAX_SIMULATED_SAMPLES} — check the pulse ({given}frequencies are in Hz) and "
+            "window.fs"
+        )
+    return needed
+
+
 @dataclass(frozen=True, kw_only=True)
 class ReceiverSettings:
     """How the virtual receiver degrades the ideal A-scan.
@@ -135,7 +159,7 @@ class ReceiverSettings:
                 self, "full_scale", positive_float("noise.full_scale", self.full_scale)
             )
         if self.adc_bits is not None and self.full_scale is None:
-            raise EchocalValueError("noise.adc_bits needs noise.full_scale (the ADC range)")
+            raise EchocalValueError("noise.adc_bits: needs noise.full_scale (the ADC range)")
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -183,25 +207,9 @@ class VirtualSetup(BaseSource):
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})
         object.__setattr__(self, "_has_closed_shapes", any(s.closed for s in self.specimen))
-        self._check_sample_count()
+        check_sample_count(self.pulse, self.window)
         self._check_outside(reference[None], what="reference_position")
         _raise_malloc_threshold()
-
-    def _check_sample_count(self) -> None:
-        """Refuse a pulse/window pair whose A-scans would need more than MAX_SIMULATED_SAMPLES."""
-        fs = self.window.fs
-        pad = math.ceil(min(self.pulse.support * fs, 1e300))
-        needed = self.window.n_samples + 2 * pad
-        if needed > MAX_SIMULATED_SAMPLES:
-            fc = self.pulse.parameters().get("center_frequency")
-            given = f"center_frequency = {format_frequency(fc)}, " if fc is not None else ""
-            raise EchocalValueError(
-                f"pulse: an A-scan would need {needed:.4g} samples (window.n_samples "
-                f"{self.window.n_samples} + the {self.pulse.name} pulse's support "
-                f"±{self.pulse.support:.3g} s at window.fs = {format_frequency(fs)}); at most "
-                f"{MAX_SIMULATED_SAMPLES} — check the pulse ({given}frequencies are in Hz) "
-                "and window.fs"
-            )
 
     def _check_outside(
         self, positions: FloatArray, *, poses: Sequence[Pose] | None = None, what: str = "pose"

@@ -12,9 +12,43 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from echocal.errors import EchocalValueError
 from echocal.io import atomic_path
 
-__all__ = ["plot_ascan", "plot_pulse", "save_figure"]
+__all__ = ["figure_formats", "plot_ascan", "plot_pulse", "save_figure", "supported_formats"]
+
+
+def supported_formats() -> tuple[str, ...]:
+    """File formats matplotlib can write here (``png``, ``svg``, ``pdf``, ...), sorted."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return tuple(sorted(FigureCanvasBase.get_supported_filetypes()))
+
+
+def _check_formats(formats: Iterable[str], option: str = "format") -> tuple[str, ...]:
+    supported = supported_formats()
+    out = []
+    for fmt in formats:
+        name = str(fmt).lstrip(".").lower()
+        if name not in supported:
+            raise EchocalValueError(
+                f"{option}: cannot write a figure as {name!r}; use one of "
+                f"{', '.join(supported)} (e.g. .png, .svg, .pdf)"
+            )
+        if name not in out:
+            out.append(name)
+    return tuple(out)
+
+
+def figure_formats(
+    path: str | os.PathLike[str], extra: Iterable[str] = (), *, option: str = "--out"
+) -> tuple[str, ...]:
+    """The formats to write for an output ``path``: its suffix (``png`` if it has none),
+    then ``extra``, without repeats — refused up front, before any work, if matplotlib
+    cannot write one (``--out result.txt``), naming ``option`` and the supported formats.
+    """
+    suffix = Path(path).suffix.lstrip(".")
+    return _check_formats((suffix or "png", *extra), option)
 
 
 def save_figure(
@@ -27,11 +61,12 @@ def save_figure(
     """Write ``fig`` once per format beside ``path`` (its suffix replaced), atomically.
 
     ``save_figure(fig, "out/pulse.png")`` writes ``out/pulse.png`` and ``out/pulse.svg``.
-    Returns the paths written.
+    Returns the paths written.  A format matplotlib cannot write is refused before any
+    file is written (:func:`figure_formats` checks a CLI's ``--out`` before the work).
     """
     base = Path(path)
     written = []
-    for fmt in formats:
+    for fmt in _check_formats(formats):
         target = base.with_suffix("." + fmt.lstrip("."))
         with atomic_path(target) as tmp:
             fig.savefig(tmp, format=fmt.lstrip("."), dpi=dpi, bbox_inches="tight")

@@ -35,6 +35,7 @@ from echocal.units import ULTRASONIC_RANGE, format_frequency, parse_quantity
 __all__ = [
     "MAX_PULSE_CYCLES",
     "MAX_SAMPLED_PULSE_SAMPLES",
+    "SINC_MIN_BANDWIDTH",
     "WINDOW_NAMES",
     "GaborPulse",
     "Pulse",
@@ -43,6 +44,7 @@ __all__ = [
     "SincPulse",
     "make_pulse",
     "parse_bandwidth",
+    "plausible_bandwidth",
     "pulse_names",
     "pulse_options",
     "register_pulse",
@@ -427,12 +429,17 @@ class SincPulse(Pulse):
                     f"long (2T·(f_c + B)); at most {MAX_PULSE_CYCLES} can be computed — give a "
                     "shorter length (it is in seconds)"
                 )
+            if 4 * (fc + b) / b <= MAX_PULSE_CYCLES:
+                raise EchocalValueError(  # B is fine with the default 4 lobes: too many lobes
+                    f"lobes: {self.lobes} lobes make the sinc pulse {cycles:.3g} carrier cycles "
+                    f"long (T = lobes / 2B = {self.half_length:.3g} s); at most "
+                    f"{MAX_PULSE_CYCLES} can be computed — use fewer lobes"
+                )
             raise EchocalValueError(
                 f"bandwidth: B = {format_frequency(b)} makes the sinc pulse {cycles:.3g} carrier "
                 f"cycles long (T = lobes / 2B = {self.half_length:.3g} s); at most "
                 f"{MAX_PULSE_CYCLES} can be computed — B is the one-sided bandwidth in Hz "
-                f"(e.g. {format_frequency(0.3 * fc)} = 30 % of f_c), not a percentage; or use "
-                "fewer lobes"
+                f"(e.g. {format_frequency(0.3 * fc)} = 30 % of f_c), not a percentage"
             )
 
     @property
@@ -769,6 +776,46 @@ def pulse_options(name: str) -> tuple[str, ...] | None:
     if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in signature.parameters.values()):
         return None
     return tuple(sorted(p.name for p in signature.parameters.values() if p.kind in kinds))
+
+
+SINC_MIN_BANDWIDTH = 1e3
+"""[Hz] the smallest plausible one-sided bandwidth B of a :class:`SincPulse` at the user
+boundary (a bare ``60`` meant as 60 % is 60 Hz for sinc)."""
+
+
+def plausible_bandwidth(
+    name: str,
+    bandwidth: float,
+    center_frequency: float,
+    *,
+    field: str = "bandwidth",
+    bare: bool = False,
+    lobes: int = 4,
+) -> float:
+    """Return ``bandwidth`` (as :func:`parse_bandwidth` gives it) unless it is implausible.
+
+    A sinc B [Hz] below :data:`SINC_MIN_BANDWIDTH` is refused; when the user typed a
+    ``bare`` number the message suggests the readings (``'60%'``, ``'60 kHz'``,
+    ``'60 MHz'``) that give a computable pulse of B <= f_c [Hz].  Other pulses pass.
+    """
+    if name != "sinc" or not SINC_MIN_BANDWIDTH > bandwidth > 0:
+        return bandwidth
+    hints = []
+    if bare:
+        fc = center_frequency
+        for text, b in (
+            (f"'{bandwidth:g}%'", bandwidth / 100.0 * fc / 2.0),
+            (f"'{bandwidth:g} kHz'", bandwidth * 1e3),
+            (f"'{bandwidth:g} MHz'", bandwidth * 1e6),
+        ):
+            if SINC_MIN_BANDWIDTH <= b <= fc and lobes * (fc + b) / b <= MAX_PULSE_CYCLES:
+                hints.append(f"{text} (B = {format_frequency(b)})")
+    raise EchocalValueError(
+        f"{field}: B = {format_frequency(bandwidth)} is implausible for the sinc pulse (its "
+        "bandwidth is the one-sided B in Hz, at least "
+        f"{format_frequency(SINC_MIN_BANDWIDTH)}; gabor's is in %)"
+        + (f" — did you mean {' or '.join(hints)}?" if hints else "")
+    )
 
 
 def parse_bandwidth(
