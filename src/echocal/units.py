@@ -119,6 +119,11 @@ def _infinite(
     return -math.inf if match.group(1) == "-" else math.inf
 
 
+def _prefix(field: str) -> str:
+    """``"field: "`` for a message, or nothing when the caller names the field itself."""
+    return f"{field}: " if field else ""
+
+
 def format_frequency(value: float) -> str:
     """``5e6`` → ``"5 MHz"``: a frequency [Hz] with the largest unit that keeps it >= 1."""
     for unit, scale in (("GHz", 1e9), ("MHz", 1e6), ("kHz", 1e3)):
@@ -154,7 +159,7 @@ def plausible_frequency(
     low, high = plausible
     if not low <= value <= high:
         raise EchocalValueError(
-            f"{field}: {format_frequency(value)} is implausible for {what} "
+            _prefix(field) + f"{format_frequency(value)} is implausible for {what} "
             f"({format_frequency(low)} to {format_frequency(high)})"
             + _frequency_hint(value, low, high)
         )
@@ -172,7 +177,7 @@ def plausible_speed(field: str, value: float) -> float:
         if low <= value * 1e3 <= high:
             hint = f"; numbers without a unit are in m/s — did you mean '{value:g} mm/us'?"
         raise EchocalValueError(
-            f"{field}: {value:g} m/s is implausible for a sound speed "
+            _prefix(field) + f"{value:g} m/s is implausible for a sound speed "
             f"({low:g} to {high:g} m/s){hint}"
         )
     return value
