@@ -110,7 +110,7 @@ def test_process_killed_by_signal_resumes(reference, tmp_path):
     assert 2 <= done < 6
     result = subprocess.run([*cmd, "--no-progress"], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
-    assert f"{done} already done" in result.stderr.replace("\n", " ")
+    assert f"{done} already done" in result.stdout.replace("\n", " ")  # the result: stdout
     final = load_results(out)
     _same(final.runs, reference[0], ["case_id"])
     _same(final.history, reference[1], ["case_id", "index"])

@@ -23,7 +23,10 @@ except ImportError:  # pragma: no cover - depends on the installed typer
 _NO_ARGS_IS_HELP = getattr(click_exceptions, "NoArgsIsHelpError", ())  # click >= 8.2
 
 console = Console(stderr=True)
-"""Console for human-oriented messages (stderr, so stdout stays clean for --json)."""
+"""Console for messages about the work — progress, warnings, errors (stderr)."""
+
+output = Console()
+"""Console for a command's result when it is not printed as --json (stdout: pipe it, grep it)."""
 
 
 def run_cli(app: typer.Typer) -> None:

@@ -11,7 +11,14 @@ import numpy as np
 import typer
 from rich.markup import escape
 
-from echocal.cli._common import console, parse_options, parse_pair, parse_pose, write_json
+from echocal.cli._common import (
+    console,
+    output,
+    parse_options,
+    parse_pair,
+    parse_pose,
+    write_json,
+)
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 
 
@@ -160,7 +167,7 @@ def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> No
     names = result.names
     found = result.acquisition_measurements
     search = "" if found is None else f" (echo found after {found})"
-    console.print(
+    output.print(
         f"[bold]{escape(result.method)}[/] on {escape(virtual.description)}\n"
         f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
         f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
@@ -173,7 +180,7 @@ def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> No
 
 
 def _print_failure(result: Any, out: Path) -> None:
-    console.print(
+    output.print(
         f"[bold red]no echo found[/] ({escape(result.method)}, "
         f"{result.n_measurements} measurements): {escape(result.message)}.\n"
         "  Nothing was calibrated.  Start nearer the echo (--x0), search farther "

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from echocal.cli._common import console, write_json
+from echocal.cli._common import output, write_json
 
 
 def register(app: typer.Typer) -> None:
@@ -31,7 +31,7 @@ def register(app: typer.Typer) -> None:
                 write_json({"methods": summary})
                 return
             for m, line in summary.items():
-                console.print(f"[bold]{m:14s}[/] {escape(line)}")
+                output.print(f"[bold]{m:14s}[/] {escape(line)}")
             return
         cls = get_method(name)  # unknown names list the valid ones
         params = inspect.signature(cls.__init__).parameters
@@ -39,10 +39,10 @@ def register(app: typer.Typer) -> None:
         if json_output:
             write_json({"method": name, "options": {k: _plain(v) for k, v in options.items()}})
             return
-        console.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
+        output.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
         for key, default in options.items():
             note = _note(key, issubclass(cls, Acquisition))
-            console.print(f"  {key:18s} default {escape(repr(default))}{note}")
+            output.print(f"  {key:18s} default {escape(repr(default))}{note}")
 
 
 def _note(key: str, searches: bool) -> str:

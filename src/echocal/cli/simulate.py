@@ -9,7 +9,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from echocal.cli._common import console, parse_pose, write_json
+from echocal.cli._common import output, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.io import atomic_path, atomic_write_text, json_ready
 from echocal.units import parse_quantity
@@ -131,14 +131,14 @@ def register(app: typer.Typer) -> None:
             return
         where = "gate" if user_gate else "recording window"
         if significance is not None and not detected:
-            console.print(
+            output.print(
                 f"[yellow]no echo detected in the {where}[/] (significance g = "
                 f"{significance:.2f}, an echo needs g > {DETECTION_THRESHOLD:g})"
             )
         elif np.isnan(tof):
-            console.print(f"[yellow]no echo in the {where}[/]")
+            output.print(f"[yellow]no echo in the {where}[/]")
         seen = "" if significance is None else f"   (significance g = {significance:.1f})"
-        console.print(
+        output.print(
             f"time of flight  {_show(tof * 1e6, 'µs')}{seen if detected else ''}\n"
             f"distance        {_show(summary['distance_m'] * 1e3, 'mm')}\n"
             f"pseudo-energy   {energy:10.4g}\n"

@@ -9,7 +9,7 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 
-from echocal.cli._common import console, write_json
+from echocal.cli._common import console, output, write_json
 
 _SWEEP_HELP = "Sweep TOML file, or a built-in sweep name (see `echocal sweep list`)."
 
@@ -65,7 +65,7 @@ def register(app: typer.Typer) -> None:
             write_json(_summary_json(results, skipped=skipped))
         else:
             resumed = f", {skipped} already done" if skipped else ""
-            console.print(
+            output.print(
                 f"sweep [bold]{escape(results.spec.name)}[/]: {results.n_new} run(s) computed"
                 f"{resumed}; results in {escape(str(out))}/ (runs.parquet, history.parquet)"
             )
@@ -223,4 +223,4 @@ def _print_table(results) -> None:
             _fmt(row.median_error_deg, ".2g"),
         ]
         view.add_row(*cells)
-    console.print(view)
+    output.print(view)

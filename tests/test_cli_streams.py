@@ -1,0 +1,30 @@
+"""Results go to stdout (pipe and grep them), messages about the work to stderr."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+
+def _run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "echocal.cli", *args], capture_output=True, text=True, timeout=120
+    )
+
+
+def test_a_listing_is_on_stdout():
+    done = _run("methods")
+    assert done.returncode == 0, done.stderr
+    assert "spsa" in done.stdout and "model-based" in done.stdout
+    assert done.stderr == ""
+
+
+def test_a_calibration_summary_is_on_stdout_and_json_stays_pure(tmp_path):
+    args = ("calibrate", "--setup", "thesis", "--x0", "0,0", "--budget", "20", "--no-plots")
+    human = _run(*args, "--out", str(tmp_path / "a"))
+    assert human.returncode == 0, human.stderr
+    assert "estimate" in human.stdout and "measurements" in human.stdout
+    machine = _run(*args, "--out", str(tmp_path / "b"), "--json")
+    assert machine.returncode == 0, machine.stderr
+    assert json.loads(machine.stdout)["n_measurements"] <= 20  # one JSON object, nothing else
