@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 from echocal.errors import EchocalValueError
-from echocal.measurement.virtual import VirtualSetup
-from echocal.setups import setup_with_overrides
+
+if TYPE_CHECKING:
+    from echocal.measurement.virtual import VirtualSetup
 
 __all__ = ["SETUP_HELP", "SNR_HELP", "SPECIMEN_HELP", "resolve_setup"]
 
@@ -25,6 +27,8 @@ def resolve_setup(
     Without ``seed`` the setup file's seed is used, and without that 0, so a command
     repeated as typed gives the same noise; ``virtual.rng`` is then that seed.
     """
+    from echocal.setups import setup_with_overrides  # the simulator loads on first use
+
     if snr is None:
         virtual = setup_with_overrides(setup, specimen=specimen, seed=seed)
     else:
