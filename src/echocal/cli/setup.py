@@ -54,6 +54,13 @@ class Default:
     note: str = "default"
 
 
+class _NoneWord:
+    """None written as the word ``"none"`` (TOML has no null; the setup reads it back)."""
+
+
+NONE_WORD = _NoneWord()
+
+
 def resolved_setup(name_or_path: str) -> tuple[dict[str, Any], str]:
     """The resolved setup as plain data (SI, degrees) and the built simulator's description.
 
@@ -74,7 +81,7 @@ def resolved_setup(name_or_path: str) -> tuple[dict[str, Any], str]:
     data["pulse"] = _pulse(config, base_dir, setup)
     noise = data["noise"]
     if noise["snr_db"] is None:
-        noise["snr_db"] = "none"
+        noise["snr_db"] = NONE_WORD  # noiseless: "none" in TOML, null in JSON
     for key, meaning in (("adc_bits", "no quantization"), ("full_scale", "no saturation")):
         if noise[key] is None:
             noise[key] = Default(None, f"default: {meaning}")
@@ -140,6 +147,8 @@ def _plain(value: Any) -> Any:
     """``value`` with every :class:`Default` replaced by the value in effect (for JSON)."""
     if isinstance(value, Default):
         return value.value
+    if value is NONE_WORD:
+        return None
     if isinstance(value, dict):
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -148,6 +157,8 @@ def _plain(value: Any) -> Any:
 
 
 def _toml_value(value: Any, unit: str | None = None) -> str:
+    if value is NONE_WORD:
+        return '"none"'
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):

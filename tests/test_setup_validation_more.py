@@ -1,0 +1,415 @@
+"""Setup files: plausibility, every problem at once, infinite limits, round trips, probes
+inside closed parts, ignored settings — the user-reported defects of the setup layer.
+
+CLI error paths go through the console-script entry point (``echocal.cli.main``), whose
+``run_cli`` turns echocal errors into one message and exit code 2, so that "no traceback,
+exit 2" is what is tested.  Setups are tiny (8 x 8 rays, 256 samples) to stay fast.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import tomllib
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+import echocal.cli
+from echocal.cli import app
+from echocal.errors import ConfigError, EchocalValueError, GeometryError, LimitError
+from echocal.geometry import Pose
+from echocal.measurement.limits import PositionerLimits, limit_problems
+from echocal.measurement.virtual import MAX_SIMULATED_SAMPLES, VirtualSetup
+from echocal.setups import builtin_setup_names, load_setup, validate_setup_file
+from echocal.signal import GaborPulse, RecordingWindow
+from echocal.specimen import Cylinder, Specimen, Sphere, TriangleMesh, builtin_specimen
+from echocal.transducer import Transducer
+from echocal.units import parse_quantity, plausible_frequency
+
+runner = CliRunner()
+
+# 8 x 8 rays, 256 samples at 50 MHz from 20 us: the echo of the plate 16 mm below
+# (2 x 16 mm / 1480 m/s = 21.6 us) lies inside the window.
+TINY = """
+name = "tiny"
+seed = 1
+
+[transducer]
+width = "6 mm"
+n_h = 8
+focal_length = "50 mm"
+
+[pulse]
+center_frequency = "5 MHz"
+
+[window]
+fs = "50 MHz"
+start = "20 us"
+n_samples = 256
+
+[positioner]
+reference_position = ["0 mm", "0 mm", "16 mm"]
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "setup.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
+    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
+    monkeypatch.setattr(sys, "argv", ["echocal", *args])
+    with pytest.raises(SystemExit) as exit_info:
+        echocal.cli.main()
+    out, err = capsys.readouterr()
+    code = exit_info.value.code
+    return (0 if code is None else int(code)), out, err
+
+
+def fields(problems: list[str]) -> list[str]:
+    return sorted(p.split(":")[0] for p in problems)
+
+
+# -- 1. frequencies are checked for plausibility ------------------------------------------
+def test_bare_frequency_in_hz_is_refused_with_a_hint(tmp_path):
+    # 5 (Hz) for 5 MHz used to make the reference echo allocate 89.7 GiB
+    path = write(tmp_path, TINY.replace('center_frequency = "5 MHz"', "center_frequency = 5"))
+    problems = validate_setup_file(path)
+    assert len(problems) == 1
+    assert problems[0].startswith("pulse.center_frequency: 5 Hz is implausible")
+    assert "did you mean '5 MHz'?" in problems[0]
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "field", "hint"),
+    [
+        ('fs = "50 MHz"', "fs = 50", "window.fs", "'50 MHz'"),
+        ("[pulse]", "[medium]\nsound_speed = 1.48\n[pulse]", "medium.sound_speed", "mm/us"),
+        (
+            "[pulse]",
+            '[transducer.directivity]\nmodel = "piston"\nfrequency = 2.25\n[pulse]',
+            "transducer.directivity.frequency",
+            "'2.25 MHz'",
+        ),
+    ],
+)
+def test_other_unit_slips_name_their_field(tmp_path, old, new, field, hint):
+    problems = validate_setup_file(write(tmp_path, TINY.replace(old, new)))
+    assert fields(problems) == [field]
+    assert "implausible" in problems[0] and hint in problems[0]
+    assert ", got" not in problems[0]  # the message quotes the value once
+
+
+def test_simulate_with_a_frequency_slip_is_exit_2_not_a_memory_error(tmp_path, capsys, monkeypatch):
+    path = write(tmp_path, TINY.replace('center_frequency = "5 MHz"', "center_frequency = 5"))
+    code, _, err = run_main(
+        ["simulate", "--setup", str(path), "--pose", "0,0,16"], capsys, monkeypatch
+    )
+    assert code == 2
+    assert "Traceback" not in err and "MemoryError" not in err
+    assert "pulse.center_frequency" in err and "5 MHz" in err
+
+
+def test_a_pulse_of_seconds_is_refused_before_allocating():
+    # Through the API (no setup file): 5 Hz is legal but doubtful (a warning); sampling its
+    # ±0.7 s support at 100 MHz would need 1.4e8 samples, so the simulator refuses it.
+    with pytest.warns(UserWarning, match="outside the ultrasonic range"):
+        pulse = GaborPulse(center_frequency=5.0)
+    with pytest.raises(EchocalValueError, match=r"pulse: an A-scan would need .* samples"):
+        VirtualSetup(
+            specimen=builtin_specimen("flat-plate"),
+            transducer=Transducer(n_h=4, n_v=4),
+            pulse=pulse,
+            window=RecordingWindow(fs=100e6, n_samples=4096),
+        )
+    assert MAX_SIMULATED_SAMPLES == 1 << 20
+
+
+def test_sinc_bandwidth_kept_from_gabor_is_refused_not_a_hang(tmp_path):
+    # bandwidth = 60 means % for gabor but B = 60 Hz for sinc: a pulse of 333 000 cycles
+    path = write(tmp_path, TINY.replace("[pulse]", '[pulse]\nname = "sinc"\nbandwidth = 60'))
+    problems = validate_setup_file(path)
+    assert fields(problems) == ["pulse.bandwidth"]
+    assert "implausible" in problems[0] and "did you mean '60%' (B = 1.5 MHz)?" in problems[0]
+    # "60%" means the same for sinc as on the command line: 2B = 60 % of the centre frequency
+    ok = write(
+        tmp_path, TINY.replace("[pulse]", '[pulse]\nname = "sinc"\nbandwidth = "60%"'), "ok.toml"
+    )
+    assert load_setup(ok).pulse.bandwidth == pytest.approx(1.5e6, rel=1e-12)
+
+
+# -- 3. infinite limits and setup show round trips ----------------------------------------
+@pytest.mark.parametrize("bounds", ["[-inf, inf]", '["-inf", "inf"]', '["-inf mm", "+inf"]'])
+def test_infinite_position_limits_are_accepted(tmp_path, bounds):
+    path = write(tmp_path, f"[positioner]\nz = {bounds}\n", "i.toml")
+    assert validate_setup_file(path) == []
+    assert load_setup(path).limits.z == (-math.inf, math.inf)
+
+
+def test_nan_limit_is_refused(tmp_path):
+    problems = validate_setup_file(write(tmp_path, "[positioner]\nz = [nan, 1]\n"))
+    assert fields(problems) == ["positioner.z.0"]
+    assert "NaN" in problems[0]
+
+
+def test_no_unit_hints_on_infinity_and_no_repeated_got(tmp_path):
+    path = write(tmp_path, '[transducer]\nwidth = inf\nheight = "inf"\n')
+    problems = validate_setup_file(path)
+    assert fields(problems) == ["transducer.height", "transducer.width"]
+    text = "\n".join(problems)
+    assert "inf mm" not in text
+    for line in problems:
+        assert line.count("got") <= 1, line
+
+
+ROUND_TRIP_EXTRAS = {
+    "noiseless-piston": TINY.replace(
+        "[pulse]", '[transducer.directivity]\nmodel = "piston"\n[noise]\nsnr_db = "none"\n[pulse]'
+    ),
+    "sinc-shapes-unlimited": TINY.replace("[pulse]", '[pulse]\nname = "sinc"\nbandwidth = "1 MHz"')
+    + '[specimen]\n[[specimen.shapes]]\nkind = "plane"\nwidth = "50 mm"\nheight = "50 mm"\n'
+    + '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, "30 mm", "-30 mm"]\nradius = "5 mm"\n',
+    "long-focus-adc": TINY.replace('focal_length = "50 mm"', 'focal_length = "3 m"').replace(
+        "[window]", "[noise]\nadc_bits = 12\nfull_scale = 2\n[window]"
+    ),
+}
+
+
+@pytest.mark.parametrize("source", [*builtin_setup_names(), *ROUND_TRIP_EXTRAS])
+def test_setup_show_output_validates_and_loads_back_the_same(tmp_path, source):
+    if source in ROUND_TRIP_EXTRAS:
+        source = str(write(tmp_path, ROUND_TRIP_EXTRAS[source], f"{source}.toml"))
+    shown = runner.invoke(app, ["setup", "show", source])
+    assert shown.exit_code == 0, shown.output
+    assert "(unset)" not in shown.stdout
+    copy = write(tmp_path, shown.stdout, "copy.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing shown may be an ignored setting
+        assert validate_setup_file(copy) == []
+        again = load_setup(copy)
+    original = load_setup(source)
+    assert again.limits == original.limits
+    assert again.pulse.parameters() == original.pulse.parameters()
+    assert again.receiver == original.receiver
+    assert again.transducer.directivity == original.transducer.directivity
+    assert again.transducer.focal_length == original.transducer.focal_length
+    assert again.description == original.description
+
+
+def test_setup_show_prints_the_defaults_in_effect(tmp_path):
+    path = write(tmp_path, ROUND_TRIP_EXTRAS["noiseless-piston"])
+    text = runner.invoke(app, ["setup", "show", str(path)]).stdout
+    lines = {
+        line.split("=")[0].strip("# ").strip(): line for line in text.splitlines() if "=" in line
+    }
+    # the piston's radius defaults to half the 6 mm width; its frequency to the pulse's
+    assert lines["radius"].startswith("# radius = 0.003 ")
+    assert "(default: width / 2)" in lines["radius"]
+    assert "5000000.0" in lines["frequency"] and "default" in lines["frequency"]
+    assert 'snr_db = "none"' in text  # noiseless stays noiseless when loaded back
+    assert "opening_angle" not in text  # a piston has none
+    assert "mesh_scale" not in text  # a built-in specimen has none
+    assert tomllib.loads(text)["noise"]["snr_db"] == "none"
+    data = json.loads(runner.invoke(app, ["setup", "show", str(path), "--json"]).stdout)
+    directivity = data["config"]["transducer"]["directivity"]
+    assert directivity == {"model": "piston", "radius": 0.003, "frequency": 5e6}
+    assert data["config"]["noise"]["snr_db"] is None
+
+
+# -- 4. every problem at once -------------------------------------------------------------
+def test_schema_and_build_problems_are_reported_together(tmp_path, capsys, monkeypatch):
+    path = write(
+        tmp_path,
+        'seed = -1\n[transducer]\nn_h = 0\naperture = "oval"\n[pulse]\nname = "nope"\n'
+        '[echo]\nreflection = "mirror"\n[noise]\nadc_bits = 8\n'
+        "[positioner]\ncoelevation = [-200, 200]\n",
+    )
+    assert fields(validate_setup_file(path)) == [
+        "echo.reflection",
+        "noise.adc_bits",
+        "positioner.coelevation",
+        "pulse.name",
+        "seed",
+        "transducer.aperture",
+        "transducer.n_h",
+    ]
+    code, out, err = run_main(["setup", "validate", str(path)], capsys, monkeypatch)
+    assert code == 1 and "7 problem(s)" in err and len(out.strip().splitlines()) == 7
+    with pytest.raises(ConfigError, match=r"7 problem\(s\)"):
+        load_setup(path)
+
+
+def test_a_check_needing_a_broken_part_is_skipped_only(tmp_path):
+    # The pulse is broken: the pulse x window checks are skipped, the rest still run.
+    path = write(
+        tmp_path,
+        TINY.replace('center_frequency = "5 MHz"', 'center_frequency = "5 MHz"\ncolour = 1')
+        + '[echo]\nreflection = "mirror"\n',
+    )
+    problems = validate_setup_file(path)
+    assert fields(problems) == ["echo.reflection", "pulse.colour"]
+    assert "pulse.colour: unknown option for gabor; valid: alpha, bandwidth, " in "".join(problems)
+
+
+# -- 5. angle limits ----------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("axis", "bounds", "message"),
+    [
+        ("coelevation", (-200.0, 200.0), r"within \[-90, 90\] deg"),
+        ("coelevation", (0.0, 150.0), r"within \[-90, 90\] deg"),
+        ("azimuth", (-400.0, 0.0), r"within \[-360, 360\] deg"),
+        ("azimuth", (-math.inf, math.inf), r"within \[-360, 360\] deg"),
+    ],
+)
+def test_angle_limits_must_be_meaningful(axis, bounds, message):
+    with pytest.raises(EchocalValueError, match=f"limits.{axis}: limits must lie {message}"):
+        PositionerLimits(**{axis: bounds})
+
+
+def test_full_angle_ranges_are_allowed():
+    assert limit_problems(azimuth=(0.0, 360.0), coelevation=(-90.0, 90.0)) == []
+
+
+def test_simulating_a_pose_beyond_the_coelevation_limits_is_exit_2(tmp_path, capsys, monkeypatch):
+    path = write(tmp_path, TINY + "coelevation = [-90, 90]\n")
+    args = ["simulate", "--setup", str(path), "--pose", "0,0,16,0,150"]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code == 2 and "Traceback" not in err
+    assert "coelevation = 150 deg outside [-90, 90] deg" in err
+
+
+def test_limit_violations_are_shown_in_millimetres():
+    limits = PositionerLimits(z=(0.005, 0.1))
+    assert limits.violations(Pose(0.0, 0.0, -0.005, 0.0, 0.0)) == ["z = -5 mm outside [5, 100] mm"]
+    with pytest.raises(LimitError, match=r"z = -5 mm outside \[5, 100\] mm"):
+        limits.check(Pose(0.0, 0.0, -0.005, 0.0, 0.0))
+
+
+# -- 6. a probe inside a closed specimen --------------------------------------------------
+SPHERE_AROUND_PROBE = TINY + (
+    '[specimen]\n[[specimen.shapes]]\nkind = "sphere"\nradius = "30 mm"\n'
+    'center = [0, 0, "20 mm"]\nname = "ball"\n'
+)
+
+
+def test_reference_position_inside_a_sphere_is_a_problem(tmp_path):
+    problems = validate_setup_file(write(tmp_path, SPHERE_AROUND_PROBE))
+    assert fields(problems) == ["positioner.reference_position"]
+    assert "(0, 0, 16) mm is inside sphere 'ball'" in problems[0]
+
+
+def test_simulating_a_pose_inside_the_part_is_a_geometry_error(tmp_path, capsys, monkeypatch):
+    # reference above the ball (top at 0), the requested pose 20 mm inside it
+    path = write(
+        tmp_path,
+        TINY + '[specimen]\n[[specimen.shapes]]\nkind = "sphere"\nradius = "30 mm"\n'
+        'center = [0, 0, "-30 mm"]\nname = "ball"\n',
+    )
+    setup = load_setup(path)
+    with pytest.raises(GeometryError, match=r"pose \(0, 0, -20\) mm.* inside sphere 'ball'"):
+        setup.measure(Pose(0.0, 0.0, -0.02, 0.0, 0.0))
+    with pytest.raises(GeometryError, match="inside sphere 'ball'"):
+        setup.true_optimum([0.0, 0.0, -0.02])
+    code, _, err = run_main(
+        ["simulate", "--setup", str(path), "--pose", "0,0,-20"], capsys, monkeypatch
+    )
+    assert code == 2 and "Traceback" not in err
+    assert "inside sphere 'ball' of specimen 'custom'" in err
+
+
+def test_which_shapes_are_closed():
+    # Independent truth: a point at distance d from the centre is inside iff d < r.
+    ball = Sphere(center=(0.0, 0.0, -0.03), radius=0.03)
+    np.testing.assert_array_equal(
+        ball.contains([[0, 0, -0.03], [0, 0, 0.001], [0.0299, 0, -0.03]]), [True, False, True]
+    )
+    rod = Cylinder(center=(0, 0, 0), radius=0.01, length=0.1, azimuth=90, coelevation=90)
+    # axis along y: inside within radius 10 mm of the axis and |y| < 50 mm
+    np.testing.assert_array_equal(
+        rod.contains([[0, 0.04, 0.005], [0, 0.06, 0.0], [0.011, 0.0, 0.0]]), [True, False, False]
+    )
+    bore = Cylinder(center=(0, 0, 0), radius=0.01, length=0.1, surface="inside")
+    assert not bore.closed and not bore.contains([[0, 0, 0]])[0]
+    box = TriangleMesh.from_trimesh(trimesh.creation.box(extents=(0.02, 0.02, 0.02)))
+    assert box.closed
+    np.testing.assert_array_equal(
+        box.contains([[0, 0, 0], [0.009, -0.009, 0.009], [0, 0, 0.011]]), [True, True, False]
+    )
+    sheet = builtin_specimen("wavy-surface")
+    assert not sheet[0].closed  # an open height field bounds nothing
+    both = Specimen([builtin_specimen("flat-plate")[0], ball])
+    np.testing.assert_array_equal(both.containing([[0, 0, 0.02], [0, 0, -0.01]]), [-1, 1])
+
+
+def test_scene_inside_the_part_is_drawn_with_a_warning(tmp_path):
+    out = tmp_path / "s.png"
+    result = runner.invoke(
+        app, ["scene", "--specimen", "sphere", "--pose", "0,0,-10", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "is inside sphere 'ball'" in result.output
+
+
+# -- 7. ignored settings, unknown options, wording ----------------------------------------
+@pytest.mark.parametrize(
+    ("extra", "key"),
+    [
+        (
+            '[transducer.directivity]\nmodel = "piston"\nopening_angle = 5\n',
+            "transducer.directivity.opening_angle",
+        ),
+        (
+            '[transducer.directivity]\nmodel = "gaussian"\nradius = "3 mm"\n',
+            "transducer.directivity.radius",
+        ),
+        ('[specimen]\nbuiltin = "flat-plate"\nmesh_scale = 0.001\n', "specimen.mesh_scale"),
+        (
+            '[specimen]\n[[specimen.shapes]]\nkind = "sphere"\nradius = "5 mm"\n'
+            'center = [0, 0, "-5 mm"]\nwidth = "3 mm"\n',
+            "specimen.shapes.0.width",
+        ),
+    ],
+)
+def test_ignored_settings_warn_naming_the_key(tmp_path, extra, key):
+    path = write(tmp_path, TINY + extra)
+    with pytest.warns(UserWarning, match=f"{key} is ignored"):
+        assert validate_setup_file(path) == []
+
+
+def test_setup_validate_prints_ignored_settings_as_warnings(tmp_path, capsys, monkeypatch):
+    path = write(tmp_path, TINY + '[specimen]\nbuiltin = "flat-plate"\nmesh_scale = 0.001\n')
+    code, out, err = run_main(["setup", "validate", str(path)], capsys, monkeypatch)
+    assert (code, out) == (0, "valid\n")
+    assert "warning: specimen.mesh_scale is ignored" in err
+    code, out, _ = run_main(["setup", "validate", str(path), "--json"], capsys, monkeypatch)
+    assert json.loads(out)["warnings"][0].startswith("specimen.mesh_scale is ignored")
+
+
+def test_unknown_pulse_option_lists_the_valid_ones(tmp_path):
+    path = write(tmp_path, TINY.replace("[pulse]", "[pulse]\nlobes = 3"))
+    assert validate_setup_file(path) == [
+        "pulse.lobes: unknown option for gabor; valid: alpha, bandwidth, center_frequency, phase"
+    ]
+
+
+def test_wording_of_unit_errors():
+    with pytest.raises(EchocalValueError, match="'m' is not an angle unit"):
+        parse_quantity("a", "5 m", "angle", "deg")
+    with pytest.raises(EchocalValueError, match="'deg' is not a length unit"):
+        parse_quantity("z", "5 deg", "length", "m")
+    assert parse_quantity("z", "-inf mm", "length", "m", allow_infinite=True) == -math.inf
+    with pytest.raises(EchocalValueError, match="must be finite"):
+        parse_quantity("z", math.inf, "length", "m")
+    with pytest.raises(EchocalValueError, match="did you mean '5 MHz'"):
+        plausible_frequency("f", 5.0)
+    with pytest.raises(EchocalValueError, match="did you mean '40 kHz'"):
+        plausible_frequency("f", 40.0, plausible=(20e3, 100e3))
+    assert plausible_frequency("f", 5e6) == 5e6
