@@ -206,7 +206,11 @@ class VirtualSetup(BaseSource):
         object.__setattr__(self, "_generator", as_generator(self.rng))
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})
-        object.__setattr__(self, "_has_closed_shapes", any(s.closed for s in self.specimen))
+        closed = tuple((i, s) for i, s in enumerate(self.specimen) if s.closed)
+        object.__setattr__(self, "_closed_shapes", closed)
+        if closed:  # the probe usually sits above them: one comparison settles it
+            top = max(float(shape.bounds()[1, 2]) for _, shape in closed)
+            object.__setattr__(self, "_closed_top", top)
         check_sample_count(self.pulse, self.window)
         self._check_outside(reference[None], what="reference_position")
         _raise_malloc_threshold()
@@ -215,18 +219,19 @@ class VirtualSetup(BaseSource):
         self, positions: FloatArray, *, poses: Sequence[Pose] | None = None, what: str = "pose"
     ) -> None:
         """Refuse probe positions [m] ``(P, 3)`` inside a closed shape of the specimen."""
-        if not self._has_closed_shapes:
+        if not self._closed_shapes or positions[:, 2].min() >= self._closed_top:
             return
-        unique, first = np.unique(positions, axis=0, return_index=True)
-        inside = self.specimen.containing(unique)
-        if not np.any(inside >= 0):
+        for _, shape in self._closed_shapes:  # positions are checked finite float64
+            inside = shape._contains(positions)
+            if np.any(inside):
+                break
+        else:
             return
-        k = int(np.argmax(inside >= 0))
-        shape = self.specimen[int(inside[k])]
-        x, y, z = (1e3 * v for v in unique[k])
+        k = int(np.argmax(inside))
+        x, y, z = (1e3 * v for v in positions[k])
         where = f"({x:g}, {y:g}, {z:g}) mm"
         if poses is not None:
-            pose = poses[int(first[k])]
+            pose = poses[k]
             where = f"{where}, azimuth {pose.azimuth:g} deg, co-elevation {pose.coelevation:g} deg"
         raise GeometryError(
             f"{what} {where} is inside {shape.kind} {shape.name!r} of specimen "

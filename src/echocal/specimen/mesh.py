@@ -222,17 +222,22 @@ class TriangleMesh(Shape):
         out = np.zeros(len(points), dtype=bool)
         lo, hi = self._bounds
         candidates = np.nonzero(np.all((points > lo) & (points < hi), axis=1))[0]
+        if candidates.size == 0:
+            return out
         direction = np.array([0.5773, 0.5771, 0.5776])
         direction /= np.linalg.norm(direction)
         all_faces = np.arange(self.n_faces)
-        for i in candidates:
+        unique, inverse = np.unique(points[candidates], axis=0, return_inverse=True)
+        odd = np.zeros(len(unique), dtype=bool)
+        for j, point in enumerate(unique):  # a batch of poses often shares one position
             crossings = 0
             for start in range(0, self.n_faces, _PAIR_CHUNK):
                 face = all_faces[start : start + _PAIR_CHUNK]
-                o = np.broadcast_to(points[i][:, None], (3, len(face)))
+                o = np.broadcast_to(point[:, None], (3, len(face)))
                 d = np.broadcast_to(direction[:, None], (3, len(face)))
                 crossings += int(np.count_nonzero(self._moller_trumbore(o, d, face) < np.inf))
-            out[i] = crossings % 2 == 1
+            odd[j] = crossings % 2 == 1
+        out[candidates] = odd[inverse.reshape(-1)]
         return out
 
     def intersect_faces(
