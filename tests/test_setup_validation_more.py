@@ -22,7 +22,13 @@ from typer.testing import CliRunner
 
 import echocal.cli
 from echocal.cli import app
-from echocal.errors import ConfigError, EchocalValueError, GeometryError, LimitError
+from echocal.errors import (
+    ConfigError,
+    DataFileError,
+    EchocalValueError,
+    GeometryError,
+    LimitError,
+)
 from echocal.geometry import Pose
 from echocal.measurement.limits import PositionerLimits, limit_problems
 from echocal.measurement.virtual import MAX_SIMULATED_SAMPLES, VirtualSetup
@@ -413,3 +419,13 @@ def test_wording_of_unit_errors():
     with pytest.raises(EchocalValueError, match="did you mean '40 kHz'"):
         plausible_frequency("f", 40.0, plausible=(20e3, 100e3))
     assert plausible_frequency("f", 5e6) == 5e6
+
+
+def test_a_missing_pulse_file_is_named_with_the_other_problems(tmp_path):
+    path = write(tmp_path, '[pulse]\nname = "sampled"\nfile = "nope.csv"\n')
+    problems = validate_setup_file(path)
+    assert fields(problems) == ["pulse.file"] and "nope.csv" in problems[0]
+    with pytest.raises(DataFileError, match="nope.csv"):  # the only problem: a file one
+        load_setup(path)
+    both = write(tmp_path, '[pulse]\nname = "sampled"\nfile = "nope.csv"\n[echo]\nreflection = 1\n')
+    assert fields(validate_setup_file(both)) == ["echo.reflection", "pulse.file"]

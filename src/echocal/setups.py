@@ -392,6 +392,8 @@ def _build_pulse(config: PulseConfig, base_dir: Path) -> tuple[Pulse | None, lis
     try:
         return make_pulse(config.name, **params), []
     except EchocalError as exc:
+        if isinstance(exc, DataFileError):  # the samples' file: missing or unreadable
+            return None, [_FileProblem(f"pulse.file: {exc}")]
         return None, [_problem("pulse", exc, pulse_options(config.name) or ())]
 
 
