@@ -6,7 +6,14 @@ noise and the positioner's limits.  Numbers are SI (metres, seconds, hertz,
 degrees for angles); any quantity may instead be a string with a unit —
 ``"12.7 mm"``, ``"5 MHz"``, ``"20 us"``.  A bare length that is implausibly
 large for its field (a 12.7 m probe) is refused with a hint that it was
-probably meant in millimetres.
+probably meant in millimetres; frequencies must be plausible (20 kHz to 1 GHz
+for a probe or pulse, 20 kHz to 100 GHz for a sampling rate: ``5`` is refused
+with "did you mean '5 MHz'?") and sound speeds 100 to 20 000 m/s.  Positioner
+position limits may be infinite (``inf``, ``-inf`` or ``"inf"``: unlimited);
+angle limits lie within [-360, 360] deg (azimuth) and [-90, 90] deg
+(co-elevation).  A ``bandwidth`` is in % for gabor and B in Hz for sinc;
+``"60%"`` works for both (sinc: 2B = 60 % of the centre frequency).  A setting
+that does not apply (a piston's ``opening_angle``) is ignored with a warning.
 
 Built-in setups (``echocal setup show NAME``) live as TOML files in
 ``echocal/data/setups/``; copy one to start your own::
@@ -14,8 +21,11 @@ Built-in setups (``echocal setup show NAME``) live as TOML files in
     setup = load_setup("immersion-5mhz")          # a name ...
     setup = load_setup("my-rig.toml", seed=3)      # ... or a file
 
-:func:`validate_setup_file` reports every problem at once, each with its
-field path: ``transducer.width: must be > 0, got -0.01``.
+:func:`validate_setup_file` reports every problem at once — schema and build
+problems (unknown names, pulse options, limits, a reference position inside the
+part) together — each with its field path: ``transducer.width: must be > 0, got
+-0.01``; :func:`load_setup` raises one :class:`~echocal.errors.ConfigError`
+listing them all.
 """
 
 from __future__ import annotations
@@ -338,7 +348,7 @@ def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dic
                 params[key] = base_dir / Path(str(value))
             elif key == "bandwidth":
                 continue  # after center_frequency: a percentage may refer to it
-            elif key in _PULSE_KINDS and not isinstance(value, bool | list):
+            elif key in _PULSE_KINDS and not isinstance(value, list):
                 kind = _PULSE_KINDS[key]
                 number = parse_quantity(field, value, kind, _SI_UNIT[kind])
                 if key == "center_frequency":
