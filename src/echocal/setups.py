@@ -359,7 +359,7 @@ def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dic
             else:
                 params[key] = _parse_any(field, value) if isinstance(value, str) else value
         except EchocalError as exc:
-            problems.append(str(exc))
+            problems.append(_colon(field, str(exc)))
     if "bandwidth" in extra and (options is None or "bandwidth" in options):
         value = extra["bandwidth"]
         fc = params.get("center_frequency", DEFAULT_CENTER_FREQUENCY)
@@ -377,8 +377,15 @@ def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dic
                 )
             params["bandwidth"] = bandwidth
         except EchocalError as exc:
-            problems.append(str(exc))
+            problems.append(_colon("pulse.bandwidth", str(exc)))
     return params, problems
+
+
+def _colon(field: str, message: str) -> str:
+    """``"pulse.fs must be finite"`` → ``"pulse.fs: must be finite"`` (field path, colon)."""
+    if message.startswith(field + " "):
+        return f"{field}: {message[len(field) + 1 :]}"
+    return message if message.startswith(field) else f"{field}: {message}"
 
 
 def _parse_any(field: str, text: str) -> Any:
