@@ -108,3 +108,26 @@ def test_usage_errors_are_one_line_with_exit_2(capsys, monkeypatch):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "No such option: --pos" in err
     assert "echocal simulate --help" in err  # where to look
+
+
+def test_warnings_in_a_command_are_one_line(capsys, monkeypatch):
+    import sys
+    import warnings
+
+    import pytest
+    import typer
+
+    from echocal.cli._common import run_cli
+
+    app = typer.Typer()
+
+    @app.command()
+    def doubtful() -> None:
+        warnings.warn("specimen.mesh_scale is ignored", UserWarning, stacklevel=1)
+
+    monkeypatch.setattr(sys, "argv", ["echocal"])
+    monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)  # restored afterwards
+    with pytest.raises(SystemExit) as exit_info:
+        run_cli(app)
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().err.strip() == "warning: specimen.mesh_scale is ignored"

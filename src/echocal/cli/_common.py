@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +35,7 @@ def run_cli(app: typer.Typer) -> None:
     paths the operating system refuses become one red line and exit code 2, not a traceback
     or a box; Ctrl-C ends with "aborted" and exit code 1.
     """
+    warnings.showwarning = _show_warning
     try:
         code = app(standalone_mode=False)
     except _NO_ARGS_IS_HELP as exc:
@@ -53,6 +55,18 @@ def run_cli(app: typer.Typer) -> None:
         where = f" {exc.filename}" if exc.filename else ""
         _fail(f"cannot access{where}: {exc.strerror or exc}; check the path and its permissions")
     sys.exit(code if isinstance(code, int) else 0)
+
+
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: Any = None,
+    line: str | None = None,
+) -> None:
+    """Warnings as one yellow line on stderr ("warning: ..."), not Python's source excerpt."""
+    console.print(f"[yellow]warning:[/] {escape(str(message))}", highlight=False, soft_wrap=True)
 
 
 def _fail(message: str) -> None:
