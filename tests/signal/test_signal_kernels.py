@@ -136,3 +136,12 @@ def test_small_and_large_inputs_agree_across_the_numba_threshold():
     )
     # sums of the same terms in a different order: round-off only
     assert_allclose(whole, parts, rtol=0, atol=1e-12 * np.max(np.abs(whole)))
+
+
+def test_kernel_transform_in_blocks_equals_small_pieces():
+    # the blocked evaluation (bounded memory for 2^20-sample windows) must not depend on
+    # where the block boundaries fall: compare with pieces far smaller than one block
+    coefs = K.horner_coefficients(6, 7)
+    xi = np.linspace(-0.5, 0.5, 3 * K._XI_BLOCK + 17)
+    pieces = np.concatenate([K.kernel_transform(p, coefs) for p in np.array_split(xi, 997)])
+    np.testing.assert_allclose(K.kernel_transform(xi, coefs), pieces, rtol=0, atol=1e-14)

@@ -85,7 +85,17 @@ def kernel_transform(xi: _F64, coefs: _F64) -> _F64:
         vals = vals * t + coefs[d][:, None]
     x = (0.5 * (t + 1.0))[None, :] + (np.arange(width) - 0.5 * width)[:, None]  # (width, q)
     weights = (0.5 * wq * vals).ravel()
-    return np.cos(2.0 * math.pi * np.outer(xi, x.ravel())) @ weights
+    nodes = 2.0 * math.pi * x.ravel()
+    xi = np.asarray(xi, dtype=np.float64)
+    flat = xi.ravel()
+    out = np.empty(flat.size)
+    for lo in range(0, flat.size, _XI_BLOCK):  # (block, width · q) at a time: bounded memory
+        out[lo : lo + _XI_BLOCK] = np.cos(np.outer(flat[lo : lo + _XI_BLOCK], nodes)) @ weights
+    return out.reshape(xi.shape)
+
+
+_XI_BLOCK = 8192
+"""Frequencies per block in :func:`kernel_transform` (8192 × ~170 nodes ≈ 11 MB)."""
 
 
 def _spread_numpy(
