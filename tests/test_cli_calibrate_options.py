@@ -7,28 +7,18 @@ console-script entry point, as a user runs it), never a traceback.
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 import echocal.cli
+from cli_helpers import run_main
 from echocal.cli import app
 from echocal.cli._common import parse_options
 
 # the thesis setup at its reference position: 4 measurements per gradient iteration
 FAST = ["calibrate", "--method", "gradient", "--max-iter", "1", "--no-plots"]
-
-
-def run_main(args, capsys, monkeypatch):
-    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["echocal", *args])
-    with pytest.raises(SystemExit) as exit_info:
-        echocal.cli.main()
-    out, err = capsys.readouterr()
-    code = exit_info.value.code
-    return (0 if code is None else int(code)), out, err
 
 
 def refused(args, capsys, monkeypatch, *fragments):

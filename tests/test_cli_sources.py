@@ -21,7 +21,7 @@ import pytest
 import xarray as xr
 from typer.testing import CliRunner
 
-import echocal.cli
+from cli_helpers import run_main
 from echocal.cli import app
 from echocal.geometry import Pose
 from echocal.measurement import HardwareSource, ReplaySource, VirtualSetup
@@ -77,18 +77,6 @@ def tiny(tmp_path: Path) -> Path:
     path = tmp_path / "tiny.toml"
     path.write_text(TINY, encoding="utf-8")
     return path
-
-
-def run_main(
-    args: list[str], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> tuple[int, str, str]:
-    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["echocal", *args])
-    with pytest.raises(SystemExit) as exit_info:
-        echocal.cli.main()
-    out, err = capsys.readouterr()
-    code = exit_info.value.code
-    return (0 if code is None else int(code)), out, err
 
 
 def assert_clean_error(err: str) -> None:

@@ -3,14 +3,14 @@ with duplicate positions is refused naming the file and the positions."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
 
-import echocal.cli
+from cli_helpers import flat as _flat
+from cli_helpers import run_main
 from echocal.errors import DataFileError, EchocalValueError
 from echocal.measurement import ReplaySource
 from echocal.measurement.recording import (
@@ -48,20 +48,6 @@ def tiny(tmp_path: Path) -> Path:
     path = tmp_path / "tiny.toml"
     path.write_text(TINY, encoding="utf-8")
     return path
-
-
-def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
-    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["echocal", *args])
-    with pytest.raises(SystemExit) as exit_info:
-        echocal.cli.main()
-    out, err = capsys.readouterr()
-    code = exit_info.value.code
-    return (0 if code is None else int(code)), out, err
-
-
-def _flat(text: str) -> str:
-    return " ".join(text.split())
 
 
 def test_duplicate_positions_are_refused_at_record_time(tiny, tmp_path, capsys, monkeypatch):

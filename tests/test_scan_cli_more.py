@@ -7,14 +7,14 @@ Grids are 1-3 points on a side so that the module runs in a few seconds.
 from __future__ import annotations
 
 import json
-import sys
 
 import numpy as np
 import pytest
 import xarray as xr
 
-import echocal.cli
 import echocal.scanning.scan as scan_module
+from cli_helpers import flat as _flat
+from cli_helpers import run_main
 from echocal.errors import LimitError
 from echocal.geometry import Pose
 from echocal.scanning import STATUS, ScanGrid, SurfaceScan, check_scan, scan_surface
@@ -22,20 +22,6 @@ from echocal.setups import load_setup
 
 MM = 1e-3
 BASE = ["scan", "--setup", "scan-5mhz", "--specimen", "sphere", "--no-figures", "--no-progress"]
-
-
-def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
-    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["echocal", *args])
-    with pytest.raises(SystemExit) as exit_info:
-        echocal.cli.main()
-    out, err = capsys.readouterr()
-    code = exit_info.value.code
-    return (0 if code is None else int(code)), out, err
-
-
-def _flat(text: str) -> str:
-    return " ".join(text.split())
 
 
 @pytest.mark.parametrize(

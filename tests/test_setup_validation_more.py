@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 import tomllib
 import warnings
 from pathlib import Path
@@ -20,7 +19,7 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-import echocal.cli
+from cli_helpers import run_main
 from echocal.cli import app
 from echocal.errors import (
     ConfigError,
@@ -68,16 +67,6 @@ def write(tmp_path: Path, text: str, name: str = "setup.toml") -> Path:
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
     return path
-
-
-def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
-    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["echocal", *args])
-    with pytest.raises(SystemExit) as exit_info:
-        echocal.cli.main()
-    out, err = capsys.readouterr()
-    code = exit_info.value.code
-    return (0 if code is None else int(code)), out, err
 
 
 def fields(problems: list[str]) -> list[str]:

@@ -4,13 +4,13 @@ whose runs failed ends with exit code 1 and names the most common error."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import pytest
 
 import echocal.cli
 import echocal.evaluation
+from cli_helpers import run_main
 from echocal.errors import ConfigError, EchocalValueError
 from echocal.experiments import expand, load_sweep, run_case, run_problems, run_sweep
 
@@ -29,16 +29,6 @@ def _problems(data: dict) -> list[str]:
     with pytest.raises(ConfigError) as info:
         load_sweep(data)
     return [line.strip() for line in str(info.value).splitlines()[1:]]
-
-
-def run_main(args: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
-    """Run the ``echocal`` entry point; return (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["echocal", *args])
-    with pytest.raises(SystemExit) as exit_info:
-        echocal.cli.main()
-    out, err = capsys.readouterr()
-    code = exit_info.value.code
-    return (0 if code is None else int(code)), out, err
 
 
 def test_runs_that_cannot_run_are_refused_with_every_reason():
