@@ -3,7 +3,10 @@
 These reproduce the two figures of every thesis scenario (pseudo-energy vs
 iterations; the path over the cost-function heat map with initial guess and
 true solution marked) and add the view that matters on a rig: the same
-against the number of measurements.  They only read results.
+against the number of measurements.  Where no truth is known (a recording, a
+rig), :func:`measured_convergence_figure` shows what was measured and how the
+estimate settled, and :func:`path_figure` draws over a recording's own metric map
+or over no map at all.  They only read results.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from numpy.typing import NDArray
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
 
-__all__ = ["CostMap", "convergence_figure", "path_figure"]
+__all__ = ["CostMap", "convergence_figure", "measured_convergence_figure", "path_figure"]
 
 FloatArray = NDArray[np.float64]
 
@@ -66,12 +69,91 @@ def convergence_figure(
     return fig
 
 
+def measured_convergence_figure(
+    result: CalibrationResult,
+    *,
+    label: str | None = None,
+    scale: float | None = None,
+    scale_label: str = "largest value measured",
+    iterate_values: Sequence[float] | None = None,
+    iterate_label: str = "metric at the estimate",
+    title: str | None = None,
+) -> Figure:
+    """Convergence of a run whose true optimum is unknown (a recording, a rig).
+
+    Left: every measured value vs measurement number, with the best value measured so
+    far, divided by ``scale`` (default: the largest value measured) — what the run saw,
+    noise included.  Right: the angle [deg] between the beam of each iterate and that
+    of the final estimate vs the measurements used — how the estimate settled (not
+    its error: no truth is known).
+
+    Parameters
+    ----------
+    result : the run.
+    label : the run's name in the legends (default ``result.method``).
+    scale : [metric units] the values are divided by this (> 0); ``scale_label`` says
+        what it is (shown in the y label).
+    iterate_values : optional metric at x0 and each iterate, shape (n_iterations + 1,),
+        e.g. a recording's repeat-averaged metric interpolated there; drawn on the left
+        vs the measurements used, labelled ``iterate_label``.
+    """
+    from echocal.evaluation import angular_error
+
+    label = result.method if label is None else label
+    values = np.asarray(result.values, dtype=float)
+    finite = values[np.isfinite(values)]
+    if scale is None:
+        scale = float(np.max(finite)) if finite.size and np.max(finite) > 0 else 1.0
+        scale_label = "largest value measured"
+    if not scale > 0:
+        from echocal.errors import EchocalValueError
+
+        raise EchocalValueError(f"scale must be > 0; got {scale}")
+    fig = Figure(figsize=(11, 4.2), constrained_layout=True)
+    measured, settling = fig.subplots(1, 2)
+    count = np.arange(1, len(values) + 1)
+    measured.plot(count, values / scale, ls="", marker=".", ms=4, color="0.55", label="measured")
+    if len(values):
+        best = np.fmax.accumulate(np.where(np.isfinite(values), values, -np.inf)) / scale
+        measured.step(count, best, where="post", color="C0", lw=1.2, label="best measured so far")
+    steps = np.asarray(result.iteration_measurements)
+    if iterate_values is not None:
+        shown = np.asarray(iterate_values, dtype=float)[: len(steps)]
+        measured.plot(
+            steps[: len(shown)], shown / scale, marker=".", ms=4, color="C1", label=iterate_label
+        )
+    measured.set_xlabel("measurement")
+    measured.set_ylabel(f"metric / {scale_label}")
+    measured.legend(fontsize=8, loc="lower right")
+    distance = angular_error(result.iterates, result.x, result.parameterization)
+    # the last iterate is usually the estimate itself (distance 0): a log axis shows the rest
+    shown_at = distance > 0
+    settling.semilogy(
+        steps[shown_at],
+        distance[shown_at],
+        marker=".",
+        ms=4,
+        color="C0",
+        label=f"{label} ({result.n_measurements} meas.)",
+    )
+    settling.set_xlabel("measurements used")
+    settling.set_ylabel("angle to the final estimate [deg]")
+    settling.set_title("how the estimate settled (no truth known)", fontsize=9)
+    settling.legend(fontsize=8, loc="upper right")
+    for ax in (measured, settling):
+        ax.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
 def path_figure(
-    cost_map: CostMap,
+    cost_map: CostMap | None,
     runs: Mapping[str, CalibrationResult],
     *,
     x0: Sequence[float] | None = None,
     truth: Sequence[float] | None = None,
+    truth_label: str = "true solution",
     title: str | None = None,
     db_floor: float | None = None,
     show_measurements: bool = False,
@@ -82,36 +164,62 @@ def path_figure(
     a narrow main lobe and its side lobes stay visible on a map many lobe widths wide
     (default: the linear metric, as in the thesis's figures).  ``show_measurements``: also
     mark every measured pose (an acquisition's search pattern, finite-difference stencils).
+    NaN in the map (orientations it does not cover) is left blank.  ``cost_map=None``
+    draws the paths alone (a rig: no map is known), framed to every point drawn.
+    ``truth_label`` names the ``truth`` marker (e.g. a recording's best grid pose).
     """
+    if db_floor is not None and not db_floor < 0.0:
+        from echocal.errors import EchocalValueError
+
+        raise EchocalValueError(f"db_floor must be a negative level in dB; got {db_floor}")
     fig = Figure(figsize=(6.8, 5.6), constrained_layout=True)
     ax = fig.add_subplot()
-    values, label = cost_map.values.T, "metric"
-    if db_floor is not None:
-        if not db_floor < 0.0:
-            from echocal.errors import EchocalValueError
-
-            raise EchocalValueError(f"db_floor must be a negative level in dB; got {db_floor}")
-        peak = float(np.nanmax(values))
-        ratio = np.clip(values / peak, 10.0 ** (db_floor / 10.0), None) if peak > 0 else values
-        values, label = 10.0 * np.log10(ratio), "metric / max [dB]"
-    mesh = ax.pcolormesh(cost_map.a, cost_map.b, values, shading="auto", cmap="viridis")
-    fig.colorbar(mesh, ax=ax, label=label)
+    on_map = cost_map is not None
+    if cost_map is not None:
+        values, label = cost_map.values.T, "metric"
+        if db_floor is not None:
+            peak = float(np.nanmax(values))
+            ratio = np.clip(values / peak, 10.0 ** (db_floor / 10.0), None) if peak > 0 else values
+            values, label = 10.0 * np.log10(ratio), "metric / max [dB]"
+        mesh = ax.pcolormesh(
+            cost_map.a, cost_map.b, np.ma.masked_invalid(values), shading="auto", cmap="viridis"
+        )
+        fig.colorbar(mesh, ax=ax, label=label)
+    # light marks on the dark map, dark ones on a white background
+    dots, mark = ("0.85", "w") if on_map else ("0.6", "k")
+    drawn = []
     for name, result in runs.items():
         if show_measurements and len(result.points):
-            ax.plot(*result.points.T, ls="", marker=".", ms=2.5, color="0.85", alpha=0.8)
+            ax.plot(*result.points.T, ls="", marker=".", ms=2.5, color=dots, alpha=0.8)
+            drawn.append(result.points)
         path = result.iterates
         ax.plot(path[:, 0], path[:, 1], marker=".", ms=4, lw=1.2, label=name)
-        ax.plot(*result.x, marker="x", color="w", ms=6)
+        ax.plot(*result.x, marker="x", color=mark, ms=6)
+        drawn += [path, np.asarray(result.x, dtype=float)[None, :]]
     if show_measurements:
-        ax.plot([], [], ls="", marker=".", color="0.85", label="measured poses")
+        ax.plot([], [], ls="", marker=".", color=dots, label="measured poses")
     if x0 is not None:
-        ax.plot(*x0, marker="o", mfc="none", mec="w", ms=10, mew=1.5, ls="", label="initial guess")
+        ax.plot(*x0, marker="o", mfc="none", mec=mark, ms=10, mew=1.5, ls="", label="initial guess")
+        drawn.append(np.asarray(x0, dtype=float)[None, :])
     if truth is not None:
-        ax.plot(*truth, marker="*", color="r", ms=14, ls="", label="true solution")
-    ax.set_xlim(cost_map.a[0], cost_map.a[-1])
-    ax.set_ylim(cost_map.b[0], cost_map.b[-1])
-    ax.set_xlabel(f"{cost_map.names[0]} [deg]")
-    ax.set_ylabel(f"{cost_map.names[1]} [deg]")
+        ax.plot(*truth, marker="*", color="r", ms=14, ls="", label=truth_label)
+        drawn.append(np.asarray(truth, dtype=float)[None, :])
+    if cost_map is not None:
+        ax.set_xlim(cost_map.a[0], cost_map.a[-1])
+        ax.set_ylim(cost_map.b[0], cost_map.b[-1])
+        names = cost_map.names
+    else:
+        if drawn:  # frame every point drawn, with a margin (at least 0.5 deg)
+            points = np.vstack(drawn)
+            low, high = points.min(axis=0), points.max(axis=0)
+            pad = np.maximum(0.08 * (high - low), 0.5)
+            ax.set_xlim(low[0] - pad[0], high[0] + pad[0])
+            ax.set_ylim(low[1] - pad[1], high[1] + pad[1])
+        first = next(iter(runs.values()), None)
+        names = first.names if first is not None else ("a", "b")
+        ax.grid(alpha=0.3)
+    ax.set_xlabel(f"{names[0]} [deg]")
+    ax.set_ylabel(f"{names[1]} [deg]")
     ax.legend(fontsize=8, loc="upper right", framealpha=0.6)
     if title:
         ax.set_title(title)
