@@ -208,3 +208,25 @@ def test_bfgs_skips_updates_that_violate_the_curvature_condition():
     new = bfgs_update(b, np.array([1.0, 0.0]), np.array([2.0, 0.0]))
     np.testing.assert_allclose(new @ np.array([1.0, 0.0]), [2.0, 0.0])  # secant equation
     assert np.all(np.linalg.eigvalsh(new) > 0)
+
+
+def test_grid_measures_its_whole_grid_whatever_the_iteration_and_settle_defaults(
+    gauss_objective,
+):
+    # 121 rows: more than the default iteration limit (100), and the settle rule would stop
+    # it once the recommendation stops moving; an exhaustive search must be cut short by
+    # neither (a partial grid reported as "converged" is a wrong answer)
+    objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
+    result = calibrate(
+        objective, method="grid", x0=(0.0, 0.0), span=15.0, step=0.25, settle=(0.01, 8), rng=0
+    )
+    assert result.n_measurements == 121 * 121  # every node, once
+    assert result.status == 5  # "grid finished", not 1 (iteration limit) or 7 (settled)
+    np.testing.assert_allclose(result.x, [0.75, -0.5], atol=1e-12)  # the node nearest OPT
+
+
+def test_grid_cut_short_by_an_explicit_iteration_limit_warns(gauss_objective):
+    objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
+    with pytest.warns(UserWarning, match="only part of the grid"):
+        result = calibrate(objective, method="grid", x0=(0.0, 0.0), max_iter=3, rng=0)
+    assert result.n_iterations == 3

@@ -240,7 +240,8 @@ def calibrate(
     budget : maximum measurements for this run (also limited by the objective's own
         budget); a budget below what the first iteration needs raises EchocalValueError
         before measuring.  The run never exceeds it: it stops with status 2.
-    max_iter : iteration limit (default: the preset's, else 100).
+    max_iter : iteration limit (default: the preset's, else 100; an exhaustive method —
+        ``grid`` — runs all its rows, and ``xtol``/``settle`` do not stop it).
     xtol : [deg] stop when an iteration moves the estimate (or proposes a step) shorter
         than this (after at least 2 iterations).
     settle : ``(tol [deg], patience)``: stop once the last ``patience`` recommendations
@@ -271,6 +272,7 @@ def calibrate(
         opts.update(method_options(method, preset))
         default_iter = presets(preset).max_iter
     opts.update(options)
+    max_iter_given = max_iter is not None
     max_iter = default_iter if max_iter is None else positive_int("max_iter", max_iter)
     xtol = None if xtol is None else nonnegative_float("xtol", xtol)
     settled = None if settle is None else _settle_test(settle, objective)
@@ -291,6 +293,18 @@ def calibrate(
             f"budget={limit} is smaller than one iteration of method {method!r} needs "
             f"({need} measurements); allowed: budget >= {need}"
         )
+    rows = getattr(opt, "n_rows", None)  # an exhaustive method: its whole set, row by row
+    if rows is not None:
+        settled = xtol = None  # a partial grid has not "converged": it is measured through
+        if not max_iter_given:
+            max_iter = rows
+        elif max_iter < rows:
+            warnings.warn(
+                f"method {method!r} measures {rows} rows but max_iter={max_iter} stops it "
+                f"after {max_iter}: only part of the grid will be searched",
+                UserWarning,
+                stacklevel=2,
+            )
     planned = getattr(opt, "n_points", None)  # a method that measures a fixed set (grid)
     if planned is not None and limit is not None and objective.cost(planned) > limit:
         warnings.warn(
@@ -307,11 +321,11 @@ def calibrate(
     status = 1
     prev = x0.copy()
     while True:
+        if opt.finished:  # first: a method that ends on its last allowed iteration says why
+            status = opt.finish_status if opt.finish_status is not None else 5
+            break
         if opt.n_iterations >= max_iter:
             status = 1
-            break
-        if opt.finished:
-            status = opt.finish_status if opt.finish_status is not None else 5
             break
         pts = opt.ask()
         used_so_far = objective.n_measurements - start

@@ -2,10 +2,12 @@
 
 The grid spans x0 ± ``span`` [deg] in both angles with spacing ``step``
 [deg] (clipped to the bounds, duplicates removed); each iteration measures
-one row of the grid.  ``recommend()`` is the grid node with the highest
-3 × 3 neighbourhood mean (a little smoothing against noise, as an operator
-looking at the whole map would do), falling back to the best single value
-at the edge of a partial grid.
+one row of the grid, and :func:`~echocal.calibrate.calibrate` runs until every
+row is measured (an explicit ``max_iter`` or the budget may stop it earlier,
+with a warning).  ``recommend()`` is the grid node with the highest 3 × 3
+neighbourhood mean (a little smoothing against noise, as an operator looking
+at the whole map would do), falling back to the best single value at the edge
+of a partial grid.
 """
 
 from __future__ import annotations
@@ -103,6 +105,13 @@ class GridSearch(Optimizer):
     def n_points(self) -> int:
         """Number of grid nodes."""
         return self.values.size
+
+    @property
+    def n_rows(self) -> int:
+        """Number of grid rows — iterations — it takes to measure the whole grid; the driver
+        runs that many (the default iteration limit, the settle and xtol rules do not cut
+        an exhaustive search short)."""
+        return self.values.shape[0]
 
     def _ask(self) -> FloatArray:
         a0, a1 = self.axes
