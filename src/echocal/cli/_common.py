@@ -23,11 +23,12 @@ except ImportError:  # pragma: no cover - depends on the installed typer
     from click import exceptions as click_exceptions  # type: ignore[no-redef]
 _NO_ARGS_IS_HELP = getattr(click_exceptions, "NoArgsIsHelpError", ())  # click >= 8.2
 
-console = Console(stderr=True)
+console = Console(stderr=True, emoji=False)  # emoji=False: "1:-1:3" is not ":-1:" -> 👎
 """Console for messages about the work — progress, warnings, errors (stderr)."""
 
-output = Console()
-"""Console for a command's result when it is not printed as --json (stdout: pipe it, grep it)."""
+output = Console(emoji=False, width=None if sys.stdout.isatty() else 200)
+"""Console for a command's result when it is not printed as --json (stdout: pipe it, grep it —
+200 columns when piped, so lines and table cells are not cut at 80)."""
 
 
 def run_cli(app: typer.Typer) -> None:
