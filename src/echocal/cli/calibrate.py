@@ -626,13 +626,17 @@ def _tilt_extent(recording: Any) -> Any:
 
 
 def _tilt_bounds_in_recording(recording: Any, start: tuple[float, float]) -> Any:
-    """[deg] (2, 2): a tilt box around ``start`` whose every orientation the recording holds.
+    """[deg] (2, 2): the largest tilt box around ``start`` whose every orientation the
+    recording holds.
 
-    The grid is in (azimuth, co-elevation): in tilts it is a curved region, so the box is
-    grown from ``start`` on a 241 × 241 lattice over the region while every lattice point
-    stays on the grid, then shrunk by one lattice step (the region's curved edges bulge
-    between lattice points) until 400 points along each edge are on the grid too.
+    The grid is in (azimuth, co-elevation): in tilts it is a curved region.  On a 161 × 161
+    lattice over that region, less one lattice step all round (its curved edges bulge
+    between lattice points), the box of largest area that contains ``start`` is found; it
+    is shrunk further, a step at a time, should any of 400 points along each of its edges
+    lie off the grid.
     """
+    from scipy.ndimage import binary_erosion
+
     from echocal.errors import LimitError
     from echocal.geometry import convert_angles
 
@@ -640,33 +644,47 @@ def _tilt_bounds_in_recording(recording: Any, start: tuple[float, float]) -> Any
         return _in_recording(recording, *convert_angles(tx, ty, "tilt", "azimuth-coelevation"))
 
     extent = _tilt_extent(recording)
-    ga, gb = (np.linspace(lo, hi, 241) for lo, hi in extent)
-    ok = inside(ga[:, None], gb[None, :])
-    i, j = int(np.argmin(np.abs(ga - start[0]))), int(np.argmin(np.abs(gb - start[1])))
+    ga, gb = (np.linspace(lo, hi, 161) for lo, hi in extent)
+    ok = binary_erosion(inside(ga[:, None], gb[None, :]), np.ones((3, 3)), border_value=0)
+    # the lattice cell holding start: rows i0..i1 (tilt_x), columns j0..j1 (tilt_y)
+    i0 = int(np.clip(np.searchsorted(ga, start[0]) - 1, 0, ga.size - 2))
+    j0 = int(np.clip(np.searchsorted(gb, start[1]) - 1, 0, gb.size - 2))
+    i1, j1 = i0 + 1, j0 + 1
     covered = (
         f"it covers azimuth [{recording.azimuths[0]:g}, {recording.azimuths[-1]:g}] and "
         f"co-elevation [{recording.coelevations[0]:g}, {recording.coelevations[-1]:g}] deg, "
         f"tilt_x [{extent[0, 0]:.3g}, {extent[0, 1]:.3g}], tilt_y [{extent[1, 0]:.3g}, "
         f"{extent[1, 1]:.3g}] deg"
     )
-    if not (bool(inside(*start)) and ok[i, j]):
+    if not bool(inside(*start)):
         raise LimitError(
             f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg is not an orientation of "
             f"{recording.path}: {covered}"
         )
-    box = [i, i, j, j]  # low and high lattice index along tilt_x, then tilt_y
-    grown = True
-    while grown:
-        grown = False
-        for side, step in ((0, -1), (1, 1), (2, -1), (3, 1)):
-            edge = box[side] + step
-            if not 0 <= edge < ok.shape[side // 2]:
-                continue
-            strip = ok[edge, box[2] : box[3] + 1] if side < 2 else ok[box[0] : box[1] + 1, edge]
-            if strip.all():
-                box[side], grown = edge, True
+    if not ok[i0 : i1 + 1, j0 : j1 + 1].all():
+        raise LimitError(
+            f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg lies at the edge of "
+            f"{recording.path}: start farther inside ({covered})"
+        )
+    box, area = (i0, i1, j0, j1), 0
+    rows = ok[i1].copy()
+    for lo in range(i0, -1, -1):  # tilt_x rows lo..hi around the cell; a tilt_y run through it
+        rows &= ok[lo]
+        if not rows[j0 : j1 + 1].all():
+            break
+        cols = rows.copy()
+        for hi in range(i1, ok.shape[0]):
+            cols &= ok[hi]
+            if not cols[j0 : j1 + 1].all():
+                break
+            gaps = np.flatnonzero(~cols)
+            k = int(np.searchsorted(gaps, j0))
+            left = int(gaps[k - 1]) + 1 if k > 0 else 0
+            right = int(gaps[k]) - 1 if k < gaps.size else ok.shape[1] - 1
+            if (hi - lo) * (right - left) > area:
+                box, area = (lo, hi, left, right), (hi - lo) * (right - left)
     edge = np.linspace(0.0, 1.0, 400)
-    for shrink in range(1, 6):
+    for shrink in range(5):
         lo_a, hi_a, lo_b, hi_b = box[0] + shrink, box[1] - shrink, box[2] + shrink, box[3] - shrink
         if lo_a >= hi_a or lo_b >= hi_b:
             break
