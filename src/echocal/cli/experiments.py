@@ -99,9 +99,11 @@ def register(app: typer.Typer) -> None:
         overwrite: Annotated[bool, typer.Option(help="Replace an existing page.")] = False,
     ) -> None:
         """Write one self-contained HTML report of scenario and sweep results."""
+        from echocal.cli.record import check_out_file
         from echocal.errors import DataFileError
         from echocal.experiments.report import write_report
 
+        check_out_file(out, suffix=".html", what="an HTML page")
         if out.exists() and not overwrite:
             raise DataFileError(f"{str(out)!r} exists; choose another --out or pass --overwrite")
         path = write_report(results, out)

@@ -66,6 +66,45 @@ def parse_position(text: str) -> tuple[float, float, float]:
     return pose.x, pose.y, pose.z
 
 
+def check_out_file(
+    path: Path,
+    *,
+    suffix: str | None,
+    option: str = "--out",
+    what: str = "a file",
+    example: str | None = None,
+) -> None:
+    """Refuse an output file path that cannot be right, before any work.
+
+    ``path`` must end in ``suffix`` (e.g. ``".nc"``, unless None; ``what`` names the
+    content, e.g. ``"a NetCDF replay file"``), must not be an existing directory, and
+    every existing ancestor folder must be a directory.  ``example`` : a file name
+    suggested inside a directory given by mistake (default ``out`` + ``suffix``).
+    Raises :class:`~echocal.errors.DataFileError`
+    naming ``option`` and the fix.
+    """
+    from echocal.errors import DataFileError
+
+    if path.is_dir():
+        raise DataFileError(
+            f"{option} {path} is a directory; give a file path, e.g. "
+            f"{path / (example or 'out' + (suffix or ''))}"
+        )
+    if suffix is not None and path.suffix.lower() != suffix:
+        given = f"ends in {path.suffix!r}" if path.suffix else "has no suffix"
+        raise DataFileError(
+            f"{option} {path} {given}: it is written as {what}; give a name ending in {suffix}, "
+            f"e.g. {path.with_suffix(suffix)}"
+        )
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise DataFileError(
+                    f"{option} {path}: {parent} is not a directory; choose a path in a folder"
+                )
+            break
+
+
 def _say(text: str) -> None:
     """One message line on stderr, not wrapped at the console width."""
     from echocal.cli._common import console
@@ -116,12 +155,15 @@ def register(app: typer.Typer) -> None:
         from echocal.measurement.recording import (
             RecordingGrid,
             check_recording_size,
+            discard_partial,
+            partial_matches,
             partial_path,
             record,
             saved_count,
         )
         from echocal.setups import load_setup_config
 
+        check_out_file(out, suffix=".nc", what="a NetCDF replay file")
         az = parse_axis(azimuth, "--azimuth")
         coel = parse_axis(coelevation, "--coelevation")
         positions = [parse_position(p) for p in position or []]
@@ -134,13 +176,19 @@ def register(app: typer.Typer) -> None:
         sidecar = partial_path(out)
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
+        source = resolve_setup(setup, snr=snr, seed=seed)
+        if overwrite and partial_matches(out, source, grid, repeats) is False:
+            discard_partial(out)
+            _say(
+                f"--overwrite: discarded the partial recording {sidecar} (made with another "
+                "grid, repeat count or setup); recording from the start"
+            )
         done = saved_count(out) if sidecar.exists() else 0
-        run_seed = seed
         if seed is not None and done:
             # A fresh process restarts the noise generator: re-seed from (seed, done) so the
             # resumed measurements do not repeat the noise draws of the first ones.
             run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
-        source = resolve_setup(setup, snr=snr, seed=run_seed)
+            source = resolve_setup(setup, snr=snr, seed=run_seed)
         if done:
             _say(f"resuming {out}: {done} of {total} measurements already saved in {sidecar}")
         try:

@@ -32,8 +32,11 @@ def register(app: typer.Typer) -> None:
         ),
     ) -> None:
         """Save a 3D view of specimen, transducer and a subsample of rays with their hits."""
+        from echocal.cli.record import check_out_file
         from echocal.plots import figure_formats, save_figure
         from echocal.plots.scene import scene_figure
+
+        check_out_file(out, suffix=None, example="scene.png")  # a directory, or a file as a folder
 
         formats = figure_formats(out)  # a format matplotlib cannot write: refused first
         virtual = resolve_setup(setup, specimen=specimen)

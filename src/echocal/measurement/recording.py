@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_array, positive_int
 from echocal.ascan import AScan
-from echocal.errors import DataFileError, EchocalValueError, LimitError
+from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import Pose
 from echocal.io import atomic_path, atomic_write_text, json_ready
 from echocal.measurement.base import MeasurementSource
@@ -48,10 +49,13 @@ __all__ = [
     "PARTIAL_FORMAT",
     "RecordingGrid",
     "check_recording_size",
+    "discard_partial",
+    "partial_matches",
     "partial_path",
     "record",
     "recording_dataset",
     "saved_count",
+    "simulation_errors",
 ]
 
 PARTIAL_FORMAT = "replay-partial/1"
@@ -194,6 +198,85 @@ def check_recording_size(grid: RecordingGrid, repeats: int, n_samples: int | Non
     return count
 
 
+def simulation_errors(source: MeasurementSource, poses: Sequence[Pose]) -> list[str | None]:
+    """What a noiseless simulation of each pose would refuse, before anything is measured.
+
+    For a simulator (a source with ``ideal_samples``, e.g.
+    :class:`~echocal.measurement.VirtualSetup`): the message of the echocal error that
+    simulating the pose raises — the probe inside the specimen, a recording window that
+    cannot contain the echo — or None where the pose simulates.  All None for any other
+    source (a replay, a rig), which cannot be asked without measuring.
+    """
+    from echocal.geometry import poses_to_arrays
+
+    ideal = getattr(source, "ideal_samples", None)
+    if ideal is None or not poses:
+        return [None] * len(poses)
+    positions, frames = poses_to_arrays(list(poses))
+    out: list[str | None] = []
+    for k in range(len(poses)):
+        try:
+            ideal(positions[k : k + 1], frames[k : k + 1])
+        except EchocalError as exc:
+            out.append(str(exc))
+        else:
+            out.append(None)
+    return out
+
+
+def _check_measurable(source: MeasurementSource, grid: RecordingGrid) -> None:
+    """Refuse a grid whose recording must fail (see :func:`simulation_errors`).
+
+    A recording stops at the first failing pose, so one failing pose is enough: checked
+    per position at the grid's centre and corner orientations (the extremes of the
+    beam's tilt), before the partial recording is created.
+    """
+    n_p, n_a, n_c = grid.shape
+    corners = {(0, 0), (0, n_c - 1), (n_a - 1, 0), (n_a - 1, n_c - 1)}
+    orientations = sorted({(n_a // 2, n_c // 2)} | corners)
+    for p in range(n_p):
+        poses = [grid.pose(p, a, c) for a, c in orientations]
+        for pose, error in zip(poses, simulation_errors(source, poses), strict=True):
+            if error is not None:
+                x, y, z = (1e3 * v for v in pose.position)
+                raise EchocalValueError(
+                    f"the recording would fail at position ({x:g}, {y:g}, {z:g}) mm, azimuth "
+                    f"{pose.azimuth:g} deg, co-elevation {pose.coelevation:g} deg: {error}"
+                    " (--position, or the setup)"
+                )
+
+
+def _fingerprint(source: MeasurementSource, grid: RecordingGrid, repeats: int) -> dict[str, Any]:
+    return {
+        "grid": grid.to_dict(),
+        "repeats": repeats,
+        "source": source.description,
+        "format": FORMAT,
+    }
+
+
+def partial_matches(
+    path: str | os.PathLike[str], source: MeasurementSource, grid: RecordingGrid, repeats: int
+) -> bool | None:
+    """Whether the partial recording of ``path`` was made with this grid, repeats and source.
+
+    None when there is no partial recording; False also when it is unreadable.
+    """
+    manifest = partial_path(path) / "manifest.json"
+    if not partial_path(path).exists():
+        return None
+    try:
+        old = json.loads(manifest.read_text(encoding="utf-8"))["fingerprint"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+    return bool(old == json.loads(json.dumps(_fingerprint(source, grid, repeats))))
+
+
+def discard_partial(path: str | os.PathLike[str]) -> None:
+    """Delete the partial recording of ``path`` (if any)."""
+    shutil.rmtree(partial_path(path), ignore_errors=True)
+
+
 def partial_path(path: str | os.PathLike[str]) -> Path:
     """The sidecar directory of an unfinished recording of ``path``."""
     target = Path(path)
@@ -282,7 +365,8 @@ class _Partial:
                 raise DataFileError(
                     f"cannot resume: partial recording {directory} was made with a different "
                     f"{', '.join(differ)} (recorded {recorded}); "
-                    "record to another path or delete the partial directory"
+                    "record to another path, pass overwrite=True (CLI: --overwrite) to discard "
+                    "it, or delete the partial directory"
                 )
         else:
             self.manifest = {"format": PARTIAL_FORMAT, "fingerprint": fingerprint, "chunks": []}
@@ -363,7 +447,15 @@ def record(
         a batch loses (and later re-measures) that batch.
     chunk_size : measurements per chunk file in the sidecar directory.
     setup : JSON-ready description of the setup, stored with the source description.
-    overwrite : replace an existing final file (otherwise that is an error).
+    overwrite : replace an existing final file (otherwise that is an error) and discard a
+        partial recording made with another grid/repeats/source.  A compatible partial
+        recording is resumed.
+
+    A simulator's grid is checked first (:func:`simulation_errors` at the centre and
+    corner orientations of every position): a probe inside the specimen or a window
+    that cannot contain the echo is refused before the partial recording is created.
+    A run that fails (an error, not an interruption) before saving anything leaves no
+    partial recording behind.
 
     Returns
     -------
@@ -372,7 +464,8 @@ def record(
     Raises
     ------
     DataFileError : the final file exists (without ``overwrite``) or a partial recording
-        there was made with a different grid/repeats/source.
+        there was made with a different grid/repeats/source (with ``overwrite`` such a
+        partial recording is discarded and the recording starts over).
     LimitError : a grid pose lies outside ``source.limits`` (nothing is measured).
     EchocalValueError : the recording is too large (:func:`check_recording_size`).
     """
@@ -403,12 +496,11 @@ def record(
         raise LimitError(
             f"{len(bad)} grid pose(s) lie outside the source's limits, e.g. #{i}: {'; '.join(v)}"
         )
-    fingerprint = {
-        "grid": grid.to_dict(),
-        "repeats": repeats,
-        "source": source.description,
-        "format": FORMAT,
-    }
+    fingerprint = _fingerprint(source, grid, repeats)
+    if overwrite and partial_matches(target, source, grid, repeats) is False:
+        discard_partial(target)  # --overwrite: start over instead of refusing to resume
+    if not sidecar.exists():
+        _check_measurable(source, grid)
     partial = _Partial(sidecar, fingerprint)
     total = len(poses) * repeats
     done = partial.n_done
@@ -443,6 +535,9 @@ def record(
         finally:
             if rows:  # keep what was measured, also on KeyboardInterrupt or a source error
                 partial.write_chunk(row_start, rows)
+            elif partial.n_done == 0 and isinstance(sys.exc_info()[1], Exception):
+                # failed (not interrupted) before saving anything: nothing to resume
+                shutil.rmtree(sidecar, ignore_errors=True)
 
     data = partial.load(total)
     n_p, n_a, n_c = grid.shape

@@ -1,0 +1,126 @@
+"""Follow-up defects of ``record``/``report``/``scene``/``scan``/``sweep check``: runs that must
+fail are refused up front (window, probe inside the part) without leaving files behind; a
+stale partial recording yields to ``--overwrite``; output paths with a wrong suffix, a
+directory or a file used as a folder are refused with the real cause."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from cli_helpers import flat, run_main
+from echocal.measurement.recording import partial_path
+
+# a tiny, fast setup (as in test_record_more): 8 x 8 rays, 256 samples, flat plate at z = 0;
+# the window [20, 25.1] us holds the echo from z = 16 mm (21.6 us) but not from 40 mm (54 us)
+TINY = """
+name = "tiny"
+seed = 4
+[specimen]
+{specimen}
+[transducer]
+width = "6 mm"
+n_h = 8
+focal_length = "50 mm"
+[pulse]
+name = "gabor"
+center_frequency = "5 MHz"
+[window]
+fs = "50 MHz"
+start = "20 us"
+n_samples = 256
+[positioner]
+reference_position = ["0 mm", "0 mm", "{ref_z}"]
+z = ["0 mm", "40 mm"]
+coelevation = [-30, 30]
+"""
+PLATE = 'builtin = "flat-plate"'
+# a sphere whose top is at z = 10 mm: the reference (26 mm) is 16 mm above it; z = 5 mm is inside
+SPHERE = '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
+
+
+def _setup(tmp_path: Path, specimen: str = PLATE, ref_z: str = "16 mm") -> Path:
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY.format(specimen=specimen, ref_z=ref_z), encoding="utf-8")
+    return path
+
+
+def _record(setup: Path, out: Path, position: str, *extra: str) -> list[str]:
+    return [
+        "record", "--setup", str(setup), "--out", str(out), "--azimuth", "-1:1:3",
+        "--coelevation", "-1:1:3", "--position", position, "--no-progress", *extra,
+    ]  # fmt: skip
+
+
+def test_record_refuses_a_probe_inside_the_part_and_then_records_the_fix(
+    tmp_path, capsys, monkeypatch
+):
+    setup = _setup(tmp_path, SPHERE, "26 mm")
+    out = tmp_path / "sp.nc"
+    code, _, err = run_main(_record(setup, out, "0,0,5"), capsys, monkeypatch)
+    assert code == 2 and "Traceback" not in err
+    assert "inside sphere" in flat(err) and "--position" in err
+    assert not out.exists() and not partial_path(out).exists()  # nothing written
+    code, _, err = run_main(_record(setup, out, "0,0,26", "--overwrite"), capsys, monkeypatch)
+    assert code == 0, err
+    assert out.is_file() and not partial_path(out).exists()
+
+
+def test_record_refuses_a_window_that_cannot_hold_the_echo(tmp_path, capsys, monkeypatch):
+    setup = _setup(tmp_path)
+    out = tmp_path / "w.nc"
+    code, _, err = run_main(_record(setup, out, "0,0,40"), capsys, monkeypatch)
+    assert code == 2 and "cannot contain any echo" in flat(err)
+    assert "(0, 0, 40) mm" in flat(err)
+    assert not out.exists() and not partial_path(out).exists()
+
+
+def test_overwrite_discards_an_incompatible_partial_and_says_so(tmp_path, capsys, monkeypatch):
+    setup = _setup(tmp_path)
+    out = tmp_path / "p.nc"
+    sidecar = partial_path(out)
+    sidecar.mkdir()  # a partial recording of another grid, with nothing saved yet
+    (sidecar / "manifest.json").write_text(
+        '{"format": "replay-partial/1", "fingerprint": {"grid": "other"}, "chunks": []}'
+    )
+    code, _, err = run_main(_record(setup, out, "0,0,16"), capsys, monkeypatch)
+    assert code == 2 and "--overwrite" in flat(err)  # the refusal names the way out
+    code, _, err = run_main(_record(setup, out, "0,0,16", "--overwrite"), capsys, monkeypatch)
+    assert code == 0, err
+    assert "discarded the partial recording" in flat(err)
+    assert out.is_file() and not sidecar.exists()
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [("x.txt", "ending in .nc"), ("x", "ending in .nc"), ("adir", "is a directory")],
+)
+def test_record_out_must_be_an_nc_file(tmp_path, capsys, monkeypatch, name, expected):
+    setup = _setup(tmp_path)
+    (tmp_path / "adir").mkdir()
+    out = tmp_path / name
+    for extra in ((), ("--overwrite",)):
+        code, _, err = run_main(_record(setup, out, "0,0,16", *extra), capsys, monkeypatch)
+        assert code == 2 and expected in flat(err) and "already exists" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["adir", "tiny.toml"]
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"), [("r.txt", "ending in .html"), ("adir", "is a directory")]
+)
+def test_report_out_must_be_an_html_file(tmp_path, capsys, monkeypatch, name, expected):
+    (tmp_path / "adir").mkdir()
+    out = tmp_path / name
+    code, _, err = run_main(["report", str(tmp_path), "--out", str(out)], capsys, monkeypatch)
+    assert code == 2 and expected in flat(err) and "pass --overwrite" not in err
+    assert not (tmp_path / "r.txt").exists()
+
+
+def test_scene_under_a_file_says_not_a_directory(tmp_path, capsys, monkeypatch):
+    blocker = tmp_path / "afile"
+    blocker.write_text("x")
+    out = blocker / "x.png"
+    args = ["scene", "--pose", "0,0,20", "--out", str(out)]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code == 2 and "is not a directory" in flat(err) and "File exists" not in err
