@@ -137,7 +137,7 @@ def register(app: typer.Typer) -> None:
             int | None,
             typer.Option(
                 help="Seed for the noise and randomized methods (and a random-repeat "
-                "replay); default: the setup file's seed, else 0."
+                "replay); default: the setup file's seed, else 0 (a replay or a rig: 0)."
             ),
         ] = None,
         out: Annotated[Path, typer.Option(help="Folder for result.json and the plots.")] = Path(
