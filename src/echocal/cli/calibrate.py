@@ -333,6 +333,19 @@ def _check_measured_options(
         )
 
 
+@dataclass(frozen=True)
+class _Measured:
+    """A run on a recording or a rig, with what its report needs (no truth)."""
+
+    result: Any
+    where: Any  # [m] shape (3,)
+    pulse: Any
+    pulse_from: str  # where the matched filter's pulse came from
+    source: dict[str, Any]  # the summary's "source" object
+    extra: dict[str, Any]  # further summary fields (a replay's recording_best_deg)
+    figures: dict[str, str]
+
+
 def _calibrate_measured(
     run: _Run,
     *,
@@ -350,10 +363,9 @@ def _calibrate_measured(
     json_output: bool,
 ) -> None:
     """Calibrate on a recording or a rig: the same objective and call, no truth known."""
-    from echocal._validate import one_of, positive_float
+    from echocal._validate import one_of
     from echocal.errors import EchocalValueError
     from echocal.geometry import PARAMETERIZATIONS
-    from echocal.measurement.objective import SourceObjective
 
     if replay_mode is not None and replay is None:
         raise EchocalValueError("--replay-mode applies only with --replay FILE")
@@ -367,108 +379,148 @@ def _calibrate_measured(
     )
     start = parse_pair(x0, "--x0") if x0 is not None else None
     seed = 0 if seed is None else seed
+    common = {"parameterization": parameterization, "start": start, "seed": seed}
     if instrument is not None:
-        address = _parse_address(instrument)
-        if position is None:
-            raise EchocalValueError(
-                "--position X,Y,Z is required with --instrument: the rig is calibrated at "
-                "one position (mm unless a unit is given)"
-            )
-        where = _parse_position(position)
-        if setup is None:
-            raise EchocalValueError(
-                "--instrument needs the transmitted pulse for the matched filter: pass "
-                "--setup NAME|FILE whose [pulse] is the rig's (see `echocal setup list`)"
-            )
-        pulse, pulse_from = _setup_pulse(setup), f"--setup {setup}"
-        wait = {} if timeout is None else {"timeout": positive_float("--timeout", timeout)}
-        from echocal.measurement.hardware import HardwareSource
-
-        with HardwareSource.connect(*address, **wait) as rig:
-            _check_reachable(rig.limits, where)
-            objective = SourceObjective(rig, where, pulse=pulse, parameterization=parameterization)
-            result = run(objective, (0.0, 0.0) if start is None else start, seed)
-            summary = {
-                "setup": setup,
-                "seed": seed,
-                "source": {
-                    "kind": "instrument",
-                    "address": f"{address[0]}:{address[1]}",
-                    "description": rig.description,
-                },
-            }
-            description = rig.description
-            extra: dict[str, Any] = {}
-            figures = _save_measured(result, out, None, plots)
+        done = _on_instrument(
+            run, instrument, timeout, setup, position, out=out, plots=plots, **common
+        )
     else:
         assert replay is not None
-        from echocal.measurement.replay import MODES, ReplaySource
-
-        if replay_mode is not None:
-            one_of("--replay-mode", replay_mode, MODES)
-        mode = {} if replay_mode is None else {"mode": replay_mode}
-        with ReplaySource.open(replay, rng=seed, **mode) as recording:
-            index, where = _replay_position(recording, position)
-            pulse, pulse_from = _replay_pulse(recording, setup)
-            if start is None:
-                start = _grid_centre(recording, parameterization)
-            bounds = (
-                _tilt_bounds_in_recording(recording, start)
-                if parameterization == "tilt"
-                else None  # the recorded grid's extent: every pose in it is recorded
-            )
-            objective = SourceObjective(
-                recording, where, pulse=pulse, parameterization=parameterization, bounds=bounds
-            )
-            result = run(objective, start, seed)
-            maps = _RecordingMap(recording, index, pulse, objective.metric, parameterization)
-            summary = {
-                "setup": setup,
-                "seed": seed,
-                "source": {
-                    "kind": "replay",
-                    "file": str(replay),
-                    "mode": recording.mode,
-                    "description": recording.description,
-                },
-            }
-            description = recording.description
-            best = None if maps.best is None else [float(v) for v in maps.best]
-            extra = {"recording_best_deg": best}
-            figures = _save_measured(result, out, maps, plots)
+        done = _on_replay(run, replay, replay_mode, setup, position, out=out, plots=plots, **common)
+    result, pulse = done.result, done.pulse
     found = result.success
-    summary.update(
-        {
-            "pulse": {
-                "name": pulse.name,
-                "center_frequency_hz": float(pulse.center_frequency),
-                "from": pulse_from,
-            },
-            "position_m": [float(v) for v in where],
-            "method": result.method,
-            "parameterization": parameterization,
-            "names": list(result.names),
-            "success": found,
-            "estimate_deg": [float(v) for v in result.x] if found else None,
-            "truth_deg": None,  # only a simulation knows its optimum
-            "error_deg": None,
-            **extra,
-            "n_measurements": result.n_measurements,
-            "acquisition_measurements": result.acquisition_measurements,
-            "n_iterations": result.n_iterations,
-            "status": result.status,
-            "message": result.message,
-            "files": {"result": str(out / "result.json"), **figures},
-        }
-    )
+    summary = {
+        "setup": setup,
+        "seed": seed,
+        "source": done.source,
+        "pulse": {
+            "name": pulse.name,
+            "center_frequency_hz": float(pulse.center_frequency),
+            "from": done.pulse_from,
+        },
+        "position_m": [float(v) for v in done.where],
+        "method": result.method,
+        "parameterization": parameterization,
+        "names": list(result.names),
+        "success": found,
+        "estimate_deg": [float(v) for v in result.x] if found else None,
+        "truth_deg": None,  # only a simulation knows its optimum
+        "error_deg": None,
+        **done.extra,
+        "n_measurements": result.n_measurements,
+        "acquisition_measurements": result.acquisition_measurements,
+        "n_iterations": result.n_iterations,
+        "status": result.status,
+        "message": result.message,
+        "files": {"result": str(out / "result.json"), **done.figures},
+    }
     if json_output:
         write_json(summary)
     elif found:
-        _print_measured_estimate(result, description, pulse, pulse_from, extra, out)
+        _print_measured_estimate(done, out)
     else:
         _print_failure(result, out)
     if not found:
         raise typer.Exit(code=EXIT_NO_ECHO)
+
+
+def _on_instrument(
+    run: _Run,
+    instrument: str,
+    timeout: float | None,
+    setup: str | None,
+    position: str | None,
+    *,
+    parameterization: str,
+    start: tuple[float, float] | None,
+    seed: int,
+    out: Path,
+    plots: bool,
+) -> _Measured:
+    """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT``."""
+    from echocal._validate import positive_float
+    from echocal.errors import EchocalValueError
+    from echocal.measurement.hardware import HardwareSource
+    from echocal.measurement.objective import SourceObjective
+
+    host, port = _parse_address(instrument)
+    if position is None:
+        raise EchocalValueError(
+            "--position X,Y,Z is required with --instrument: the rig is calibrated at "
+            "one position (mm unless a unit is given)"
+        )
+    where = _parse_position(position)
+    if setup is None:
+        raise EchocalValueError(
+            "--instrument needs the transmitted pulse for the matched filter: pass "
+            "--setup NAME|FILE whose [pulse] is the rig's (see `echocal setup list`)"
+        )
+    pulse = _setup_pulse(setup)
+    wait = {} if timeout is None else {"timeout": positive_float("--timeout", timeout)}
+    with HardwareSource.connect(host, port, **wait) as rig:
+        _check_reachable(rig.limits, where)
+        objective = SourceObjective(rig, where, pulse=pulse, parameterization=parameterization)
+        result = run(objective, (0.0, 0.0) if start is None else start, seed)
+        figures = _save_measured(result, out, None, plots)
+        source = {"kind": "instrument", "address": f"{host}:{port}"}
+        return _Measured(
+            result=result,
+            where=where,
+            pulse=pulse,
+            pulse_from=f"--setup {setup}",
+            source={**source, "description": rig.description},
+            extra={},
+            figures=figures,
+        )
+
+
+def _on_replay(
+    run: _Run,
+    replay: Path,
+    replay_mode: str | None,
+    setup: str | None,
+    position: str | None,
+    *,
+    parameterization: str,
+    start: tuple[float, float] | None,
+    seed: int,
+    out: Path,
+    plots: bool,
+) -> _Measured:
+    """Open the recording, check the options against it, calibrate, save: ``--replay FILE``."""
+    from echocal._validate import one_of
+    from echocal.measurement.objective import SourceObjective
+    from echocal.measurement.replay import MODES, ReplaySource
+
+    if replay_mode is not None:
+        one_of("--replay-mode", replay_mode, MODES)
+    mode = {} if replay_mode is None else {"mode": replay_mode}  # else the replay's default
+    with ReplaySource.open(replay, rng=seed, **mode) as recording:
+        index, where = _replay_position(recording, position)
+        pulse, pulse_from = _replay_pulse(recording, setup)
+        if start is None:
+            start = _grid_centre(recording, parameterization)
+        bounds = (
+            _tilt_bounds_in_recording(recording, start)
+            if parameterization == "tilt"
+            else None  # the recorded grid's extent: every pose in it is recorded
+        )
+        objective = SourceObjective(
+            recording, where, pulse=pulse, parameterization=parameterization, bounds=bounds
+        )
+        result = run(objective, start, seed)
+        maps = _RecordingMap(recording, index, pulse, objective.metric, parameterization)
+        best = None if maps.best is None else [float(v) for v in maps.best]
+        source = {"kind": "replay", "file": str(replay), "mode": recording.mode}
+        return _Measured(
+            result=result,
+            where=where,
+            pulse=pulse,
+            pulse_from=pulse_from,
+            source={**source, "description": recording.description},
+            extra={"recording_best_deg": best},
+            figures=_save_measured(result, out, maps, plots),
+        )
 
 
 def _parse_address(text: str) -> tuple[str, int]:
@@ -832,9 +884,9 @@ def _save_measured(
     }
 
 
-def _print_measured_estimate(
-    result: Any, description: str, pulse: Any, pulse_from: str, extra: dict[str, Any], out: Path
-) -> None:
+def _print_measured_estimate(done: _Measured, out: Path) -> None:
+    """The human report of a run on a recording or a rig: no truth, so no error."""
+    result, pulse, extra = done.result, done.pulse, done.extra
     names = result.names
     found = result.acquisition_measurements
     search = "" if found is None else f" (echo found after {found})"
@@ -849,12 +901,12 @@ def _print_measured_estimate(
             f"{best[1]:.3f}° (no truth is known for a recording)"
         )
     output.print(
-        f"[bold]{escape(result.method)}[/] on {escape(description)}\n"
+        f"[bold]{escape(result.method)}[/] on {escape(done.source['description'])}\n"
         f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
         f"{escape(reference)}\n"
         f"  measurements {result.n_measurements}{search}   iterations {result.n_iterations}\n"
         f"  pulse     {escape(pulse.name)} {pulse.center_frequency / 1e6:g} MHz, from "
-        f"{escape(pulse_from)}\n"
+        f"{escape(done.pulse_from)}\n"
         f"  stopped:  {escape(result.message)}\n"
         f"  saved to  {escape(str(out))}/"
     )
