@@ -497,6 +497,9 @@ def run_problems(
             f"position: outside the positioner limits of setup {spec.setup!r}: "
             f"{'; '.join(outside)}; choose a reachable position"
         )
+    if not outside and not part.touched("position"):
+        if (problem := _echo_problem(virtual, position)) is not None:
+            problems.append(f"position: {problem}")
 
     class DryRun(SourceObjective):
         def _evaluate(self, points: Any) -> Any:
@@ -548,6 +551,33 @@ def run_problems(
                 seen.add(message)
                 problems.append(f"methods.{part.index[i]} ({label}): {message}")
     return problems
+
+
+def _echo_problem(virtual: Any, position: Any) -> str | None:
+    """Why no run at ``position`` [m] can succeed on ``virtual`` (None if nothing is known).
+
+    Every run computes the true optimum first, a search that starts by simulating the
+    beam towards the nearest surface point (:meth:`VirtualSetup.true_optimum`): a probe
+    inside the specimen, no surface within 60 deg of straight down, or a recording window
+    that cannot contain the echo there fails every run — as ``calibrate`` refuses it.
+    """
+    from echocal.geometry import pose_from_angles
+    from echocal.measurement.recording import simulation_errors
+
+    x, y, z = (1e3 * float(v) for v in position)
+    where = f"({x:g}, {y:g}, {z:g}) mm"
+    try:
+        tilt = virtual._perpendicular_start(position)
+    except EchocalError as exc:
+        return f"every run would fail at {where}: {exc}; choose another position"
+    pose = pose_from_angles(position, float(tilt[0]), float(tilt[1]), "tilt")
+    (error,) = simulation_errors(virtual, [pose])
+    if error is None:
+        return None
+    return (
+        f"every run would fail at {where}: {error}; choose another position or adjust the "
+        "setup (its window or specimen)"
+    )
 
 
 def _thawed(value: Any) -> Any:
