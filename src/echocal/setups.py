@@ -82,6 +82,7 @@ from echocal.units import (
 
 __all__ = [
     "SetupConfig",
+    "build_pulse",
     "builtin_setup_names",
     "load_setup",
     "load_setup_config",
@@ -396,6 +397,15 @@ def _parse_any(field: str, text: str) -> Any:
         except EchocalError:
             continue
     return text
+
+
+def build_pulse(config: PulseConfig, base_dir: Path, *, where: str = "pulse") -> Pulse:
+    """The pulse of a setup's ``[pulse]`` table, built as a setup builds it (file paths
+    relative to ``base_dir``); every problem in one :class:`ConfigError` prefixed ``where``."""
+    pulse, problems = _build_pulse(config, base_dir)
+    if pulse is None:
+        raise ConfigError(f"{where}: {'; '.join(problems)}")
+    return pulse
 
 
 def _build_pulse(config: PulseConfig, base_dir: Path) -> tuple[Pulse | None, list[str]]:

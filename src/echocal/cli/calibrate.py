@@ -555,13 +555,9 @@ def _check_reachable(limits: Any, where: Any) -> None:
 
 def _config_pulse(config: Any, base_dir: Path, where: str) -> Any:
     """The pulse of a setup's ``[pulse]`` table, built as a setup builds it."""
-    from echocal.errors import ConfigError
-    from echocal.setups import _build_pulse  # the setups' own pulse builder
+    from echocal.setups import build_pulse
 
-    pulse, problems = _build_pulse(config, base_dir)
-    if pulse is None:
-        raise ConfigError(f"{where}: {'; '.join(problems)}")
-    return pulse
+    return build_pulse(config, base_dir, where=where)
 
 
 def _setup_pulse(setup: str) -> Any:
