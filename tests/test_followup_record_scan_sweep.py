@@ -147,3 +147,36 @@ def test_sweep_check_refuses_a_window_that_cannot_hold_the_echo():
     (problem,) = [line.strip() for line in str(info.value).splitlines()[1:]]
     assert problem.startswith("position:") and "cannot contain any echo" in problem
     assert load_sweep({**SWEEP, "position": [0, 0, "22 mm"]}).name == "w"  # a valid one passes
+
+
+def _scan(setup: Path, out: Path, z: str, *extra: str) -> list[str]:
+    return [
+        "scan", "--setup", str(setup), "--grid", "-1:1:1,-1:1:1", "--z", z, "--out", str(out),
+        "--no-progress", *extra,
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("specimen", "ref_z", "z", "expected"),
+    [(PLATE, "16 mm", "40", "cannot contain any echo"), (SPHERE, "26 mm", "5", "inside sphere")],
+)
+def test_scan_refuses_a_run_where_every_point_fails(
+    tmp_path, capsys, monkeypatch, specimen, ref_z, z, expected
+):
+    setup = _setup(tmp_path, specimen, ref_z)
+    out = tmp_path / "scan"
+    code, _, err = run_main(_scan(setup, out, z), capsys, monkeypatch)
+    assert code == 2 and "Traceback" not in err
+    assert expected in flat(err) and "every grid point would fail (9 of 9)" in flat(err)
+    assert not out.exists()  # nothing written
+
+
+def test_a_scan_that_finds_nothing_prints_no_numpy_warnings(tmp_path, capsys, monkeypatch):
+    setup = _setup(tmp_path)
+    out = tmp_path / "scan"
+    # 9 measurements per point: one auto iteration + 2 time-of-flight A-scans, never converged
+    code, _, err = run_main(_scan(setup, out, "16", "--budget-per-point", "9"), capsys, monkeypatch)
+    assert code == 0, err
+    assert "0 found" in err  # the case of the defect: nothing found, summaries of nothing
+    assert "Mean of empty slice" not in err and "invalid value" not in err
+    assert "warning" not in err.lower()

@@ -306,7 +306,9 @@ def check_scan(
     positioner's z limits, that some grid point lies within its x/y limits (a point
     outside them is a per-point ``source-error``, as at a part's edge), and that
     ``budget_per_point`` covers one iteration of ``method`` (with ``method_options``)
-    plus the ``tof_repeats`` time-of-flight A-scans.  Raises
+    plus the ``tof_repeats`` time-of-flight A-scans.  On a simulator, also that the
+    first measurement (at ``x0``) does not fail at every grid point — the probe inside
+    the specimen, a window that cannot contain the echo.  Raises
     :class:`~echocal.errors.EchocalValueError` or :class:`~echocal.errors.LimitError`
     naming the setting and what is allowed.
     """
@@ -360,6 +362,7 @@ def check_scan(
         raise EchocalValueError(
             f"method_options for method {method!r}: {type(exc).__name__}: {exc}"
         ) from None
+    _check_echo_possible(source, positions[reach], start, parameterization)
     need = objective.cost(opt.min_budget)
     if budget < need + tof_repeats:
         raise EchocalValueError(
@@ -367,6 +370,37 @@ def check_scan(
             f"measurements for one iteration, plus {tof_repeats} time-of-flight A-scans; "
             f"allowed: budget_per_point >= {need + tof_repeats} (--budget-per-point)"
         )
+
+
+def _check_echo_possible(
+    source: MeasurementSource, positions: FloatArray, start: FloatArray, parameterization: str
+) -> None:
+    """Refuse a scan whose every point fails its first measurement (simulators only).
+
+    Each point's calibration starts cold at ``start`` [deg] until a neighbour is found, so
+    when the simulation at ``start`` fails at every reachable position [m] ``(N, 3)`` —
+    the probe inside the specimen, a window that cannot contain the echo — no point can
+    be found.  The centre position is checked first; only when it fails are the others.
+    """
+    from echocal.geometry import pose_from_angles
+    from echocal.measurement.recording import simulation_errors
+
+    centre = int(np.argmin(np.sum((positions - positions.mean(axis=0)) ** 2, axis=1)))
+    order = [centre, *(k for k in range(len(positions)) if k != centre)]
+    first = None
+    for k in order:
+        pose = pose_from_angles(positions[k], float(start[0]), float(start[1]), parameterization)
+        (error,) = simulation_errors(source, [pose])
+        if error is None:
+            return
+        first = first or (positions[k], error)
+    where, error = first  # type: ignore[misc]
+    x, y, z = (1e3 * v for v in where)
+    raise EchocalValueError(
+        f"every grid point would fail ({len(positions)} of {len(positions)}), e.g. at "
+        f"({x:g}, {y:g}, {z:g}) mm: {error}; choose another stand-off (--z), grid (--grid) "
+        "or setup"
+    )
 
 
 def scan_surface(
