@@ -131,3 +131,13 @@ def test_warnings_in_a_command_are_one_line(capsys, monkeypatch):
         run_cli(app)
     assert exit_info.value.code == 0
     assert capsys.readouterr().err.strip() == "warning: specimen.mesh_scale is ignored"
+
+
+def test_a_file_in_the_way_of_the_output_folder_is_named(tmp_path):
+    import pytest
+
+    from echocal.errors import DataFileError
+
+    (tmp_path / "notes").write_text("x")
+    with pytest.raises(DataFileError, match=r"notes is not a directory"):
+        atomic_write_text(tmp_path / "notes" / "deeper" / "out.txt", "y")

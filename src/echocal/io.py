@@ -26,6 +26,13 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     target = Path(path)
     if target.is_dir():
         raise DataFileError(f"cannot write {target}: it is a directory; give a file path")
+    for folder in target.parents:  # the nearest existing ancestor must be a directory
+        if folder.exists():
+            if not folder.is_dir():
+                raise DataFileError(
+                    f"cannot write {target}: {folder} is not a directory; choose another path"
+                )
+            break
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         tmp = _create_unique(target)

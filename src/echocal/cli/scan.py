@@ -98,7 +98,6 @@ def register(app: typer.Typer) -> None:
         point fail (a height outside the positioner's limits, a budget below what the
         method needs) are refused before anything is written.
         """
-        import warnings
 
         import numpy as np
 
@@ -152,12 +151,7 @@ def register(app: typer.Typer) -> None:
             if figures and warm:
                 from echocal.plots.surface import save_surface_figures
 
-                with warnings.catch_warnings():
-                    # matplotlib's quiver averages the arrows: with no point found (all
-                    # NaN) numpy warns of an empty mean — the figure is right, just empty
-                    warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
-                    warnings.filterwarnings("ignore", "invalid value encountered", RuntimeWarning)
-                    save_surface_figures(results[label], out, specimen=source.specimen)
+                save_surface_figures(results[label], out, specimen=source.specimen)
         summary = results["warm"].summary
         report = {
             "out": str(out),

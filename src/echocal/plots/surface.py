@@ -94,7 +94,9 @@ def normal_map_figure(scan: SurfaceScan) -> Figure:
         cmap="magma",
     )
     xx, yy = np.meshgrid(ds["x"].values * _MM, ds["y"].values * _MM)
-    ax.quiver(xx, yy, ds["normal_x"].values, ds["normal_y"].values, color="white", pivot="mid")
+    nx, ny = ds["normal_x"].values, ds["normal_y"].values
+    if np.isfinite(nx).any():  # no point found: no arrows (quiver would average nothing)
+        ax.quiver(xx, yy, nx, ny, color="white", pivot="mid")
     return fig
 
 
