@@ -1,0 +1,410 @@
+"""``echocal calibrate`` on a recording (``--replay FILE``) or a rig (``--instrument
+HOST:PORT``): the options checked against the source, the pulse found, the recording's
+grid turned into bounds and a map, the run saved and printed without a truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import typer
+from rich.markup import escape
+
+from echocal.cli._common import console, output, parse_pair, write_json
+from echocal.cli._replay_grid import (
+    RecordingMap,
+    grid_centre,
+    replay_position,
+    tilt_bounds_in_recording,
+)
+from echocal.cli.calibrate import EXIT_NO_ECHO, _parse_position, _print_failure, _Run
+
+
+def _check_measured_options(
+    replay: Path | None, instrument: str | None, snr: str | None, specimen: str | None
+) -> None:
+    """Refuse what a recording or a rig cannot honour (before any work)."""
+    from echocal.errors import EchocalValueError
+
+    if replay is not None and instrument is not None:
+        raise EchocalValueError(
+            "--replay and --instrument are mutually exclusive: calibrate on one source"
+        )
+    what = "a recording (--replay)" if replay is not None else "a rig (--instrument)"
+    if snr is not None:
+        raise EchocalValueError(
+            f"--snr applies to a simulated setup only: {what} has its own noise; drop --snr"
+        )
+    if specimen is not None:
+        raise EchocalValueError(
+            f"--specimen applies to a simulated setup only: {what} measures its own "
+            "specimen; drop --specimen"
+        )
+
+
+@dataclass(frozen=True)
+class _Measured:
+    """A run on a recording or a rig, with what its report needs (no truth)."""
+
+    result: Any
+    where: Any  # [m] shape (3,)
+    pulse: Any
+    pulse_from: str  # where the matched filter's pulse came from
+    source: dict[str, Any]  # the summary's "source" object
+    extra: dict[str, Any]  # further summary fields (a replay's recording_best_deg)
+    figures: dict[str, str]
+
+
+def _calibrate_measured(
+    run: _Run,
+    *,
+    replay: Path | None,
+    replay_mode: str | None,
+    instrument: str | None,
+    timeout: float | None,
+    setup: str | None,
+    position: str | None,
+    parameterization: str | None,
+    x0: str | None,
+    seed: int | None,
+    out: Path,
+    plots: bool,
+    json_output: bool,
+) -> None:
+    """Calibrate on a recording or a rig: the same objective and call, no truth known."""
+    from echocal._validate import one_of
+    from echocal.errors import EchocalValueError
+    from echocal.geometry import PARAMETERIZATIONS
+
+    if replay_mode is not None and replay is None:
+        raise EchocalValueError("--replay-mode applies only with --replay FILE")
+    if timeout is not None and instrument is None:
+        raise EchocalValueError("--timeout applies only with --instrument HOST:PORT")
+    default = "azimuth-coelevation" if replay is not None else "tilt"
+    parameterization = one_of(
+        "--parameterization",
+        default if parameterization is None else parameterization,
+        PARAMETERIZATIONS,
+    )
+    start = parse_pair(x0, "--x0") if x0 is not None else None
+    seed = 0 if seed is None else seed
+    common = {"parameterization": parameterization, "start": start, "seed": seed}
+    if instrument is not None:
+        done = _on_instrument(
+            run, instrument, timeout, setup, position, out=out, plots=plots, **common
+        )
+    else:
+        assert replay is not None
+        done = _on_replay(run, replay, replay_mode, setup, position, out=out, plots=plots, **common)
+    result, pulse = done.result, done.pulse
+    found = result.success
+    summary = {
+        "setup": setup,
+        "seed": seed,
+        "source": done.source,
+        "pulse": {
+            "name": pulse.name,
+            "center_frequency_hz": float(pulse.center_frequency),
+            "from": done.pulse_from,
+        },
+        "position_m": [float(v) for v in done.where],
+        "method": result.method,
+        "parameterization": parameterization,
+        "names": list(result.names),
+        "success": found,
+        "estimate_deg": [float(v) for v in result.x] if found else None,
+        "truth_deg": None,  # only a simulation knows its optimum
+        "error_deg": None,
+        **done.extra,
+        "n_measurements": result.n_measurements,
+        "acquisition_measurements": result.acquisition_measurements,
+        "n_iterations": result.n_iterations,
+        "status": result.status,
+        "message": result.message,
+        "files": {"result": str(out / "result.json"), **done.figures},
+    }
+    if json_output:
+        write_json(summary)
+    elif found:
+        _print_measured_estimate(done, out)
+    else:
+        _print_failure(result, out)
+    if not found:
+        raise typer.Exit(code=EXIT_NO_ECHO)
+
+
+def _on_instrument(
+    run: _Run,
+    instrument: str,
+    timeout: float | None,
+    setup: str | None,
+    position: str | None,
+    *,
+    parameterization: str,
+    start: tuple[float, float] | None,
+    seed: int,
+    out: Path,
+    plots: bool,
+) -> _Measured:
+    """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT``."""
+    from echocal._validate import positive_float
+    from echocal.errors import EchocalValueError
+    from echocal.measurement.hardware import HardwareSource
+    from echocal.measurement.objective import SourceObjective
+
+    host, port = _parse_address(instrument)
+    if position is None:
+        raise EchocalValueError(
+            "--position X,Y,Z is required with --instrument: the rig is calibrated at "
+            "one position (mm unless a unit is given)"
+        )
+    where = _parse_position(position)
+    if setup is None:
+        raise EchocalValueError(
+            "--instrument needs the transmitted pulse for the matched filter: pass "
+            "--setup NAME|FILE whose [pulse] is the rig's (see `echocal setup list`)"
+        )
+    pulse = _setup_pulse(setup)
+    wait = {} if timeout is None else {"timeout": positive_float("--timeout", timeout)}
+    with HardwareSource.connect(host, port, **wait) as rig:
+        _check_reachable(rig.limits, where)
+        objective = SourceObjective(rig, where, pulse=pulse, parameterization=parameterization)
+        result = run(objective, (0.0, 0.0) if start is None else start, seed)
+        figures = _save_measured(result, out, None, plots)
+        source = {"kind": "instrument", "address": f"{host}:{port}"}
+        return _Measured(
+            result=result,
+            where=where,
+            pulse=pulse,
+            pulse_from=f"--setup {setup}",
+            source={**source, "description": rig.description},
+            extra={},
+            figures=figures,
+        )
+
+
+def _on_replay(
+    run: _Run,
+    replay: Path,
+    replay_mode: str | None,
+    setup: str | None,
+    position: str | None,
+    *,
+    parameterization: str,
+    start: tuple[float, float] | None,
+    seed: int,
+    out: Path,
+    plots: bool,
+) -> _Measured:
+    """Open the recording, check the options against it, calibrate, save: ``--replay FILE``."""
+    from echocal._validate import one_of
+    from echocal.measurement.objective import SourceObjective
+    from echocal.measurement.replay import MODES, ReplaySource
+
+    if replay_mode is not None:
+        one_of("--replay-mode", replay_mode, MODES)
+    mode = {} if replay_mode is None else {"mode": replay_mode}  # else the replay's default
+    with ReplaySource.open(replay, rng=seed, **mode) as recording:
+        index, where = replay_position(recording, position)
+        pulse, pulse_from = _replay_pulse(recording, setup)
+        if start is None:
+            start = grid_centre(recording, parameterization)
+        bounds = (
+            tilt_bounds_in_recording(recording, start)
+            if parameterization == "tilt"
+            else None  # the recorded grid's extent: every pose in it is recorded
+        )
+        objective = SourceObjective(
+            recording, where, pulse=pulse, parameterization=parameterization, bounds=bounds
+        )
+        result = run(objective, start, seed)
+        maps = RecordingMap(recording, index, pulse, objective.metric, parameterization)
+        best = None if maps.best is None else [float(v) for v in maps.best]
+        source = {"kind": "replay", "file": str(replay), "mode": recording.mode}
+        return _Measured(
+            result=result,
+            where=where,
+            pulse=pulse,
+            pulse_from=pulse_from,
+            source={**source, "description": recording.description},
+            extra={"recording_best_deg": best},
+            figures=_save_measured(result, out, maps, plots),
+        )
+
+
+def _parse_address(text: str) -> tuple[str, int]:
+    """``--instrument HOST:PORT`` → (host, port); an IPv6 host may be bracketed."""
+    from echocal.errors import EchocalValueError
+
+    host, sep, port = text.strip().rpartition(":")
+    host = host.strip().removeprefix("[").removesuffix("]")
+    if not sep or not host or not port.strip().isdigit() or not 1 <= int(port) <= 65535:
+        raise EchocalValueError(
+            "--instrument takes HOST:PORT of a rig speaking echocal's line protocol, the "
+            f"port 1-65535 (e.g. 127.0.0.1:5025); got {text!r}"
+        )
+    return host, int(port)
+
+
+def _check_reachable(limits: Any, where: Any) -> None:
+    """LimitError if the rig cannot reach position ``where`` [m] (before any move)."""
+    from echocal.errors import LimitError
+    from echocal.geometry import Pose
+
+    middle = (0.5 * sum(limits.azimuth), 0.5 * sum(limits.coelevation))
+    problems = limits.violations(Pose(*(float(v) for v in where), *middle))
+    if problems:
+        raise LimitError(f"--position is outside the rig's limits: {'; '.join(problems)}")
+
+
+def _config_pulse(config: Any, base_dir: Path, where: str) -> Any:
+    """The pulse of a setup's ``[pulse]`` table, built as a setup builds it."""
+    from echocal.setups import build_pulse
+
+    return build_pulse(config, base_dir, where=where)
+
+
+def _setup_pulse(setup: str) -> Any:
+    """The pulse of ``--setup`` (a built-in or a TOML file); nothing else of it is used."""
+    from echocal.setups import load_setup_config
+
+    config, base_dir = load_setup_config(setup)
+    return _config_pulse(config.pulse, base_dir, setup)
+
+
+def _recorded_pulse(recording: Any) -> tuple[Any, str]:
+    """The pulse of the setup a recording was made with (``echocal record`` stores its
+    config in the file's ``source`` attribute) and where it came from; (None, why not)."""
+    from echocal.errors import EchocalError
+    from echocal.setups import PulseConfig
+
+    stored = recording.source_info.get("setup")
+    config = stored.get("config") if isinstance(stored, dict) else None
+    table = config.get("pulse") if isinstance(config, dict) else None
+    if not isinstance(table, dict):
+        return None, (
+            "the recording does not say which pulse was transmitted (only `echocal record` "
+            "stores its setup in the file)"
+        )
+    name = stored.get("setup")
+    # a setup file's relative paths (a sampled pulse's samples) are relative to its folder
+    base = Path(name).parent if isinstance(name, str) and name.endswith(".toml") else Path.cwd()
+    try:
+        pulse = _config_pulse(PulseConfig.model_validate(table), base, "pulse")
+    except (EchocalError, ValueError) as exc:
+        return None, f"the recorded setup's pulse cannot be rebuilt ({exc})"
+    return pulse, f"the recording's setup {name or config.get('name', '')}".rstrip()
+
+
+def _same_pulse(a: Any, b: Any) -> bool:
+    if type(a) is not type(b):
+        return False
+    pa, pb = a.parameters(), b.parameters()
+    return pa.keys() == pb.keys() and all(np.array_equal(pa[k], pb[k]) for k in pa)
+
+
+def _replay_pulse(recording: Any, setup: str | None) -> tuple[Any, str]:
+    """The matched filter's template for a recording: ``--setup``'s pulse when given (with a
+    warning if the recording was made with another), else the recorded setup's."""
+    from echocal.errors import ConfigError
+
+    recorded, origin = _recorded_pulse(recording)
+    if setup is not None:
+        pulse = _setup_pulse(setup)
+        if recorded is not None and not _same_pulse(pulse, recorded):
+            console.print(
+                f"[yellow]warning:[/] the pulse of --setup {escape(setup)} ({pulse.name} "
+                f"{pulse.center_frequency / 1e6:g} MHz) differs from the one {recording.path} "
+                f"was recorded with ({recorded.name} {recorded.center_frequency / 1e6:g} MHz); "
+                "the matched filter uses --setup's",
+                highlight=False,
+                soft_wrap=True,
+            )
+        return pulse, f"--setup {setup}"
+    if recorded is None:
+        raise ConfigError(
+            f"{recording.path}: no pulse for the matched filter: {origin}; pass --setup "
+            "NAME|FILE whose [pulse] is the transmitted one"
+        )
+    return recorded, origin
+
+
+def _save_measured(
+    result: Any, out: Path, maps: RecordingMap | None, plots: bool
+) -> dict[str, str]:
+    """Write result.json and (with ``plots``) the convergence and path plots of a run on a
+    recording (``maps``) or a rig (None: no map)."""
+    out.mkdir(parents=True, exist_ok=True)
+    result.save_json(out / "result.json")
+    if not plots:
+        return {}
+    from echocal.plots import save_figure
+    from echocal.plots.calibration import measured_convergence_figure, path_figure
+
+    label = result.method
+    if maps is None:
+        conv = measured_convergence_figure(
+            result, title=f"{label} on a rig: the pseudo-energy measured (no truth known)"
+        )
+        path = path_figure(
+            None,
+            {label: result},
+            x0=result.iterates[0],
+            title=f"{label}: path over the measured poses (a rig has no map)",
+            show_measurements=True,
+        )
+    else:
+        peak = maps.peak if maps.peak > 0 else None
+        conv = measured_convergence_figure(
+            result,
+            scale=peak,
+            scale_label="the recording's maximum",
+            iterate_values=maps.at(result.iterates),
+            iterate_label="the recording's metric at the estimate",
+            title=f"{label} on a recording: the pseudo-energy measured (no truth known)",
+        )
+        path = path_figure(
+            maps.cost_map(),
+            {label: result},
+            x0=result.iterates[0],
+            truth=maps.best,
+            truth_label="the recording's best grid pose",
+            title=f"{label}: path over the recording's metric map (measured poses in grey)",
+            db_floor=-40.0,
+            show_measurements=True,
+        )
+    return {
+        name: str(save_figure(fig, out / f"{name}.png", formats=("png",), dpi=110)[0])
+        for name, fig in (("convergence", conv), ("path", path))
+    }
+
+
+def _print_measured_estimate(done: _Measured, out: Path) -> None:
+    """The human report of a run on a recording or a rig: no truth, so no error."""
+    result, pulse, extra = done.result, done.pulse, done.extra
+    names = result.names
+    found = result.acquisition_measurements
+    search = "" if found is None else f" (echo found after {found})"
+    best = extra.get("recording_best_deg")
+    if "recording_best_deg" not in extra:
+        reference = "  truth     unknown: a rig does not know its optimum (no error computed)"
+    elif best is None:
+        reference = "  truth     unknown, and the recording has no finite A-scan to compare with"
+    else:
+        reference = (
+            f"  recording's best grid pose {names[0]} = {best[0]:.3f}°, {names[1]} = "
+            f"{best[1]:.3f}° (no truth is known for a recording)"
+        )
+    output.print(
+        f"[bold]{escape(result.method)}[/] on {escape(done.source['description'])}\n"
+        f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
+        f"{escape(reference)}\n"
+        f"  measurements {result.n_measurements}{search}   iterations {result.n_iterations}\n"
+        f"  pulse     {escape(pulse.name)} {pulse.center_frequency / 1e6:g} MHz, from "
+        f"{escape(done.pulse_from)}\n"
+        f"  stopped:  {escape(result.message)}\n"
+        f"  saved to  {escape(str(out))}/"
+    )
