@@ -8,7 +8,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 from echocal import MM, SOUND_SPEED_WATER, EchocalValueError, LimitError, Pose
 from echocal.echo import ray_echoes
-from echocal.geometry import angle_between, orientation_frame, orientation_normal
+from echocal.geometry import angle_between, orientation_frame, orientation_normal, tilt_normal
 from echocal.measurement import PositionerLimits
 from echocal.measurement.virtual import ReceiverSettings, VirtualSetup
 from echocal.signal import RecordingWindow, make_pulse, pseudo_energy, time_of_flight
@@ -129,6 +129,16 @@ def test_true_optimum_over_a_sphere_points_at_its_centre():
     expected = position - np.array([0.0, 0.0, -25 * MM])
     # Symmetric beam on a sphere: the echo peaks exactly there (search tol 1e-5°).
     assert angle_between(orientation_normal(az, coel), expected) < 1e-3
+
+
+def test_perpendicular_start_aims_at_the_nearest_surface_point():
+    # Over a sphere the nearest surface point lies on the line to its centre (0, 0, −25 mm):
+    # from (10, 0, 25) mm the beam tilts by atan(10 / 50) = 11.3° towards −x.  The search
+    # fan has 1° steps, so the start is within half a step (0.5°) of that, per axis.
+    sim = setup("sphere", snr_db=None)
+    tx, ty = sim.perpendicular_start(np.array([10 * MM, 0.0, 25 * MM]))
+    start = tilt_normal(tx, ty)
+    assert angle_between(start, np.array([10.0, 0.0, 50.0])) <= np.hypot(0.5, 0.5)
 
 
 def test_setup_is_frozen_so_its_cached_noise_cannot_go_stale():

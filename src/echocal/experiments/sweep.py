@@ -567,7 +567,7 @@ def _echo_problem(virtual: Any, position: Any) -> str | None:
     x, y, z = (1e3 * float(v) for v in position)
     where = f"({x:g}, {y:g}, {z:g}) mm"
     try:
-        tilt = virtual._perpendicular_start(position)
+        tilt = virtual.perpendicular_start(position)
     except EchocalError as exc:
         return f"every run would fail at {where}: {exc}; choose another position"
     pose = pose_from_angles(position, float(tilt[0]), float(tilt[1]), "tilt")

@@ -454,7 +454,7 @@ class VirtualSetup(BaseSource):
 
     def _search_optimum(self, position: FloatArray, metric: str) -> tuple[float, float]:
         # Search in gimbal tilts: smooth at the pole, where most optima lie.
-        start = self._perpendicular_start(position)
+        start = self.perpendicular_start(position)
 
         def negative(v: FloatArray) -> float:
             value = self.metric_values(position, v[0], v[1], parameterization="tilt", metric=metric)
@@ -469,8 +469,9 @@ class VirtualSetup(BaseSource):
         az, coel = convert_angles(best.x[0], best.x[1], "tilt", "azimuth-coelevation")
         return float(az), float(coel)
 
-    def _perpendicular_start(self, position: FloatArray) -> FloatArray:
-        """Tilts [deg] of the beam towards the nearest surface point within ±60°.
+    def perpendicular_start(self, position: FloatArray) -> FloatArray:
+        """Tilts [deg], shape (2,), of the beam from ``position`` [m] towards the nearest
+        surface point within ±60° (where :meth:`true_optimum` starts its search).
 
         The distance to a smooth surface is stationary where the ray meets it at
         normal incidence, so the nearest hit of a 1° fan of rays from ``position``
