@@ -230,3 +230,15 @@ def test_grid_cut_short_by_an_explicit_iteration_limit_warns(gauss_objective):
     with pytest.warns(UserWarning, match="only part of the grid"):
         result = calibrate(objective, method="grid", x0=(0.0, 0.0), max_iter=3, rng=0)
     assert result.n_iterations == 3
+
+
+def test_grid_warns_when_its_best_node_is_on_its_edge(gauss_objective):
+    # OPT = (0.7, -0.4): a grid of span 0.5 around (-0.5, 0) cannot reach it; its best node
+    # is on the +x edge.  Centred on OPT it is inside, and no warning is given.
+    with pytest.warns(UserWarning, match="edge"):
+        calibrate(gauss_objective(), "grid", x0=(-0.5, 0.0), span=0.5, step=0.25)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        calibrate(gauss_objective(), "grid", x0=(0.7, -0.4), span=0.5, step=0.25)

@@ -12,6 +12,8 @@ of a partial grid.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -120,11 +122,27 @@ class GridSearch(Optimizer):
     def _tell(self, points: FloatArray, values: FloatArray) -> bool:
         self.values[self._row] = values
         self._row += 1
+        self._iterate = self._recommend()
         if self._row == len(self.axes[1]):
             self.finished = True
             self.finish_status = 5
-        self._iterate = self._recommend()
+            self._warn_on_edge()
         return True
+
+    def _warn_on_edge(self) -> None:
+        """Warn when the best node of the whole grid lies on its outer edge: the maximum may
+        lie beyond it (a larger span, or x0 moved towards it, would show)."""
+        (a0, a1), best = self.axes, self._iterate
+        if len(a0) < 3 or len(a1) < 3:
+            return
+        if best[0] in (a0[0], a0[-1]) or best[1] in (a1[0], a1[-1]):
+            warnings.warn(
+                f"grid: the best node ({best[0]:.4g}, {best[1]:.4g}) deg lies on the grid's "
+                f"edge, so the maximum may lie outside it: widen span (now {self.span:g} deg) "
+                "or start nearer the echo",
+                UserWarning,
+                stacklevel=4,
+            )
 
     def _recommend(self) -> FloatArray:
         v = self.values

@@ -23,7 +23,7 @@ except ImportError:  # pragma: no cover - depends on the installed typer
     from click import exceptions as click_exceptions  # type: ignore[no-redef]
 _NO_ARGS_IS_HELP = getattr(click_exceptions, "NoArgsIsHelpError", ())  # click >= 8.2
 
-console = Console(stderr=True, emoji=False)  # emoji=False: "1:-1:3" is not ":-1:" -> 👎
+console = Console(stderr=True, emoji=False, soft_wrap=True)  # one message, one line; "1:-1:3" no 👎
 """Console for messages about the work — progress, warnings, errors (stderr)."""
 
 output = Console(emoji=False, width=None if sys.stdout.isatty() else 200)
