@@ -92,6 +92,24 @@ def test_overwrite_discards_an_incompatible_partial_and_says_so(tmp_path, capsys
     assert out.is_file() and not sidecar.exists()
 
 
+def test_a_stale_partial_is_refused_in_one_line_without_resuming_news(
+    tmp_path, capsys, monkeypatch
+):
+    setup = _setup(tmp_path)
+    out = tmp_path / "s.nc"
+    sidecar = partial_path(out)
+    sidecar.mkdir()  # another grid's partial recording with 5 A-scans saved
+    (sidecar / "manifest.json").write_text(
+        '{"format": "replay-partial/1", "fingerprint": {"grid": "other"},'
+        ' "chunks": [{"file": "c0.npy", "count": 5}]}'
+    )
+    code, _, err = run_main(_record(setup, out, "0,0,16"), capsys, monkeypatch)
+    assert code == 2
+    assert "resuming" not in err and "saved" not in err  # it would not resume: no such news
+    assert len(err.strip().splitlines()) == 1 and "--overwrite" in err
+    assert sidecar.exists()  # kept until the user says --overwrite
+
+
 @pytest.mark.parametrize(
     ("name", "expected"),
     [("x.txt", "ending in .nc"), ("x", "ending in .nc"), ("adir", "is a directory")],

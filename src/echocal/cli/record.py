@@ -177,11 +177,18 @@ def register(app: typer.Typer) -> None:
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
         source = resolve_setup(setup, snr=snr, seed=seed)
-        if overwrite and partial_matches(out, source, grid, repeats) is False:
+        stale = partial_matches(out, source, grid, repeats) is False
+        if stale and overwrite:
             discard_partial(out)
             _say(
                 f"--overwrite: discarded the partial recording {sidecar} (made with another "
                 "grid, repeat count or setup); recording from the start"
+            )
+        elif stale:  # before any "resuming" news: it would not resume
+            raise DataFileError(
+                f"cannot resume: {sidecar} was recorded with another grid, repeat count or "
+                "setup; pass --overwrite to discard it and record from the start, or record "
+                "to another --out"
             )
         done = saved_count(out) if sidecar.exists() else 0
         if seed is not None and done:

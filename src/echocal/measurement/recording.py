@@ -343,6 +343,12 @@ def recording_dataset(
     )
 
 
+def _short(value: Any, limit: int = 60) -> str:
+    """``repr(value)``, cut to ``limit`` characters (a grid's angle lists run to kilobytes)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 class _Partial:
     """The sidecar directory: chunk files plus a manifest (private)."""
 
@@ -361,7 +367,7 @@ class _Partial:
                 k for k in fingerprint.keys() | old.keys() if fingerprint.get(k) != old.get(k)
             )
             if differ:
-                recorded = ", ".join(f"{k}={old.get(k)!r}" for k in differ)
+                recorded = ", ".join(f"{k}={_short(old.get(k))}" for k in differ)
                 raise DataFileError(
                     f"cannot resume: partial recording {directory} was made with a different "
                     f"{', '.join(differ)} (recorded {recorded}); "
