@@ -25,7 +25,7 @@ from echocal.calibrate import CalibrationResult
 from echocal.cli import app
 from echocal.evaluation import CostMap, angular_error
 from echocal.geometry import convert_angles
-from echocal.measurement import InstrumentServer, RecordingGrid, ReplaySource, record
+from echocal.measurement import Faults, InstrumentServer, RecordingGrid, ReplaySource, record
 from echocal.plots.calibration import measured_convergence_figure, path_figure
 from echocal.setups import load_setup
 
@@ -262,6 +262,116 @@ def test_instrument_plots_the_path_without_a_map(plate, tmp_path, capsys, monkey
     assert code == 0, err
     assert "a rig does not know its optimum" in flat(out)
     assert {p.name for p in tmp_path.iterdir()} == {"result.json", "convergence.png", "path.png"}
+
+
+# -- the rig fails mid-run -----------------------------------------------------------------------
+RIG_ARGS = ["--position", "0,0,20", "--x0", "-7,15", "--seed", "3", "--no-plots"]
+
+
+# The rig vanishes after 2 + 3 k commands (*IDN?, LIMITS?, then MOVE, POS?, ACQ? per pose):
+# k A-scans.  The run measures a first batch of 7 poses, then one at a time: k = 5 cuts the
+# first batch short (the objective has logged nothing), k = 10 stops between batches.
+DROPS = [(5, 5), (10, 0)]  # (k, A-scans of the unfinished batch)
+
+
+@pytest.mark.parametrize(("k", "unfinished"), DROPS, ids=["in-a-batch", "between-batches"])
+def test_rig_failing_mid_run_saves_what_was_measured(
+    k, unfinished, plate, tmp_path, capsys, monkeypatch
+):
+    """The measurements made before the fault are written to partial_log.json, one error
+    line says how many and where, exit 2; they are the simulated run's first measurements
+    (same seed)."""
+    sim = calibrate_json(
+        ["--setup", str(plate), *RIG_ARGS, "--out", str(tmp_path / "sim")], capsys, monkeypatch
+    )
+    simulated = CalibrationResult.load_json(tmp_path / "sim" / "result.json")
+    out = tmp_path / "rig"
+    faults = Faults(drop_after=2 + 3 * k, drop_forever=True)
+    with InstrumentServer(load_setup(plate, seed=3), faults=faults) as server:
+        host, port = server.address
+        args = ["--instrument", f"{host}:{port}", "--setup", str(plate), *RIG_ARGS]
+        code, stdout, err = run_main(["calibrate", *args, "--out", str(out)], capsys, monkeypatch)
+        acquired = server.n_acquisitions
+    assert code == 2, err
+    assert "Traceback" not in err and err.count("error:") == 1, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert stdout == ""
+    assert acquired == k < sim["n_measurements"]  # the fault came mid-run
+    assert "failed after 4 attempts" in err
+    assert f"stopped after {acquired} measurements" in err
+    assert str(out / "partial_log.json") in err
+    assert {p.name for p in out.iterdir()} == {"partial_log.json"}  # no result.json
+    log = json.loads((out / "partial_log.json").read_text())
+    assert log["status"] == "interrupted" and "failed after 4 attempts" in log["error"]
+    assert log["n_measurements"] == acquired == len(log["values"]) == len(log["times"])
+    assert log["source"] == {
+        "kind": "instrument",
+        "address": f"{host}:{port}",
+        "description": log["source"]["description"],
+    }
+    assert log["names"] == ["tilt_x", "tilt_y"] and log["x0_deg"] == [-7.0, 15.0]
+    assert log["unfinished_batch"] == unfinished
+    # the same points and values as the simulation's first measurements (the socket carries
+    # float64 samples and the rig has the simulator's noise seed): the unfinished batch's
+    # points come back from their poses (1e-9 deg: round-off of the angle conversion), its
+    # values from the same matched filter by another call (1e-12 relative: round-off)
+    np.testing.assert_allclose(log["points"], simulated.points[:acquired], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(log["values"], simulated.values[:acquired], rtol=1e-12)
+    assert np.all(np.diff(log["times"]) >= 0)
+    # each pose is the probe position and the point's tilts as (azimuth, co-elevation);
+    # 1e-9 deg / 1e-12 m cover float round-off of the conversion
+    poses = np.array(log["poses"])
+    np.testing.assert_allclose(poses[:, :3], np.tile(POSITION, (acquired, 1)), atol=1e-12)
+    for pose, point in zip(poses, log["points"], strict=True):
+        angles = convert_angles(*point, "tilt", "azimuth-coelevation")
+        assert beam_error(pose[3:], angles) < 1e-9
+    best = int(np.argmax(log["values"]))
+    assert log["best"]["index"] == best and log["best"]["point_deg"] == log["points"][best]
+    a, b = log["points"][best]
+    assert f"--x0 {a:.3f},{b:.3f}" in err
+
+
+def test_rig_failing_before_any_measurement_writes_nothing(plate, tmp_path, capsys, monkeypatch):
+    """Gone after *IDN? and LIMITS?: the first MOVE fails; nothing measured, nothing saved."""
+    out = tmp_path / "rig"
+    faults = Faults(drop_after=2, drop_forever=True)
+    with InstrumentServer(load_setup(plate, seed=3), faults=faults) as server:
+        host, port = server.address
+        args = ["--instrument", f"{host}:{port}", "--setup", str(plate), *RIG_ARGS]
+        code, _, err = run_main(["calibrate", *args, "--out", str(out)], capsys, monkeypatch)
+        assert server.n_acquisitions == 0
+    assert code == 2 and err.count("error:") == 1, err
+    assert "MOVE" in err and "failed after 4 attempts" in err and "saved" not in err
+    assert not out.exists()
+
+
+def test_ctrl_c_on_a_rig_saves_what_was_measured(plate, tmp_path, capsys, monkeypatch):
+    """Ctrl-C in the 6th measurement: the 5 made are saved, exit 130 (any Ctrl-C's)."""
+    from echocal.measurement import SourceObjective
+
+    evaluate = SourceObjective._evaluate
+    calls = []
+
+    def interrupted(self, points):
+        calls.append(len(points))
+        if len(calls) == 6:
+            raise KeyboardInterrupt
+        return evaluate(self, points)
+
+    monkeypatch.setattr(SourceObjective, "_evaluate", interrupted)
+    out = tmp_path / "rig"
+    with InstrumentServer(load_setup(plate, seed=3)) as server:
+        host, port = server.address
+        args = ["--instrument", f"{host}:{port}", "--setup", str(plate), *RIG_ARGS]
+        code, _, err = run_main(["calibrate", *args, "--out", str(out)], capsys, monkeypatch)
+        acquired = server.n_acquisitions
+    made = sum(calls[:5])
+    assert code == 130, err
+    assert acquired == made > 0
+    assert "interrupted:" in err and f"stopped after {made} measurements" in err, err
+    log = json.loads((out / "partial_log.json").read_text())
+    assert log["status"] == "interrupted" and log["error"] == "interrupted (Ctrl-C)"
+    assert log["n_measurements"] == made == len(log["points"])
 
 
 # -- bad input ----------------------------------------------------------------------------------

@@ -5,6 +5,9 @@ grid turned into bounds and a map, the run saved and printed without a truth.
 
 from __future__ import annotations
 
+import json
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,6 +24,7 @@ from echocal.cli._replay_grid import (
     tilt_bounds_in_recording,
 )
 from echocal.cli.calibrate import EXIT_NO_ECHO, _parse_position, _print_failure, _Run
+from echocal.measurement.base import BaseSource
 
 
 def _check_measured_options(
@@ -151,7 +155,7 @@ def _on_instrument(
 ) -> _Measured:
     """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT``."""
     from echocal._validate import positive_float
-    from echocal.errors import EchocalValueError
+    from echocal.errors import EchocalError, EchocalValueError
     from echocal.measurement.hardware import HardwareSource
     from echocal.measurement.objective import SourceObjective
 
@@ -171,10 +175,32 @@ def _on_instrument(
     wait = {} if timeout is None else {"timeout": positive_float("--timeout", timeout)}
     with HardwareSource.connect(host, port, **wait) as rig:
         _check_reachable(rig.limits, where)
-        objective = SourceObjective(rig, where, pulse=pulse, parameterization=parameterization)
-        result = run(objective, (0.0, 0.0) if start is None else start, seed)
-        figures = _save_measured(result, out, None, plots)
+        tally = _Tally(rig)
+        objective = SourceObjective(tally, where, pulse=pulse, parameterization=parameterization)
+        tally.logged = lambda: objective.n_measurements
         source = {"kind": "instrument", "address": f"{host}:{port}"}
+        x0 = (0.0, 0.0) if start is None else start
+        try:
+            result = run(objective, x0, seed)
+        except (EchocalError, KeyboardInterrupt) as exc:  # the rig failed, or Ctrl-C
+            context = {
+                "method": run.method,
+                "setup": setup,
+                "seed": seed,
+                "source": {**source, "description": rig.description},
+                "pulse": {"name": pulse.name, "center_frequency_hz": pulse.center_frequency},
+                "x0_deg": list(x0),
+            }
+            note = _save_interrupted(exc, objective, tally, out, context)
+            if note is None:  # nothing measured: nothing to save
+                raise
+            if isinstance(exc, KeyboardInterrupt):  # then exit 130, as any Ctrl-C
+                console.print(
+                    f"[yellow]interrupted:[/] {escape(note)}", highlight=False, soft_wrap=True
+                )
+                raise
+            raise _with_note(exc, note) from exc
+        figures = _save_measured(result, out, None, plots)
         return _Measured(
             result=result,
             where=where,
@@ -233,6 +259,123 @@ def _on_replay(
             extra={"recording_best_deg": best},
             figures=_save_measured(result, out, maps, plots),
         )
+
+
+PARTIAL_LOG = "partial_log.json"
+"""What a run on a rig measured before the rig failed (or Ctrl-C), in ``--out``."""
+
+
+class _Tally(BaseSource):
+    """A rig that keeps the A-scans its objective has not logged yet, with their poses and
+    arrival times: an objective logs a batch of poses only once all of it is measured, so
+    the A-scans of a batch cut short by a fault would be lost."""
+
+    def __init__(self, rig: Any) -> None:
+        self.rig = rig
+        self.limits = rig.limits
+        self.description = rig.description
+        self.logged: Callable[[], int] = lambda: 0  # measurements the objective has logged
+        self.n_measurements = 0
+        """A-scans delivered so far."""
+        self._unlogged: list[tuple[float, Any, Any]] = []  # (time [s], pose, A-scan)
+
+    def measure(self, pose: Any) -> Any:
+        """Measure ``pose`` on the rig; keep the A-scan until the objective logs it."""
+        scan = self.rig.measure(pose)
+        self.n_measurements += 1
+        keep = self.n_measurements - 1 - self.logged()  # earlier A-scans still unlogged
+        self._unlogged = self._unlogged[len(self._unlogged) - keep :] if keep > 0 else []
+        self._unlogged.append((time.time(), pose, scan))
+        return scan
+
+    def unlogged(self, n_logged: int) -> list[tuple[float, Any, Any]]:
+        """The A-scans delivered after the first ``n_logged`` ones, in order."""
+        n = self.n_measurements - n_logged
+        return self._unlogged[len(self._unlogged) - n :] if n > 0 else []
+
+
+def _save_interrupted(
+    exc: BaseException, objective: Any, tally: _Tally, out: Path, context: dict[str, Any]
+) -> str | None:
+    """Write ``out/partial_log.json`` — every measurement made so far, in order, with its
+    point, pose, value and time — and return the sentence that says so; None (nothing
+    written) when nothing was measured.  The objective's log is followed by the A-scans of
+    the batch the fault cut short (``unfinished_batch`` of them; the method never saw
+    their values, computed here with the objective's metric).  If the file cannot be
+    written the sentence says so instead (the run's own error stays the one reported)."""
+    from echocal.geometry import convert_angles
+    from echocal.io import atomic_write_text, json_ready
+    from echocal.measurement.objective import ascan_metric
+
+    log = objective.log
+    tail = tally.unlogged(len(log.values))
+    n = len(log.values) + len(tail)
+    if n == 0:
+        return None
+    names, parameterization = objective.names, objective.parameterization
+    poses = [objective.pose(a, b) for a, b in log.points] + [pose for _, pose, _ in tail]
+    tail_points = [
+        convert_angles(pose.azimuth, pose.coelevation, "azimuth-coelevation", parameterization)
+        for _, pose, _ in tail
+    ]
+    points = np.concatenate([log.points, np.reshape(tail_points, (-1, 2))])
+    values = np.concatenate(
+        [
+            log.values,
+            [
+                ascan_metric(scan, objective.metric, objective.pulse, objective.window_length)
+                for _, _, scan in tail
+            ],
+        ]
+    )
+    times = np.concatenate([log.times, [t for t, _, _ in tail]])
+    finite = np.isfinite(values)
+    best = None
+    if np.any(finite):
+        i = int(np.flatnonzero(finite)[np.argmax(values[finite])])
+        best = {"index": i, "point_deg": points[i], "value": values[i]}
+    record = {
+        "status": "interrupted",
+        "error": "interrupted (Ctrl-C)" if isinstance(exc, KeyboardInterrupt) else str(exc),
+        **context,
+        "position_m": objective.position,
+        "metric": objective.metric,
+        "parameterization": parameterization,
+        "names": list(names),
+        "n_measurements": n,
+        "unfinished_batch": len(tail),
+        "points": points,
+        "values": values,
+        "times": times,
+        "pose_columns": ["x_m", "y_m", "z_m", "azimuth_deg", "coelevation_deg"],
+        "poses": np.array([pose.as_array() for pose in poses]),
+        "best": best,
+    }
+    path = out / PARTIAL_LOG
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, json.dumps(json_ready(record), indent=1))
+    except OSError as err:  # DataFileError is one too
+        return f"the {n} measurements made before could not be saved to {path}: {err}"
+    where = ""
+    if best is not None:
+        a, b = (float(v) for v in best["point_deg"])
+        where = (
+            f"; the largest value was at {names[0]}={a:.3f}, {names[1]}={b:.3f} deg "
+            f"(a new run can start there: --x0 {a:.3f},{b:.3f})"
+        )
+    return (
+        f"the run stopped after {n} measurements; they are saved, with their poses, values "
+        f"and times, to {path}{where}"
+    )
+
+
+def _with_note(exc: BaseException, note: str) -> Exception:
+    """``exc``'s error with ``note`` appended, of the same public class (one error line)."""
+    from echocal.errors import EchocalError, InstrumentError, LimitError
+
+    kind = next((k for k in (InstrumentError, LimitError) if isinstance(exc, k)), EchocalError)
+    return kind(f"{exc}; {note}")
 
 
 def _parse_address(text: str) -> tuple[str, int]:
