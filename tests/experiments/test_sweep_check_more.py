@@ -4,15 +4,25 @@ whose runs failed ends with exit code 1 and names the most common error."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import echocal.cli
 import echocal.evaluation
 from cli_helpers import run_main
 from echocal.errors import ConfigError, EchocalValueError
-from echocal.experiments import expand, load_sweep, run_case, run_problems, run_sweep
+from echocal.experiments import (
+    builtin_sweep_names,
+    expand,
+    load_sweep,
+    run_case,
+    run_problems,
+    run_sweep,
+)
+from echocal.setups import load_setup
 
 OK = {
     "name": "ok",
@@ -167,3 +177,77 @@ def test_run_sweep_library_checks_workers_before_writing(tmp_path):
     with pytest.raises(EchocalValueError, match="workers"):
         run_sweep(OK, tmp_path / "x", workers=0, progress=False)
     assert not (tmp_path / "x").exists()
+
+
+# -- random starts outside the angle bounds -------------------------------------------------------
+THESIS_AT_10 = {**OK, "position": ["10 mm", 0, "22 mm"], "parameterization": "tilt"}
+# the thesis positioner's co-elevation cone is 45 deg; the tilt box inside it has the
+# half-width arccos(sqrt(cos 45 deg)) = 32.765 deg (see default_bounds)
+TILT_BOUND = float(np.rad2deg(np.arccos(np.sqrt(np.cos(np.deg2rad(45.0))))))
+
+
+def _numbers(text: str) -> list[float]:
+    return [float(v) for v in re.findall(r"-?\d+(?:\.\d+)?", text)]
+
+
+def test_an_offset_putting_starts_outside_the_bounds_is_refused_with_the_rest():
+    # passed `sweep check` before and started both runs from the clipped corner
+    problems = _problems(
+        {
+            **THESIS_AT_10,
+            "seeds": 2,
+            "x0": {"offset": [60, 70]},
+            "methods": [{"name": "auto", "options": {"fine_radius": "abc"}}],
+        }
+    )
+    assert len(problems) == 2, problems
+    offset, method = problems
+    assert method.startswith("methods.0 (auto") and "fine_radius" in method
+    assert offset.startswith("x0.offset: [60, 70] deg from the truth")
+    assert "2 of 2 start(s)" in offset
+    assert f"tilt_x in [{-TILT_BOUND:.2f}, {TILT_BOUND:.2f}]" in offset
+    truth = np.array(load_setup("thesis").true_optimum([0.01, 0, 0.022], parameterization="tilt"))
+    head, tail = offset.split(" deg: ")
+    np.testing.assert_allclose(_numbers(head.split("truth")[1])[:2], truth, atol=0.005)
+    starts = re.findall(r"seed (\d+) x0=\((\S+), (\S+)\)", tail)
+    assert [int(s) for s, _, _ in starts] == [0, 1]
+    for _, a, b in starts:
+        x0 = np.array([float(a), float(b)])
+        # each start as drawn: 60..70 deg from the truth (0.02 deg: the 2-decimal rounding
+        # of the start and the truth), beyond the bound on some axis
+        assert 60 - 0.02 <= np.hypot(*(x0 - truth)) <= 70 + 0.02
+        assert np.max(np.abs(x0)) > TILT_BOUND
+    # the largest offset whose every start is inside: the truth's distance to the box edge
+    assert f"offsets up to {TILT_BOUND - np.max(np.abs(truth)):.2f} deg" in tail
+
+
+def test_an_offset_inside_the_bounds_passes_and_runs_from_the_drawn_start():
+    spec = load_sweep({**THESIS_AT_10, "seeds": 3, "x0": {"offset": [20, 26]}})
+    assert run_problems(spec) == []
+    row, _ = run_case(expand(spec)[2])
+    assert row["status"] >= 0, row["message"]
+    # the run starts at the drawn distance from the truth (not clipped), 1e-9 deg: round-off
+    distance = np.hypot(row["x0_a"] - row["truth_a"], row["x0_b"] - row["truth_b"])
+    assert 20 - 1e-9 <= distance <= 26 + 1e-9
+
+
+def test_sweep_check_names_the_offset_and_exits_2(tmp_path, capsys, monkeypatch):
+    sweep = tmp_path / "far.toml"
+    sweep.write_text(
+        'setup = "thesis"\nposition = ["10 mm", 0, "22 mm"]\nseeds = 2\n'
+        '[x0]\noffset = [60, 70]\n[[methods]]\nname = "auto"\n',
+        encoding="utf-8",
+    )
+    for command in ("check", "run"):
+        out = tmp_path / "out"
+        args = ["sweep", command, str(sweep)] + (["--out", str(out)] if command == "run" else [])
+        code, stdout, err = run_main(args, capsys, monkeypatch)
+        assert code == 2 and stdout == "", err
+        assert "x0.offset: [60, 70]" in err and "outside the bounds" in err
+        assert "Traceback" not in err and not out.exists()
+
+
+@pytest.mark.parametrize("name", builtin_sweep_names())
+def test_the_builtin_sweeps_pass_the_check(name, capsys, monkeypatch):
+    code, _, err = run_main(["sweep", "check", name], capsys, monkeypatch)
+    assert code == 0, err

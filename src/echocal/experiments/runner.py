@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from echocal.errors import EchocalError
-from echocal.experiments.sweep import RunCase, _thawed
+from echocal.experiments.sweep import RunCase, _thawed, offset_start
 
 __all__ = ["HISTORY_COLUMNS", "RUN_COLUMNS", "history_frame", "run_case", "runs_frame"]
 
@@ -103,11 +103,8 @@ def _truth_setup(setup: str):
 
 def _random_start(case: RunCase, truth: np.ndarray, bounds: np.ndarray) -> np.ndarray:
     """[deg] a start at a uniform distance in ``case.x0`` and a uniform direction from truth."""
-    rng = np.random.default_rng(case.x0_seed)
-    lo, hi = case.x0
-    distance = rng.uniform(lo, hi)
-    direction = rng.uniform(0.0, 2.0 * np.pi)
-    start = truth + distance * np.array([np.cos(direction), np.sin(direction)])
+    start = offset_start(case.x0_seed, case.x0, truth)
+    # `sweep check` refuses a sweep whose starts lie outside; a case built by hand is clipped
     return np.clip(start, bounds[:, 0], bounds[:, 1])
 
 

@@ -53,6 +53,7 @@ __all__ = [
     "builtin_sweep_names",
     "expand",
     "load_sweep",
+    "offset_start",
     "run_problems",
     "spec_hash",
 ]
@@ -210,7 +211,25 @@ class RunCase:
     def x0_seed(self) -> int:
         """Seed of a random start: the sweep seed, the run's seed and the x0 entry only, so
         every method and SNR of a seed starts from the same point (paired comparison)."""
-        return _derive_seed(self.sweep_seed, f"x0/{self.x0_index}/seed={self.seed}")
+        return _x0_seed(self.sweep_seed, self.x0_index, self.seed)
+
+
+def _x0_seed(sweep_seed: int, x0_index: int, seed: int) -> int:
+    return _derive_seed(sweep_seed, f"x0/{x0_index}/seed={seed}")
+
+
+def offset_start(x0_seed: int, offset: tuple[float, float], truth: Any) -> Any:
+    """[deg] shape (2,): the random start of an ``x0.offset`` run, not clipped — a distance
+    drawn uniformly from ``offset`` [deg] ``(lo, hi)`` in a uniform direction from ``truth``
+    [deg] shape (2,), with the run's ``x0_seed``."""
+    import numpy as np
+
+    rng = np.random.default_rng(x0_seed)
+    distance = rng.uniform(*offset)
+    direction = rng.uniform(0.0, 2.0 * np.pi)
+    return np.asarray(truth, dtype=np.float64) + distance * np.array(
+        [np.cos(direction), np.sin(direction)]
+    )
 
 
 def _derive_seed(base: int, text: str) -> int:
@@ -461,7 +480,8 @@ def run_problems(
     """Problems that would make runs of a resolved sweep fail, found without measuring.
 
     Builds the setup at every SNR of the sweep, checks the position against the
-    positioner's limits and every explicit start against the angle bounds, and runs
+    positioner's limits and every start against the angle bounds (the explicit ones and
+    every seed's random ``x0.offset`` start, drawn as the runs draw it), and runs
     :func:`~echocal.calibrate.calibrate` for every method and option combination up to
     (not including) its first measurement, so that what ``calibrate`` refuses before
     measuring — option values the method rejects, a budget below what one iteration of
@@ -516,6 +536,10 @@ def run_problems(
                 starts.append(objective().check_point("x0", point))
             except EchocalError as exc:
                 problems.append(f"x0.points.{j}: {exc}; choose a start inside the bounds")
+    if spec.x0.offset is not None and not (outside or part.touched("parameterization")):
+        names = objective().names
+        if (problem := _offset_problem(spec, virtual, position, bounds, names)) is not None:
+            problems.append(problem)
     start = starts[0] if starts else bounds.mean(axis=1)
     for i, method in enumerate(spec.methods):
         if i in _skip:
@@ -551,6 +575,54 @@ def run_problems(
                 seen.add(message)
                 problems.append(f"methods.{part.index[i]} ({label}): {message}")
     return problems
+
+
+def _offset_problem(
+    spec: SweepSpec, virtual: Any, position: Any, bounds: Any, names: tuple[str, str]
+) -> str | None:
+    """Why the random starts ``truth + offset`` of ``spec.x0.offset`` cannot all be run
+    (None if every seed's start lies inside the angle ``bounds`` [deg], shape (2, 2)).
+
+    The starts are the runs' own: the same truth and the same draws as
+    :func:`~echocal.experiments.runner.run_case`, one per seed, so a sweep that passes runs
+    exactly what it says (a start outside would be clipped to the nearest bound).
+    """
+    import numpy as np
+
+    lo, hi = spec.x0.offset  # type: ignore[misc]
+    if not 0 <= lo <= hi:
+        return None  # reported by the schema check
+    try:
+        truth = np.array(virtual.true_optimum(position, parameterization=spec.parameterization))
+    except EchocalError:
+        return None  # every run fails there: the position's problem, reported as such
+    index = len(spec.x0.points)  # the offset is the last start entry (see expand)
+    seeds = spec.seed_list
+    drawn = {
+        seed: offset_start(_x0_seed(spec.seed, index, seed), (lo, hi), truth) for seed in seeds
+    }
+    bad = {
+        seed: x0 for seed, x0 in drawn.items() if np.any((x0 < bounds[:, 0]) | (x0 > bounds[:, 1]))
+    }
+    if not bad:
+        return None
+    shown = ", ".join(
+        f"seed {seed} x0=({x0[0]:.2f}, {x0[1]:.2f})" for seed, x0 in list(bad.items())[:3]
+    )
+    more = f" and {len(bad) - 3} more" if len(bad) > 3 else ""
+    margin = float(np.min(np.abs(bounds - truth[:, None])))  # the truth to the nearest bound
+    within = (
+        f"offsets up to {margin:.2f} deg keep every start inside"
+        if np.all((truth >= bounds[:, 0]) & (truth <= bounds[:, 1]))
+        else "the truth itself is outside the bounds"
+    )
+    return (
+        f"x0.offset: [{lo:g}, {hi:g}] deg from the truth ({names[0]}={truth[0]:.2f}, "
+        f"{names[1]}={truth[1]:.2f}) puts {len(bad)} of {len(seeds)} start(s) (x0 = truth + "
+        f"offset, one per seed) outside the bounds {names[0]} in [{bounds[0, 0]:.2f}, "
+        f"{bounds[0, 1]:.2f}], {names[1]} in [{bounds[1, 0]:.2f}, {bounds[1, 1]:.2f}] "
+        f"deg: {shown}{more}; {within}"
+    )
 
 
 def _echo_problem(virtual: Any, position: Any) -> str | None:
