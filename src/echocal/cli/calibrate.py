@@ -154,7 +154,8 @@ def register(app: typer.Typer) -> None:
 
         Exit status: 0 when the method returned an estimate; 1 when no echo was found
         (the acquisition search failed, or every measurement failed) — the result files
-        are still written; 2 for bad input.
+        are still written; 2 for bad input or a rig that failed mid-run (what was measured
+        before the fault is saved to partial_log.json in --out).
         """
         run = _Run.parse(method, budget, max_iter, settle, preset, option, search_radius)
         if replay is not None or instrument is not None:
