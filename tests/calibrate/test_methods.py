@@ -242,3 +242,30 @@ def test_grid_warns_when_its_best_node_is_on_its_edge(gauss_objective):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         calibrate(gauss_objective(), "grid", x0=(0.7, -0.4), span=0.5, step=0.25)
+
+
+def test_grid_behind_an_acquisition_phase_is_measured_through(gauss_objective):
+    # the search hands over to the grid; settle must not stop the half-measured grid then
+    objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
+    result = calibrate(
+        objective,
+        "grid",
+        x0=(0.0, 0.0),
+        span=3.0,
+        step=0.5,
+        settle=(0.01, 3),
+        acquire={"max_radius": 20.0},
+    )
+    assert result.status == 5  # "search complete", not 7 (settled) after a few rows
+
+
+def test_grid_does_not_ask_to_widen_a_grid_clipped_at_the_bounds(gauss_objective):
+    # OPT = (0.7, -0.4) lies beyond the bound 0.5 in x: the best node sits on the bound,
+    # which no larger span can move; the maximum is out of reach, not out of the grid
+    import warnings
+
+    objective = gauss_objective(bounds=[[-2.0, 0.5], [-2.0, 2.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = calibrate(objective, "grid", x0=(0.0, 0.0), span=1.0, step=0.25)
+    assert result.x[0] == 0.5

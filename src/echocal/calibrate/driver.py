@@ -294,11 +294,12 @@ def calibrate(
             f"({need} measurements); allowed: budget >= {need}"
         )
     rows = getattr(opt, "n_rows", None)  # an exhaustive method: its whole set, row by row
-    if rows is not None:
+    wrapped = isinstance(opt, Acquisition) and hasattr(opt._local_cls, "n_rows")
+    if rows is not None or wrapped:  # (behind a search, its rows are known once it starts)
         settled = xtol = None  # a partial grid has not "converged": it is measured through
         if not max_iter_given:
-            max_iter = rows
-        elif max_iter < rows:
+            max_iter = np.iinfo(np.int64).max  # it ends itself, after its last row
+        elif rows is not None and max_iter < rows:
             warnings.warn(
                 f"method {method!r} measures {rows} rows but max_iter={max_iter} stops it "
                 f"after {max_iter}: only part of the grid will be searched",

@@ -135,7 +135,9 @@ class GridSearch(Optimizer):
         (a0, a1), best = self.axes, self._iterate
         if len(a0) < 3 or len(a1) < 3:
             return
-        if best[0] in (a0[0], a0[-1]) or best[1] in (a1[0], a1[-1]):
+        (lo0, hi0), (lo1, hi1) = self.bounds  # an edge clipped at a bound: widening can't help
+        edges = {a0[0], a0[-1]} - {lo0, hi0}, {a1[0], a1[-1]} - {lo1, hi1}
+        if best[0] in edges[0] or best[1] in edges[1]:
             warnings.warn(
                 f"grid: the best node ({best[0]:.4g}, {best[1]:.4g}) deg lies on the grid's "
                 f"edge, so the maximum may lie outside it: widen span (now {self.span:g} deg) "
