@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import xarray as xr
 
 from cli_helpers import flat, run_main
 from echocal.measurement.recording import partial_path
@@ -74,6 +75,22 @@ def test_record_refuses_a_window_that_cannot_hold_the_echo(tmp_path, capsys, mon
     assert code == 2 and "cannot contain any echo" in flat(err)
     assert "(0, 0, 40) mm" in flat(err)
     assert not out.exists() and not partial_path(out).exists()
+
+
+def test_record_keeps_a_grid_whose_steep_poses_alone_miss_the_window(tmp_path, capsys, monkeypatch):
+    # thesis at z = 50 mm: the corner pose (-10, -40) deg alone has no echo in the window
+    # (its rays return at ~80 us, the window ends at 71 us), but the simulator only fails a
+    # batch where NO pose has an echo; the centre pose does, so the recording works and the
+    # steep poses are noise A-scans.  Refusing it was a regression.
+    out = tmp_path / "r2.nc"
+    args = ["record", "--setup", "thesis", "--out", str(out), "--position", "0,0,50"]
+    args += ["--azimuth=-10:10:3", "--coelevation=-40:40:5", "--no-progress"]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code == 0, err
+    assert "recorded 15 A-scans" in flat(err)
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        assert ds["samples"].shape[:4] == (1, 3, 5, 1)
+    assert not partial_path(out).exists()
 
 
 def test_overwrite_discards_an_incompatible_partial_and_says_so(tmp_path, capsys, monkeypatch):

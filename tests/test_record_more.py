@@ -66,6 +66,27 @@ def test_duplicate_positions_are_refused_at_record_time(tiny, tmp_path, capsys, 
         )
 
 
+def test_duplicates_among_thousands_of_positions_are_found_and_named():
+    # 3,000 distinct positions on a 1 mm lattice (a P x P distance array would be 216 MB;
+    # the tree search is O(P log P)): accepted, in order
+    grid_xyz = np.stack(np.meshgrid(*(np.arange(15) * 1e-3,) * 2, np.arange(14) * 1e-3), -1)
+    many = grid_xyz.reshape(-1, 3)[:3000] + np.array([0.0, 0.0, 0.02])
+    grid = RecordingGrid(azimuth=[0.0], coelevation=[0.0], positions=many)
+    np.testing.assert_array_equal(np.array(grid.positions), many)
+    # 0.5 um from #1234 (below the 1 um limit) appended as #3000, plus an exact copy of
+    # #17 as #3001: the first pair in (i, j) order, (17, 3001), is named
+    near = many[1234] + [5e-7, 0.0, 0.0]
+    bad = np.vstack([many, near, many[17]])
+    where = ", ".join(f"{1e3 * c:g}" for c in many[17])
+    with pytest.raises(
+        EchocalValueError, match=rf"#17 and #3001 are the same position \({where}\)"
+    ):
+        RecordingGrid(azimuth=[0.0], coelevation=[0.0], positions=bad)
+    # 1.5 um apart (above the 1 um limit, clear of rounding) is allowed
+    apart = np.vstack([many[:2], many[0] + [1.5e-6, 0.0, 0.0]])
+    assert len(RecordingGrid(azimuth=[0.0], coelevation=[0.0], positions=apart).positions) == 3
+
+
 def test_replay_with_duplicate_positions_names_the_file_and_them(
     tiny, tmp_path, capsys, monkeypatch
 ):

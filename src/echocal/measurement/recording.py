@@ -105,11 +105,16 @@ class RecordingGrid:
             raise EchocalValueError("grid.positions must hold at least one (x, y, z) [m]")
         pos = finite_array("grid.positions", self.positions, shape_tail=(3,)).reshape(-1, 3)
         if len(pos) > 1:
-            dist = np.linalg.norm(pos[:, None] - pos[None], axis=-1)
-            i, j = np.triu_indices(len(pos), 1)
-            close = dist[i, j] < MIN_POSITION_DISTANCE
-            if np.any(close):
-                a, b = int(i[close][0]), int(j[close][0])
+            from scipy.spatial import cKDTree
+
+            # pairs within the distance, O(P log P) memory-light (a P x P array would not fit)
+            pairs = cKDTree(pos).query_pairs(MIN_POSITION_DISTANCE, output_type="ndarray")
+            if len(pairs):
+                pairs = np.sort(pairs, axis=1)
+                gap = np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=-1)
+                pairs = pairs[gap < MIN_POSITION_DISTANCE]  # query_pairs includes the bound
+            if len(pairs):
+                a, b = (int(v) for v in pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))[0]])
                 where = ", ".join(f"{1e3 * c:g}" for c in pos[a])
                 raise EchocalValueError(
                     f"grid.positions #{a} and #{b} are the same position ({where}) mm "
@@ -199,51 +204,74 @@ def check_recording_size(grid: RecordingGrid, repeats: int, n_samples: int | Non
 
 
 def simulation_errors(source: MeasurementSource, poses: Sequence[Pose]) -> list[str | None]:
-    """What a noiseless simulation of each pose would refuse, before anything is measured.
+    """What a noiseless simulation of each pose alone would refuse, before anything is measured.
 
     For a simulator (a source with ``ideal_samples``, e.g.
     :class:`~echocal.measurement.VirtualSetup`): the message of the echocal error that
-    simulating the pose raises — the probe inside the specimen, a recording window that
-    cannot contain the echo — or None where the pose simulates.  All None for any other
-    source (a replay, a rig), which cannot be asked without measuring.
+    simulating the pose alone raises — the probe inside the specimen, a recording window
+    that cannot contain the echo — or None where the pose simulates.  All None for any
+    other source (a replay, a rig), which cannot be asked without measuring.
     """
+    return [None if e is None else str(e) for e in _simulation_exceptions(source, poses)]
+
+
+def _simulation_exceptions(
+    source: MeasurementSource, poses: Sequence[Pose]
+) -> list[EchocalError | None]:
+    """:func:`simulation_errors` as the raised exceptions (None where the pose simulates)."""
     from echocal.geometry import poses_to_arrays
 
     ideal = getattr(source, "ideal_samples", None)
     if ideal is None or not poses:
         return [None] * len(poses)
     positions, frames = poses_to_arrays(list(poses))
-    out: list[str | None] = []
+    out: list[EchocalError | None] = []
     for k in range(len(poses)):
         try:
             ideal(positions[k : k + 1], frames[k : k + 1])
         except EchocalError as exc:
-            out.append(str(exc))
+            out.append(exc)
         else:
             out.append(None)
     return out
 
 
+# the simulator's window error (echocal.signal.window.check_echoes): raised only when NO pose
+# of a simulated batch has an echo in the window, so one silent pose among others is not fatal
+_WINDOW_ERROR = "cannot contain any echo"
+
+
 def _check_measurable(source: MeasurementSource, grid: RecordingGrid) -> None:
     """Refuse a grid whose recording must fail (see :func:`simulation_errors`).
 
-    A recording stops at the first failing pose, so one failing pose is enough: checked
-    per position at the grid's centre and corner orientations (the extremes of the
-    beam's tilt), before the partial recording is created.
+    Checked per position at the grid's centre and corner orientations (the extremes of the
+    beam's tilt), before the partial recording is created.  An error that fails every
+    orientation of a position (the probe inside the specimen) is refused at the first
+    pose that raises it.  The window error is raised by the simulator only when no pose of
+    a simulated batch has an echo in the window; a steep pose measured together with
+    others is just a noise A-scan.  So a position is refused for it only when every
+    checked orientation of that position raises it: the recording would then fail.
     """
     n_p, n_a, n_c = grid.shape
     corners = {(0, 0), (0, n_c - 1), (n_a - 1, 0), (n_a - 1, n_c - 1)}
     orientations = sorted({(n_a // 2, n_c // 2)} | corners)
     for p in range(n_p):
         poses = [grid.pose(p, a, c) for a, c in orientations]
-        for pose, error in zip(poses, simulation_errors(source, poses), strict=True):
-            if error is not None:
-                x, y, z = (1e3 * v for v in pose.position)
-                raise EchocalValueError(
-                    f"the recording would fail at position ({x:g}, {y:g}, {z:g}) mm, azimuth "
-                    f"{pose.azimuth:g} deg, co-elevation {pose.coelevation:g} deg: {error}"
-                    " (--position, or the setup)"
-                )
+        errors = _simulation_exceptions(source, poses)
+        failing = [
+            (pose, error)
+            for pose, error in zip(poses, errors, strict=True)
+            if error is not None
+            and (_WINDOW_ERROR not in str(error) or all(e is not None for e in errors))
+        ]
+        if failing:
+            pose, error = failing[0]
+            x, y, z = (1e3 * v for v in pose.position)
+            raise EchocalValueError(
+                f"the recording would fail at position ({x:g}, {y:g}, {z:g}) mm, azimuth "
+                f"{pose.azimuth:g} deg, co-elevation {pose.coelevation:g} deg: {error}"
+                " (--position, or the setup)"
+            )
 
 
 def _fingerprint(source: MeasurementSource, grid: RecordingGrid, repeats: int) -> dict[str, Any]:
@@ -458,8 +486,9 @@ def record(
         recording is resumed.
 
     A simulator's grid is checked first (:func:`simulation_errors` at the centre and
-    corner orientations of every position): a probe inside the specimen or a window
-    that cannot contain the echo is refused before the partial recording is created.
+    corner orientations of every position): a probe inside the specimen, or a window
+    that cannot contain the echo at any checked orientation of a position, is refused
+    before the partial recording is created.
     A run that fails (an error, not an interruption) before saving anything leaves no
     partial recording behind.
 
