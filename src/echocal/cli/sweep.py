@@ -135,7 +135,7 @@ def register(app: typer.Typer) -> None:
         from echocal.experiments import builtin_sweep_names, load_sweep
 
         for name in builtin_sweep_names():
-            typer.echo(f"{name:16s} {load_sweep(name).description}")
+            typer.echo(f"{name:16s} {load_sweep(name, check_runs=False).description}")
 
 
 def _jsonable(value: Any) -> Any:

@@ -287,13 +287,18 @@ def _read(source: str | Path) -> tuple[dict[str, Any], Path, str]:
 
 
 def load_sweep(
-    source: str | Path | dict[str, Any] | SweepSpec, *, base_dir: str | Path | None = None
+    source: str | Path | dict[str, Any] | SweepSpec,
+    *,
+    base_dir: str | Path | None = None,
+    check_runs: bool = True,
 ) -> SweepSpec:
     """Read, validate and resolve a sweep: a built-in name, a TOML path, a dict or a spec.
 
     Relative setup paths resolve against the sweep file's folder (``base_dir`` for a
     dict or spec, default the working directory).  Defaults are filled in from the setup:
-    ``position`` (its reference position) and ``snr_db`` (its SNR).
+    ``position`` (its reference position) and ``snr_db`` (its SNR).  ``check_runs=False``
+    skips the dry run of every run configuration (:func:`run_problems`; ≈ 1 s) when only
+    the sweep's description is wanted.
 
     Raises :class:`~echocal.errors.ConfigError` listing every problem with its field
     path: ``methods.0.options.epsilon: unknown option of method 'spsa'; accepted: ...``.
@@ -325,7 +330,7 @@ def load_sweep(
             resolved = _resolve(spec, base)
         except EchocalError as exc:
             problems.append(f"setup: {exc}")
-    if resolved is not None:
+    if resolved is not None and check_runs:
         problems += run_problems(resolved, _part=part, _skip=bad_methods)
     if problems:
         _raise(where, problems)
