@@ -99,7 +99,8 @@ def tilt_bounds_in_recording(recording: Any, start: tuple[float, float]) -> Any:
     if not ok[i0 : i1 + 1, j0 : j1 + 1].all():
         raise LimitError(
             f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg lies at the edge of "
-            f"{recording.path}: start farther inside ({covered})"
+            f"{recording.path}: start farther inside ({covered}), or calibrate in its own "
+            "angles (--parameterization azimuth-coelevation)"
         )
     box, area = (i0, i1, j0, j1), 0
     rows = ok[i1].copy()
@@ -131,7 +132,8 @@ def tilt_bounds_in_recording(recording: Any, start: tuple[float, float]) -> Any:
             if not (a0 <= start[0] <= a1 and b0 <= start[1] <= b1):
                 raise LimitError(
                     f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg lies at the edge of "
-                    f"{recording.path}: start farther inside ({covered})"
+                    f"{recording.path}: start farther inside ({covered}), or calibrate in its own "
+                    "angles (--parameterization azimuth-coelevation)"
                 )
             return bounds
     raise LimitError(
