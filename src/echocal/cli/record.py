@@ -206,7 +206,14 @@ def register(app: typer.Typer) -> None:
                 repeats=repeats,
                 progress=progress,
                 batch_size=batch_size,
-                setup={"setup": setup, "seed": seed, "snr": snr, "config": config.model_dump()},
+                setup={
+                    # a file as an absolute path: a replay elsewhere still finds a sampled
+                    # pulse's file relative to it
+                    "setup": str(Path(setup).resolve()) if Path(setup).is_file() else setup,
+                    "seed": seed,
+                    "snr": snr,
+                    "config": config.model_dump(),
+                },
                 overwrite=overwrite,
             )
         except KeyboardInterrupt:
