@@ -10,7 +10,7 @@ import numpy as np
 from echocal.errors import EchocalValueError, LimitError
 from echocal.geometry import Pose
 
-__all__ = ["ANGLE_RANGES", "PositionerLimits", "limit_problems"]
+__all__ = ["ANGLE_RANGES", "ENDLESS_AZIMUTH", "PositionerLimits", "limit_problems"]
 
 _INF = float("inf")
 _AXES = ("x", "y", "z", "azimuth", "coelevation")
@@ -22,7 +22,19 @@ ANGLE_RANGES = {"azimuth": (-360.0, 360.0), "coelevation": (-90.0, 90.0)}
 Co-elevation θ is measured from straight down (θ = 0 fires along −z) and may be signed;
 beyond ±90° the beam points up, away from the specimen.  Azimuth is periodic: one turn
 either side of 0 covers every positioner ([-180, 180] and [0, 360] alike); an axis that
-turns without end is [-180, 180]."""
+turns without end is [-180, 180].  An infinite azimuth range (``-inf inf`` from a rig,
+see :mod:`echocal.measurement.protocol`) means exactly that endless axis and is taken as
+[-180, 180] (:data:`ENDLESS_AZIMUTH`)."""
+
+ENDLESS_AZIMUTH = (-180.0, 180.0)
+"""[deg] the azimuth limits of an axis that turns without end."""
+
+
+def _endless_azimuth(low: float, high: float) -> bool:
+    """Whether azimuth bounds [deg] describe an unlimited axis: ``low <= high`` and a bound
+    is infinite (the protocol's ``inf``).  Finite bounds outside :data:`ANGLE_RANGES` stay
+    refused: they are more likely a unit slip than a rig with more than two turns."""
+    return low <= high and (math.isinf(low) or math.isinf(high))
 
 
 def _show(name: str, value: float) -> str:
@@ -56,6 +68,8 @@ def limit_problems(**axes: tuple[float, float]) -> list[str]:
                 f"{name}: must be an interval with low <= high; "
                 f"got [{_show(name, low)}, {_show(name, high)}] {unit}"
             )
+        if name == "azimuth" and _endless_azimuth(low, high):
+            continue  # an endless axis: taken as ENDLESS_AZIMUTH by PositionerLimits
         if name in ANGLE_RANGES:
             lo, hi = ANGLE_RANGES[name]
             if not (lo <= low <= hi and lo <= high <= hi):
@@ -79,7 +93,8 @@ class PositionerLimits:
 
     Infinite position bounds mean "unlimited".  The co-elevation range may be signed
     and must lie within [-90, 90] deg, the azimuth range within [-360, 360] deg
-    (:data:`ANGLE_RANGES`).
+    (:data:`ANGLE_RANGES`); an infinite azimuth range means an endless axis and is
+    stored as [-180, 180] deg (:data:`ENDLESS_AZIMUTH`).
     """
 
     x: tuple[float, float] = (-_INF, _INF)
@@ -94,7 +109,10 @@ class PositionerLimits:
         if problems:
             raise EchocalValueError("limits." + "; limits.".join(problems))
         for name, bounds in axes.items():
-            object.__setattr__(self, name, tuple(float(b) for b in bounds))
+            values = tuple(float(b) for b in bounds)
+            if name == "azimuth" and _endless_azimuth(*values):
+                values = ENDLESS_AZIMUTH
+            object.__setattr__(self, name, values)
 
     def violations(self, pose: Pose) -> list[str]:
         """Human-readable list of the limits ``pose`` breaks (empty if reachable).

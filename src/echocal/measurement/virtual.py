@@ -221,8 +221,11 @@ class VirtualSetup(BaseSource):
         """Refuse probe positions [m] ``(P, 3)`` inside a closed shape of the specimen."""
         if not self._closed_shapes or positions[:, 2].min() >= self._closed_top:
             return
+        bores = [s for s in self.specimen if s.bore]
         for _, shape in self._closed_shapes:  # positions are checked finite float64
             inside = shape._contains(positions)
+            for bore in bores if np.any(inside) else ():  # a bore's hole is not material
+                inside &= ~bore._in_hole(positions)
             if np.any(inside):
                 break
         else:

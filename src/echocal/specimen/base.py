@@ -71,6 +71,16 @@ class Shape(abc.ABC):
         """True when the shape bounds a solid, so a probe cannot be inside (:meth:`contains`)."""
         return False
 
+    @property
+    def bore(self) -> bool:
+        """True when the shape bounds a hole cut into the solids around it (a cylinder with
+        ``surface="inside"``): a point in it (:meth:`_in_hole`) is in the coupling medium."""
+        return False
+
+    def _in_hole(self, points: FloatArray) -> NDArray[np.bool_]:
+        """Whether checked ``(M, 3)`` points [m] lie inside the hole of a :attr:`bore`."""
+        return np.zeros(len(points), dtype=bool)
+
     def contains(self, points: ArrayLike) -> NDArray[np.bool_]:
         """Whether each point [m], shape ``(M, 3)``, lies strictly inside the solid, ``(M,)``.
 

@@ -91,6 +91,16 @@ class Cylinder(Shape):
         wall (``"inside"``) bounds the hole the probe may enter, not a solid."""
         return self.surface == "outside"
 
+    @property
+    def bore(self) -> bool:
+        """A bore (``"inside"``) is a hole: a probe inside it is not inside the material."""
+        return self.surface == "inside"
+
+    def _in_hole(self, points: FloatArray) -> NDArray[np.bool_]:
+        if not self.bore:
+            return np.zeros(len(points), dtype=bool)
+        return self._contains(points)
+
     def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
         f = points - self.center
         axial = f @ self.axis

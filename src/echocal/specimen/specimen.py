@@ -85,15 +85,21 @@ class Specimen:
         """Index of the closed shape each point [m] ``(M, 3)`` lies inside, −1 if none, ``(M,)``.
 
         Only closed shapes (spheres, solid cylinders, watertight meshes) bound a solid; a
-        probe position inside one is impossible (see :attr:`Shape.closed`).
+        probe position inside one is impossible (see :attr:`Shape.closed`).  A bore
+        (:attr:`Shape.bore`, e.g. the ``"inside"`` cylinder of a pipe) is a hole cut into
+        them: a point inside some solid but also inside a bore is in the coupling medium (−1).
         """
         pts = finite_array("points", points, shape_tail=(3,)).reshape(-1, 3)
         out = np.full(len(pts), -1, dtype=np.int64)
+        for shape in self._shapes:
+            if shape.bore:
+                out[shape._in_hole(pts)] = -2  # excluded from every solid below
         for index, shape in enumerate(self._shapes):
             if shape.closed:
-                free = out < 0
+                free = out == -1
                 inside = shape.contains(pts[free])
                 out[np.nonzero(free)[0][inside]] = index
+        out[out == -2] = -1
         return out
 
     def cast(self, origins: ArrayLike, directions: ArrayLike) -> Hits:
