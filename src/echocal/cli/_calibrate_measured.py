@@ -23,7 +23,13 @@ from echocal.cli._replay_grid import (
     replay_position,
     tilt_bounds_in_recording,
 )
-from echocal.cli.calibrate import EXIT_NO_ECHO, _parse_position, _print_failure, _Run
+from echocal.cli.calibrate import (
+    EXIT_NO_ECHO,
+    _parse_position,
+    _print_failure,
+    _Run,
+    save_pngs,
+)
 from echocal.measurement.base import BaseSource
 
 
@@ -484,7 +490,6 @@ def _save_measured(
     result.save_json(out / "result.json")
     if not plots:
         return {}
-    from echocal.plots import save_figure
     from echocal.plots.calibration import measured_convergence_figure, path_figure
 
     label = result.method
@@ -519,10 +524,7 @@ def _save_measured(
             db_floor=-40.0,
             show_measurements=True,
         )
-    return {
-        name: str(save_figure(fig, out / f"{name}.png", formats=("png",), dpi=110)[0])
-        for name, fig in (("convergence", conv), ("path", path))
-    }
+    return save_pngs({"convergence": conv, "path": path}, out)
 
 
 def _print_measured_estimate(done: _Measured, out: Path) -> None:

@@ -455,7 +455,6 @@ def _parse_settle(text: str) -> tuple[float, int] | None:
 
 def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
     from echocal.evaluation import cost_map
-    from echocal.plots import save_figure
     from echocal.plots.calibration import convergence_figure, path_figure
 
     result = evaluation.result
@@ -486,7 +485,14 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         db_floor=-40.0,
         show_measurements=True,
     )
+    return save_pngs({"convergence": conv, "path": path}, out)
+
+
+def save_pngs(figures: dict[str, Any], out: Path) -> dict[str, str]:
+    """Write each figure as ``out/<name>.png`` (atomically); return name -> path."""
+    from echocal.plots import save_figure
+
     return {
         name: str(save_figure(fig, out / f"{name}.png", formats=("png",), dpi=110)[0])
-        for name, fig in (("convergence", conv), ("path", path))
+        for name, fig in figures.items()
     }
