@@ -29,10 +29,8 @@ def resolve_setup(
     """
     from echocal.setups import setup_with_overrides  # the simulator loads on first use
 
-    if snr is None:
-        virtual = setup_with_overrides(setup, specimen=specimen, seed=seed)
-    else:
-        virtual = setup_with_overrides(setup, specimen=specimen, snr_db=_parse_snr(snr), seed=seed)
+    noise = {} if snr is None else {"snr_db": _parse_snr(snr)}  # absent: the setup's own SNR
+    virtual = setup_with_overrides(setup, specimen=specimen, seed=seed, **noise)
     return virtual if virtual.rng is not None else dataclasses.replace(virtual, rng=0)
 
 
