@@ -223,6 +223,7 @@ class Acquisition(Optimizer):
         if self._local_cls is Acquisition or issubclass(self._local_cls, Acquisition):
             raise EchocalValueError(f"local must be a local method, not {local!r}")
         self.local_name = local
+        self._local_params = inspect.signature(self._local_cls.__init__).parameters
         self.local_options = _local_options(local, self._local_cls, local_options)
         self._local_normalize = normalize
         self.spacing = positive_float("spacing", spacing)
@@ -350,7 +351,7 @@ class Acquisition(Optimizer):
         ``local_options`` plus what this phase supplies — its spacing as the design
         ``radius`` of a warm-started method, its noise model and floor, ``normalize``."""
         opts = dict(self.local_options)
-        params = inspect.signature(self._local_cls.__init__).parameters
+        params = self._local_params
         if "history" in params and "radius" in params:
             opts.setdefault("radius", self.spacing)
         if "noise_model" in params and self.noise_model is not None:
@@ -363,7 +364,7 @@ class Acquisition(Optimizer):
     def _start_local(self, best: FloatArray | None = None) -> None:
         best = self._x[int(np.argmax(self.scores()))] if best is None else best
         opts = self.local_setup()
-        if "history" in inspect.signature(self._local_cls.__init__).parameters:
+        if "history" in self._local_params:
             opts.setdefault("history", (self._x.copy(), self._y.copy()))
         self.local = self._local_cls(best, bounds=self.bounds, rng=self.rng, **opts)
         self._iterate = best.copy()

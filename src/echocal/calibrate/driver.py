@@ -294,7 +294,7 @@ def calibrate(
             f"({need} measurements); allowed: budget >= {need}"
         )
     rows = getattr(opt, "n_rows", None)  # an exhaustive method: its whole set, row by row
-    wrapped = isinstance(opt, Acquisition) and hasattr(opt._local_cls, "n_rows")
+    wrapped = isinstance(opt, Acquisition) and hasattr(opt.local_class, "n_rows")
     if rows is not None or wrapped:  # (behind a search, its rows are known once it starts)
         settled = xtol = None  # a partial grid has not "converged": it is measured through
         if not max_iter_given:
