@@ -24,3 +24,33 @@ def run_main(
 def flat(text: str) -> str:
     """``text`` with every run of whitespace (console line wrapping) made one space."""
     return " ".join(text.split())
+
+
+TINY_PLATE = 'builtin = "flat-plate"'
+"""The ``[specimen]`` body of :func:`tiny_setup_toml`'s default: a flat plate at z = 0."""
+
+
+def tiny_setup_toml(specimen: str = TINY_PLATE, ref_z: str = "16 mm", z_min: str = "10 mm") -> str:
+    """A tiny, fast setup file's text: 8 x 8 rays, 256 samples; the window [20, 25.1] us holds
+    the plate's echo from z = 16 mm (21.6 us) but not from 40 mm (54 us)."""
+    return f"""
+name = "tiny"
+seed = 4
+[specimen]
+{specimen}
+[transducer]
+width = "6 mm"
+n_h = 8
+focal_length = "50 mm"
+[pulse]
+name = "gabor"
+center_frequency = "5 MHz"
+[window]
+fs = "50 MHz"
+start = "20 us"
+n_samples = 256
+[positioner]
+reference_position = ["0 mm", "0 mm", "{ref_z}"]
+z = ["{z_min}", "40 mm"]
+coelevation = [-30, 30]
+"""

@@ -10,40 +10,16 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from cli_helpers import flat, run_main
+from cli_helpers import TINY_PLATE, flat, run_main, tiny_setup_toml
 from echocal.measurement.recording import partial_path
 
-# a tiny, fast setup (as in test_record_more): 8 x 8 rays, 256 samples, flat plate at z = 0;
-# the window [20, 25.1] us holds the echo from z = 16 mm (21.6 us) but not from 40 mm (54 us)
-TINY = """
-name = "tiny"
-seed = 4
-[specimen]
-{specimen}
-[transducer]
-width = "6 mm"
-n_h = 8
-focal_length = "50 mm"
-[pulse]
-name = "gabor"
-center_frequency = "5 MHz"
-[window]
-fs = "50 MHz"
-start = "20 us"
-n_samples = 256
-[positioner]
-reference_position = ["0 mm", "0 mm", "{ref_z}"]
-z = ["0 mm", "40 mm"]
-coelevation = [-30, 30]
-"""
-PLATE = 'builtin = "flat-plate"'
 # a sphere whose top is at z = 10 mm: the reference (26 mm) is 16 mm above it; z = 5 mm is inside
 SPHERE = '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
 
 
-def _setup(tmp_path: Path, specimen: str = PLATE, ref_z: str = "16 mm") -> Path:
+def _setup(tmp_path: Path, specimen: str = TINY_PLATE, ref_z: str = "16 mm") -> Path:
     path = tmp_path / "tiny.toml"
-    path.write_text(TINY.format(specimen=specimen, ref_z=ref_z), encoding="utf-8")
+    path.write_text(tiny_setup_toml(specimen, ref_z, z_min="0 mm"), encoding="utf-8")
     return path
 
 
@@ -193,7 +169,10 @@ def _scan(setup: Path, out: Path, z: str, *extra: str) -> list[str]:
 
 @pytest.mark.parametrize(
     ("specimen", "ref_z", "z", "expected"),
-    [(PLATE, "16 mm", "40", "cannot contain any echo"), (SPHERE, "26 mm", "5", "inside sphere")],
+    [
+        (TINY_PLATE, "16 mm", "40", "cannot contain any echo"),
+        (SPHERE, "26 mm", "5", "inside sphere"),
+    ],
 )
 def test_scan_refuses_a_run_where_every_point_fails(
     tmp_path, capsys, monkeypatch, specimen, ref_z, z, expected

@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 from cli_helpers import flat as _flat
-from cli_helpers import run_main
+from cli_helpers import run_main, tiny_setup_toml
 from echocal.errors import DataFileError, EchocalValueError
 from echocal.measurement import ReplaySource
 from echocal.measurement.recording import (
@@ -19,34 +19,11 @@ from echocal.measurement.recording import (
     check_recording_size,
 )
 
-# a tiny, fast setup (as in test_cli_sources): 8 x 8 rays, 256 samples
-TINY = """
-name = "tiny"
-seed = 4
-[specimen]
-builtin = "flat-plate"
-[transducer]
-width = "6 mm"
-n_h = 8
-focal_length = "50 mm"
-[pulse]
-name = "gabor"
-center_frequency = "5 MHz"
-[window]
-fs = "50 MHz"
-start = "20 us"
-n_samples = 256
-[positioner]
-reference_position = ["0 mm", "0 mm", "16 mm"]
-z = ["10 mm", "40 mm"]
-coelevation = [-30, 30]
-"""
-
 
 @pytest.fixture
 def tiny(tmp_path: Path) -> Path:
     path = tmp_path / "tiny.toml"
-    path.write_text(TINY, encoding="utf-8")
+    path.write_text(tiny_setup_toml(), encoding="utf-8")
     return path
 
 
