@@ -210,14 +210,14 @@ def _check_scheduler(scheduler: str) -> None:
 
 
 def _connect(scheduler: str) -> Any:
-    """A Dask distributed client of ``scheduler`` (EchocalValueError if unreachable)."""
+    """A Dask distributed client of ``scheduler``, an address :func:`_check_scheduler`
+    accepted (EchocalValueError if unreachable)."""
     try:
         from distributed import Client
     except ImportError:  # pragma: no cover - distributed is a dependency
         raise EchocalValueError(
             "scheduler needs dask.distributed; install it (pip install distributed)"
         ) from None
-    _check_scheduler(scheduler)
     try:
         return Client(scheduler, timeout="20s")
     except OSError as exc:

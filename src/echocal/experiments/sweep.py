@@ -38,7 +38,7 @@ import tomllib
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, NoReturn
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 
@@ -321,7 +321,6 @@ def load_sweep(
         spec, part = _salvage(raw, exc)
     if spec is None:  # nothing more can be checked
         _raise(where, problems)
-    assert spec is not None
     found, bad_methods = _check(spec, part)
     problems += found
     resolved = None
@@ -388,7 +387,7 @@ def _salvage(raw: Any, exc: ValidationError) -> tuple[SweepSpec | None, _Partial
         return None, part
 
 
-def _raise(where: str, problems: list[str]) -> None:
+def _raise(where: str, problems: list[str]) -> NoReturn:
     raise ConfigError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
 
 
