@@ -23,7 +23,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """List the calibration methods, or one method's options (for --option KEY=VALUE)."""
         from echocal.calibrate import Acquisition, get_method, method_names
-        from echocal.calibrate.driver import _accepted
+        from echocal.calibrate._options import accepted_options
 
         if name is None:
             summary = {m: _first_line(get_method(m)) for m in method_names()}
@@ -34,8 +34,8 @@ def register(app: typer.Typer) -> None:
                 output.print(f"[bold]{m:14s}[/] {escape(line)}")
             return
         cls = get_method(name)  # unknown names list the valid ones
-        params = inspect.signature(cls.__init__).parameters
-        options = {k: params[k].default for k in params if k in _accepted(cls)}
+        params, accepted = inspect.signature(cls.__init__).parameters, accepted_options(cls)
+        options = {k: params[k].default for k in params if k in accepted}
         if json_output:
             write_json({"method": name, "options": {k: _plain(v) for k, v in options.items()}})
             return
