@@ -206,11 +206,9 @@ class VirtualSetup(BaseSource):
         object.__setattr__(self, "_generator", as_generator(self.rng))
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})
-        closed = tuple((i, s) for i, s in enumerate(self.specimen) if s.closed)
-        object.__setattr__(self, "_closed_shapes", closed)
-        if closed:  # the probe usually sits above them: one comparison settles it
-            top = max(float(shape.bounds()[1, 2]) for _, shape in closed)
-            object.__setattr__(self, "_closed_top", top)
+        # the probe usually sits above the closed shapes: one comparison settles it
+        tops = [float(shape.bounds()[1, 2]) for shape in self.specimen if shape.closed]
+        object.__setattr__(self, "_closed_top", max(tops, default=-np.inf))
         check_sample_count(self.pulse, self.window)
         self._check_outside(reference[None], what="reference_position")
         _raise_malloc_threshold()
@@ -219,18 +217,14 @@ class VirtualSetup(BaseSource):
         self, positions: FloatArray, *, poses: Sequence[Pose] | None = None, what: str = "pose"
     ) -> None:
         """Refuse probe positions [m] ``(P, 3)`` inside a closed shape of the specimen."""
-        if not self._closed_shapes or positions[:, 2].min() >= self._closed_top:
+        if positions[:, 2].min() >= self._closed_top:
             return
-        bores = [s for s in self.specimen if s.bore]
-        for _, shape in self._closed_shapes:  # positions are checked finite float64
-            inside = shape._contains(positions)
-            for bore in bores if np.any(inside) else ():  # a bore's hole is not material
-                inside &= ~bore._in_hole(positions)
-            if np.any(inside):
-                break
-        else:
+        index = self.specimen.containing(positions)  # a bore's hole is not material
+        if not np.any(index >= 0):
             return
-        k = int(np.argmax(inside))
+        first = int(index[index >= 0].min())  # the first shape any position is inside
+        shape = self.specimen[first]
+        k = int(np.argmax(index == first))
         x, y, z = (1e3 * v for v in positions[k])
         where = f"({x:g}, {y:g}, {z:g}) mm"
         if poses is not None:

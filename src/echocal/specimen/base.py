@@ -74,12 +74,8 @@ class Shape(abc.ABC):
     @property
     def bore(self) -> bool:
         """True when the shape bounds a hole cut into the solids around it (a cylinder with
-        ``surface="inside"``): a point in it (:meth:`_in_hole`) is in the coupling medium."""
+        ``surface="inside"``): a point in it (:meth:`_contains`) is in the coupling medium."""
         return False
-
-    def _in_hole(self, points: FloatArray) -> NDArray[np.bool_]:
-        """Whether checked ``(M, 3)`` points [m] lie inside the hole of a :attr:`bore`."""
-        return np.zeros(len(points), dtype=bool)
 
     def contains(self, points: ArrayLike) -> NDArray[np.bool_]:
         """Whether each point [m], shape ``(M, 3)``, lies strictly inside the solid, ``(M,)``.
@@ -92,7 +88,9 @@ class Shape(abc.ABC):
         return self._contains(pts)
 
     def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
-        """Kernel of :meth:`contains` for a closed shape: checked ``(M, 3)`` points."""
+        """Whether checked ``(M, 3)`` points [m] lie strictly inside the volume the shape
+        bounds: the solid of a :attr:`closed` shape (kernel of :meth:`contains`), the hole
+        of a :attr:`bore`."""
         return np.zeros(len(points), dtype=bool)
 
     def _kernel_params(self) -> tuple[int, FloatArray] | None:

@@ -96,11 +96,6 @@ class Cylinder(Shape):
         """A bore (``"inside"``) is a hole: a probe inside it is not inside the material."""
         return self.surface == "inside"
 
-    def _in_hole(self, points: FloatArray) -> NDArray[np.bool_]:
-        if not self.bore:
-            return np.zeros(len(points), dtype=bool)
-        return self._contains(points)
-
     def _contains(self, points: FloatArray) -> NDArray[np.bool_]:
         f = points - self.center
         axial = f @ self.axis

@@ -91,15 +91,14 @@ class Specimen:
         """
         pts = finite_array("points", points, shape_tail=(3,)).reshape(-1, 3)
         out = np.full(len(pts), -1, dtype=np.int64)
+        in_hole = np.zeros(len(pts), dtype=bool)
         for shape in self._shapes:
             if shape.bore:
-                out[shape._in_hole(pts)] = -2  # excluded from every solid below
+                in_hole |= shape._contains(pts)
         for index, shape in enumerate(self._shapes):
             if shape.closed:
-                free = out == -1
-                inside = shape.contains(pts[free])
-                out[np.nonzero(free)[0][inside]] = index
-        out[out == -2] = -1
+                free = np.flatnonzero((out == -1) & ~in_hole)
+                out[free[shape._contains(pts[free])]] = index
         return out
 
     def cast(self, origins: ArrayLike, directions: ArrayLike) -> Hits:
