@@ -385,17 +385,16 @@ def _check_echo_possible(
     from echocal.geometry import pose_from_angles
     from echocal.measurement.recording import simulation_errors
 
-    centre = int(np.argmin(np.sum((positions - positions.mean(axis=0)) ** 2, axis=1)))
-    order = [centre, *(k for k in range(len(positions)) if k != centre)]
-    first = None
-    for k in order:
+    def error_at(k: int) -> str | None:
         pose = pose_from_angles(positions[k], float(start[0]), float(start[1]), parameterization)
         (error,) = simulation_errors(source, [pose])
-        if error is None:
-            return
-        first = first or (positions[k], error)
-    where, error = first  # type: ignore[misc]
-    x, y, z = (1e3 * v for v in where)
+        return error
+
+    centre = int(np.argmin(np.sum((positions - positions.mean(axis=0)) ** 2, axis=1)))
+    error = error_at(centre)
+    if error is None or any(error_at(k) is None for k in range(len(positions)) if k != centre):
+        return
+    x, y, z = (1e3 * v for v in positions[centre])
     raise EchocalValueError(
         f"every grid point would fail ({len(positions)} of {len(positions)}), e.g. at "
         f"({x:g}, {y:g}, {z:g}) mm: {error}; choose another stand-off (--z), grid (--grid) "
