@@ -25,6 +25,7 @@ from echocal.cli._replay_grid import (
 )
 from echocal.cli.calibrate import (
     EXIT_NO_ECHO,
+    _check_source_options,
     _parse_position,
     _print_failure,
     _Run,
@@ -86,13 +87,9 @@ def _calibrate_measured(
 ) -> None:
     """Calibrate on a recording or a rig: the same objective and call, no truth known."""
     from echocal._validate import one_of
-    from echocal.errors import EchocalValueError
     from echocal.geometry import PARAMETERIZATIONS
 
-    if replay_mode is not None and replay is None:
-        raise EchocalValueError("--replay-mode applies only with --replay FILE")
-    if timeout is not None and instrument is None:
-        raise EchocalValueError("--timeout applies only with --instrument HOST:PORT")
+    _check_source_options(replay, replay_mode, instrument, timeout)
     default = "azimuth-coelevation" if replay is not None else "tilt"
     parameterization = one_of(
         "--parameterization",

@@ -181,12 +181,7 @@ def register(app: typer.Typer) -> None:
                 json_output=json_output,
             )
             return
-        for name, value in (("--replay-mode", replay_mode), ("--timeout", timeout)):
-            if value is not None:
-                from echocal.errors import EchocalValueError
-
-                where = "--replay FILE" if name == "--replay-mode" else "--instrument HOST:PORT"
-                raise EchocalValueError(f"{name} applies only with {where}")
+        _check_source_options(replay, replay_mode, instrument, timeout)
         setup = "thesis" if setup is None else setup
         parameterization = "tilt" if parameterization is None else parameterization
         _calibrate_simulated(
@@ -202,6 +197,18 @@ def register(app: typer.Typer) -> None:
             plots=plots,
             json_output=json_output,
         )
+
+
+def _check_source_options(
+    replay: Path | None, replay_mode: str | None, instrument: str | None, timeout: float | None
+) -> None:
+    """Refuse ``--replay-mode`` without ``--replay`` and ``--timeout`` without ``--instrument``."""
+    from echocal.errors import EchocalValueError
+
+    if replay_mode is not None and replay is None:
+        raise EchocalValueError("--replay-mode applies only with --replay FILE")
+    if timeout is not None and instrument is None:
+        raise EchocalValueError("--timeout applies only with --instrument HOST:PORT")
 
 
 @dataclass(frozen=True)
