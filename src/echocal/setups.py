@@ -38,7 +38,7 @@ import tomllib
 import warnings
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, NoReturn
 
 import numpy as np
 from pydantic import (
@@ -732,23 +732,16 @@ def _check(
         problems = _format_errors(exc)
         invalid = frozenset(str(item["loc"][0]) for item in exc.errors() if item["loc"])
     else:
-        return _build_checked(config, base_dir, frozenset())
+        return config, base_dir, *_build_parts(config, base_dir)
     try:
         config = SetupConfig.model_validate({k: v for k, v in raw.items() if k not in invalid})
     except ValidationError:  # a top-level problem the schema could not pin to a key
         return None, base_dir, {}, problems
-    _, _, parts, found = _build_checked(config, base_dir, invalid)
+    parts, found = _build_parts(config, base_dir, invalid=invalid)
     return config, base_dir, parts, problems + found
 
 
-def _build_checked(
-    config: SetupConfig, base_dir: Path, invalid: frozenset[str]
-) -> tuple[SetupConfig, Path, dict[str, Any], list[str]]:
-    parts, problems = _build_parts(config, base_dir, invalid=invalid)
-    return config, base_dir, parts, problems
-
-
-def _raise_problems(name_or_path: str | Path, problems: list[str]) -> None:
+def _raise_problems(name_or_path: str | Path, problems: list[str]) -> NoReturn:
     only_files = problems and all(isinstance(p, _FileProblem) for p in problems)
     raise (DataFileError if only_files else ConfigError)(
         f"{name_or_path}: {len(problems)} problem(s):\n  " + "\n  ".join(problems)
@@ -770,7 +763,6 @@ def load_setup_with_config(
     config, base_dir, parts, problems = _check(name_or_path)
     if problems or config is None:
         _raise_problems(name_or_path, problems)
-    assert config is not None
     return config, base_dir, _assemble(config, parts, seed)
 
 
