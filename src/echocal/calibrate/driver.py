@@ -119,11 +119,10 @@ def build_optimizer(
         local = record.pop("local_options")
         del record["local"]
         return opt, {**local, "acquire": record}
-    if "noise_model" in _accepted(cls) and not issubclass(cls, Acquisition):
-        known.setdefault("noise_model", objective.noise_estimate)
     if issubclass(cls, Acquisition):
-        known.update(acq_opts)
-        known = {**_search_inputs(objective), **known}
+        known = {**_search_inputs(objective), **known, **acq_opts}
+    elif "noise_model" in _accepted(cls):
+        known.setdefault("noise_model", objective.noise_estimate)
     opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
     return opt, _record(opt, known, objective)
 
