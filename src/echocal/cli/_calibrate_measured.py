@@ -181,7 +181,11 @@ def _on_instrument(
         tally = _Tally(rig)
         objective = SourceObjective(tally, where, pulse=pulse, parameterization=parameterization)
         tally.logged = lambda: objective.n_measurements
-        source = {"kind": "instrument", "address": f"{host}:{port}"}
+        source = {
+            "kind": "instrument",
+            "address": f"{host}:{port}",
+            "description": rig.description,
+        }
         x0 = (0.0, 0.0) if start is None else start
         try:
             result = run(objective, x0, seed)
@@ -190,7 +194,7 @@ def _on_instrument(
                 "method": run.method,
                 "setup": setup,
                 "seed": seed,
-                "source": {**source, "description": rig.description},
+                "source": source,
                 "pulse": {"name": pulse.name, "center_frequency_hz": pulse.center_frequency},
                 "x0_deg": list(x0),
             }
@@ -209,7 +213,7 @@ def _on_instrument(
             where=where,
             pulse=pulse,
             pulse_from=f"--setup {setup}",
-            source={**source, "description": rig.description},
+            source=source,
             extra={},
             figures=figures,
         )
@@ -252,13 +256,17 @@ def _on_replay(
         result = run(objective, start, seed)
         maps = RecordingMap(recording, index, pulse, objective.metric, parameterization)
         best = None if maps.best is None else [float(v) for v in maps.best]
-        source = {"kind": "replay", "file": str(replay), "mode": recording.mode}
         return _Measured(
             result=result,
             where=where,
             pulse=pulse,
             pulse_from=pulse_from,
-            source={**source, "description": recording.description},
+            source={
+                "kind": "replay",
+                "file": str(replay),
+                "mode": recording.mode,
+                "description": recording.description,
+            },
             extra={"recording_best_deg": best},
             figures=_save_measured(result, out, maps, plots),
         )
