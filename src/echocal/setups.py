@@ -74,9 +74,9 @@ from echocal.specimen import (
 )
 from echocal.transducer import Transducer, directivity_names, make_directivity
 from echocal.units import (
-    SAMPLING_RANGE,
     parse_quantity,
     plausible_frequency,
+    plausible_sampling_rate,
     plausible_speed,
 )
 
@@ -138,10 +138,6 @@ def _not_nan(value: float) -> float:
     return value
 
 
-def _sampling_rate(field: str, value: float) -> float:
-    return plausible_frequency(field, value, plausible=SAMPLING_RANGE, what="a sampling rate")
-
-
 _SI_UNIT = {"length": "m", "time": "s", "frequency": "Hz", "speed": "m/s", "angle": "deg"}
 
 ProbeLength = Annotated[
@@ -158,7 +154,7 @@ Frequency = Annotated[
 ]
 """An ultrasonic frequency [Hz], 20 kHz to 1 GHz (5 Hz for 5 MHz is refused with a hint)."""
 SamplingRate = Annotated[
-    float, _quantity("frequency", check=_sampling_rate), Field(gt=0, allow_inf_nan=False)
+    float, _quantity("frequency", check=plausible_sampling_rate), Field(gt=0, allow_inf_nan=False)
 ]
 Time = Annotated[float, _quantity("time", plausible_max=1.0), Field(allow_inf_nan=False)]
 Speed = Annotated[
@@ -355,7 +351,7 @@ def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dic
                 if key == "center_frequency":
                     plausible_frequency(field, number)
                 elif key == "fs":
-                    _sampling_rate(field, number)
+                    plausible_sampling_rate(field, number)
                 params[key] = number
             else:
                 params[key] = _parse_any(field, value) if isinstance(value, str) else value

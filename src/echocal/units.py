@@ -21,6 +21,7 @@ __all__ = [
     "parse_length",
     "parse_quantity",
     "plausible_frequency",
+    "plausible_sampling_rate",
     "plausible_speed",
 ]
 
@@ -149,6 +150,11 @@ def plausible_frequency(
             + _frequency_hint(value, low, high)
         )
     return value
+
+
+def plausible_sampling_rate(field: str, value: float) -> float:
+    """:func:`plausible_frequency` for a digitizer's sampling rate [Hz] (:data:`SAMPLING_RANGE`)."""
+    return plausible_frequency(field, value, plausible=SAMPLING_RANGE, what="a sampling rate")
 
 
 def plausible_speed(field: str, value: float) -> float:

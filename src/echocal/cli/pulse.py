@@ -10,11 +10,11 @@ import typer
 from echocal.cli._common import console, write_json
 from echocal.errors import EchocalError, EchocalValueError
 from echocal.units import (
-    SAMPLING_RANGE,
     format_frequency,
     parse_angle,
     parse_quantity,
     plausible_frequency,
+    plausible_sampling_rate,
 )
 
 _OPTIONS_BY_PULSE = {
@@ -126,7 +126,7 @@ def _run(
             )
     formats = figure_formats(out, ("svg",) if svg else ())  # before any work
     fs = parse_quantity("--fs", fs_text, "frequency", "Hz")
-    plausible_frequency("--fs", fs, plausible=SAMPLING_RANGE, what="a sampling rate")
+    plausible_sampling_rate("--fs", fs)
     params: dict[str, Any] = {}
     if fc is not None:
         params["center_frequency"] = plausible_frequency(
