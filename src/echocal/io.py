@@ -12,7 +12,7 @@ from typing import Any
 
 from echocal.errors import DataFileError
 
-__all__ = ["atomic_path", "atomic_write_text", "json_ready"]
+__all__ = ["atomic_path", "atomic_write_text", "file_in_the_way", "json_ready"]
 
 
 @contextlib.contextmanager
@@ -26,13 +26,11 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     target = Path(path)
     if target.is_dir():
         raise DataFileError(f"cannot write {target}: it is a directory; give a file path")
-    for folder in target.parents:  # the nearest existing ancestor must be a directory
-        if folder.exists():
-            if not folder.is_dir():
-                raise DataFileError(
-                    f"cannot write {target}: {folder} is not a directory; choose another path"
-                )
-            break
+    blocker = file_in_the_way(target)
+    if blocker is not None:
+        raise DataFileError(
+            f"cannot write {target}: {blocker} is not a directory; choose another path"
+        )
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         tmp = _create_unique(target)
@@ -47,6 +45,15 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def file_in_the_way(path: str | os.PathLike[str]) -> Path | None:
+    """The nearest existing ancestor of ``path`` when it is not a directory (a file where a
+    folder must be), else None."""
+    for folder in Path(path).parents:
+        if folder.exists():
+            return None if folder.is_dir() else folder
+    return None
 
 
 def _unwritable(target: Path, exc: OSError) -> DataFileError:

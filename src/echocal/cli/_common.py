@@ -12,9 +12,9 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from echocal.errors import EchocalError
+from echocal.errors import DataFileError, EchocalError
 from echocal.geometry import Pose
-from echocal.io import atomic_write_text, json_ready
+from echocal.io import atomic_write_text, file_in_the_way, json_ready
 from echocal.units import parse_angle, parse_length
 
 try:  # recent typer vendors click as typer._click; older ones use click itself
@@ -150,3 +150,38 @@ def write_json(data: dict[str, Any], path: Path | None = None) -> None:
         sys.stdout.write(text + "\n")
         return
     atomic_write_text(path, text + "\n")
+
+
+def check_out_file(
+    path: Path,
+    *,
+    suffix: str | None,
+    option: str = "--out",
+    what: str = "a file",
+    example: str | None = None,
+) -> None:
+    """Refuse an output file path that cannot be right, before any work.
+
+    ``path`` must end in ``suffix`` (e.g. ``".nc"``, unless None; ``what`` names the
+    content, e.g. ``"a NetCDF replay file"``), must not be an existing directory, and
+    every existing ancestor folder must be a directory.  ``example`` : a file name
+    suggested inside a directory given by mistake (default ``out`` + ``suffix``).
+    Raises :class:`~echocal.errors.DataFileError`
+    naming ``option`` and the fix.
+    """
+    if path.is_dir():
+        raise DataFileError(
+            f"{option} {path} is a directory; give a file path, e.g. "
+            f"{path / (example or 'out' + (suffix or ''))}"
+        )
+    if suffix is not None and path.suffix.lower() != suffix:
+        given = f"ends in {path.suffix!r}" if path.suffix else "has no suffix"
+        raise DataFileError(
+            f"{option} {path} {given}: it is written as {what}; give a name ending in {suffix}, "
+            f"e.g. {path.with_suffix(suffix)}"
+        )
+    blocker = file_in_the_way(path)
+    if blocker is not None:
+        raise DataFileError(
+            f"{option} {path}: {blocker} is not a directory; choose a path in a folder"
+        )

@@ -99,7 +99,7 @@ def register(app: typer.Typer) -> None:
         overwrite: Annotated[bool, typer.Option(help="Replace an existing page.")] = False,
     ) -> None:
         """Write one self-contained HTML report of scenario and sweep results."""
-        from echocal.cli.record import check_out_file
+        from echocal.cli._common import check_out_file
         from echocal.errors import DataFileError
         from echocal.experiments.report import write_report
 

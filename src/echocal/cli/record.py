@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
+from echocal.cli._common import check_out_file
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP
 
 GRID_HELP = "FIRST:LAST:COUNT in degrees, e.g. -10:10:21 (or with units: -0.2rad:0.2rad:5)"
@@ -64,45 +65,6 @@ def parse_position(text: str) -> tuple[float, float, float]:
         )
     pose = parse_pose(text, "--position")
     return pose.x, pose.y, pose.z
-
-
-def check_out_file(
-    path: Path,
-    *,
-    suffix: str | None,
-    option: str = "--out",
-    what: str = "a file",
-    example: str | None = None,
-) -> None:
-    """Refuse an output file path that cannot be right, before any work.
-
-    ``path`` must end in ``suffix`` (e.g. ``".nc"``, unless None; ``what`` names the
-    content, e.g. ``"a NetCDF replay file"``), must not be an existing directory, and
-    every existing ancestor folder must be a directory.  ``example`` : a file name
-    suggested inside a directory given by mistake (default ``out`` + ``suffix``).
-    Raises :class:`~echocal.errors.DataFileError`
-    naming ``option`` and the fix.
-    """
-    from echocal.errors import DataFileError
-
-    if path.is_dir():
-        raise DataFileError(
-            f"{option} {path} is a directory; give a file path, e.g. "
-            f"{path / (example or 'out' + (suffix or ''))}"
-        )
-    if suffix is not None and path.suffix.lower() != suffix:
-        given = f"ends in {path.suffix!r}" if path.suffix else "has no suffix"
-        raise DataFileError(
-            f"{option} {path} {given}: it is written as {what}; give a name ending in {suffix}, "
-            f"e.g. {path.with_suffix(suffix)}"
-        )
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise DataFileError(
-                    f"{option} {path}: {parent} is not a directory; choose a path in a folder"
-                )
-            break
 
 
 def _say(text: str) -> None:

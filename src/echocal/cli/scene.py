@@ -32,7 +32,7 @@ def register(app: typer.Typer) -> None:
         ),
     ) -> None:
         """Save a 3D view of specimen, transducer and a subsample of rays with their hits."""
-        from echocal.cli.record import check_out_file
+        from echocal.cli._common import check_out_file
         from echocal.plots import figure_formats, save_figure
         from echocal.plots.scene import scene_figure
 
