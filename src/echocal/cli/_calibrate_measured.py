@@ -414,26 +414,19 @@ def _check_reachable(limits: Any, where: Any) -> None:
         raise LimitError(f"--position is outside the rig's limits: {'; '.join(problems)}")
 
 
-def _config_pulse(config: Any, base_dir: Path, where: str) -> Any:
-    """The pulse of a setup's ``[pulse]`` table, built as a setup builds it."""
-    from echocal.setups import build_pulse
-
-    return build_pulse(config, base_dir, where=where)
-
-
 def _setup_pulse(setup: str) -> Any:
     """The pulse of ``--setup`` (a built-in or a TOML file); nothing else of it is used."""
-    from echocal.setups import load_setup_config
+    from echocal.setups import build_pulse, load_setup_config
 
     config, base_dir = load_setup_config(setup)
-    return _config_pulse(config.pulse, base_dir, setup)
+    return build_pulse(config.pulse, base_dir, where=setup)
 
 
 def _recorded_pulse(recording: Any) -> tuple[Any, str]:
     """The pulse of the setup a recording was made with (``echocal record`` stores its
     config in the file's ``source`` attribute) and where it came from; (None, why not)."""
     from echocal.errors import EchocalError
-    from echocal.setups import PulseConfig
+    from echocal.setups import PulseConfig, build_pulse
 
     stored = recording.source_info.get("setup")
     config = stored.get("config") if isinstance(stored, dict) else None
@@ -447,7 +440,7 @@ def _recorded_pulse(recording: Any) -> tuple[Any, str]:
     # a setup file's relative paths (a sampled pulse's samples) are relative to its folder
     base = Path(name).parent if isinstance(name, str) and name.endswith(".toml") else Path.cwd()
     try:
-        pulse = _config_pulse(PulseConfig.model_validate(table), base, "pulse")
+        pulse = build_pulse(PulseConfig.model_validate(table), base, where="pulse")
     except (EchocalError, ValueError) as exc:
         return None, f"the recorded setup's pulse cannot be rebuilt ({exc})"
     return pulse, f"the recording's setup {name or config.get('name', '')}".rstrip()
