@@ -91,17 +91,18 @@ def tilt_bounds_in_recording(recording: Any, start: tuple[float, float]) -> Any:
         f"tilt_x [{extent[0, 0]:.3g}, {extent[0, 1]:.3g}], tilt_y [{extent[1, 0]:.3g}, "
         f"{extent[1, 1]:.3g}] deg"
     )
+    at_edge = (
+        f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg lies at the edge of "
+        f"{recording.path}: start farther inside ({covered}), or calibrate in its own "
+        "angles (--parameterization azimuth-coelevation)"
+    )
     if not bool(inside(*start)):
         raise LimitError(
             f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg is not an orientation of "
             f"{recording.path}: {covered}"
         )
     if not ok[i0 : i1 + 1, j0 : j1 + 1].all():
-        raise LimitError(
-            f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg lies at the edge of "
-            f"{recording.path}: start farther inside ({covered}), or calibrate in its own "
-            "angles (--parameterization azimuth-coelevation)"
-        )
+        raise LimitError(at_edge)
     box, area = (i0, i1, j0, j1), 0
     rows = ok[i1].copy()
     for lo in range(i0, -1, -1):  # tilt_x rows lo..hi around the cell; a tilt_y run through it
@@ -130,11 +131,7 @@ def tilt_bounds_in_recording(recording: Any, start: tuple[float, float]) -> Any:
         ring_b = np.concatenate([np.full(400, b0), np.full(400, b1)] + [b0 + edge * (b1 - b0)] * 2)
         if inside(ring_a, ring_b).all():
             if not (a0 <= start[0] <= a1 and b0 <= start[1] <= b1):
-                raise LimitError(
-                    f"--x0 (tilt_x={start[0]:g}, tilt_y={start[1]:g}) deg lies at the edge of "
-                    f"{recording.path}: start farther inside ({covered}), or calibrate in its own "
-                    "angles (--parameterization azimuth-coelevation)"
-                )
+                raise LimitError(at_edge)
             return bounds
     raise LimitError(
         f"{recording.path} is too narrow around --x0 for a calibration in tilts: {covered}; "
