@@ -16,3 +16,9 @@ MM = 1.0e-3
 
 US = 1.0e-6
 """One microsecond [s]."""
+
+ECHO_THRESHOLD = 4.5
+"""Detection significance g (Gaussian-equivalent σ, see
+:class:`~echocal.signal.detection.EchoDetector`) above which an A-scan shows an echo: pure
+noise exceeds it about 3·10⁻⁶ of the time (``echocal simulate``; the acquisition phase's
+default ``threshold``)."""

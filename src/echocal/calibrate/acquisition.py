@@ -56,6 +56,7 @@ from echocal.calibrate._options import (
 )
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.registry import get_method, register_method
+from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import EchocalValueError
 
 __all__ = ["Acquisition", "Detector", "NoiseModel", "hex_spiral", "search_rings"]
@@ -198,7 +199,7 @@ class Acquisition(Optimizer):
         local_options: dict[str, Any] | None = None,
         spacing: float = 1.0,
         max_radius: float = 20.0,
-        threshold: float = 4.5,
+        threshold: float = ECHO_THRESHOLD,
         first_threshold: float = 3.0,
         confirm: bool = True,
         noise_sigma: float | None = None,

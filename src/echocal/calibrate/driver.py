@@ -49,13 +49,8 @@ class CalibrationState:
     values: FloatArray
 
 
-def _accepted(cls: type[Optimizer]) -> set[str]:
-    """The options ``cls`` accepts (see :func:`echocal.calibrate._options.accepted_options`)."""
-    return accepted_options(cls)
-
-
 def _split(cls: type[Optimizer], options: Mapping[str, Any]) -> tuple[dict, list[str]]:
-    ok = _accepted(cls)
+    ok = accepted_options(cls)
     known = {k: v for k, v in options.items() if k in ok}
     return known, sorted(set(options) - ok)
 
@@ -102,11 +97,11 @@ def build_optimizer(
         unknown += [f"acquire.{k}" for k in aunknown]
     if unknown:
         hints = "; ".join(
-            f"{k}{suggestion(k.removeprefix('acquire.'), _accepted(cls))}" for k in unknown
+            f"{k}{suggestion(k.removeprefix('acquire.'), accepted_options(cls))}" for k in unknown
         )
         warnings.warn(
             f"unknown option(s) for method {method!r} ignored: {hints}; "
-            f"accepted: {', '.join(sorted(_accepted(cls)))}",
+            f"accepted: {', '.join(sorted(accepted_options(cls)))}",
             UserWarning,
             stacklevel=3,
         )
@@ -121,7 +116,7 @@ def build_optimizer(
         return opt, {**local, "acquire": record}
     if issubclass(cls, Acquisition):
         known = {**_search_inputs(objective), **known, **acq_opts}
-    elif "noise_model" in _accepted(cls):
+    elif "noise_model" in accepted_options(cls):
         known.setdefault("noise_model", objective.noise_estimate)
     opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
     return opt, _record(opt, known, objective)

@@ -11,6 +11,7 @@ import typer
 
 from echocal.cli._common import output, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.constants import ECHO_THRESHOLD
 from echocal.io import atomic_path, atomic_write_text, json_ready
 from echocal.units import parse_quantity
 
@@ -82,7 +83,7 @@ def register(app: typer.Typer) -> None:
         peak_tof = float(time_of_flight(scan.samples, window, pulse, gate=user_gate))
         significance = _significance(scan.samples, virtual, user_gate)
         detected = bool(np.isfinite(peak_tof)) and (
-            significance is None or significance > DETECTION_THRESHOLD
+            significance is None or significance > ECHO_THRESHOLD
         )
         tof = peak_tof if detected else float("nan")
         energy = float(pseudo_energy(scan.samples, window, pulse))
@@ -99,7 +100,7 @@ def register(app: typer.Typer) -> None:
             "snr_db": virtual.receiver.snr_db,
             "detected": detected,
             "significance": significance,
-            "detection_threshold": None if significance is None else DETECTION_THRESHOLD,
+            "detection_threshold": None if significance is None else ECHO_THRESHOLD,
             "tof_s": tof,
             "distance_m": float(distance(tof, virtual.sound_speed)),
             "pseudo_energy": energy,
@@ -133,7 +134,7 @@ def register(app: typer.Typer) -> None:
         if significance is not None and not detected:
             output.print(
                 f"[yellow]no echo detected in the {where}[/] (significance g = "
-                f"{significance:.2f}, an echo needs g > {DETECTION_THRESHOLD:g})"
+                f"{significance:.2f}, an echo needs g > {ECHO_THRESHOLD:g})"
             )
         elif np.isnan(tof):
             output.print(f"[yellow]no echo in the {where}[/]")
@@ -144,11 +145,6 @@ def register(app: typer.Typer) -> None:
             f"pseudo-energy   {energy:10.4g}\n"
             f"saved           {data_path}, {plots[0]}"
         )
-
-
-DETECTION_THRESHOLD = 4.5
-"""Significance g (Gaussian-equivalent σ) above which an A-scan shows an echo: pure noise
-exceeds it about 3·10⁻⁶ of the time; the acquisition phase uses the same level."""
 
 
 def _show(value: float, unit: str) -> str:

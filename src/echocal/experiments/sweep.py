@@ -397,7 +397,7 @@ def _check(spec: SweepSpec, part: _Partial) -> tuple[list[str], set[int]]:
     Returns the problems and the positions (in ``spec.methods``) of the methods with one.
     """
     from echocal.calibrate import get_method, preset_names
-    from echocal.calibrate.driver import _accepted
+    from echocal.calibrate._options import accepted_options
 
     problems = []
     bad: set[int] = set()
@@ -434,7 +434,7 @@ def _check(spec: SweepSpec, part: _Partial) -> tuple[list[str], set[int]]:
                 f"{at}.preset: unknown preset {method.preset!r}; "
                 f"choose one of: {', '.join(preset_names())}"
             )
-        accepted = sorted(_accepted(cls))
+        accepted = sorted(accepted_options(cls))
         for key, value in method.options.items():
             if key not in accepted:
                 problems.append(
