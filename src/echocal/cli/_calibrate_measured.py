@@ -13,10 +13,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import typer
 from rich.markup import escape
 
-from echocal.cli._common import console, output, parse_pair, write_json
+from echocal.cli._common import console, output, parse_pair
 from echocal.cli._replay_grid import (
     RecordingMap,
     grid_centre,
@@ -24,10 +23,9 @@ from echocal.cli._replay_grid import (
     tilt_bounds_in_recording,
 )
 from echocal.cli.calibrate import (
-    EXIT_NO_ECHO,
     _check_source_options,
     _parse_position,
-    _print_failure,
+    _report,
     _Run,
     save_pngs,
 )
@@ -133,14 +131,7 @@ def _calibrate_measured(
         "message": result.message,
         "files": {"result": str(out / "result.json"), **done.figures},
     }
-    if json_output:
-        write_json(summary)
-    elif found:
-        _print_measured_estimate(done, out)
-    else:
-        _print_failure(result, out)
-    if not found:
-        raise typer.Exit(code=EXIT_NO_ECHO)
+    _report(summary, result, out, json_output, lambda: _print_measured_estimate(done, out))
 
 
 def _on_instrument(

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import inspect
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -314,18 +315,32 @@ def _calibrate_simulated(
         "message": result.message,
         "files": {"result": str(out / "result.json"), **figures},
     }
-    if json_output:
-        write_json(summary)
-    elif found:
-        _print_estimate(result, evaluation, virtual, out)
-    else:
-        _print_failure(result, out)
-    if not found:
-        raise typer.Exit(code=EXIT_NO_ECHO)
+    _report(
+        summary, result, out, json_output, lambda: _print_estimate(result, evaluation, virtual, out)
+    )
 
 
 EXIT_NO_ECHO = 1
 """Exit status of a calibration that found no echo (result files written all the same)."""
+
+
+def _report(
+    summary: dict[str, Any],
+    result: Any,
+    out: Path,
+    json_output: bool,
+    print_estimate: Callable[[], None],
+) -> None:
+    """Print ``summary`` (``--json``), the estimate or the failure; exit with
+    :data:`EXIT_NO_ECHO` when no echo was found."""
+    if json_output:
+        write_json(summary)
+    elif result.success:
+        print_estimate()
+    else:
+        _print_failure(result, out)
+    if not result.success:
+        raise typer.Exit(code=EXIT_NO_ECHO)
 
 
 def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> None:
