@@ -21,43 +21,13 @@ import pytest
 import xarray as xr
 from typer.testing import CliRunner
 
-from cli_helpers import run_main
+from cli_helpers import run_main, tiny_setup_toml
 from echocal.cli import app
 from echocal.geometry import Pose
 from echocal.measurement import HardwareSource, ReplaySource, VirtualSetup
 from echocal.setups import builtin_setup_names, load_setup, load_setup_config
 
 runner = CliRunner()
-
-# A tiny, fast setup: 8 x 8 rays, 256 samples; echo at 2 x 16 mm / 1480 m/s = 21.6 us,
-# inside the window [20, 25.1] us.
-TINY = """
-name = "tiny"
-description = "tiny test rig"
-seed = 4
-
-[specimen]
-builtin = "flat-plate"
-
-[transducer]
-width = "6 mm"
-n_h = 8
-focal_length = "50 mm"
-
-[pulse]
-name = "gabor"
-center_frequency = "5 MHz"
-
-[window]
-fs = "50 MHz"
-start = "20 us"
-n_samples = 256
-
-[positioner]
-reference_position = ["0 mm", "0 mm", "16 mm"]
-z = ["10 mm", "40 mm"]
-coelevation = [-30, 30]
-"""
 
 # Five problems, each in a different field (one of them an unknown key).
 BAD = """
@@ -75,7 +45,7 @@ n_samples = 4
 @pytest.fixture
 def tiny(tmp_path: Path) -> Path:
     path = tmp_path / "tiny.toml"
-    path.write_text(TINY, encoding="utf-8")
+    path.write_text(tiny_setup_toml(), encoding="utf-8")
     return path
 
 
