@@ -20,6 +20,7 @@ re-exported here: the name would shadow that subpackage.
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the same names, eagerly, for type checkers and IDEs
@@ -126,7 +127,11 @@ _LAZY: dict[str, str] = {
 """Public name -> the module that defines it, imported on first use (PEP 562): `import
 echocal` and the command line's start stay fast."""
 
-__version__ = "0.1.0"
+try:
+    __version__: str = importlib.metadata.version("echocal")
+except importlib.metadata.PackageNotFoundError:  # a source tree that was never installed
+    __version__ = "0+unknown"
+"""The installed distribution's version (one source: ``pyproject.toml``)."""
 
 __all__ = [
     "MM",
