@@ -1,11 +1,11 @@
 # Two entry points, each sets itself up on a fresh machine (Python >= 3.11 with venv).
 #   make demo  — install, then run the main job (see README)
-#   make test  — install with test extras, lint, run the test suite
+#   make test  — install with test extras, lint (ruff), type-check (mypy), run the test suite
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 
-.PHONY: demo test setup lint clean
+.PHONY: demo test setup lint typecheck clean
 
 $(BIN)/echocal: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,7 +21,10 @@ demo: setup
 lint: setup
 	$(BIN)/ruff check src tests $(wildcard benchmarks)
 
-test: lint
+typecheck: setup
+	$(BIN)/mypy
+
+test: lint typecheck
 	$(BIN)/python -m pytest -n 2 --timeout=600
 
 clean:

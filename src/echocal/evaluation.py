@@ -37,7 +37,8 @@ def angular_error(points: ArrayLike, truth: ArrayLike, parameterization: str) ->
     """[deg] angle between the beams of ``points`` (shape (..., 2)) and ``truth`` (2,)."""
     pts = np.asarray(points, dtype=np.float64)
     az, coel = convert_angles(pts[..., 0], pts[..., 1], parameterization, "azimuth-coelevation")
-    taz, tcoel = convert_angles(truth[0], truth[1], parameterization, "azimuth-coelevation")
+    t = np.asarray(truth, dtype=np.float64)
+    taz, tcoel = convert_angles(t[0], t[1], parameterization, "azimuth-coelevation")
     return angle_between(orientation_normal(az, coel), orientation_normal(taz, tcoel))
 
 

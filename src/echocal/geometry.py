@@ -297,7 +297,8 @@ class Pose:
     def from_array(cls, values: ArrayLike) -> Pose:
         """Inverse of :meth:`as_array`."""
         v = finite_array("pose", values, shape_tail=(5,))
-        return cls(*(float(c) for c in v))
+        x, y, z, azimuth, coelevation = (float(c) for c in v)
+        return cls(x, y, z, azimuth, coelevation)
 
 
 def poses_to_arrays(poses: Sequence[Pose]) -> tuple[FloatArray, FloatArray]:

@@ -51,7 +51,10 @@ _RAY_BLOCK = 16384  # rays generated per matrix product (see Transducer._rays_so
 class Directivity(Protocol):
     """Amplitude of a ray from its angle to the beam axis."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """The model's registry name."""
+        ...
 
     def __call__(self, angle: FloatArray) -> FloatArray:
         """Amplitude in [0, 1] (1 on axis) for off-axis angles ψ [rad], any shape."""

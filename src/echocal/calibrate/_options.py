@@ -56,12 +56,12 @@ _DESCRIPTIONS = {
 
 def accepted_options(cls: type) -> set[str]:
     """Names of the options a method class accepts (its constructor's keywords)."""
-    return set(inspect.signature(cls.__init__).parameters) - RESERVED
+    return set(inspect.signature(cls).parameters) - RESERVED
 
 
 def option_defaults(cls: type) -> dict[str, Any]:
     """Each option of ``cls`` with its default value (None where it has none)."""
-    params = inspect.signature(cls.__init__).parameters
+    params = inspect.signature(cls).parameters
     return {
         k: (None if p.default is inspect.Parameter.empty else p.default)
         for k, p in params.items()

@@ -107,7 +107,7 @@ def build_optimizer(
         )
     if wrap:
         aknown = {**_search_inputs(objective), **aknown}
-        opt = Acquisition(
+        opt: Optimizer = Acquisition(
             x0, local=method, local_options=known, bounds=objective.bounds, rng=rng, **aknown
         )
         record = _record(opt, {"local": method, "local_options": known, **aknown}, objective)

@@ -47,7 +47,7 @@ def newton_direction(
     eig = np.linalg.eigvalsh(h)
     scale = max(float(np.abs(eig).max()), 1e-300)
     if eig[-1] < -1e-9 * scale:
-        return -np.linalg.solve(h, g), True
+        return np.asarray(-np.linalg.solve(h, g), dtype=np.float64), True
     gnorm = float(np.hypot(*g))
     if gnorm == 0.0:
         return np.zeros(2), False

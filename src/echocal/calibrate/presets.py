@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from echocal._validate import lookup
+from echocal._validate import one_of
 
 __all__ = ["Preset", "method_options", "preset_names", "presets"]
 
@@ -90,8 +90,8 @@ def preset_names() -> list[str]:
 
 def presets(name: str) -> Preset:
     """The preset called ``name`` (unknown names list the valid ones)."""
-    name = _ALIASES.get(name, name)
-    return lookup("preset", name, {**_PRESETS, **dict.fromkeys(_ALIASES, None)})  # type: ignore[arg-type]
+    one_of("preset", name, preset_names())
+    return _PRESETS[_ALIASES.get(name, name)]
 
 
 def method_options(method: str, preset: str = "thesis") -> dict[str, Any]:

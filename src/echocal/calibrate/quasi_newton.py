@@ -99,7 +99,7 @@ class QuasiNewton(Optimizer):
 
     def _propose(self) -> None:
         assert self.hess is not None and self._g is not None
-        step = cap_step(self.mu * np.linalg.solve(self.hess, self._g), self._limit)
+        step = cap_step(np.asarray(self.mu * np.linalg.solve(self.hess, self._g)), self._limit)
         self._candidate = self.clip(self._iterate + step)
 
     def _tell(self, points: FloatArray, values: FloatArray) -> bool:

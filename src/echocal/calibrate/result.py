@@ -100,11 +100,10 @@ class CalibrationResult:
             v = getattr(self, f.name)
             if f.name in _ARRAYS:
                 arr = np.asarray(v)
-                v = (
-                    np.where(np.isnan(arr), None, arr).tolist()
-                    if arr.dtype.kind == "f"
-                    else (arr.tolist())
-                )
+                if arr.dtype.kind == "f":
+                    arr = arr.astype(object)
+                    arr[np.isnan(arr.astype(float))] = None
+                v = arr.tolist()
             elif f.name == "names":
                 v = list(v)
             elif f.name == "fun" and v is not None and not math.isfinite(v):

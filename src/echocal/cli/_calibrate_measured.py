@@ -96,7 +96,7 @@ def _calibrate_measured(
     )
     start = parse_pair(x0, "--x0") if x0 is not None else None
     seed = 0 if seed is None else seed
-    common = {"parameterization": parameterization, "start": start, "seed": seed}
+    common: dict[str, Any] = {"parameterization": parameterization, "start": start, "seed": seed}
     if instrument is not None:
         done = _on_instrument(
             run, instrument, timeout, setup, position, out=out, plots=plots, **common
@@ -166,7 +166,9 @@ def _on_instrument(
             "--setup NAME|FILE whose [pulse] is the rig's (see `echocal setup list`)"
         )
     pulse = _setup_pulse(setup)
-    wait = {} if timeout is None else {"timeout": positive_float("--timeout", timeout)}
+    wait: dict[str, Any] = {}
+    if timeout is not None:
+        wait["timeout"] = positive_float("--timeout", timeout)
     with HardwareSource.connect(host, port, **wait) as rig:
         _check_reachable(rig.limits, where)
         tally = _Tally(rig)
@@ -230,7 +232,7 @@ def _on_replay(
 
     if replay_mode is not None:
         one_of("--replay-mode", replay_mode, MODES)
-    mode = {} if replay_mode is None else {"mode": replay_mode}  # else the replay's default
+    mode: dict[str, Any] = {} if replay_mode is None else {"mode": replay_mode}  # else default
     with ReplaySource.open(replay, rng=seed, **mode) as recording:
         index, where = replay_position(recording, position)
         pulse, pulse_from = _replay_pulse(recording, setup)
@@ -400,7 +402,8 @@ def _check_reachable(limits: Any, where: Any) -> None:
     from echocal.geometry import Pose
 
     middle = (0.5 * sum(limits.azimuth), 0.5 * sum(limits.coelevation))
-    problems = limits.violations(Pose(*(float(v) for v in where), *middle))
+    x, y, z = (float(v) for v in where)
+    problems = limits.violations(Pose(x, y, z, *middle))
     if problems:
         raise LimitError(f"--position is outside the rig's limits: {'; '.join(problems)}")
 
@@ -422,7 +425,7 @@ def _recorded_pulse(recording: Any) -> tuple[Any, str]:
     stored = recording.source_info.get("setup")
     config = stored.get("config") if isinstance(stored, dict) else None
     table = config.get("pulse") if isinstance(config, dict) else None
-    if not isinstance(table, dict):
+    if not isinstance(config, dict) or not isinstance(table, dict):
         return None, (
             "the recording does not say which pulse was transmitted (only `echocal record` "
             "stores its setup in the file)"

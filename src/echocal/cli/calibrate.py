@@ -300,7 +300,7 @@ def _calibrate_simulated(
         "setup": virtual.name,
         "seed": virtual.rng if isinstance(virtual.rng, int) else None,
         "source": {"kind": "setup", "name": virtual.name, "description": virtual.description},
-        "position_m": [float(v) for v in where],
+        "position_m": [float(v) for v in np.asarray(where, dtype=np.float64)],
         "method": result.method,
         "parameterization": parameterization,
         "names": list(result.names),

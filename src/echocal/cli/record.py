@@ -132,7 +132,8 @@ def register(app: typer.Typer) -> None:
         config, _ = load_setup_config(setup)
         seed = config.seed if seed is None else seed
         if not positions:
-            positions = [tuple(float(v) for v in config.positioner.reference_position)]
+            x, y, z = (float(v) for v in config.positioner.reference_position)
+            positions = [(x, y, z)]
         grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
         total = check_recording_size(grid, repeats, config.window.n_samples)
         sidecar = partial_path(out)

@@ -180,7 +180,7 @@ def register(app: typer.Typer) -> None:
             f"{summary['measurements_per_point']:.1f} per point "
             f"(median {summary['measurements_per_point_median']:g})",
         ]
-        if ne is not None:
+        if ne is not None and he is not None:
             lines.append(
                 f"normal error: median {_fmt(ne['median'], 1, 'deg')}, "
                 f"p90 {_fmt(ne['p90'], 1, 'deg')}; |height error|: median "

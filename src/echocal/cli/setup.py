@@ -136,7 +136,9 @@ def _pulse(config: Any, base_dir: Path, setup: Any) -> dict[str, Any]:
         if "file" in extra:
             extra["file"] = str((base_dir / Path(str(extra["file"]))).resolve())
         return {"name": config.pulse.name, **extra}
-    params = {k: v for k, v in pulse.parameters().items() if isinstance(v, int | float | str)}
+    params: dict[str, Any] = {
+        k: v for k, v in pulse.parameters().items() if isinstance(v, int | float | str)
+    }
     if pulse.name == "sinc" and pulse.length is None:
         params["length"] = Default(2 * pulse.half_length, "default: lobes / B")
     return {"name": config.pulse.name, **params}
@@ -192,6 +194,7 @@ def _toml_table(data: dict[str, Any], prefix: str, out: list[str]) -> None:
         if _is_table(value) or value is None:
             continue
         unit = units.get(key)
+        note: str | None
         if isinstance(value, Default):
             shown = '"none"' if value.value is None else _toml_value(value.value, unit)
             line = f"# {key} = {shown}"

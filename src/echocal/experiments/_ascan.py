@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from echocal.experiments._findings import Finding
 from echocal.geometry import Pose, orientation_normal
@@ -27,18 +27,19 @@ __all__ = ["ascan_overlay_figure", "ascan_study", "facet_distance"]
 _MM = 1e-3
 
 
-def facet_distance(point: Sequence[float]) -> tuple[str, float]:
+def facet_distance(point: ArrayLike) -> tuple[str, float]:
     """The thesis-block facet below ``point`` [m] and the perpendicular distance [m] to it.
 
     Closed form: facets are planes through (hinge_x, 0, 0) with the normals of
     :data:`THESIS_BLOCK_FACETS`; left of x = −5 mm the left facet, right of +5 mm the right one.
     """
-    x = float(point[0])
+    p = np.asarray(point, dtype=np.float64)
+    x = float(p[0])
     name = "left" if x < -5 * _MM else ("right" if x > 5 * _MM else "centre")
     facet = THESIS_BLOCK_FACETS[name]
     n = orientation_normal(facet["azimuth"], facet["coelevation"])
     hinge = np.array([facet["hinge_x"], 0.0, 0.0])
-    return name, float(n @ (np.asarray(point, dtype=np.float64) - hinge))
+    return name, float(n @ (p - hinge))
 
 
 def ascan_overlay_figure(
@@ -75,10 +76,11 @@ def ascan_overlay_figure(
 
 
 def ascan_study(
-    setup: VirtualSetup, points: Sequence[Sequence[float]], *, seed: int
+    setup: VirtualSetup, points: NDArray[np.float64], *, seed: int
 ) -> tuple[pd.DataFrame, NDArray[np.float64], list[Pose], Finding]:
     """Noisy A-scans at each point's optimal orientation; table, samples, poses, finding.
 
+    points : [m] probe positions, shape (n_points, 3).
     Returns the per-point table, the noisy samples (n_points, n_samples), the poses
     and the finding "the farther facet's echo arrives later, at τ = 2d/c₀".
     """

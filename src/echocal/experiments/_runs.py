@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from echocal.calibrate import calibrate
 from echocal.evaluation import RunEvaluation, evaluate_run
@@ -96,7 +96,7 @@ class Bench:
     """
 
     def __init__(
-        self, setup: VirtualSetup, position: Sequence[float], parameterization: str
+        self, setup: VirtualSetup, position: ArrayLike, parameterization: str
     ) -> None:
         self.setup = setup
         self.position = np.asarray(position, dtype=np.float64)

@@ -695,6 +695,8 @@ def expand(spec: SweepSpec) -> list[RunCase]:
     """
     if spec.position is None or spec.snr_db is None:
         spec = load_sweep(spec)
+    position, snrs = spec.position, spec.snr_db
+    assert position is not None and snrs is not None  # load_sweep resolved both
     starts: list[tuple[str, tuple[float, float]]] = [
         ("point", (float(a), float(b))) for a, b in spec.x0.points
     ]
@@ -704,7 +706,7 @@ def expand(spec: SweepSpec) -> list[RunCase]:
         RunCase(
             sweep=spec.name,
             setup=spec.setup,
-            position=tuple(float(v) for v in spec.position),  # type: ignore[arg-type]
+            position=(float(position[0]), float(position[1]), float(position[2])),
             parameterization=spec.parameterization,
             budget=spec.budget,
             max_iter=spec.max_iter,
@@ -724,7 +726,7 @@ def expand(spec: SweepSpec) -> list[RunCase]:
         )
         for method in spec.methods
         for params in _grid(method.options)
-        for snr in spec.snr_db
+        for snr in snrs
         for index, (kind, x0) in enumerate(starts)
         for seed in spec.seed_list
     ]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Protocol, runtime_checkable
+from typing import Protocol, Self, runtime_checkable
 
 from echocal.ascan import AScan
 from echocal.geometry import Pose
@@ -62,7 +62,7 @@ class BaseSource:
     def close(self) -> None:
         """Nothing to release by default."""
 
-    def __enter__(self) -> BaseSource:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -144,8 +144,10 @@ class PositionerLimits:
 
     def clip(self, pose: Pose) -> Pose:
         """The nearest reachable pose (each coordinate clipped to its interval)."""
-        values = [float(np.clip(getattr(pose, n), *getattr(self, n))) for n in _AXES]
-        return Pose(*values)
+        x, y, z, azimuth, coelevation = (
+            float(np.clip(getattr(pose, n), *getattr(self, n))) for n in _AXES
+        )
+        return Pose(x, y, z, azimuth, coelevation)
 
     def as_dict(self) -> dict[str, list[float]]:
         """Plain-data form (for JSON / NetCDF attributes)."""

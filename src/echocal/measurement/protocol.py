@@ -137,7 +137,8 @@ def decode_pose(text: str, what: str = "pose") -> Pose:
     gimbal = len(tokens) == 6 and tokens[-1] == GIMBAL
     if gimbal:
         text = " ".join(tokens[:5])
-    return Pose(*decode_floats(text, 5, what), gimbal=gimbal)
+    x, y, z, azimuth, coelevation = decode_floats(text, 5, what)
+    return Pose(x, y, z, azimuth, coelevation, gimbal=gimbal)
 
 
 def encode_limits(limits: PositionerLimits) -> str:

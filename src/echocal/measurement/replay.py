@@ -273,7 +273,8 @@ class ReplaySource(BaseSource):
             samples = sum(
                 w * block[a, c].mean(axis=0) for (a, c), w in zip(corners, weights, strict=True)
             )
-            reached = Pose(*self.positions[p], pose.azimuth, pose.coelevation)
+            x, y, z = (float(v) for v in self.positions[p])
+            reached = Pose(x, y, z, pose.azimuth, pose.coelevation)
             meta = {"mode": self.mode, "position_index": p, "grid_index": (ai, ci)}
             return AScan(samples, self.fs, self.start_time, reached, {"source": "replay", **meta})
         ai, ci = self._fractional(pose, exact=False)

@@ -23,6 +23,7 @@ import platform
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.optimize
@@ -194,6 +195,11 @@ class VirtualSetup(BaseSource):
     limits: PositionerLimits = field(default_factory=PositionerLimits)
     rng: RngLike = None
     name: str = "virtual setup"
+    # set by __post_init__, never by the caller
+    _generator: np.random.Generator = field(init=False, repr=False)
+    _closed: bool = field(init=False, repr=False)
+    _truth_cache: dict[tuple[Any, ...], tuple[float, float]] = field(init=False, repr=False)
+    _closed_top: float = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         # Frozen: the cached reference echo, noise level and truth can never go stale.
@@ -238,7 +244,7 @@ class VirtualSetup(BaseSource):
 
     # ------------------------------------------------------------------ description
     @property
-    def description(self) -> str:
+    def description(self) -> str:  # type: ignore[override]  # derived; other sources store it
         """One line: what is simulated."""
         snr = self.receiver.snr_db
         noise = "noiseless" if snr is None else f"SNR {snr:g} dB"
@@ -320,7 +326,8 @@ class VirtualSetup(BaseSource):
     @cached_property
     def reference_samples(self) -> FloatArray:
         """The noiseless reference A-scan (normal incidence at ``reference_position``)."""
-        x, y, _ = self.reference_position
+        reference = np.asarray(self.reference_position, dtype=np.float64)  # (3,) [m]
+        x, y, _ = reference
         normal = self.specimen.surface_normal_below(x, y)
         if not np.all(np.isfinite(normal)):
             raise GeometryError(
@@ -329,7 +336,7 @@ class VirtualSetup(BaseSource):
             )
         azimuth, coelevation = self.specimen.optimal_orientation_below(x, y)
         frame = orientation_frame(azimuth, coelevation)
-        samples = self.ideal_samples(self.reference_position[None], frame[None])[0]
+        samples = self.ideal_samples(reference[None], frame[None])[0]
         if not np.any(samples):
             raise GeometryError(
                 "the reference echo is silent: no ray returns within the recording window "

@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
@@ -27,7 +27,7 @@ FloatArray = NDArray[np.float64]
 
 def convergence_figure(
     runs: Mapping[str, CalibrationResult],
-    iterate_values: Mapping[str, Sequence[float]],
+    iterate_values: Mapping[str, ArrayLike],
     *,
     optimum_value: float | None = None,
     ylabel: str = "pseudo-energy (normalized)",
@@ -152,7 +152,7 @@ def path_figure(
     runs: Mapping[str, CalibrationResult],
     *,
     x0: Sequence[float] | None = None,
-    truth: Sequence[float] | None = None,
+    truth: ArrayLike | None = None,
     truth_label: str = "true solution",
     title: str | None = None,
     db_floor: float | None = None,
@@ -202,8 +202,9 @@ def path_figure(
         ax.plot(*x0, marker="o", mfc="none", mec=mark, ms=10, mew=1.5, ls="", label="initial guess")
         drawn.append(np.asarray(x0, dtype=float)[None, :])
     if truth is not None:
-        ax.plot(*truth, marker="*", color="r", ms=14, ls="", label=truth_label)
-        drawn.append(np.asarray(truth, dtype=float)[None, :])
+        t = np.asarray(truth, dtype=float)
+        ax.plot(t[0], t[1], marker="*", color="r", ms=14, ls="", label=truth_label)
+        drawn.append(t[None, :])
     if cost_map is not None:
         ax.set_xlim(cost_map.a[0], cost_map.a[-1])
         ax.set_ylim(cost_map.b[0], cost_map.b[-1])

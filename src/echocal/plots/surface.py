@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from numpy.typing import NDArray
@@ -33,16 +34,17 @@ __all__ = [
 _MM = 1e3
 
 
-def _extent(scan: SurfaceScan) -> list[float]:
+def _extent(scan: SurfaceScan) -> tuple[float, float, float, float]:
+    """[mm] (left, right, bottom, top) of the scan's raster, half a step beyond its points."""
     x, y = scan.dataset["x"].values * _MM, scan.dataset["y"].values * _MM
     dx = (x[1] - x[0]) / 2 if x.size > 1 else 0.5
     dy = (y[1] - y[0]) / 2 if y.size > 1 else 0.5
-    return [x[0] - dx, x[-1] + dx, y[0] - dy, y[-1] + dy]
+    return (float(x[0] - dx), float(x[-1] + dx), float(y[0] - dy), float(y[-1] + dy))
 
 
 def _image(
     fig: Figure,
-    ax: object,
+    ax: Axes,
     scan: SurfaceScan,
     values: NDArray,
     label: str,
@@ -52,17 +54,17 @@ def _image(
 ) -> None:
     """``values`` shape (n_y, n_x) as an image in mm with a colour bar ``label``; the points
     not found marked ×, unless ``mark_missing`` is False."""
-    im = ax.imshow(  # type: ignore[attr-defined]
+    im = ax.imshow(
         np.ma.masked_invalid(values), origin="lower", extent=_extent(scan), **kw
     )
     missing = ~scan.found
     if mark_missing and np.any(missing):
         xx, yy = np.meshgrid(scan.dataset["x"].values * _MM, scan.dataset["y"].values * _MM)
-        ax.plot(xx[missing], yy[missing], "x", color="0.4", ms=4, label="missing")  # type: ignore[attr-defined]
-        ax.legend(loc="upper right", fontsize="small")  # type: ignore[attr-defined]
-    ax.set_xlabel("x [mm]")  # type: ignore[attr-defined]
-    ax.set_ylabel("y [mm]")  # type: ignore[attr-defined]
-    ax.set_aspect("equal")  # type: ignore[attr-defined]
+        ax.plot(xx[missing], yy[missing], "x", color="0.4", ms=4, label="missing")
+        ax.legend(loc="upper right", fontsize="small")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_aspect("equal")
     fig.colorbar(im, ax=ax, label=label)
 
 

@@ -34,7 +34,7 @@ def axis_values(name: str, first: float, last: float, step: float) -> FloatArray
     count = math.floor((last - first) / step * (1 + 1e-9) + 1e-9) + 1
     if count > _MAX_POINTS:
         raise EchocalValueError(f"{name}: {count} points is too many; use a larger step")
-    return first + step * np.arange(count)
+    return first + step * np.arange(count, dtype=np.float64)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -84,7 +84,7 @@ class ScanGrid:
         return cls(
             x=tuple(axis_values("grid x", *x)),
             y=tuple(axis_values("grid y", *y)),
-            z=z if np.ndim(z) == 0 else np.asarray(z),
+            z=z,  # type: ignore[arg-type]  # __post_init__ normalizes any array of heights
         )
 
     @property
@@ -124,6 +124,7 @@ class ScanGrid:
         """
         one_of("start", start, ("centre", "corner"))
         n_y, n_x = self.shape
+        out: list[tuple[int, int]]
         if start == "corner":
             out = []
             for iy in range(n_y):

@@ -102,7 +102,10 @@ def echo_snr(samples: ArrayLike, window: RecordingWindow, pulse: Pulse) -> Float
 
 
 def _predict(
-    done: Mapping[tuple[int, int], FloatArray], here: FloatArray, xy: FloatArray, radius: float
+    done: Mapping[tuple[int, int], FloatArray],
+    here: FloatArray,
+    xy: Mapping[tuple[int, int], FloatArray],
+    radius: float,
 ) -> FloatArray | None:
     """Warm start [deg] (2,) at ``here`` [m] (2,) from found neighbours within ``radius``:
     a least-squares plane a + g·(p − centroid) (minimum-norm where the neighbours are
@@ -561,12 +564,12 @@ def scan_surface(
         for i, key in enumerate(order):
             if key in records:
                 continue
-            start = None
+            guess = None
             if warm_start:
-                start = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
-            start = ctx.x0 if start is None else start
-            rec = _measure_point(ctx, positions[key], start, np.random.default_rng(seeds[i]))
-            rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and start is not ctx.x0))
+                guess = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
+            guess = ctx.x0 if guess is None else guess
+            rec = _measure_point(ctx, positions[key], guess, np.random.default_rng(seeds[i]))
+            rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and guess is not ctx.x0))
             records[key] = rec
             if rec["status"] == 0:
                 found[key] = np.array([rec["a"], rec["b"]])
@@ -597,9 +600,12 @@ def scan_surface(
             pending.discard(key)
             i, old = index[key], records[key]
             others = {k: v for k, v in found.items() if k != key}
-            start = _predict(others, xy[key], {k: xy[k] for k in others}, radius)
+            guess = _predict(others, xy[key], {k: xy[k] for k in others}, radius)
             new = _measure_point(
-                ctx, positions[key], start, np.random.default_rng([int(seeds[i]), 1])
+                ctx,
+                positions[key],
+                ctx.x0 if guess is None else guess,  # None only without neighbours (not here)
+                np.random.default_rng([int(seeds[i]), 1]),
             )
             new["warm"] = True
             best = new if _score(new) >= _score(old) else old

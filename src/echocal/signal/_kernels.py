@@ -60,7 +60,8 @@ def horner_coefficients(width: int, beta: float, tol: float = 1e-9) -> _F64:
                 return _semicircle_exp(((t + 1.0) * 0.5 + k) / half - 1.0, beta)
 
             mono = np.zeros(degree + 1)
-            low = _cheb.cheb2poly(_cheb.chebinterpolate(tap, degree))  # may drop zero tails
+            # numpy's stub wants a scalar function; chebinterpolate calls it on an array
+            low = _cheb.cheb2poly(_cheb.chebinterpolate(tap, degree))  # type: ignore[arg-type,type-var]
             mono[: low.size] = low
             coefs[:, k] = mono[::-1]
             if 0 < k < width - 1:

@@ -85,9 +85,8 @@ class EchoDetector:
             peaks.append(env.max(axis=-1))
         # Rayleigh scale from the mean power: E|z|² = 2 s² (every cell, not only the peaks)
         gain = float(np.sqrt(power / (_CALIBRATION_SCANS // _CALIBRATION_CHUNK) / 2.0))
-        peaks = np.concatenate(peaks) / gain
         # at the median: exp(−M t e^{−t²/2}) = 1/2  →  M = ln 2 · e^{t²/2} / t
-        median = float(np.median(peaks))
+        median = float(np.median(np.concatenate(peaks) / gain))
         cells = float(np.log(2.0) * np.exp(0.5 * median**2) / median)
         object.__setattr__(self, "noise_gain", gain)
         object.__setattr__(self, "n_cells", cells)

@@ -42,7 +42,9 @@ __all__ = [
 ]
 
 _F64 = NDArray[np.float64]
-Metric = Callable[[ArrayLike, RecordingWindow, Pulse], _F64]
+Metric = Callable[..., _F64]
+"""``metric(samples, window, pulse)`` -> shape ``(...,)``; pseudo-energy also takes an
+optional window length [s] as a fourth argument."""
 
 
 def _samples(samples: ArrayLike, window: RecordingWindow | None = None) -> _F64:

@@ -652,7 +652,9 @@ class SampledPulse(Pulse):
         ab = np.empty((3, n))
         ab[0], ab[1], ab[2] = 1.0, 4.0, 1.0
         c = linalg.solve_banded((1, 1), ab, 6.0 * v)
-        return c, float(self.start_time) - _PAD / self.fs
+        start = self.start_time
+        assert start is not None  # __post_init__ sets it
+        return c, start - _PAD / self.fs
 
     def waveform(self, t: ArrayLike) -> _F64:
         t = np.asarray(t, dtype=np.float64)

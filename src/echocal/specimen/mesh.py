@@ -6,6 +6,7 @@ import importlib.util
 import os
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -136,7 +137,7 @@ class TriangleMesh(Shape):
             float(np.linalg.norm(self._bounds[1] - self._bounds[0])), 1e-300
         )
         self._hierarchy = _build_hierarchy(tri, pad=1e-9 * max(scale, 1.0))
-        self._embree = None
+        self._embree: Any = None  # trimesh's embree intersector, built on first use
         self._closed: bool | None = None  # watertight? computed on first use
 
     # ------------------------------------------------------------- construction

@@ -123,7 +123,7 @@ class Specimen:
         top = float(self.bounds()[1, 2]) + 1.0
         origins = np.stack([xa, ya, np.full(xa.shape, top)], axis=-1)
         directions = np.broadcast_to(np.array([0.0, 0.0, -1.0]), origins.shape)
-        return cast(self, origins.reshape(-1, 3), directions.reshape(-1, 3)).reshape(xa.shape)
+        return cast(self, origins.reshape(-1, 3), directions.reshape(-1, 3)).reshape(*xa.shape)
 
     def surface_normal_below(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Upward unit surface normal below ``(x, y)`` [m], shape ``(..., 3)``; NaN where nothing.
