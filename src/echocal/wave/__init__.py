@@ -1,0 +1,6 @@
+"""The wave echo model: diffraction-correct echoes of piston probes (see :mod:`.model`)."""
+
+from echocal.wave.model import WaveEchoModel
+from echocal.wave.probe import PistonProbe, curvature_for_focus, oneil_on_axis
+
+__all__ = ["PistonProbe", "WaveEchoModel", "curvature_for_focus", "oneil_on_axis"]

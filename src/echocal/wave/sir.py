@@ -1,0 +1,291 @@
+"""Spatial impulse responses (SIR) of a baffled piston, binned, and their two-way correlation.
+
+The transmit field of a rigid-baffled piston with uniform normal velocity v(t) is
+p(x, t) = ρ ∂ₜ[v * h](x, t), with the spatial impulse response (Stepanishen, JASA 49
+(1971) 1629; Penttinen & Luukkala, J. Phys. D 9 (1976) 1547 for a spherical bowl)
+
+    h(x, t) = ∫_A δ(t − |x − a|/c) / (2π|x − a|) dA      [m/s].
+
+For both apertures used here the points of the face at distance ρ = ct from x form one
+circular arc, so h has the closed form
+
+    h(x, t) = c · J · Ω(t)/π,
+
+where Ω ∈ [0, π] is the half-angle of the part of that circle that lies on the face and
+J = 1 for a flat disc, J = R_f/D for a bowl of radius of curvature R_f whose centre (the
+geometric focus) is at distance D from x.  The same arc gives the direction-weighted response
+
+    h_m(x, t) = ∫_A (m·R̂) δ(t − R/c) / (2πR) dA = h(x, t) · m·⟨x − a⟩_arc / (ct),
+
+because every point of the arc is at R = ct; the arc mean ⟨x − a⟩ is closed form too
+(the mean of a unit vector over an arc of half-angle Ω is sinΩ/Ω along its bisector).
+
+The kernels below project h and h_m onto quadratic B-splines on a uniform time grid of
+spacing Δ (integrals split at the breakpoints of the closed form, Gauss–Legendre on each
+smooth piece, 2-point Gauss–Legendre) and accumulate the two-way correlation g(t) = (h * h_m)(t) of every surface
+sample into one grid.  The projection is a smoothing filter of transform sinc³(fΔ) per
+factor, undone exactly in the frequency domain by dividing by sinc⁶(fΔ) (see
+:mod:`echocal.wave.model`); it keeps the aliases of the SIR, which is not band-limited,
+below 10⁻³ at a grid of five samples per period of the pulse's highest frequency.
+
+All kernels are plain Python loops over numpy arrays, compiled by numba when it is
+installed (the ``fast`` extra) and run as they are otherwise (correct, much slower).
+Importing this module imports numba: :mod:`echocal.wave` is loaded only when a wave
+model is used.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from echocal._numba import HAVE_NUMBA, USE_NUMBA
+
+
+def _jit(func: Callable[..., Any]) -> Callable[..., Any]:
+    """numba.njit (lazy compilation, cached on disk) when numba is installed, else ``func``."""
+    if not (USE_NUMBA and HAVE_NUMBA):
+        return func
+    from numba import njit
+
+    return njit(cache=True, nogil=True)(func)
+
+# 2-point Gauss–Legendre nodes and weights on [0, 1]
+_GL_X = np.array([0.2113248654051871, 0.7886751345948129])
+_GL_W = np.array([0.5, 0.5])
+
+DISC = 0
+"""Aperture code: flat circular piston (parameters: radius)."""
+BOWL = 1
+"""Aperture code: spherically focused bowl (parameters: radius, radius of curvature)."""
+
+
+@_jit
+def _arc_disc(t, c, r, z, a, mx_r, mz):
+    """(Ω [rad], m·⟨x − a⟩ [m]) of a flat disc of radius ``a`` seen from (r, z) at time t.
+
+    ``mx_r`` and ``mz`` are the radial and axial components of the unit vector m."""
+    ct = c * t
+    s2 = ct * ct - z * z
+    if s2 <= 0.0:
+        return 0.0, 0.0
+    s = math.sqrt(s2)
+    if r + s <= a:
+        return math.pi, mz * z  # the whole circle lies on the face: the arc mean is x⊥
+    if s >= r + a or s <= r - a:
+        return 0.0, 0.0
+    cw = (s2 + r * r - a * a) / (2.0 * r * s)
+    cw = min(1.0, max(-1.0, cw))
+    om = math.acos(cw)
+    mean_r = s * math.sin(om) / om if om > 0.0 else s
+    return om, mz * z + mx_r * mean_r
+
+
+@_jit
+def _arc_bowl(t, c, rf, d, cos_beta, sin_beta, cos_tmax, m_e, m_e1):
+    """(Ω [rad], m·⟨x − a⟩ [m]) of a bowl (radius of curvature ``rf``, half-aperture angle
+    θmax) seen from a point at distance ``d`` from the focus, at angle β from the axis
+    direction focus → apex.  ``m_e`` and ``m_e1`` are the components of m along
+    e = (x − F)/D and along e₁ ⊥ e in the plane of e and the axis (towards the apex)."""
+    rho = c * t
+    cos_psi = (rf * rf + d * d - rho * rho) / (2.0 * rf * d)
+    if cos_psi > 1.0 or cos_psi < -1.0:
+        return 0.0, 0.0
+    sin_psi = math.sqrt(max(0.0, 1.0 - cos_psi * cos_psi))
+    den = sin_psi * sin_beta
+    num = cos_tmax - cos_psi * cos_beta
+    if den <= 1e-15:
+        om = math.pi if num <= 0.0 else 0.0
+    else:
+        q = num / den
+        if q >= 1.0:
+            return 0.0, 0.0
+        om = math.pi if q <= -1.0 else math.acos(q)
+    if om == 0.0:
+        return 0.0, 0.0
+    sinc = math.sin(om) / om
+    # x − a = D e − R_f u, ⟨u⟩ = cosψ e + sinψ (sinΩ/Ω) e₁
+    return om, m_e * (d - rf * cos_psi) - m_e1 * rf * sin_psi * sinc
+
+
+@_jit
+def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
+    """Quadratic B-spline coefficients of h [m/s] and h_m [m/s] on a grid of spacing ``dt``.
+
+    Coefficient k is (1/Δ)∫ h(t) N(t/Δ − k) dt with N the uniform quadratic B-spline
+    centred on bin k = [t0 + kΔ, t0 + (k+1)Δ): a smoothing projection whose transform is
+    sinc³(fΔ), so the aliases of the (not band-limited) SIR fall off as sinc³ and the
+    projection itself is undone exactly in the frequency domain.  ``geo`` holds the
+    sample's geometry (see :func:`_sample_geometry`); the support is [t_lo, t_hi] with
+    one internal breakpoint t_mid.  Each smooth piece of each bin is integrated by 2-point
+    Gauss–Legendre.  Writes coefficients k0 − 1 … k0 + K to ``h[0 : K + 2]`` and
+    ``hm[0 : K + 2]`` and returns (k0 − 1, K + 2)."""
+    k0 = int(math.floor((t_lo - t0) / dt))
+    k1 = int(math.floor((t_hi - t0) / dt))
+    n = min(k1 - k0 + 1, h.shape[0] - 2)
+    for i in range(n + 2):
+        h[i] = 0.0
+        hm[i] = 0.0
+    for k in range(n):
+        b_lo = t0 + (k0 + k) * dt
+        b_hi = b_lo + dt
+        for piece in range(2):
+            p_lo = t_lo if piece == 0 else t_mid
+            p_hi = t_mid if piece == 0 else t_hi
+            lo = max(b_lo, p_lo)
+            hi = min(b_hi, p_hi)
+            if hi <= lo:
+                continue
+            span = hi - lo
+            for j in range(2):
+                t = lo + _GL_X[j] * span
+                if kind == DISC:
+                    om, mdot = _arc_disc(t, c, geo[0], geo[1], prm[0], geo[2], geo[3])
+                    jac = 1.0
+                else:
+                    om, mdot = _arc_bowl(
+                        t, c, prm[1], geo[0], geo[1], geo[2], prm[2], geo[3], geo[4]
+                    )
+                    jac = prm[1] / geo[0]
+                hv = _GL_W[j] * span / dt * c * jac * om / math.pi
+                hmv = hv * mdot / (c * t)
+                u = (t - b_lo) / dt
+                w_prev = 0.5 * (1.0 - u) * (1.0 - u)
+                w_next = 0.5 * u * u
+                w_here = 1.0 - w_prev - w_next
+                h[k] += w_prev * hv
+                h[k + 1] += w_here * hv
+                h[k + 2] += w_next * hv
+                hm[k] += w_prev * hmv
+                hm[k + 1] += w_here * hmv
+                hm[k + 2] += w_next * hmv
+    return k0 - 1, n + 2
+
+
+@_jit
+def _support_disc(c, r, z, a):
+    """(t_lo, t_mid, t_hi) [s]: start, end of the full-circle part, end of the SIR."""
+    lo = math.sqrt(z * z + max(r - a, 0.0) ** 2) / c
+    mid = math.sqrt(z * z + (a - r) ** 2) / c if r < a else lo
+    hi = math.sqrt(z * z + (r + a) ** 2) / c
+    return lo, mid, hi
+
+
+@_jit
+def _support_bowl(c, rf, d, beta, tmax):
+    """(t_lo, t_mid, t_hi) [s] of a bowl: ρ(ψ) = √(R_f² + D² − 2R_f D cosψ) at the breaks."""
+    psi_lo = max(0.0, beta - tmax)
+    psi_mid = max(psi_lo, tmax - beta)
+    psi_hi = min(math.pi, beta + tmax)
+    lo = math.sqrt(max(rf * rf + d * d - 2.0 * rf * d * math.cos(psi_lo), 0.0)) / c
+    mid = math.sqrt(max(rf * rf + d * d - 2.0 * rf * d * math.cos(psi_mid), 0.0)) / c
+    hi = math.sqrt(max(rf * rf + d * d - 2.0 * rf * d * math.cos(psi_hi), 0.0)) / c
+    return lo, max(lo, mid), hi
+
+
+@_jit
+def _sample_geometry(kind, prm, x, y, z, mx, my, mz, geo):
+    """Fill ``geo`` for a sample at (x, y, z) [m] (aperture frame: face centre or bowl apex
+    at the origin, beam along +z) with unit vector m; return False if it cannot contribute."""
+    if kind == DISC:
+        if z <= 0.0:
+            return False
+        r = math.sqrt(x * x + y * y)
+        geo[0] = r
+        geo[1] = z
+        geo[2] = (mx * x + my * y) / r if r > 0.0 else 0.0
+        geo[3] = mz
+        return True
+    rf = prm[1]
+    fx, fy, fz = x, y, z - rf  # x − F
+    d = math.sqrt(fx * fx + fy * fy + fz * fz)
+    if d < 1e-12 * rf or z <= 0.0:
+        return False
+    ex, ey, ez = fx / d, fy / d, fz / d
+    cos_beta = -ez  # u0 = (0, 0, −1): from the focus towards the apex
+    sin_beta = math.sqrt(max(0.0, 1.0 - cos_beta * cos_beta))
+    geo[0] = d
+    geo[1] = cos_beta
+    geo[2] = sin_beta
+    geo[3] = mx * ex + my * ey + mz * ez
+    if sin_beta > 1e-12:  # e₁ = (u0 − cosβ e)/sinβ
+        e1x = (0.0 - cos_beta * ex) / sin_beta
+        e1y = (0.0 - cos_beta * ey) / sin_beta
+        e1z = (-1.0 - cos_beta * ez) / sin_beta
+        geo[4] = mx * e1x + my * e1y + mz * e1z
+    else:
+        geo[4] = 0.0
+    return True
+
+
+@_jit
+def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scratch):
+    """Add Σₛ wₛ·(h̄ₛ * h̄_m,ₛ)(t)·Δ of every sample to ``grid`` (two-way times).
+
+    Parameters
+    ----------
+    kind : :data:`DISC` or :data:`BOWL`.
+    prm : aperture parameters ``(a, R_f, cos θmax)`` [m, m, 1] (R_f, cos θmax unused for a disc).
+    points : [m] samples in the aperture frame, shape ``(3, n)``.
+    unit_m : unit vectors m (the surface normal pointing away from the probe), ``(3, n)``.
+    weights : [m²·…] per-sample weights (area × reflection coefficient × normalization), ``(n,)``.
+    c : [m/s] sound speed.
+    t0 : [s] two-way time of grid point 0; grid point j is at t0 + jΔ.
+    dt : [s] grid spacing Δ.
+    grid : float64 ``(n_grid,)``, accumulated in place.
+    scratch : float64 ``(3, 2·n_scratch)`` work space (one sample's SIR and correlation).
+
+    Returns
+    -------
+    [s·weight] Σₛ |wₛ|·(two-way time of sample s) and Σₛ |wₛ| (for the mean path of the echo).
+    """
+    n = points.shape[1]
+    n_grid = grid.shape[0]
+    geo = np.zeros(5)
+    t1 = 0.5 * t0  # one-way bins start at half the two-way origin, so bins p, q → p + q + 1
+    tmax = math.acos(prm[2]) if kind == BOWL else 0.0
+    h = scratch[0]
+    hm = scratch[1]
+    sum_wt = 0.0
+    sum_w = 0.0
+    for s in range(n):
+        w = weights[s]
+        if w == 0.0:
+            continue
+        x, y, z = points[0, s], points[1, s], points[2, s]
+        if not _sample_geometry(
+            kind, prm, x, y, z, unit_m[0, s], unit_m[1, s], unit_m[2, s], geo
+        ):
+            continue
+        if kind == DISC:
+            lo, mid, hi = _support_disc(c, geo[0], geo[1], prm[0])
+        else:
+            lo, mid, hi = _support_bowl(c, prm[1], geo[0], math.acos(geo[1]), tmax)
+        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, t1, dt, h, hm)
+        base = 2 * k0 + 1
+        scale = w * dt
+        acc = scratch[2]
+        for j in range(2 * nk - 1):
+            acc[j] = 0.0
+        for p in range(nk):
+            hp = h[p] * scale
+            if hp != 0.0:
+                for q in range(nk):
+                    acc[p + q] += hp * hm[q]
+        j_lo = max(0, -base)
+        j_hi = min(2 * nk - 1, n_grid - base)
+        for j in range(j_lo, j_hi):
+            grid[base + j] += acc[j]
+        r_centre = math.sqrt(x * x + y * y + z * z)
+        sum_wt += abs(w) * 2.0 * r_centre / c
+        sum_w += abs(w)
+    return sum_wt, sum_w
+
+
+def scratch_bins(c: float, dt: float, extent: float) -> int:
+    """Bins one sample's SIR can span: its support is at most 2·extent/c [s] (extent [m],
+    the aperture's largest dimension), plus two for partial bins."""
+    return int(math.ceil(2.0 * extent / (c * dt))) + 5
