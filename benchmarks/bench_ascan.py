@@ -150,7 +150,7 @@ def make_setup(
     return VirtualSetup(
         specimen=specimen if specimen is not None else builtin_specimen("flat-plate"),
         transducer=Transducer(
-            width=10 * MM, height=10 * MM, n_h=side, n_v=side, focal_length=20 * MM
+            width=10 * MM, height=10 * MM, n_h=side, n_v=side, pinhole_distance=20 * MM
         ),
         pulse=pulse,
         window=window,
@@ -303,7 +303,7 @@ def bench_large_rays(sizes: Sizes, out: dict[str, Any]) -> None:
 
 def _mesh_rays(side: int) -> tuple[np.ndarray, np.ndarray]:
     """A transducer's ray bundle, 20 mm above the mesh, as (M, 3) origins and directions."""
-    probe = Transducer(width=40 * MM, height=40 * MM, n_h=side, n_v=side, focal_length=80 * MM)
+    probe = Transducer(width=40 * MM, height=40 * MM, n_h=side, n_v=side, pinhole_distance=80 * MM)
     positions, frames = poses_to_arrays([Pose(0.0, 0.0, STANDOFF, 10.0, 5.0)])
     rays = probe.rays(positions, frames)
     return (np.ascontiguousarray(rays.origins[0]), np.ascontiguousarray(rays.directions[0]))

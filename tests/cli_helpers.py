@@ -41,7 +41,7 @@ seed = 4
 [transducer]
 width = "6 mm"
 n_h = 8
-focal_length = "50 mm"
+pinhole_distance = "50 mm"
 [pulse]
 name = "gabor"
 center_frequency = "5 MHz"

@@ -48,7 +48,7 @@ def plate():
             height=4 * MM,
             n_h=16,
             n_v=16,
-            focal_length=0.2,
+            pinhole_distance=0.2,
             directivity=make_directivity("gaussian", opening_angle=10.0),
         ),
         pulse=make_pulse("gabor", center_frequency=1e6),

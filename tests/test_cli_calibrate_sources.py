@@ -47,7 +47,7 @@ coelevation = 20
 [transducer]
 width = "4 mm"
 n_h = 12
-focal_length = "200 mm"
+pinhole_distance = "200 mm"
 
 [transducer.directivity]
 model = "gaussian"

@@ -36,7 +36,7 @@ colour = "red"
 [transducer]
 width = -0.01
 n_h = 0
-focal_length = "20 kg"
+pinhole_distance = "20 kg"
 [window]
 n_samples = 4
 """
@@ -114,7 +114,7 @@ def test_setup_validate_reports_every_problem_with_its_field(
     fields = sorted(line.split(":")[0] for line in out.strip().splitlines())
     assert fields == [
         "colour",
-        "transducer.focal_length",
+        "transducer.pinhole_distance",
         "transducer.n_h",
         "transducer.width",
         "window.n_samples",

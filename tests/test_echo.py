@@ -12,7 +12,7 @@ from echocal.geometry import orientation_frame
 from echocal.specimen import builtin_specimen
 from echocal.transducer import Transducer
 
-PROBE = Transducer(width=10 * MM, height=10 * MM, n_h=16, n_v=16, focal_length=20 * MM)
+PROBE = Transducer(width=10 * MM, height=10 * MM, n_h=16, n_v=16, pinhole_distance=20 * MM)
 
 
 def poses(n: int, seed: int = 3) -> tuple[np.ndarray, np.ndarray]:
@@ -52,7 +52,7 @@ def test_flat_plate_closed_form():
 @pytest.mark.parametrize("model", ["lambertian", "specular"])
 def test_results_do_not_depend_on_chunking(model):
     """9 poses × 64² rays span several 16k-ray chunks; each pose alone is one chunk."""
-    probe = Transducer(width=10 * MM, height=10 * MM, n_h=64, n_v=64, focal_length=20 * MM)
+    probe = Transducer(width=10 * MM, height=10 * MM, n_h=64, n_v=64, pinhole_distance=20 * MM)
     positions, frames = poses(9, seed=11)
     shape = builtin_specimen("sphere")
     amp, tof = echo_arrays(probe, shape, positions, frames, model=model)

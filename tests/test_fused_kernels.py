@@ -24,7 +24,7 @@ from echocal.transducer import Transducer
 
 pytestmark = pytest.mark.skipif(not N.HAVE_NUMBA, reason="numba not installed")
 
-PROBE = Transducer(width=10 * MM, height=10 * MM, n_h=24, n_v=20, focal_length=20 * MM)
+PROBE = Transducer(width=10 * MM, height=10 * MM, n_h=24, n_v=20, pinhole_distance=20 * MM)
 
 
 def poses(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

@@ -48,7 +48,7 @@ seed = 1
 [transducer]
 width = "6 mm"
 n_h = 8
-focal_length = "50 mm"
+pinhole_distance = "50 mm"
 
 [pulse]
 center_frequency = "5 MHz"
@@ -172,7 +172,7 @@ ROUND_TRIP_EXTRAS = {
     "sinc-shapes-unlimited": TINY.replace("[pulse]", '[pulse]\nname = "sinc"\nbandwidth = "1 MHz"')
     + '[specimen]\n[[specimen.shapes]]\nkind = "plane"\nwidth = "50 mm"\nheight = "50 mm"\n'
     + '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, "30 mm", "-30 mm"]\nradius = "5 mm"\n',
-    "long-focus-adc": TINY.replace('focal_length = "50 mm"', 'focal_length = "3 m"').replace(
+    "long-focus-adc": TINY.replace('pinhole_distance = "50 mm"', 'pinhole_distance = "3 m"').replace(
         "[window]", "[noise]\nadc_bits = 12\nfull_scale = 2\n[window]"
     ),
 }
@@ -195,7 +195,7 @@ def test_setup_show_output_validates_and_loads_back_the_same(tmp_path, source):
     assert again.pulse.parameters() == original.pulse.parameters()
     assert again.receiver == original.receiver
     assert again.transducer.directivity == original.transducer.directivity
-    assert again.transducer.focal_length == original.transducer.focal_length
+    assert again.transducer.pinhole_distance == original.transducer.pinhole_distance
     assert again.description == original.description
 
 

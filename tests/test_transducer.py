@@ -36,7 +36,7 @@ def test_circular_aperture_drops_corner_pixels():
 
 @given(st.floats(-180, 180), st.floats(-60, 60))
 def test_rays_start_on_plane_and_leave_from_focus(az, coel):
-    t = Transducer(n_h=5, n_v=3, focal_length=15 * MM)
+    t = Transducer(n_h=5, n_v=3, pinhole_distance=15 * MM)
     frame = orientation_frame(az, coel)[None]
     centre = np.array([[0.01, -0.02, 0.03]])
     rays = t.rays(centre, frame)
@@ -100,7 +100,7 @@ def test_batched_rays_equal_single_pose_rays():
         ({"height": -1e-3}, "transducer.height"),
         ({"n_h": 0}, "transducer.n_h"),
         ({"n_v": 2.5}, "transducer.n_v"),
-        ({"focal_length": float("nan")}, "transducer.focal_length"),
+        ({"pinhole_distance": float("nan")}, "transducer.pinhole_distance"),
         ({"aperture": "hexagonal"}, "transducer.aperture"),
         ({"directivity": None}, "transducer.directivity"),
     ],

@@ -48,10 +48,11 @@ from pydantic import (
     ConfigDict,
     Field,
     ValidationError,
+    model_validator,
 )
 
 from echocal.constants import DEFAULT_CENTER_FREQUENCY, SOUND_SPEED_WATER
-from echocal.echo import reflection_model_names
+from echocal.echo import echo_model_names
 from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownNameError
 from echocal.measurement.limits import PositionerLimits, limit_problems
 from echocal.measurement.virtual import (
@@ -223,9 +224,21 @@ class TransducerConfig(_Model):
     height: ProbeLength | None = None
     n_h: int = Field(default=64, ge=1, le=1024)
     n_v: int | None = Field(default=None, ge=1, le=1024)
-    focal_length: ProbeLength = 0.02
+    pinhole_distance: ProbeLength = 0.02
+    focus: ProbeLength | None = None
     aperture: Literal["rectangular", "circular"] = "rectangular"
     directivity: DirectivityConfig = DirectivityConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed_focal_length(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "focal_length" in data:
+            raise ValueError(
+                "focal_length was renamed: it is the ray model's pinhole_distance (it only "
+                "spreads the rays); for a focused probe give its acoustic focal length in "
+                "water as focus"
+            )
+        return data
 
 
 class PulseConfig(BaseModel):
@@ -261,10 +274,11 @@ class NoiseConfig(_Model):
 
 
 class EchoConfig(_Model):
-    """How rays become echoes and echoes an A-scan."""
+    """How the surface becomes echoes: the thesis's ray models or the wave model."""
 
     reflection: str = "lambertian"
     synthesis: Literal["fast", "direct"] = "fast"
+    spacing: ProbeLength | None = None
 
 
 class PositionerConfig(_Model):
@@ -514,7 +528,8 @@ def _build_transducer(
             height=config.height if config.height is not None else config.width,
             n_h=config.n_h,
             n_v=config.n_v if config.n_v is not None else config.n_h,
-            focal_length=config.focal_length,
+            pinhole_distance=config.pinhole_distance,
+            focus=config.focus,
             aperture=config.aperture,
             directivity=directivity,
         ), []
@@ -577,11 +592,13 @@ def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
 
 
 def _check_echo(config: EchoConfig) -> tuple[EchoConfig | None, list[str]]:
-    if config.reflection not in reflection_model_names():
+    if config.reflection not in echo_model_names():
         return None, [
-            f"echo.reflection: unknown reflection model {config.reflection!r}; "
-            f"choose one of: {', '.join(reflection_model_names())}"
+            f"echo.reflection: unknown echo model {config.reflection!r}; "
+            f"choose one of: {', '.join(echo_model_names())}"
         ]
+    if config.spacing is not None and config.reflection != "wave":
+        _ignored("echo.spacing", f"it sets the wave model's surface sampling; this is {config.reflection}")
     return config, []
 
 
@@ -636,6 +653,7 @@ def _assemble(config: SetupConfig, parts: dict[str, Any], seed: int | None) -> V
             sound_speed=config.medium.sound_speed,
             reflection=config.echo.reflection,
             synthesis=config.echo.synthesis,
+            wave_spacing=config.echo.spacing,
             limits=parts["positioner"],
             rng=seed if seed is not None else config.seed,
             name=config.name,

@@ -2,7 +2,7 @@
 
 The sensor is an imaging plane of ``width × height`` discretized into
 ``n_v × n_h`` pixels (optionally cut to a circular/elliptic aperture).  The
-focus sits a focal length ``l`` *behind* the plane — on the side away from the
+pinhole (the thesis's "focus") sits a distance ``l`` (``pinhole_distance``) *behind* the plane — on the side away from the
 specimen — so that with the beam travelling along ``−n``::
 
     focus = c + l · n              (thesis eq. 5 with the beam along −n)
@@ -178,7 +178,11 @@ class Transducer:
     width, height : [m] size of the imaging plane (sensor area).  For a circular
         aperture they are the diameters (equal for a disc).
     n_h, n_v : number of horizontal and vertical pixels (one ray each).
-    focal_length : [m] distance l of the focus behind the plane's centre.
+    pinhole_distance : [m] distance l of the ray model's pinhole (the thesis's "focus")
+        behind the plane's centre: it only spreads the rays.  Not an acoustic focus.
+    focus : [m] acoustic focal length in water of a spherically focused probe (the distance
+        of the on-axis maximum at the pulse's centre frequency), or None for a flat probe.
+        Used by the ``wave`` echo model (circular apertures).
     aperture : ``"rectangular"`` or ``"circular"`` (pixels outside the inscribed
         disc/ellipse are dropped).
     directivity : amplitude per ray from its angle to the beam axis.
@@ -188,7 +192,8 @@ class Transducer:
     height: float = 10.0 * MM
     n_h: int = 64
     n_v: int = 64
-    focal_length: float = 20.0 * MM
+    pinhole_distance: float = 20.0 * MM
+    focus: float | None = None
     aperture: Literal["rectangular", "circular"] = "rectangular"
     directivity: Directivity = field(default_factory=GaussianDirectivity)
 
@@ -198,8 +203,12 @@ class Transducer:
         object.__setattr__(self, "n_h", positive_int("transducer.n_h", self.n_h))
         object.__setattr__(self, "n_v", positive_int("transducer.n_v", self.n_v))
         object.__setattr__(
-            self, "focal_length", positive_float("transducer.focal_length", self.focal_length)
+            self,
+            "pinhole_distance",
+            positive_float("transducer.pinhole_distance", self.pinhole_distance),
         )
+        if self.focus is not None:
+            object.__setattr__(self, "focus", positive_float("transducer.focus", self.focus))
         if self.aperture not in ("rectangular", "circular"):
             raise EchocalValueError(
                 f"transducer.aperture must be 'rectangular' or 'circular'; got {self.aperture!r}"
@@ -213,7 +222,8 @@ class Transducer:
         local.setflags(write=False)
         object.__setattr__(self, "_local", local)
         # Direction through each pixel in the local frame [x', y', n]: (u, v, −l) / norm.
-        dirs = np.stack([local[0], local[1], np.full(local.shape[1], -self.focal_length)], axis=1)
+        depth = np.full(local.shape[1], -self.pinhole_distance)
+        dirs = np.stack([local[0], local[1], depth], axis=1)
         dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
         dirs.setflags(write=False)
         object.__setattr__(self, "_local_directions", dirs)
@@ -258,7 +268,7 @@ class Transducer:
     def ray_angles(self) -> FloatArray:
         """[rad] angle ψ of each ray to the beam axis −n, shape ``(n_rays,)``."""
         r = np.hypot(self._local[0], self._local[1])  # type: ignore[attr-defined]
-        return np.arctan2(r, self.focal_length)
+        return np.arctan2(r, self.pinhole_distance)
 
     @property
     def weights(self) -> FloatArray:

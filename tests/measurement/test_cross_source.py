@@ -74,7 +74,7 @@ def make_setup(seed: int) -> VirtualSetup:
             width=0.004,
             n_h=12,
             n_v=12,
-            focal_length=0.2,
+            pinhole_distance=0.2,
             directivity=make_directivity("gaussian", opening_angle=10.0),
         ),
         pulse=PULSE,

@@ -20,7 +20,6 @@ Conventions (all functions)
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 from scipy import optimize, special
@@ -31,23 +30,23 @@ RHO_WATER = 1000.0
 __all__ = [
     "C_WATER",
     "RHO_WATER",
-    "jinc",
-    "rogers_van_buren",
-    "rogers_van_buren_loss_db",
-    "pulse_echo_plane",
-    "pulse_echo_plane_rayleigh",
-    "far_field_piston",
-    "pulse_echo_far_field",
-    "pulse_echo_deep_near_field",
-    "oneil_on_axis",
-    "oneil_peak_position",
     "bowl_on_axis_rayleigh",
-    "normal_incidence_reflection",
+    "far_field_piston",
     "fluid_fluid_reflection",
     "fluid_solid_reflection",
-    "gabor_spectrum",
     "gabor_sigma_t",
+    "gabor_spectrum",
+    "jinc",
+    "normal_incidence_reflection",
+    "oneil_on_axis",
+    "oneil_peak_position",
+    "pulse_echo_deep_near_field",
     "pulse_echo_envelope_peak",
+    "pulse_echo_far_field",
+    "pulse_echo_plane",
+    "pulse_echo_plane_rayleigh",
+    "rogers_van_buren",
+    "rogers_van_buren_loss_db",
     "tilt_envelope_curve",
     "tilt_halfwidth_minus6db",
 ]
@@ -148,8 +147,9 @@ def rogers_van_buren_loss_db(d, a, f, c: float = C_WATER):
 # ---------------------------------------------------------------------------
 # 2. Pulse-echo of a piston over a tilted infinite rigid plane
 # ---------------------------------------------------------------------------
-def pulse_echo_plane(a, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float = 0.5,
-                     evanescent: bool = True):
+def pulse_echo_plane(
+    a, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float = 0.5, evanescent: bool = True
+):
     """Exact scalar pulse-echo response V(f) of a piston over a tilted rigid plane.
 
     Geometry: piston (radius ``a``) in z=0 radiating into +z; an infinite rigid
@@ -247,7 +247,7 @@ def pulse_echo_plane(a, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float =
     # theta panels of equal (over-estimated) phase, 16 GL nodes per 2 cycles
     th_f = np.linspace(0.0, np.pi / 2, 4001)
     Phi = 2 * kd * (1 - np.cos(th_f)) + (4 * ka + kd * s2a_max) * np.sin(th_f) + 20 * th_f
-    n_pan = max(4, int(math.ceil(accuracy * Phi[-1] / (4 * np.pi))))
+    n_pan = max(4, math.ceil(accuracy * Phi[-1] / (4 * np.pi)))
     edges = np.interp(np.linspace(0, Phi[-1], n_pan + 1), Phi, th_f)
     th, wth = _gauss_legendre_panels(edges, 16)
 
@@ -258,8 +258,8 @@ def pulse_echo_plane(a, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float =
 
     chunk = max(1, int(2_000_000 // (tilt.size * phi.size)))
     for i0 in range(0, th.size, chunk):
-        t_ = th[i0:i0 + chunk]
-        w_ = wth[i0:i0 + chunk] * np.sin(t_)
+        t_ = th[i0 : i0 + chunk]
+        w_ = wth[i0 : i0 + chunk] * np.sin(t_)
         kap = k * np.sin(t_)[None, :, None]
         kz = k * np.cos(t_)[None, :, None]
         kx = kap * cphi[None, None, :]
@@ -332,10 +332,10 @@ def pulse_echo_plane_rayleigh(a, f, d, tilt_deg, c: float = C_WATER, *, accuracy
         acc = 0.0 + 0.0j
         chunk = max(1, 4_000_000 // mx.size)
         for i0 in range(0, bx.size, chunk):
-            dx = bx[i0:i0 + chunk, None] - mx[None, :]
-            dy = by[i0:i0 + chunk, None] - my[None, :]
+            dx = bx[i0 : i0 + chunk, None] - mx[None, :]
+            dy = by[i0 : i0 + chunk, None] - my[None, :]
             R = np.sqrt(dx * dx + dy * dy + mz[None, :] ** 2)
-            acc += bw[i0:i0 + chunk] @ ((np.exp(1j * k * R) / R) @ hw)
+            acc += bw[i0 : i0 + chunk] @ ((np.exp(1j * k * R) / R) @ hw)
         out[it] = -1j * k * acc / (2 * np.pi) / (np.pi * a * a)
     return out.reshape(np.shape(tilt_deg)) if np.ndim(tilt_deg) else out[0]
 
@@ -391,8 +391,9 @@ def oneil_on_axis(z, a, R, f, c: float = C_WATER):
     (``r2 - r1 = 2h(R - z)/(r1 + r2)``), so z = R gives the focal gain ``k h``.
 
     Source: H. T. O'Neil, "Theory of focusing radiators", JASA 21, 516-526
-    (1949), eq. (27); also Kinsler et al., Fundamentals of Acoustics (4th ed.),
-    sec. 7.9, and Cobbold, Foundations of Biomedical Ultrasound, sec. 5.7.
+    (1949) (on-axis solution; the same form is implemented by k-Wave's
+    ``focusedBowlONeil``); also Cobbold, Foundations of Biomedical
+    Ultrasound (2007), ch. 5.  Section/equation numbers not checked here.
     Derivation: the Rayleigh integral ``-ik \\int e^{ikr}/(2 pi r) dS`` over the
     bowl; on axis ``dS/r = 2 pi R dr/(R - z)``, which integrates exactly.  It is
     exact for that (Rayleigh-on-the-bowl) model, which itself is accurate
@@ -436,9 +437,12 @@ def oneil_peak_position(a, R, f, c: float = C_WATER):
     p = oneil_on_axis(zz, a, R, f, c)
     i = int(np.argmax(p))
     lo, hi = zz[max(i - 1, 0)], zz[min(i + 1, zz.size - 1)]
-    res = optimize.minimize_scalar(lambda z: -oneil_on_axis(z, a, R, f, c),
-                                   bounds=(lo, hi), method="bounded",
-                                   options={"xatol": 1e-9 * R})
+    res = optimize.minimize_scalar(
+        lambda z: -oneil_on_axis(z, a, R, f, c),
+        bounds=(lo, hi),
+        method="bounded",
+        options={"xatol": 1e-9 * R},
+    )
     return float(res.x)
 
 
@@ -467,8 +471,9 @@ def fluid_fluid_reflection(theta_deg, rho1, c1, rho2, c2):
 
     ``R = (Z2 - Z1)/(Z2 + Z1)``, ``Z1 = rho1 c1/cos th``, ``Z2 = rho2 c2/cos th2``,
     Snell ``sin th2 = (c2/c1) sin th``; complex beyond the critical angle
-    (exp(-iwt), see :func:`_cos_transmitted`).  Brekhovskikh, Waves in Layered
-    Media, eq. (2.4.?) / Kinsler et al. sec. 6.3.
+    (exp(-iwt), see :func:`_cos_transmitted`).  Standard result, e.g.
+    Brekhovskikh, Waves in Layered Media; Kinsler et al., Fundamentals of
+    Acoustics (ch. 6, transmission through an interface).
     """
     th = np.deg2rad(np.asarray(theta_deg, dtype=float))
     Z1 = rho1 * c1 / np.cos(th)
@@ -492,9 +497,10 @@ def fluid_solid_reflection(theta_deg, rho1, c1, rho2, cL, cT):
     ``sin^2 2th_T = 4 sin^2 th_T (1 - sin^2 th_T)`` stay well defined.  |R| = 1
     beyond the shear critical angle (no transmitted energy).
 
-    Source: L. M. Brekhovskikh, Waves in Layered Media (1980), sec. 4
-    (eq. 4.3.?); Brekhovskikh & Godin, Acoustics of Layered Media I, eq.
-    (3.3.x); also Krautkraemer, Ultrasonic Testing of Materials, ch. 2.
+    Source: L. M. Brekhovskikh, Waves in Layered Media (2nd ed. 1980), the
+    liquid/solid boundary (ch. 1); Brekhovskikh & Godin, Acoustics of Layered
+    Media I; also Krautkraemer, Ultrasonic Testing of Materials, ch. 2
+    (equation numbers not checked here; the tests verify the limits).
     Limits: th -> 0 gives ``(rho2 cL - rho1 c1)/(rho2 cL + rho1 c1)``;
     cT -> 0 gives the fluid-fluid coefficient.  Angle convention: angles
     measured from the interface normal, pressure reflection coefficient.
@@ -515,7 +521,7 @@ def fluid_solid_reflection(theta_deg, rho1, c1, rho2, cL, cT):
         shear = ZT * sin2T_sq
     else:
         shear = 0.0
-    Zs = ZL * cos2T ** 2 + shear
+    Zs = ZL * cos2T**2 + shear
     return (Zs - Z1) / (Zs + Z1)
 
 
@@ -545,8 +551,9 @@ def gabor_spectrum(freqs, f0, sigma_t):
     return np.exp(-0.5 * ((f - f0) / sf) ** 2) + np.exp(-0.5 * ((f + f0) / sf) ** 2)
 
 
-def pulse_echo_envelope_peak(V_of_f, freqs, pulse_spectrum, *, oversample: int = 16,
-                             return_time: bool = False):
+def pulse_echo_envelope_peak(
+    V_of_f, freqs, pulse_spectrum, *, oversample: int = 16, return_time: bool = False
+):
     """Envelope peak of the broadband echo ``s(t) = Re a(t)``.
 
     Analytic signal (exp(-iwt) convention, one-sided spectrum)::
@@ -594,8 +601,12 @@ def pulse_echo_envelope_peak(V_of_f, freqs, pulse_spectrum, *, oversample: int =
         def env(t, xj=xj):
             return abs(2 * df * np.sum(xj * np.exp(-2j * np.pi * freqs * t)))
 
-        res = optimize.minimize_scalar(lambda t: -env(t), bounds=((m - 1) * dt, (m + 1) * dt),
-                                       method="bounded", options={"xatol": dt * 1e-6})
+        res = optimize.minimize_scalar(
+            lambda t: -env(t),
+            bounds=((m - 1) * dt, (m + 1) * dt),
+            method="bounded",
+            options={"xatol": dt * 1e-6},
+        )
         peaks.append(-res.fun)
         times.append(res.x % T)
     peaks, times = np.array(peaks), np.array(times)
@@ -612,13 +623,21 @@ def _band(a, d, f0, sigma_t, c, max_tilt_deg, n_sigma=4.5):
     df = 1.0 / T
     fmin = max(df, f0 - n_sigma * sf)
     fmax = f0 + n_sigma * sf
-    n = int(math.ceil((fmax - fmin) / df)) + 1
+    n = math.ceil((fmax - fmin) / df) + 1
     return fmin + df * np.arange(n)
 
 
-def tilt_envelope_curve(a, d, f0, tilts_deg, *, frac_bw_6db: float = 0.55,
-                        sigma_t: float | None = None, c: float = C_WATER,
-                        accuracy: float = 0.35):
+def tilt_envelope_curve(
+    a,
+    d,
+    f0,
+    tilts_deg,
+    *,
+    frac_bw_6db: float = 0.55,
+    sigma_t: float | None = None,
+    c: float = C_WATER,
+    accuracy: float = 0.35,
+):
     """Broadband echo envelope peak vs plane tilt, divided by its value at tilt 0.
 
     Echo of a Gabor pulse (centre ``f0``, -6 dB fractional bandwidth
@@ -638,9 +657,17 @@ def tilt_envelope_curve(a, d, f0, tilts_deg, *, frac_bw_6db: float = 0.55,
     return out.reshape(np.shape(tilts_deg)) if np.ndim(tilts_deg) else out[0]
 
 
-def tilt_halfwidth_minus6db(a, d, f0, *, frac_bw_6db: float = 0.55, sigma_t: float | None = None,
-                            c: float = C_WATER, xtol_deg: float = 1e-4,
-                            accuracy: float = 0.35):
+def tilt_halfwidth_minus6db(
+    a,
+    d,
+    f0,
+    *,
+    frac_bw_6db: float = 0.55,
+    sigma_t: float | None = None,
+    c: float = C_WATER,
+    xtol_deg: float = 1e-4,
+    accuracy: float = 0.35,
+):
     """-6 dB half-width [deg] in plane tilt of the broadband pulse-echo envelope peak.
 
     Finds t > 0 with ``E(t)/E(0) = 1/2`` where ``E`` is the envelope peak of
@@ -663,9 +690,11 @@ def tilt_halfwidth_minus6db(a, d, f0, *, frac_bw_6db: float = 0.55, sigma_t: flo
     if idx.size == 0:
         raise RuntimeError(f"-6 dB point not bracketed: {grid} -> {vals + 0.5}")
     i = int(idx[0])
-    g = lambda t: float(tilt_envelope_curve(a, d, f0, [t], sigma_t=sigma_t, c=c,  # noqa: E731
-                                            accuracy=accuracy)[0]) - 0.5
-    # secant guess inside the bracket speeds Brent up
+
+    def g(t):
+        curve = tilt_envelope_curve(a, d, f0, [t], sigma_t=sigma_t, c=c, accuracy=accuracy)
+        return float(curve[0]) - 0.5
+
     return float(optimize.brentq(g, grid[i], grid[i + 1], xtol=xtol_deg))
 
 
@@ -678,8 +707,9 @@ def _kz(k, kx):
     return np.where(kz.imag < 0, -kz, kz)
 
 
-def fluid_loaded_plate_reflection(f, theta_deg, thickness, rho_fluid, c_fluid, rho, cL, cT,
-                                  *, return_transmission: bool = False):
+def fluid_loaded_plate_reflection(
+    f, theta_deg, thickness, rho_fluid, c_fluid, rho, cL, cT, *, return_transmission: bool = False
+):
     """Plane-wave reflection (and transmission) coefficient of an elastic plate in fluid.
 
     An isotropic elastic plate (``rho``, ``cL``, ``cT`` > 0; complex speeds
@@ -736,7 +766,6 @@ def fluid_loaded_plate_reflection(f, theta_deg, thickness, rho_fluid, c_fluid, r
     sxz_L = -2 * mu * kx * kzL
     sxz_T = mu * (kzT * kzT - kx * kx)
     z = np.zeros_like(kzL)
-    one = np.ones_like(kzL)
     # unknowns: R, A+, A-, B+, B-, T
     rows = [
         # z = 0
@@ -750,8 +779,13 @@ def fluid_loaded_plate_reflection(f, theta_deg, thickness, rho_fluid, c_fluid, r
     ]
     rhs = [1j * kz1, rw2 + 0 * z, z, z, z, z]
     scale = [sk, ps, ps, sk, ps, ps]
-    M = np.stack([np.stack([np.asarray(e, dtype=complex) / scale[i] for e in r], axis=-1)
-                  for i, r in enumerate(rows)], axis=-2)
+    M = np.stack(
+        [
+            np.stack([np.asarray(e, dtype=complex) / scale[i] for e in r], axis=-1)
+            for i, r in enumerate(rows)
+        ],
+        axis=-2,
+    )
     b = np.stack([np.asarray(e, dtype=complex) / scale[i] for i, e in enumerate(rhs)], axis=-1)
     normal = np.abs(kx) == 0
     if np.any(normal):  # decouple shear: rows 2 and 5 become B+ = 0, B- = 0

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-import references as ref  # noqa: E402
+import references as ref
 
 C = 1480.0
 F = 5e6
@@ -47,11 +47,14 @@ def test_angular_spectrum_normal_incidence_matches_rvb(a):
 
 
 # --- 2. angular spectrum vs brute-force Rayleigh -----------------------------
-@pytest.mark.parametrize(("a", "d", "tilts"), [
-    (1.5e-3, 10e-3, [0.0, 0.3, 1.0, 2.0]),
-    (1.5e-3, 50e-3, [0.0, 0.3, 1.0, 2.0]),
-    (6.35e-3, 50e-3, [0.0, 0.3, 1.0]),
-])
+@pytest.mark.parametrize(
+    ("a", "d", "tilts"),
+    [
+        (1.5e-3, 10e-3, [0.0, 0.3, 1.0, 2.0]),
+        (1.5e-3, 50e-3, [0.0, 0.3, 1.0, 2.0]),
+        (6.35e-3, 50e-3, [0.0, 0.3, 1.0]),
+    ],
+)
 def test_angular_spectrum_matches_rayleigh(a, d, tilts):
     V = ref.pulse_echo_plane(a, F, d, tilts)
     W = ref.pulse_echo_plane_rayleigh(a, F, d, tilts)
@@ -76,9 +79,12 @@ def test_far_field_formulas():
     assert ref.far_field_piston(10.0, 0.0) == 1.0
     x = 3.8317059702  # first zero of J1
     assert abs(ref.far_field_piston(20.0, np.rad2deg(np.arcsin(x / 20.0)))) < 1e-9
-    assert ref.pulse_echo_far_field(20.0, 3.0) == pytest.approx(ref.far_field_piston(20.0, 3.0) ** 2)
+    assert ref.pulse_echo_far_field(20.0, 3.0) == pytest.approx(
+        ref.far_field_piston(20.0, 3.0) ** 2
+    )
     assert ref.pulse_echo_deep_near_field(20.0, 3.0) == pytest.approx(
-        float(ref.jinc(40 * np.sin(np.deg2rad(3.0)))))
+        float(ref.jinc(40 * np.sin(np.deg2rad(3.0))))
+    )
 
 
 def test_exact_tends_to_far_field_at_long_range():
@@ -173,7 +179,9 @@ def test_envelope_of_pure_delay():
     freqs = np.linspace(0.5e6, 9.5e6, 73)
     W = ref.gabor_spectrum(freqs, f0, st)
     tau = 3.1e-6
-    pk, t = ref.pulse_echo_envelope_peak(np.exp(2j * np.pi * freqs * tau), freqs, W, return_time=True)
+    pk, t = ref.pulse_echo_envelope_peak(
+        np.exp(2j * np.pi * freqs * tau), freqs, W, return_time=True
+    )
     assert t == pytest.approx(tau, abs=1e-12)
     sf = 1 / (2 * np.pi * st)
     assert pk == pytest.approx(2 * sf * np.sqrt(2 * np.pi), rel=1e-4)  # 2 * integral of W
@@ -206,8 +214,9 @@ def test_plate_normal_incidence_closed_form():
 def test_plate_energy_and_limits():
     rho, cL, cT = ALU
     th = np.linspace(0, 80, 81)
-    R, T = ref.fluid_loaded_plate_reflection(3e6, th, 1.5e-3, 1000.0, C, rho, cL, cT,
-                                             return_transmission=True)
+    R, T = ref.fluid_loaded_plate_reflection(
+        3e6, th, 1.5e-3, 1000.0, C, rho, cL, cT, return_transmission=True
+    )
     assert np.allclose(np.abs(R) ** 2 + np.abs(T) ** 2, 1.0, atol=1e-12)
     assert abs(ref.fluid_loaded_plate_reflection(3e6, 20.0, 1e-9, 1000.0, C, rho, cL, cT)) < 1e-3
 
@@ -227,6 +236,7 @@ def test_thick_lossy_plate_tends_to_half_space():
     rho, cL, cT = STEEL
     eta = 0.01  # loss kills the back-wall echoes; it also shifts Z by ~1 %
     th = np.array([0.0, 5.0, 10.0, 50.0])
-    R = ref.fluid_loaded_plate_reflection(5e6, th, 0.15, 1000.0, C, rho,
-                                          cL * (1 - 1j * eta), cT * (1 - 1j * eta))
+    R = ref.fluid_loaded_plate_reflection(
+        5e6, th, 0.15, 1000.0, C, rho, cL * (1 - 1j * eta), cT * (1 - 1j * eta)
+    )
     assert np.allclose(R, ref.fluid_solid_reflection(th, 1000.0, C, rho, cL, cT), atol=1e-2)

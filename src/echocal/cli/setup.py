@@ -23,7 +23,7 @@ _UNITS = {
     "height": "m",
     "radius": "m",
     "length": "m",
-    "focal_length": "m",
+    "pinhole_distance": "m",
     "reference_position": "m",
     "x": "m",
     "y": "m",

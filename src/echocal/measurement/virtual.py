@@ -34,12 +34,13 @@ from echocal._validate import finite_array, lookup, one_of, positive_float
 from echocal.ascan import AScan
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.echo import (
+    WAVE_MODEL,
     RayEchoes,
     _echo_arrays_unchecked,
     _reflection_model,
     check_pose_arrays,
+    echo_model_names,
     ray_echoes,
-    reflection_model_names,
 )
 from echocal.errors import EchocalValueError, GeometryError
 from echocal.geometry import (
@@ -176,7 +177,9 @@ class VirtualSetup(BaseSource):
     receiver : noise, ADC and saturation settings.
     reference_position : [m] where the reference echo for the SNR is taken, shape (3,).
     sound_speed : [m/s] c₀ of the medium.
-    reflection : reflection model, ``lambertian`` (thesis) or ``specular``.
+    reflection : echo model: ``wave`` (diffraction theory, :mod:`echocal.wave`; circular
+        probes) or the thesis's ray models ``lambertian`` and ``specular``.
+    wave_spacing : [m] the wave model's surface-sample spacing (None: its default).
     synthesis : A-scan synthesis method, ``fast`` (default) or ``direct`` (reference).
     limits : the virtual positioner's reachable poses.
     rng : seed or Generator for the receiver noise (reproducible runs).
@@ -192,6 +195,7 @@ class VirtualSetup(BaseSource):
     sound_speed: float = SOUND_SPEED_WATER
     reflection: str = "lambertian"
     synthesis: str = "fast"
+    wave_spacing: float | None = None
     limits: PositionerLimits = field(default_factory=PositionerLimits)
     rng: RngLike = None
     name: str = "virtual setup"
@@ -207,7 +211,16 @@ class VirtualSetup(BaseSource):
         reference = finite_array("reference_position", self.reference_position, shape_tail=(3,))
         object.__setattr__(self, "reference_position", reference.reshape(3))
         object.__setattr__(self, "sound_speed", positive_float("sound_speed", self.sound_speed))
-        lookup("reflection model", self.reflection, dict.fromkeys(reflection_model_names()))
+        lookup("echo model", self.reflection, dict.fromkeys(echo_model_names()))
+        if self.wave_spacing is not None:
+            object.__setattr__(
+                self, "wave_spacing", positive_float("echo.spacing", self.wave_spacing)
+            )
+        if self.reflection == WAVE_MODEL and self.transducer.aperture != "circular":
+            raise EchocalValueError(
+                "echo.reflection: the wave model needs a circular probe (transducer.aperture = "
+                "'circular'); rectangular probes use the ray models lambertian or specular"
+            )
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         object.__setattr__(self, "_generator", as_generator(self.rng))
         object.__setattr__(self, "_closed", False)
@@ -262,7 +275,7 @@ class VirtualSetup(BaseSource):
             self.specimen,
             np.asarray(positions, dtype=np.float64).reshape(-1, 3),
             np.asarray(frames, dtype=np.float64).reshape(-1, 3, 3),
-            model=self.reflection,
+            model="lambertian" if self.reflection == WAVE_MODEL else self.reflection,
             sound_speed=self.sound_speed,
         )
 
@@ -288,7 +301,50 @@ class VirtualSetup(BaseSource):
             out[sl] = self._ideal_chunk(positions[sl], frames[sl])
         return out
 
+    @cached_property
+    def wave_model(self):  # -> echocal.wave.WaveEchoModel (imported lazily: it loads numba)
+        """The diffraction echo model of this setup (``reflection = "wave"``)."""
+        from echocal.wave import PistonProbe, WaveEchoModel, curvature_for_focus
+
+        radius = 0.5 * self.transducer.width
+        curvature = None
+        if self.transducer.focus is not None:
+            curvature = curvature_for_focus(
+                self.transducer.focus,
+                radius=radius,
+                frequency=self.pulse.center_frequency,
+                sound_speed=self.sound_speed,
+            )
+        return WaveEchoModel(
+            probe=PistonProbe(radius=radius, curvature=curvature),
+            pulse=self.pulse,
+            window=self.window,
+            sound_speed=self.sound_speed,
+            attenuation=self._medium_attenuation,
+            reflection=self._reflection_coefficient,
+            spacing=self.wave_spacing,
+        )
+
+    @property
+    def _medium_attenuation(self):
+        """α(f) [Np/m] of the coupling medium, or None (lossless)."""
+        medium = getattr(self, "medium", None)
+        return None if medium is None else medium.attenuation.alpha
+
+    @property
+    def _reflection_coefficient(self):
+        """R(θ [deg]) of the specimen's material, or None (a perfect reflector)."""
+        material = getattr(self, "material", None)
+        if material is None:
+            return None
+        from echocal.materials import reflection_fluid_solid
+
+        medium = self.medium  # type: ignore[attr-defined]
+        return lambda theta: reflection_fluid_solid(theta, medium, material)
+
     def _ideal_chunk(self, positions: FloatArray, frames: FloatArray) -> FloatArray:
+        if self.reflection == WAVE_MODEL:
+            return self.wave_model.ascans(_as_shapes(self.specimen), positions, frames)
         # checked float64 pose arrays, model and c₀ validated in __post_init__: no re-checks
         amplitude, tof = _echo_arrays_unchecked(
             self.transducer,
@@ -325,7 +381,8 @@ class VirtualSetup(BaseSource):
 
     @cached_property
     def reference_samples(self) -> FloatArray:
-        """The noiseless reference A-scan (normal incidence at ``reference_position``)."""
+        """The noiseless reference A-scan: the strongest echo at ``reference_position``
+        (normal incidence on the surface; see :meth:`normal_incidence_directions`)."""
         reference = np.asarray(self.reference_position, dtype=np.float64)  # (3,) [m]
         x, y, _ = reference
         normal = self.specimen.surface_normal_below(x, y)
@@ -334,9 +391,13 @@ class VirtualSetup(BaseSource):
                 f"reference_position ({x:g}, {y:g}) m is not above the specimen; "
                 "move it over the part"
             )
-        azimuth, coelevation = self.specimen.optimal_orientation_below(x, y)
-        frame = orientation_frame(azimuth, coelevation)
-        samples = self.ideal_samples(reference[None], frame[None])[0]
+        # the reference echo is the best echo at the reference position: the strongest of
+        # the directions of normal incidence (the metric's optimum up to its flat top)
+        candidates = self.normal_incidence_directions(reference)
+        frames = tilt_frame(candidates[:, 0], candidates[:, 1])
+        positions = np.broadcast_to(reference, (len(candidates), 3))
+        scans = self.ideal_samples(positions, frames)
+        samples = scans[int(np.argmax(np.max(np.abs(scans), axis=1)))]
         if not np.any(samples):
             raise GeometryError(
                 "the reference echo is silent: no ray returns within the recording window "
@@ -457,31 +518,70 @@ class VirtualSetup(BaseSource):
         return float(a), float(b)
 
     def _search_optimum(self, position: FloatArray, metric: str) -> tuple[float, float]:
-        # Search in gimbal tilts: smooth at the pole, where most optima lie.
-        start = self.perpendicular_start(position)
+        # Global: the candidates are the directions of normal incidence on the surface
+        # (every local maximum of the echo of a smooth surface lies near one), scored by
+        # the metric itself; the best is refined by Nelder–Mead in gimbal tilts (smooth at
+        # the pole, where most optima lie).
+        candidates = self.normal_incidence_directions(position)
 
         def negative(v: FloatArray) -> float:
             value = self.metric_values(position, v[0], v[1], parameterization="tilt", metric=metric)
             return -float(value)
 
+        scores = self.metric_values(
+            position, candidates[:, 0], candidates[:, 1], parameterization="tilt", metric=metric
+        )
+        start = candidates[int(np.argmax(scores))]
         best = scipy.optimize.minimize(
             negative,
             start,
             method="Nelder-Mead",
-            options={"xatol": 1e-5, "fatol": 0.0, "initial_simplex": _simplex(start, 0.5)},
+            options={"xatol": 1e-5, "fatol": 0.0, "initial_simplex": _simplex(start, 0.25)},
         )
         az, coel = convert_angles(best.x[0], best.x[1], "tilt", "azimuth-coelevation")
         return float(az), float(coel)
 
+    def normal_incidence_directions(self, position: FloatArray, *, limit: int = 6) -> FloatArray:
+        """Tilts [deg], shape ``(n, 2)`` with n ≤ ``limit``, of the beam from ``position``
+        [m] at normal incidence on the surface: the local maxima of |cos| of the angle of
+        incidence over a 0.5° fan within ±60° of straight down, best first (the nearest
+        surface point within ±60° comes first when nothing is closer than 2° to normal).
+
+        Over a smooth part the echo of a physical probe peaks where the beam meets the
+        surface at normal incidence — also inside a bore or off the axis of a sphere,
+        where the surface straight below would aim the search at a side lobe.
+        """
+        step = 0.5
+        grid = np.arange(-60.0, 60.0 + step / 2, step)
+        tx, ty = np.meshgrid(grid, grid, indexing="ij")
+        directions = -tilt_normal(tx.ravel(), ty.ravel())
+        hits = cast(self.specimen, np.broadcast_to(position, directions.shape), directions)
+        if not np.any(hits.hit):
+            raise GeometryError(
+                f"no surface within 60° of straight down from position "
+                f"({position[0]:g}, {position[1]:g}, {position[2]:g}) m; "
+                "the optimum is undefined there"
+            )
+        cosine = np.where(hits.hit, -np.sum(hits.normal * directions, axis=-1), -1.0)
+        cosine = cosine.reshape(tx.shape)
+        padded = np.pad(cosine, 1, constant_values=-1.0)
+        peak = np.ones_like(cosine, dtype=bool)
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                if dx or dy:
+                    rows = slice(1 + dx, 1 + dx + cosine.shape[0])
+                    shifted = padded[rows, 1 + dy : 1 + dy + cosine.shape[1]]
+                    peak &= cosine >= shifted
+        peak &= cosine > math.cos(math.radians(2.0))
+        order = np.argsort(-cosine[peak])
+        found = np.stack([tx[peak], ty[peak]], axis=1)[order][:limit]
+        nearest = self.perpendicular_start(position)
+        return np.vstack([found, nearest[None]]) if found.size else nearest[None]
+
     def perpendicular_start(self, position: FloatArray) -> FloatArray:
         """Tilts [deg], shape (2,), of the beam from ``position`` [m] towards the nearest
-        surface point within ±60° (where :meth:`true_optimum` starts its search).
-
-        The distance to a smooth surface is stationary where the ray meets it at
-        normal incidence, so the nearest hit of a 1° fan of rays from ``position``
-        starts the search on the main lobe — also for curved parts, where the
-        normal straight below the probe would aim at a side lobe.
-        """
+        surface point within ±60° (1° fan): the distance to a smooth surface is stationary
+        where the ray meets it at normal incidence."""
         grid = np.arange(-60.0, 60.5, 1.0)
         tx, ty = (g.ravel() for g in np.meshgrid(grid, grid, indexing="ij"))
         directions = -tilt_normal(tx, ty)

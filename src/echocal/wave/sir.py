@@ -202,8 +202,12 @@ def _sample_geometry(kind, prm, x, y, z, mx, my, mz, geo):
     rf = prm[1]
     fx, fy, fz = x, y, z - rf  # x − F
     d = math.sqrt(fx * fx + fy * fy + fz * fz)
-    if d < 1e-12 * rf or z <= 0.0:
+    if z <= 0.0:
         return False
+    if d < 1e-9 * rf:  # at the geometric focus: every point of the bowl is R_f away
+        fz = 1e-9 * rf  # a nanometre-scale offset keeps the closed form finite and exact
+        d = fz
+
     ex, ey, ez = fx / d, fy / d, fz / d
     cos_beta = -ez  # u0 = (0, 0, −1): from the focus towards the apex
     sin_beta = math.sqrt(max(0.0, 1.0 - cos_beta * cos_beta))
