@@ -172,7 +172,9 @@ ROUND_TRIP_EXTRAS = {
     "sinc-shapes-unlimited": TINY.replace("[pulse]", '[pulse]\nname = "sinc"\nbandwidth = "1 MHz"')
     + '[specimen]\n[[specimen.shapes]]\nkind = "plane"\nwidth = "50 mm"\nheight = "50 mm"\n'
     + '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, "30 mm", "-30 mm"]\nradius = "5 mm"\n',
-    "long-focus-adc": TINY.replace('pinhole_distance = "50 mm"', 'pinhole_distance = "3 m"').replace(
+    "long-focus-adc": TINY.replace(
+        'pinhole_distance = "50 mm"', 'pinhole_distance = "3 m"'
+    ).replace(
         "[window]", "[noise]\nadc_bits = 12\nfull_scale = 2\n[window]"
     ),
 }

@@ -598,7 +598,10 @@ def _check_echo(config: EchoConfig) -> tuple[EchoConfig | None, list[str]]:
             f"choose one of: {', '.join(echo_model_names())}"
         ]
     if config.spacing is not None and config.reflection != "wave":
-        _ignored("echo.spacing", f"it sets the wave model's surface sampling; this is {config.reflection}")
+        _ignored(
+            "echo.spacing",
+            f"it sets the wave model's surface sampling; this is {config.reflection}",
+        )
     return config, []
 
 

@@ -2,7 +2,8 @@
 
 The sensor is an imaging plane of ``width × height`` discretized into
 ``n_v × n_h`` pixels (optionally cut to a circular/elliptic aperture).  The
-pinhole (the thesis's "focus") sits a distance ``l`` (``pinhole_distance``) *behind* the plane — on the side away from the
+pinhole (the thesis's "focus") sits a distance ``l`` (``pinhole_distance``)
+*behind* the plane — on the side away from the
 specimen — so that with the beam travelling along ``−n``::
 
     focus = c + l · n              (thesis eq. 5 with the beam along −n)

@@ -24,7 +24,7 @@ from echocal.specimen.builtins import builtin_specimen
 from echocal.wave import PistonProbe, WaveEchoModel, curvature_for_focus
 
 sys.path.insert(0, str(Path(__file__).parent))
-import references as ref  # noqa: E402
+import references as ref
 
 C = 1480.0
 F0 = 5e6

@@ -110,8 +110,8 @@ class WaveEchoModel:
         fs = self.window.fs
         m = max(1, int(fs / (_GRID_OVERSAMPLING * self.pulse.highest_frequency)))
         dt = m / fs
-        pad = int(math.ceil(self.pulse.support / dt)) + 2
-        n_window = int(math.ceil(self.window.n_samples / m)) + 1
+        pad = math.ceil(self.pulse.support / dt) + 2
+        n_window = math.ceil(self.window.n_samples / m) + 1
         n_fft = scipy.fft.next_fast_len(n_window + 2 * pad, real=True)
         return m, dt, pad, n_fft
 
@@ -146,7 +146,7 @@ class WaveEchoModel:
         apex = r0 / tan_spread
         # face pitch so that the samples are `spacing` apart at the surface
         pitch = self._sample_spacing * apex / (apex + max(distance, 0.0))
-        n_side = int(math.ceil(2.0 * r0 / pitch))
+        n_side = math.ceil(2.0 * r0 / pitch)
         u = (np.arange(n_side) + 0.5) / n_side * 2.0 * r0 - r0
         uu, vv = np.meshgrid(u, u)
         rr = np.hypot(uu, vv).ravel()
@@ -160,7 +160,9 @@ class WaveEchoModel:
         solid_angle *= np.sin(0.5 * math.pi * taper) ** 2
         return np.stack([x, y]), dirs, solid_angle, apex
 
-    def _surface_distance(self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray) -> float:
+    def _surface_distance(
+        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+    ) -> float:
         """[m] the nearest surface within the beam's cone (9 × 9 probe rays)."""
         a = self.probe.radius
         g = np.linspace(-1.0, 1.0, 9)
@@ -214,7 +216,9 @@ class WaveEchoModel:
         return points, unit_m, area
 
     # ------------------------------------------------------------------ A-scans
-    def ascans(self, shapes: tuple[Shape, ...], positions: FloatArray, frames: FloatArray) -> FloatArray:
+    def ascans(
+        self, shapes: tuple[Shape, ...], positions: FloatArray, frames: FloatArray
+    ) -> FloatArray:
         """Noiseless A-scans ``(n_poses, n_samples)`` at positions ``(P, 3)`` [m] and frames
         ``(P, 3, 3)`` (columns x', y', n; the beam travels along −n)."""
         out = np.empty((positions.shape[0], self.window.n_samples))
@@ -222,7 +226,9 @@ class WaveEchoModel:
             out[i] = self._ascan(shapes, positions[i], frames[i])
         return out
 
-    def _ascan(self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray) -> FloatArray:
+    def _ascan(
+        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+    ) -> FloatArray:
         points, unit_m, area = self.surface_samples(shapes, position, frame)
         m, dt, pad, n_fft = self._grid
         t0 = self.window.start - pad * dt
@@ -246,7 +252,15 @@ class WaveEchoModel:
         for w, factor in parts:
             grid = np.zeros(n_fft)
             st, sw = kernel(
-                self.probe.kind, prm, points, unit_m, np.ascontiguousarray(w), c, t0, dt, grid,
+                self.probe.kind,
+                prm,
+                points,
+                unit_m,
+                np.ascontiguousarray(w),
+                c,
+                t0,
+                dt,
+                grid,
                 scratch,
             )
             if factor == 1.0:

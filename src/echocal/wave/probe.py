@@ -29,7 +29,9 @@ __all__ = ["PistonProbe", "curvature_for_focus", "oneil_on_axis"]
 FloatArray = NDArray[np.float64]
 
 
-def oneil_on_axis(z: ArrayLike, *, radius: float, curvature: float, wavenumber: float) -> FloatArray:
+def oneil_on_axis(
+    z: ArrayLike, *, radius: float, curvature: float, wavenumber: float
+) -> FloatArray:
     """O'Neil's on-axis |p/(ρcv₀)| of a bowl (``z`` [m] from the apex, ``radius`` a [m],
     ``curvature`` R_f [m], ``wavenumber`` k [1/m]); shape of ``z``."""
     z = np.asarray(z, dtype=np.float64)
@@ -41,7 +43,9 @@ def oneil_on_axis(z: ArrayLike, *, radius: float, curvature: float, wavenumber: 
     return np.where(np.isclose(z, curvature, rtol=1e-12), wavenumber * h, out)
 
 
-def curvature_for_focus(focus: float, *, radius: float, frequency: float, sound_speed: float) -> float:
+def curvature_for_focus(
+    focus: float, *, radius: float, frequency: float, sound_speed: float
+) -> float:
     """Radius of curvature R_f [m] of a bowl whose on-axis maximum at ``frequency`` [Hz]
     lies at ``focus`` [m] from the apex (O'Neil's closed form, solved by root finding).
 
@@ -55,7 +59,9 @@ def curvature_for_focus(focus: float, *, radius: float, frequency: float, sound_
     near_field = radius**2 * frequency / sound_speed
 
     def peak(curvature: float) -> float:
-        grid = np.linspace(0.2 * curvature, min(1.2 * curvature, 3.0 * near_field + curvature), 2001)
+        grid = np.linspace(
+            0.2 * curvature, min(1.2 * curvature, 3.0 * near_field + curvature), 2001
+        )
         values = oneil_on_axis(grid, radius=radius, curvature=curvature, wavenumber=k)
         i = int(np.argmax(values))
         lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
@@ -136,7 +142,9 @@ class PistonProbe:
             return 0.0
         return self.curvature - math.sqrt(self.curvature**2 - self.radius**2)
 
-    def field(self, points: ArrayLike, frequency: float, sound_speed: float) -> NDArray[np.complex128]:
+    def field(
+        self, points: ArrayLike, frequency: float, sound_speed: float
+    ) -> NDArray[np.complex128]:
         """Normalized transmit pressure p/(ρcv₀) at ``points`` [m] (aperture frame: face centre
         or bowl apex at the origin, beam along +z), shape ``(n, 3)`` → ``(n,)``, at one
         ``frequency`` [Hz], from the Fourier transform of the closed-form SIR:

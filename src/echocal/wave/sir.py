@@ -21,9 +21,9 @@ because every point of the arc is at R = ct; the arc mean ⟨x − a⟩ is close
 (the mean of a unit vector over an arc of half-angle Ω is sinΩ/Ω along its bisector).
 
 The kernels below project h and h_m onto quadratic B-splines on a uniform time grid of
-spacing Δ (integrals split at the breakpoints of the closed form, Gauss–Legendre on each
-smooth piece, 2-point Gauss–Legendre) and accumulate the two-way correlation g(t) = (h * h_m)(t) of every surface
-sample into one grid.  The projection is a smoothing filter of transform sinc³(fΔ) per
+spacing Δ (integrals split at the breakpoints of the closed form, 2-point Gauss–Legendre
+on each smooth piece) and accumulate the two-way correlation g(t) = (h * h_m)(t) of every
+surface sample into one grid.  The projection is a smoothing filter of transform sinc³(fΔ) per
 factor, undone exactly in the frequency domain by dividing by sinc⁶(fΔ) (see
 :mod:`echocal.wave.model`); it keeps the aliases of the SIR, which is not band-limited,
 below 10⁻³ at a grid of five samples per period of the pulse's highest frequency.
@@ -52,6 +52,7 @@ def _jit(func: Callable[..., Any]) -> Callable[..., Any]:
     from numba import njit
 
     return njit(cache=True, nogil=True)(func)
+
 
 # 2-point Gauss–Legendre nodes and weights on [0, 1]
 _GL_X = np.array([0.2113248654051871, 0.7886751345948129])
@@ -123,8 +124,8 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
     one internal breakpoint t_mid.  Each smooth piece of each bin is integrated by 2-point
     Gauss–Legendre.  Writes coefficients k0 − 1 … k0 + K to ``h[0 : K + 2]`` and
     ``hm[0 : K + 2]`` and returns (k0 − 1, K + 2)."""
-    k0 = int(math.floor((t_lo - t0) / dt))
-    k1 = int(math.floor((t_hi - t0) / dt))
+    k0 = int(math.floor((t_lo - t0) / dt))  # noqa: RUF046 (numba)
+    k1 = int(math.floor((t_hi - t0) / dt))  # noqa: RUF046 (numba)
     n = min(k1 - k0 + 1, h.shape[0] - 2)
     for i in range(n + 2):
         h[i] = 0.0
@@ -260,9 +261,7 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scra
         if w == 0.0:
             continue
         x, y, z = points[0, s], points[1, s], points[2, s]
-        if not _sample_geometry(
-            kind, prm, x, y, z, unit_m[0, s], unit_m[1, s], unit_m[2, s], geo
-        ):
+        if not _sample_geometry(kind, prm, x, y, z, unit_m[0, s], unit_m[1, s], unit_m[2, s], geo):
             continue
         if kind == DISC:
             lo, mid, hi = _support_disc(c, geo[0], geo[1], prm[0])
@@ -292,4 +291,4 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scra
 def scratch_bins(c: float, dt: float, extent: float) -> int:
     """Bins one sample's SIR can span: its support is at most 2·extent/c [s] (extent [m],
     the aperture's largest dimension), plus two for partial bins."""
-    return int(math.ceil(2.0 * extent / (c * dt))) + 5
+    return math.ceil(2.0 * extent / (c * dt)) + 5
