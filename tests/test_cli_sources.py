@@ -114,8 +114,8 @@ def test_setup_validate_reports_every_problem_with_its_field(
     fields = sorted(line.split(":")[0] for line in out.strip().splitlines())
     assert fields == [
         "colour",
-        "transducer.pinhole_distance",
         "transducer.n_h",
+        "transducer.pinhole_distance",
         "transducer.width",
         "window.n_samples",
     ]

@@ -339,7 +339,7 @@ class VirtualSetup(BaseSource):
             return None
         from echocal.materials import reflection_fluid_solid
 
-        medium = self.medium  # type: ignore[attr-defined]
+        medium = self.medium
         return lambda theta: reflection_fluid_solid(theta, medium, material)
 
     def _ideal_chunk(self, positions: FloatArray, frames: FloatArray) -> FloatArray:

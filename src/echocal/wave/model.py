@@ -126,7 +126,7 @@ class WaveEchoModel:
     @cached_property
     def _frequencies(self) -> FloatArray:
         _, dt, _, n_fft = self._grid
-        return np.fft.rfftfreq(n_fft, dt)
+        return np.asarray(np.fft.rfftfreq(n_fft, dt), dtype=np.float64)
 
     # ------------------------------------------------------------------ footprint
     def _fan(self, distance: float) -> tuple[FloatArray, FloatArray, FloatArray, float]:
@@ -245,7 +245,9 @@ class WaveEchoModel:
         n_scratch = sir.scratch_bins(c, dt, 2.0 * self.probe.radius)
         scratch = np.zeros((3, 2 * n_scratch))
         spectrum = np.zeros(n_fft // 2 + 1, dtype=np.complex128)
-        parts = [(weights if reflection is None else weights * reflection.real, 1.0)]
+        parts: list[tuple[FloatArray, complex]] = [
+            (weights if reflection is None else weights * reflection.real, 1.0)
+        ]
         if reflection is not None and np.any(reflection.imag != 0.0):
             parts.append((weights * reflection.imag, -1j))  # e^{−iωt} phase → numpy's
         path_t, path_w = 0.0, 0.0
