@@ -46,6 +46,7 @@ _COMMAND_MODULES = (
     "echocal.cli.pulse",
     "echocal.cli.scene",
     "echocal.cli.simulate",
+    "echocal.cli.lobe",
     "echocal.cli.calibrate",
     "echocal.cli.methods",
     "echocal.cli.setup",
