@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import run_main
 
+from cli_helpers import run_main
 from echocal import load_setup
 from echocal.errors import ConfigError, EchocalValueError
 from echocal.lobe import echo_lobe, far_field_lobe, near_field_lobe
