@@ -555,13 +555,14 @@ def _study_table7(bench: Bench, quick: bool) -> _Study:
                 value=method,
             )
         )
-    for group in (thesis_group, auto_group):
+    for group, gains in ((thesis_group, "the thesis's gains"), (auto_group, "automatic gains")):
         checks[group] = [
-            lambda s, g: fnd.fewest_measurements(
+            lambda s, g, gains=gains: fnd.fewest_measurements(
                 s,
                 claim="SPSA needs the fewest measurements among the thesis methods",
                 group=g,
                 method="spsa",
+                gains=gains,
             )
         ]
     return _Study(
