@@ -21,7 +21,7 @@ import functools
 import math
 import platform
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -54,6 +54,7 @@ from echocal.geometry import (
     tilt_normal,
     tilt_to_orientation,
 )
+from echocal.materials import WATER, Material
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
 from echocal.raytrace import _as_shapes, cast
@@ -163,6 +164,21 @@ class ReceiverSettings:
             raise EchocalValueError("noise.adc_bits: needs noise.full_scale (the ADC range)")
 
 
+def _check_materials(medium: Any, material: Any) -> None:
+    """The medium must be a fluid :class:`Material`; the part's a Material or None."""
+    if not isinstance(medium, Material):
+        raise EchocalValueError(f"medium must be a Material; got {type(medium).__name__}")
+    if not medium.is_fluid:
+        raise EchocalValueError(
+            f"medium: {medium.name!r} has a shear speed ({medium.shear_speed:g} m/s); "
+            "the coupling medium must be a fluid"
+        )
+    if material is not None and not isinstance(material, Material):
+        raise EchocalValueError(
+            f"material must be a Material or None; got {type(material).__name__}"
+        )
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
 class VirtualSetup(BaseSource):
     """The simulator: specimen + transducer + pulse + recording window + receiver.
@@ -175,7 +191,11 @@ class VirtualSetup(BaseSource):
     window : the receiver's recording window (fs [Hz], start [s], n_samples).
     receiver : noise, ADC and saturation settings.
     reference_position : [m] where the reference echo for the SNR is taken, shape (3,).
-    sound_speed : [m/s] c₀ of the medium.
+    sound_speed : [m/s] c₀ of the medium: the one sound speed of the simulation.
+    medium : the coupling fluid (density, attenuation; water at 20 °C by default); its
+        ``longitudinal_speed`` is set to ``sound_speed``, so the two never disagree.
+    material : the specimen's material; None: a perfect reflector (the thesis).  Neither
+        changes the ray models' echoes (the thesis's); the wave model uses them.
     reflection : reflection model, ``lambertian`` (thesis) or ``specular``.
     synthesis : A-scan synthesis method, ``fast`` (default) or ``direct`` (reference).
     limits : the virtual positioner's reachable poses.
@@ -190,6 +210,8 @@ class VirtualSetup(BaseSource):
     receiver: ReceiverSettings = field(default_factory=ReceiverSettings)
     reference_position: ArrayLike = (0.0, 0.0, 0.02)
     sound_speed: float = SOUND_SPEED_WATER
+    medium: Material = WATER
+    material: Material | None = None
     reflection: str = "lambertian"
     synthesis: str = "fast"
     limits: PositionerLimits = field(default_factory=PositionerLimits)
@@ -207,6 +229,10 @@ class VirtualSetup(BaseSource):
         reference = finite_array("reference_position", self.reference_position, shape_tail=(3,))
         object.__setattr__(self, "reference_position", reference.reshape(3))
         object.__setattr__(self, "sound_speed", positive_float("sound_speed", self.sound_speed))
+        _check_materials(self.medium, self.material)
+        if self.medium.longitudinal_speed != self.sound_speed:
+            medium = replace(self.medium, longitudinal_speed=self.sound_speed)
+            object.__setattr__(self, "medium", medium)
         lookup("reflection model", self.reflection, dict.fromkeys(reflection_model_names()))
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         object.__setattr__(self, "_generator", as_generator(self.rng))
