@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, NoReturn
 
 import numpy as np
+import pydantic
 from pydantic import (
     AfterValidator,
     BaseModel,
@@ -49,8 +50,6 @@ from pydantic import (
     ConfigDict,
     Field,
     ValidationError,
-    ValidationInfo,
-    field_validator,
 )
 
 from echocal.constants import DEFAULT_CENTER_FREQUENCY, SOUND_SPEED_WATER
@@ -174,9 +173,9 @@ Point = tuple[Position, Position, Position]
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    @field_validator("*", mode="before")
+    @pydantic.field_validator("*", mode="before")
     @classmethod
-    def _no_bool(cls, value: Any, info: ValidationInfo) -> Any:
+    def _no_bool(cls, value: Any, info: pydantic.ValidationInfo) -> Any:
         """``true`` where a number belongs is refused (pydantic would read it as 1)."""
         if isinstance(value, bool) and info.field_name is not None:
             annotation = cls.model_fields[info.field_name].annotation

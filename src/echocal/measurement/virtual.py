@@ -191,16 +191,16 @@ class VirtualSetup(BaseSource):
     window : the receiver's recording window (fs [Hz], start [s], n_samples).
     receiver : noise, ADC and saturation settings.
     reference_position : [m] where the reference echo for the SNR is taken, shape (3,).
-    sound_speed : [m/s] c₀ of the medium: the one sound speed of the simulation.
-    medium : the coupling fluid (density, attenuation; water at 20 °C by default); its
-        ``longitudinal_speed`` is set to ``sound_speed``, so the two never disagree.
-    material : the specimen's material; None: a perfect reflector (the thesis).  Neither
-        changes the ray models' echoes (the thesis's); the wave model uses them.
+    sound_speed : [m/s] c₀ of the medium.
     reflection : reflection model, ``lambertian`` (thesis) or ``specular``.
     synthesis : A-scan synthesis method, ``fast`` (default) or ``direct`` (reference).
     limits : the virtual positioner's reachable poses.
     rng : seed or Generator for the receiver noise (reproducible runs).
     name : label for logs and reports.
+    medium : the coupling fluid (density, attenuation; water at 20 °C by default); its
+        ``longitudinal_speed`` is set to ``sound_speed``, the one c₀ of the simulation.
+    material : the specimen's material; None: a perfect reflector (the thesis).  The
+        thesis's ray models do not use either.
     """
 
     specimen: Specimen
@@ -229,12 +229,12 @@ class VirtualSetup(BaseSource):
         reference = finite_array("reference_position", self.reference_position, shape_tail=(3,))
         object.__setattr__(self, "reference_position", reference.reshape(3))
         object.__setattr__(self, "sound_speed", positive_float("sound_speed", self.sound_speed))
+        lookup("reflection model", self.reflection, dict.fromkeys(reflection_model_names()))
+        lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         _check_materials(self.medium, self.material)
         if self.medium.longitudinal_speed != self.sound_speed:
             medium = replace(self.medium, longitudinal_speed=self.sound_speed)
             object.__setattr__(self, "medium", medium)
-        lookup("reflection model", self.reflection, dict.fromkeys(reflection_model_names()))
-        lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         object.__setattr__(self, "_generator", as_generator(self.rng))
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})
