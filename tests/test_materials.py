@@ -423,3 +423,45 @@ def test_virtual_setup_refuses_a_solid_medium():
         dataclasses.replace(setup, medium=STEEL)
     with pytest.raises(EchocalValueError, match="material must be a Material or None"):
         dataclasses.replace(setup, material="steel")
+
+
+# ---------------------------------------------------------------- command line
+def test_cli_material_list_and_show(capsys, monkeypatch):
+    import json
+
+    code, out, _ = run_main(["material", "list", "--json"], capsys, monkeypatch)
+    assert code == 0
+    rows = {row["name"]: row for row in json.loads(out)["materials"]}
+    assert set(rows) == set(material_names())
+    assert rows["steel"]["impedance_mrayl"] == pytest.approx(46.315, rel=1e-12)
+    assert rows["water"]["attenuation_db_per_mm_5mhz"] == pytest.approx(
+        0.0253 * 25 * 20 / math.log(10) / 1e3, rel=1e-12
+    )
+    code, out, _ = run_main(
+        ["material", "show", "STEEL", "--angles", "0,20,40", "--json"], capsys, monkeypatch
+    )
+    assert code == 0
+    report = json.loads(out)
+    r = (46.315e6 - 998.2 * 1482.3) / (46.315e6 + 998.2 * 1482.3)
+    assert report["normal_incidence"]["reflection"] == pytest.approx(r, rel=1e-12)
+    assert report["normal_incidence"]["back_wall_round_trip"] == pytest.approx(-r * (1 - r * r))
+    assert report["critical_angles_deg"]["shear"] == pytest.approx(27.317, abs=1e-3)
+    assert [row["angle_deg"] for row in report["oblique"]] == [0.0, 20.0, 40.0]
+    assert report["oblique"][2]["reflection_abs"] == pytest.approx(1.0, rel=1e-12)
+    assert report["oblique"][2]["refraction_shear_deg"] is None  # evanescent: NaN → null
+    code, out, _ = run_main(["material", "show", "aluminum"], capsys, monkeypatch)
+    assert code == 0 and "aluminium: ρ 2700 kg/m³" in out and "critical angles" in out
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (["unobtainium"], "unknown material 'unobtainium'; choose one of: acrylic"),
+        (["steel", "--medium", "steel"], "--medium: 'steel' is a solid"),
+        (["steel", "--angles", "10,95"], "--angles: incidence angles lie in [0, 90]"),
+    ],
+)
+def test_cli_material_show_refuses_bad_input_in_one_line(capsys, monkeypatch, args, expected):
+    code, _, err = run_main(["material", "show", *args], capsys, monkeypatch)
+    assert code == 2 and expected in " ".join(err.split()) and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
