@@ -61,50 +61,40 @@ ComplexArray = NDArray[np.complex128]
 
 
 class Transmission(NamedTuple):
-    """Fluid → solid transmission, each of the incidence angles' shape.
-
-    Attributes
-    ----------
-    longitudinal : T_L, complex stress amplitude of the refracted longitudinal wave per
-        unit incident pressure (2Z₂/(Z₁ + Z₂) at normal incidence).
-    shear : T_T, likewise for the mode-converted shear wave (0 at normal incidence and
-        in a fluid).
-    angle_longitudinal : [deg] refraction angle by Snell's law; NaN beyond the first
-        critical angle (evanescent wave).
-    angle_shear : [deg] likewise; NaN beyond the second critical angle or in a fluid.
-    """
+    """Fluid → solid transmission; each field has the incidence angles' shape."""
 
     longitudinal: ComplexArray
+    """T_L, complex stress amplitude of the refracted longitudinal wave per unit incident
+    pressure (2Z₂/(Z₁ + Z₂) at normal incidence)."""
     shear: ComplexArray
+    """T_T, likewise for the mode-converted shear wave (0 at normal incidence and in a
+    fluid)."""
     angle_longitudinal: FloatArray
+    """[deg] refraction angle by Snell's law; NaN beyond the first critical angle
+    (evanescent wave)."""
     angle_shear: FloatArray
+    """[deg] likewise; NaN beyond the second critical angle or in a fluid."""
 
 
 class SolidReflection(NamedTuple):
-    """Reflection of a longitudinal wave inside a solid at its interface with a fluid.
-
-    Attributes
-    ----------
-    longitudinal : R_LL, complex (−(Z₂ − Z₁)/(Z₂ + Z₁) at normal incidence: Z₂ solid).
-    shear : R_LT, the mode-converted shear wave.
-    angle_shear : [deg] the reflected shear wave's angle by Snell's law (NaN for c_T = 0).
-    """
+    """Reflection of a longitudinal wave inside a solid at its interface with a fluid."""
 
     longitudinal: ComplexArray
+    """R_LL, complex ((Z₁ − Z₂)/(Z₁ + Z₂) at normal incidence, Z₂ the solid's)."""
     shear: ComplexArray
+    """R_LT, the mode-converted shear wave."""
     angle_shear: FloatArray
+    """[deg] the reflected shear wave's angle by Snell's law (NaN for c_T = 0)."""
 
 
 class CriticalAngles(NamedTuple):
-    """Critical angles [deg] of incidence from a fluid; None where there is none.
-
-    ``longitudinal`` (first): beyond it the longitudinal wave is evanescent (needs
-    c_L > c_fluid).  ``shear`` (second): beyond it the shear wave is too, and the
-    reflection is total, |R| = 1 (needs c_T > c_fluid).
-    """
+    """Critical angles [deg] of incidence from a fluid; None where there is none."""
 
     longitudinal: float | None
+    """First: beyond it the longitudinal wave is evanescent (needs c_L > c_fluid)."""
     shear: float | None
+    """Second: beyond it the shear wave is too and the reflection is total, |R| = 1
+    (needs c_T > c_fluid)."""
 
 
 def _scalar_or_array(value: np.ndarray) -> np.ndarray:
