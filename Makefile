@@ -1,16 +1,17 @@
 # Two entry points, each sets itself up on a fresh machine (Python >= 3.11 with venv).
 #   make demo  — install, then run the main job (see README)
-#   make test  — install with test extras, lint (ruff), type-check (mypy), run the test suite
+#   make test  — install with test extras, lint (ruff), type-check (mypy), run the test
+#                suite, then build the documentation (make docs)
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 
-.PHONY: demo test setup lint typecheck clean
+.PHONY: demo test setup lint typecheck docs clean
 
 $(BIN)/echocal: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,fast]"
+	$(BIN)/python -m pip install --quiet -e ".[test,fast,docs]"
 	touch $(BIN)/echocal
 
 setup: $(BIN)/echocal
@@ -19,13 +20,20 @@ demo: setup
 	$(BIN)/echocal demo --out echocal-out/demo --overwrite
 
 lint: setup
-	$(BIN)/ruff check src tests $(wildcard benchmarks)
+	$(BIN)/ruff check src tests docs $(wildcard benchmarks)
 
 typecheck: setup
 	$(BIN)/mypy
 
 test: lint typecheck
 	$(BIN)/python -m pytest -n 2 --timeout=600
+	$(MAKE) docs
+
+# The documentation site (Sphinx): warnings are errors, every gallery example is executed.
+docs: setup
+	rm -rf docs/_build docs/api/generated docs/auto_examples
+	MPLBACKEND=Agg $(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
 
 clean:
-	rm -rf $(VENV) echocal-out
+	rm -rf $(VENV) echocal-out docs/_build docs/api/generated docs/auto_examples

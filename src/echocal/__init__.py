@@ -49,6 +49,21 @@ if TYPE_CHECKING:  # the same names, eagerly, for type checkers and IDEs
         tilt_normal,
         tilt_to_orientation,
     )
+    from echocal.materials import (
+        MATERIALS,
+        WATER,
+        Attenuation,
+        Material,
+        critical_angles,
+        material,
+        material_names,
+        reflection_fluid_solid,
+        reflection_normal,
+        reflection_solid_fluid,
+        transmission_fluid_solid,
+        transmission_normal,
+        transmission_solid_fluid,
+    )
     from echocal.measurement import (
         HardwareSource,
         MeasurementSource,
@@ -74,6 +89,19 @@ if TYPE_CHECKING:  # the same names, eagerly, for type checkers and IDEs
     from echocal.transducer import Transducer, make_directivity
 
 _LAZY: dict[str, str] = {
+    "MATERIALS": "echocal.materials",
+    "WATER": "echocal.materials",
+    "Attenuation": "echocal.materials",
+    "Material": "echocal.materials",
+    "critical_angles": "echocal.materials",
+    "material": "echocal.materials",
+    "material_names": "echocal.materials",
+    "reflection_fluid_solid": "echocal.materials",
+    "reflection_normal": "echocal.materials",
+    "reflection_solid_fluid": "echocal.materials",
+    "transmission_fluid_solid": "echocal.materials",
+    "transmission_normal": "echocal.materials",
+    "transmission_solid_fluid": "echocal.materials",
     "AScan": "echocal.ascan",
     "BudgetExhaustedError": "echocal.errors",
     "CalibrationResult": "echocal.calibrate",
@@ -134,10 +162,13 @@ except importlib.metadata.PackageNotFoundError:  # a source tree that was never 
 """The installed distribution's version (one source: ``pyproject.toml``)."""
 
 __all__ = [
+    "MATERIALS",
     "MM",
     "SOUND_SPEED_WATER",
     "US",
+    "WATER",
     "AScan",
+    "Attenuation",
     "BudgetExhaustedError",
     "CalibrationResult",
     "ConfigError",
@@ -149,6 +180,7 @@ __all__ = [
     "Hits",
     "InstrumentError",
     "LimitError",
+    "Material",
     "MeasurementSource",
     "Pose",
     "PositionerLimits",
@@ -165,11 +197,14 @@ __all__ = [
     "builtin_setup_names",
     "builtin_specimen",
     "cast",
+    "critical_angles",
     "evaluate_run",
     "get_metric",
     "load_setup",
     "make_directivity",
     "make_pulse",
+    "material",
+    "material_names",
     "method_names",
     "metric_names",
     "normal_to_orientation",
@@ -179,11 +214,17 @@ __all__ = [
     "pseudo_energy",
     "pulse_names",
     "record",
+    "reflection_fluid_solid",
+    "reflection_normal",
+    "reflection_solid_fluid",
     "specimen_names",
     "synthesize",
     "tilt_normal",
     "tilt_to_orientation",
     "time_of_flight",
+    "transmission_fluid_solid",
+    "transmission_normal",
+    "transmission_solid_fluid",
 ]
 
 

@@ -35,12 +35,14 @@ import importlib.resources
 import json
 import math
 import tomllib
+import typing
 import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any, Literal, NoReturn
 
 import numpy as np
+import pydantic
 from pydantic import (
     AfterValidator,
     BaseModel,
@@ -54,6 +56,8 @@ from pydantic import (
 from echocal.constants import DEFAULT_CENTER_FREQUENCY, SOUND_SPEED_WATER
 from echocal.echo import echo_model_names
 from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownNameError
+from echocal.material_config import LOC_TAGS, MaterialSpec, build_material
+from echocal.materials import Material
 from echocal.measurement.limits import PositionerLimits, limit_problems
 from echocal.measurement.virtual import (
     MAX_SIMULATED_SAMPLES,
@@ -115,7 +119,9 @@ def _quantity(
             value = parse_quantity(
                 "value", value, kind, _SI_UNIT[kind], allow_infinite=allow_infinite
             )
-        elif isinstance(value, bool) or not isinstance(value, int | float):
+        elif isinstance(value, bool):  # pydantic would read true as 1.0
+            raise ValueError(f"must be a number; got {str(value).lower()}")
+        elif not isinstance(value, int | float):
             return value  # the field reports the wrong type
         if not math.isfinite(value):
             return value
@@ -168,10 +174,26 @@ Point = tuple[Position, Position, Position]
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
+    @pydantic.field_validator("*", mode="before")
+    @classmethod
+    def _no_bool(cls, value: Any, info: pydantic.ValidationInfo) -> Any:
+        """``true`` where a number belongs is refused (pydantic would read it as 1)."""
+        if isinstance(value, bool) and info.field_name is not None:
+            annotation = cls.model_fields[info.field_name].annotation
+            if annotation is not bool and bool not in typing.get_args(annotation):
+                raise ValueError(f"must be a number; got {str(value).lower()}")
+        return value
+
 
 class MediumConfig(_Model):
-    """The coupling medium (sound speed 100 to 20 000 m/s)."""
+    """The coupling medium: a fluid ``material`` (water by default) and its sound speed.
 
+    ``sound_speed`` (100 to 20 000 m/s), when given, wins over the material's (a measured
+    water temperature); else a ``material`` given names its speed; with neither, the
+    thesis's c₀ = 1480 m/s applies (water's density and attenuation still do).
+    """
+
+    material: MaterialSpec = "water"
     sound_speed: Speed = SOUND_SPEED_WATER
 
 
@@ -206,6 +228,8 @@ class SpecimenConfig(_Model):
     mesh: str | None = None
     mesh_scale: float = Field(default=1.0, gt=0)
     name: str | None = None
+    material: MaterialSpec | None = None
+    """The part's material; None: a perfect reflector (the thesis)."""
 
 
 class DirectivityConfig(_Model):
@@ -556,7 +580,13 @@ def _build_parts(
         if part is not None and not found:
             parts[section] = part
 
-    c0 = config.medium.sound_speed
+    run("medium", lambda: _build_medium(config.medium))
+    medium = parts.get("medium")
+    c0 = medium.longitudinal_speed if medium is not None else config.medium.sound_speed
+    if "specimen" not in invalid and config.specimen.material is not None:
+        material, found = build_material("specimen.material", config.specimen.material)
+        problems.extend(found)
+        parts["material"] = material
     run("pulse", lambda: _build_pulse(config.pulse, base_dir))
     pulse = parts.get("pulse")
     # the piston's default frequency is the pulse's; a broken pulse leaves the default
@@ -581,6 +611,21 @@ def _build_parts(
     if "specimen" in parts and "positioner" in parts:
         problems.extend(_reference_problems(parts["specimen"], config.positioner))
     return parts, problems
+
+
+def _build_medium(config: MediumConfig) -> tuple[Material | None, list[str]]:
+    """The medium's fluid, with the sound speed in effect (see :class:`MediumConfig`)."""
+    medium, problems = build_material("medium.material", config.material)
+    if medium is None:
+        return None, problems
+    if not medium.is_fluid:
+        return None, [
+            f"medium.material: {medium.name!r} is a solid (shear_speed {medium.shear_speed:g} "
+            "m/s); the coupling medium must be a fluid (shear_speed 0)"
+        ]
+    if "sound_speed" in config.model_fields_set or "material" not in config.model_fields_set:
+        medium = dataclasses.replace(medium, longitudinal_speed=config.sound_speed)
+    return medium, []
 
 
 def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
@@ -653,7 +698,9 @@ def _assemble(config: SetupConfig, parts: dict[str, Any], seed: int | None) -> V
             window=parts["window"],
             receiver=parts["noise"],
             reference_position=config.positioner.reference_position,
-            sound_speed=config.medium.sound_speed,
+            sound_speed=parts["medium"].longitudinal_speed,
+            medium=parts["medium"],
+            material=parts.get("material"),
             reflection=config.echo.reflection,
             synthesis=config.echo.synthesis,
             wave_spacing=config.echo.spacing,
@@ -680,7 +727,8 @@ def _format_errors(
     """One line per pydantic error: ``field.path: message, got value`` (``hint`` for typos)."""
     lines = []
     for item in error.errors():
-        where = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        parts = [str(part) for part in item["loc"] if part not in LOC_TAGS]
+        where = ".".join(parts) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
             message = f"unknown key (check the spelling; {hint})"

@@ -40,6 +40,23 @@ _SCALES: dict[str, dict[str, float]] = {
     "frequency": {"hz": 1.0, "khz": 1e3, "mhz": 1e6, "ghz": 1e9},
     "speed": {"m/s": 1.0, "mm/us": 1e3, "mm/µs": 1e3},
     "angle": {"deg": 1.0, "°": 1.0, "rad": 180.0 / math.pi},
+    "density": {
+        "kg/m3": 1.0,
+        "kg/m^3": 1.0,
+        "kg/m³": 1.0,
+        "g/cm3": 1e3,
+        "g/cm^3": 1e3,
+        "g/cm³": 1e3,
+    },
+    # amplitude attenuation; 1 dB = 1/NEPER_TO_DB Np (20·log10(e) ≈ 8.686 dB per neper)
+    "attenuation": {
+        "np/m": 1.0,
+        "np/cm": 1e2,
+        "np/mm": 1e3,
+        "db/m": math.log(10.0) / 20.0,
+        "db/cm": 1e2 * math.log(10.0) / 20.0,
+        "db/mm": 1e3 * math.log(10.0) / 20.0,
+    },
 }
 _NUMBER_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\s\d].*)?\s*$")
 _INFINITY = re.compile(r"^\s*([-+]?(?:inf|infinity))\s*([^\s\d].*)?\s*$", re.IGNORECASE)
@@ -59,7 +76,8 @@ def parse_quantity(
     ----------
     field : name used in error messages, e.g. ``"transducer.width"``.
     text : ``"12.7 mm"``, ``"5MHz"``, ``0.02`` (a bare number is in ``default_unit``).
-    kind : one of ``length``, ``time``, ``frequency``, ``speed``, ``angle``.
+    kind : one of ``length``, ``time``, ``frequency``, ``speed``, ``angle``, ``density``
+        (kg/m3, g/cm3), ``attenuation`` (Np/m, dB/mm, ...: amplitude attenuation).
     default_unit : unit of a bare number, e.g. ``"mm"`` on the CLI, ``"m"`` in files.
     allow_infinite : accept ``inf``/``-inf`` (also as text, ``"inf"``, ``"-inf mm"``), e.g.
         for the limits of an unlimited axis.  NaN is always refused.

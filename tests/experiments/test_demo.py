@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import io
 import json
 
 import pytest
+from rich.console import Console
 from typer.testing import CliRunner
 
 from echocal.cli import app
@@ -14,7 +16,9 @@ from echocal.experiments.demo import run_demo
 
 def test_demo_quick_end_to_end(tmp_path):
     out = tmp_path / "demo"
-    result = run_demo(out, quick=True, progress=False)
+    printed = io.StringIO()
+    console = Console(file=printed, width=120, color_system=None)
+    result = run_demo(out, quick=True, progress=True, console=console)
     page = result.report.read_text()
     assert result.report == out / "report.html"
     assert "table-7: all methods compared" in page and "sweep quick-reduced" in page
@@ -23,6 +27,17 @@ def test_demo_quick_end_to_end(tmp_path):
         "thesis presets (Table 7)",
         "echocal automatic gains",
     ]
+    # every verdict that does not agree says why, in the file, the page and the console
+    lines = printed.getvalue().splitlines()
+    disagree = [f for f in meta["findings"] if not f["agrees"]]
+    assert all(f["why"] for f in disagree)
+    for f in disagree:
+        assert f"why: {f['why']}" in page.replace("&#x27;", "'")
+    for i, line in enumerate(lines):
+        if "does not agree" in line:
+            assert lines[i + 1].strip().startswith("why:"), lines[i : i + 2]
+    # ... and the last thing printed is where the report is
+    assert lines[-1].startswith(f"report: {(out / 'report.html').resolve()}")
     # the sweep summary covers every configuration of quick.toml: 4 methods x 2 SNRs
     assert len(result.sweep_summary) == 8
     # an existing demo folder is never overwritten silently (Python and CLI)

@@ -275,6 +275,9 @@ class FunctionObjective(Objective):
     rng : seed or Generator for the noise.
     optimum : [deg], shape (2,), the known maximizer if any (for error reports).
     noise_floor : [energy units] f far from the peak, if known (e.g. 0 for a peak on zero).
+
+    Notes
+    -----
     Other keywords as :class:`Objective`.
     """
 

@@ -50,6 +50,7 @@ _COMMAND_MODULES = (
     "echocal.cli.calibrate",
     "echocal.cli.methods",
     "echocal.cli.setup",
+    "echocal.cli.material",
     "echocal.cli.record",
     "echocal.cli.instrument",
     "echocal.cli.scan",

@@ -83,8 +83,10 @@ def register(app: typer.Typer) -> None:
                 for f in result.findings:
                     mark = "[green]agrees[/]" if f.agrees else "[red]does not agree[/]"
                     group_text = f" [{f.group}]" if f.group else ""
+                    why = f"\n    why: {escape(f.why)}" if f.why else ""
                     console.print(
-                        f"  {mark}{escape(group_text)} {escape(f.claim)}\n    {escape(f.evidence)}",
+                        f"  {mark}{escape(group_text)} {escape(f.claim)}\n    {escape(f.evidence)}"
+                        + why,
                         highlight=False,
                     )
         if json_output:

@@ -18,6 +18,11 @@ import typer
 
 _UNITS = {
     "sound_speed": "m/s",
+    "density": "kg/m3",
+    "longitudinal_speed": "m/s",
+    "shear_speed": "m/s",
+    "alpha0": "Np/m",
+    "f_ref": "Hz",
     "center": "m",
     "width": "m",
     "height": "m",
@@ -74,6 +79,7 @@ def resolved_setup(name_or_path: str) -> tuple[dict[str, Any], str]:
 
     config, base_dir, setup = load_setup_with_config(name_or_path)
     data = config.model_dump(mode="python")
+    data["medium"]["sound_speed"] = setup.sound_speed  # in effect (the material's or given)
     data["specimen"] = _specimen(config, base_dir, setup.specimen.name)
     data["transducer"]["height"] = setup.transducer.height
     data["transducer"]["n_v"] = setup.transducer.n_v
@@ -100,6 +106,9 @@ def _specimen(config: Any, base_dir: Path, resolved_name: str) -> dict[str, Any]
         out["mesh"] = str(mesh if mesh.is_absolute() else (base_dir / mesh).resolve())
         out["mesh_scale"] = spec.mesh_scale
     out["name"] = spec.name if spec.name is not None else Default(resolved_name)
+    if spec.material is not None:
+        material = spec.material
+        out["material"] = material if isinstance(material, str) else material.model_dump()
     if spec.shapes is not None:
         out["shapes"] = []
         for i, shape in enumerate(spec.shapes):

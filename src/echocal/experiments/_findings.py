@@ -17,6 +17,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 __all__ = ["Finding"]
@@ -28,7 +29,9 @@ class Finding:
 
     claim : the thesis's statement; criterion : how we measure it;
     agrees : whether our runs agree; evidence : one sentence with the numbers;
-    group : the sub-study (e.g. "thesis gains") it was tested on.
+    group : the sub-study (e.g. "thesis gains") it was tested on;
+    why : where our runs do not agree, the reason in plain words, read from the same
+        numbers ("" when they agree or no reason can be read from them).
     """
 
     claim: str
@@ -36,6 +39,7 @@ class Finding:
     agrees: bool
     evidence: str
     group: str = ""
+    why: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready dict."""
@@ -171,8 +175,13 @@ def diverges_far(summary: pd.DataFrame, *, claim: str, group: str, near_max: flo
     )
 
 
-def fewest_measurements(summary: pd.DataFrame, *, claim: str, group: str, method: str) -> Finding:
-    """``method`` has the fewest median measurements to 90 % among the thesis methods."""
+def fewest_measurements(
+    summary: pd.DataFrame, *, claim: str, group: str, method: str, gains: str = "these gains"
+) -> Finding:
+    """``method`` has the fewest median measurements to 90 % among the thesis methods.
+
+    gains : how the group's gains are named in the explanation (e.g. "the thesis's gains").
+    """
     thesis = summary[~summary["beyond_thesis"]]
     best = thesis["measurements_to_90pct"].min()
     own = float(thesis[thesis["method"] == method]["measurements_to_90pct"].iloc[0])
@@ -187,6 +196,67 @@ def fewest_measurements(summary: pd.DataFrame, *, claim: str, group: str, method
         agrees=bool(ok),
         evidence=f"measurements to 90 %: {detail}.",
         group=group,
+        why="" if ok else _why_not_fewest(summary, method, gains),
+    )
+
+
+def _why_not_fewest(summary: pd.DataFrame, method: str, gains: str) -> str:
+    """Plain words: why ``method`` is not the cheapest to 90 % (read from ``summary``'s rows)."""
+    thesis = summary[~summary["beyond_thesis"]]
+    reached = thesis[np.isfinite(thesis["measurements_to_90pct"].astype(float))]
+    if reached.empty:
+        return _why_stalled(thesis, gains) + _beyond(summary[summary["beyond_thesis"]])
+    own = thesis[thesis["method"] == method].iloc[0]
+    fastest = reached.loc[reached["measurements_to_90pct"].astype(float).idxmin()]
+    if not math.isfinite(own["measurements_to_90pct"]):
+        return (
+            f"With {gains}, {own['label']} never reached 90 % of the optimal echo energy (median "
+            f"final error {own['final_error_deg']:.1f}°), while {fastest['label']} did after "
+            f"{fastest['measurements_to_90pct']:g} measurements."
+        )
+    ratio = own["iterations_to_90pct"] / fastest["iterations_to_90pct"]
+    cause = (
+        f"{own['label']} spends fewer measurements per iteration than a finite-difference "
+        "gradient (2 instead of 4: in two angles it can save at most half), but it estimates "
+        "the gradient along only one random direction per iteration, so its steps are less "
+        "direct: it"
+        if method == "spsa"
+        else own["label"]
+    )
+    return (
+        f"{cause} needed {own['iterations_to_90pct']:g} iterations "
+        f"({own['measurements_to_90pct']:g} measurements) to reach 90 % of the optimal echo "
+        f"energy, {ratio:.1f}× the "
+        f"{fastest['iterations_to_90pct']:g} iterations ({fastest['measurements_to_90pct']:g} "
+        f"measurements) of {fastest['label']}."
+    )
+
+
+def _why_stalled(rows: pd.DataFrame, gains: str) -> str:
+    """Plain words for 'no configuration reached 90 %': how little the estimates moved."""
+    start = float(rows["initial_error_deg"].median())
+    ends = rows["final_error_deg"].astype(float)
+    near, far = rows.loc[ends.idxmin()], rows.loc[ends.idxmax()]
+    budget = float(rows["n_measurements"].max())
+    return (
+        f"None of the {len(rows)} thesis methods reached 90 % of the optimal echo energy, so "
+        f"none can be called the fastest: with {gains} the estimates move too little per "
+        f"iteration on this setup. Starting "
+        f"{start:.1f}° from the optimum, the median runs ended between "
+        f"{near['final_error_deg']:.1f}° ({near['label']}) and {far['final_error_deg']:.1f}° "
+        f"({far['label']}) from it, after up to {budget:g} measurements."
+    )
+
+
+def _beyond(rows: pd.DataFrame) -> str:
+    """' On the same runs, X reached 90 % after N measurements.' for the best such row."""
+    m = rows["measurements_to_90pct"].astype(float) if len(rows) else pd.Series(dtype=float)
+    if not np.isfinite(m).any():
+        return ""
+    best = rows.loc[m.idxmin()]
+    return (
+        f" On the same setup and starts, {best['label']} reached it after "
+        f"{best['measurements_to_90pct']:g} measurements."
     )
 
 

@@ -133,6 +133,8 @@ def write_summary(
             f"  - criterion: {f.criterion}",
             f"  - evidence: {f.evidence}",
         ]
+        if f.why:
+            lines.append(f"  - why: {f.why}")
     if notes:
         lines += ["", "## Notes", "", *[f"- {n}" for n in notes]]
     for name, frame in tables.items():

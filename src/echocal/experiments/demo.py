@@ -109,7 +109,10 @@ def run_demo(
             console.print(
                 f"  {mark} {escape(f'[{f.group}]')} {escape(f.claim)}: {escape(f.evidence)}",
                 highlight=False,
+                soft_wrap=True,
             )
+            if f.why:
+                console.print(f"    [bold]why:[/] {escape(f.why)}", highlight=False, soft_wrap=True)
         console.print(f"[bold]sweep[/] {sweep.spec.name}: {len(sweep.runs)} runs")
         for row in summary.itertuples():
             console.print(
@@ -118,7 +121,12 @@ def run_demo(
                 f", p90 {_count(row.p90_measurements_to_tol)} measurements",
                 highlight=False,
             )
-        console.print(f"[bold]report[/] {report}  (total {wall:.1f} s)")
+        console.print(
+            f"[bold]report:[/] {escape(str(report.resolve()))}  (open it in a browser; "
+            f"results in {escape(str(out.resolve()))}, total {wall:.1f} s)",
+            highlight=False,
+            soft_wrap=True,
+        )
     return DemoResult(
         report=report, scenario=scenario, sweep_dir=sweep_dir, sweep_summary=summary, wall_time=wall
     )

@@ -99,7 +99,9 @@ def _finding_html(f: dict[str, Any]) -> str:
     return (
         f'<div class="finding">{badge}{group} <b>{html.escape(f["claim"])}</b><br>'
         f'<span class="small">criterion: {html.escape(f["criterion"])}</span><br>'
-        f"evidence: {html.escape(f['evidence'])}</div>"
+        f"evidence: {html.escape(f['evidence'])}"
+        + (f"<br>why: {html.escape(f['why'])}" if f.get("why") else "")
+        + "</div>"
     )
 
 

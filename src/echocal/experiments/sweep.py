@@ -88,6 +88,8 @@ class _Model(BaseModel):
 class MethodSpec(_Model):
     """One calibration method of a sweep.
 
+    Attributes
+    ----------
     name : a method of :func:`echocal.calibrate.method_names`.
     preset : optional preset (``"thesis"``, ``"thesis-table-4"``, ...) giving default options.
     options : option -> value, or a list of values (a grid axis; axes are crossed).

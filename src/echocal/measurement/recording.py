@@ -485,6 +485,8 @@ def record(
         partial recording made with another grid/repeats/source.  A compatible partial
         recording is resumed.
 
+    Notes
+    -----
     A simulator's grid is checked first (:func:`simulation_errors` at the centre and
     corner orientations of every position): a probe inside the specimen, or a window
     that cannot contain the echo at any checked orientation of a position, is refused

@@ -21,7 +21,7 @@ import functools
 import math
 import platform
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -55,6 +55,7 @@ from echocal.geometry import (
     tilt_normal,
     tilt_to_orientation,
 )
+from echocal.materials import WATER, Material
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
 from echocal.raytrace import _as_shapes, cast
@@ -164,6 +165,21 @@ class ReceiverSettings:
             raise EchocalValueError("noise.adc_bits: needs noise.full_scale (the ADC range)")
 
 
+def _check_materials(medium: Any, material: Any) -> None:
+    """The medium must be a fluid :class:`Material`; the part's a Material or None."""
+    if not isinstance(medium, Material):
+        raise EchocalValueError(f"medium must be a Material; got {type(medium).__name__}")
+    if not medium.is_fluid:
+        raise EchocalValueError(
+            f"medium: {medium.name!r} has a shear speed ({medium.shear_speed:g} m/s); "
+            "the coupling medium must be a fluid"
+        )
+    if material is not None and not isinstance(material, Material):
+        raise EchocalValueError(
+            f"material must be a Material or None; got {type(material).__name__}"
+        )
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
 class VirtualSetup(BaseSource):
     """The simulator: specimen + transducer + pulse + recording window + receiver.
@@ -184,6 +200,10 @@ class VirtualSetup(BaseSource):
     limits : the virtual positioner's reachable poses.
     rng : seed or Generator for the receiver noise (reproducible runs).
     name : label for logs and reports.
+    medium : the coupling fluid (density, attenuation; water at 20 °C by default); its
+        ``longitudinal_speed`` is set to ``sound_speed``, the one c₀ of the simulation.
+    material : the specimen's material; None: a perfect reflector (the thesis).  The
+        thesis's ray models do not use either.
     """
 
     specimen: Specimen
@@ -193,6 +213,8 @@ class VirtualSetup(BaseSource):
     receiver: ReceiverSettings = field(default_factory=ReceiverSettings)
     reference_position: ArrayLike = (0.0, 0.0, 0.02)
     sound_speed: float = SOUND_SPEED_WATER
+    medium: Material = WATER
+    material: Material | None = None
     reflection: str = "lambertian"
     synthesis: str = "fast"
     wave_spacing: float | None = None
@@ -222,6 +244,10 @@ class VirtualSetup(BaseSource):
                 "'circular'); rectangular probes use the ray models lambertian or specular"
             )
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
+        _check_materials(self.medium, self.material)
+        if self.medium.longitudinal_speed != self.sound_speed:
+            medium = replace(self.medium, longitudinal_speed=self.sound_speed)
+            object.__setattr__(self, "medium", medium)
         object.__setattr__(self, "_generator", as_generator(self.rng))
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})

@@ -22,7 +22,7 @@ _MAX_POINTS = 1_000_000
 
 
 def axis_values(name: str, first: float, last: float, step: float) -> FloatArray:
-    """Values ``first, first + step, ... <= last`` [m] (``last`` included up to rounding).
+    """Values ``first``, ``first + step``, … up to ``last`` [m] (included up to rounding).
 
     ``first == last`` gives the single value; ``last < first`` or ``step <= 0`` is refused.
     """

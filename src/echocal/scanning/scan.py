@@ -471,6 +471,8 @@ def scan_surface(
         stored (nothing measured) unless ``overwrite``.
     log : called with one line of news (resuming, already finished).
 
+    Notes
+    -----
     Whole-run mistakes (:func:`check_scan`) are refused before anything is written.
     """
     check_scan(

@@ -66,6 +66,8 @@ class TriangleMesh(Shape):
         least ``EMBREE_MIN_FACES`` faces, numpy otherwise.
     name : label used in plots and reports.
 
+    Notes
+    -----
     Zero-area faces are dropped with a warning; a mesh with no faces left is a
     :class:`~echocal.errors.GeometryError`.  Normals are the faces' geometric
     normals (``(v1 − v0) × (v2 − v0)``, unit), flipped to face the ray.
