@@ -20,7 +20,7 @@ from __future__ import annotations
 import functools
 import math
 import platform
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
@@ -352,18 +352,19 @@ class VirtualSetup(BaseSource):
         )
 
     @property
-    def _medium_attenuation(self):
-        """α(f) [Np/m] of the coupling medium, or None (lossless)."""
-        medium = getattr(self, "medium", None)
-        return None if medium is None else medium.attenuation.alpha
+    def _medium_attenuation(self) -> Callable[[FloatArray], FloatArray] | None:
+        """α(f) [Np/m] of the coupling medium, or None when it is lossless."""
+        attenuation = self.medium.attenuation
+        return None if attenuation.alpha0 == 0.0 else attenuation.alpha
 
     @property
-    def _reflection_coefficient(self):
-        """R(θ [deg]) of the specimen's material, or None (a perfect reflector)."""
-        material = getattr(self, "material", None)
+    def _reflection_coefficient(self) -> Callable[[FloatArray], NDArray[np.complex128]] | None:
+        """R(θ [deg]) of the specimen's material against the medium, or None (a perfect
+        reflector, the thesis's assumption)."""
+        material = self.material
         if material is None:
             return None
-        from echocal.materials import reflection_fluid_solid
+        from echocal.coefficients import reflection_fluid_solid
 
         medium = self.medium
         return lambda theta: reflection_fluid_solid(theta, medium, material)

@@ -31,8 +31,8 @@ fan so that the cut-off edge does not diffract.
 
 **Materials.** Rₛ is the specimen's plane-wave reflection coefficient at the local angle
 of incidence (1 for a perfect reflector); the medium's attenuation α(f) multiplies the
-spectrum by exp(−α(f)·L̄) with L̄ the echo's mean two-way path, which lowers the centre
-frequency as it should.
+spectrum by exp(−α(f)·c·t̂), c·t̂ the path travelled by the echo's envelope peak, which
+lowers the centre frequency as it should.
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from functools import cached_property
 
 import numpy as np
 import scipy.fft
+import scipy.signal
 from numpy.typing import NDArray
 
 from echocal.raytrace import _cast_soa
@@ -270,8 +271,12 @@ class WaveEchoModel:
             spectrum += factor * scipy.fft.rfft(grid)
         spectrum *= self._transfer
         if self.attenuation is not None and path_w > 0.0:
-            two_way_path = c * path_t / path_w
-            spectrum *= np.exp(-np.asarray(self.attenuation(self._frequencies)) * two_way_path)
+            # every contribution arriving at two-way time t has travelled c·t in the medium:
+            # the echo is attenuated over the path c·t of its envelope peak
+            echo = scipy.fft.irfft(spectrum, n=n_fft)
+            analytic = scipy.signal.hilbert(echo)
+            t_echo = t0 + dt * float(np.argmax(np.abs(analytic)))
+            spectrum *= np.exp(-np.asarray(self.attenuation(self._frequencies)) * c * t_echo)
         x = m * scipy.fft.irfft(spectrum, n=m * n_fft)
         start = pad * m
         return x[start : start + self.window.n_samples]
