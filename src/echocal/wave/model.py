@@ -62,6 +62,8 @@ _TAPER = 0.25
 """Fraction of the fan's radius over which the surface weights fall smoothly to zero."""
 _GRID_OVERSAMPLING = 5.0
 _FRESNEL_MARGIN = 1.0
+_SPACING_WAVELENGTHS = 2.7
+"""Default surface-sample spacing, in wavelengths at the pulse's centre frequency."""
 _SPREAD = 2.5
 """The fan reaches this many Fresnel-zone widths √(λd) beyond the probe's rim."""
 """The correlation grid samples at least this many times the pulse's highest frequency."""
@@ -80,9 +82,10 @@ class WaveEchoModel:
     attenuation : α(f) [Np/m] of the medium at frequencies f [Hz], or None (lossless).
     reflection : R(θ) (complex, pressure) of the specimen at incidence angles θ [deg], or
         None for a perfect reflector (R = 1).
-    spacing : [m] target distance between surface samples at the surface; None: two
-        wavelengths at the pulse's centre frequency (measured: the echo's envelope peak
-        changes by < 0.1 % from 0.3 mm to 0.6 mm spacing at 5 MHz, tilts 0–2°).
+    spacing : [m] target distance between surface samples at the surface; None: 2.7
+        wavelengths at the pulse's centre frequency (0.8 mm at 5 MHz: measured against the
+        exact angular spectrum, the tilt lobe stays within 0.5 % of its peak at 10–150 mm
+        and tilts 0.25–2° for 3 and 12.7 mm probes; 1.0 mm gives up to 1.2 %).
     """
 
     probe: PistonProbe
@@ -102,7 +105,7 @@ class WaveEchoModel:
     def _sample_spacing(self) -> float:
         if self.spacing is not None:
             return float(self.spacing)
-        return 2.0 * self._wavelength
+        return _SPACING_WAVELENGTHS * self._wavelength
 
     @cached_property
     def _grid(self) -> tuple[int, float, int, int]:

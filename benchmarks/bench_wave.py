@@ -1,0 +1,194 @@
+"""Wave-model benchmark: its cost against the thesis ray model and a brute-force reference.
+
+Run from the repository root::
+
+    python benchmarks/bench_wave.py            # full run (a few minutes on 2 cores)
+    python benchmarks/bench_wave.py --quick    # fewer repeats, cheaper reference (CI: --smoke)
+
+Measured in one process, as ratios (issue 13):
+
+1. one noiseless A-scan at the ``immersion-5mhz`` defaults (12.7 mm 5 MHz probe, 50 mm
+   water path, 4096 samples at 100 MHz) on the wave model against the same setup on the
+   thesis's lambertian ray model;
+2. the wave model against a brute-force double Rayleigh integral over the probe's face and
+   its mirror image (tests/physics/references.py, written independently of echocal) for a
+   piston over a plane tilted 0.5° at 10 mm, the broadband echo's envelope peak from both
+   (their agreement and the speed ratio);
+3. the wave model's cost against its number of surface samples (the slope of a log–log fit:
+   1 is linear), varying the sample spacing;
+4. the figure of the README's physics section: the lobe of both models beside the piston's
+   analytic limits (docs/physics-lobe.png, full runs only).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import scipy.signal  # noqa: E402
+from _common import fmt_time, machine_info, measure  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "physics"))
+import references as ref  # noqa: E402
+
+from echocal import load_setup  # noqa: E402
+from echocal.geometry import tilt_frame  # noqa: E402
+from echocal.signal.pulses import GaborPulse  # noqa: E402
+from echocal.signal.window import RecordingWindow  # noqa: E402
+from echocal.specimen.builtins import builtin_specimen  # noqa: E402
+from echocal.wave import PistonProbe, WaveEchoModel  # noqa: E402
+
+C = 1480.0
+
+
+def ray_vs_wave(repeats: int) -> dict[str, float]:
+    """Seconds per noiseless A-scan of immersion-5mhz, both models, near the optimum."""
+    ray = load_setup("immersion-5mhz")
+    wave = dataclasses.replace(ray, reflection="wave")
+    pos = ray.reference_position[None]
+    frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
+    t_ray = measure(lambda: ray.ideal_samples(pos, frames), repeats=20 * repeats, warmup=3)
+    t_wave = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+    return {
+        "ray_s": t_ray.median,
+        "wave_s": t_wave.median,
+        "ratio": t_wave.median / t_ray.median,
+    }
+
+
+def _envelope(x: np.ndarray) -> float:
+    return float(np.abs(scipy.signal.hilbert(x)).max())
+
+
+def wave_vs_rayleigh(accuracy: float, n_freq: int) -> dict[str, float]:
+    """The broadband echo of a 12.7 mm probe over a plane tilted 0.5° at 10 mm."""
+    a, d, tilt = 6.35e-3, 0.010, 0.5
+    pulse = GaborPulse(center_frequency=5e6, bandwidth=60)
+    sigma_t = 1.0 / math.sqrt(2.0 * pulse.alpha)
+    window = RecordingWindow(fs=100e6, start=2 * d / C - 4e-6, n_samples=1024)
+    model = WaveEchoModel(probe=PistonProbe(radius=a), pulse=pulse, window=window, sound_speed=C)
+    plane = tuple(builtin_specimen("flat-plate"))
+    pos = np.array([[0.0, 0.0, d]])
+
+    def wave_ratio() -> float:
+        tilted = model.ascans(plane, pos, tilt_frame(np.array([tilt]), np.array([0.0])))[0]
+        normal = model.ascans(plane, pos, tilt_frame(np.array([0.0]), np.array([0.0])))[0]
+        return _envelope(tilted) / _envelope(normal)
+
+    t_wave = measure(wave_ratio, repeats=3, warmup=1)
+    freqs = np.linspace(1.5e6, 8.5e6, n_freq)
+    spectrum = ref.gabor_spectrum(freqs, 5e6, sigma_t)
+
+    def rayleigh_ratio() -> float:
+        v = np.array(
+            [
+                ref.pulse_echo_plane_rayleigh(a, f, d, [tilt, 0.0], C, accuracy=accuracy)
+                for f in freqs
+            ]
+        )
+        peaks = ref.pulse_echo_envelope_peak(v, freqs, spectrum)
+        return float(peaks[0] / peaks[1])
+
+    start = time.perf_counter()
+    brute = rayleigh_ratio()
+    t_brute = time.perf_counter() - start
+    got = wave_ratio()
+    return {
+        "wave_s": t_wave.median,
+        "rayleigh_s": t_brute,
+        "speedup": t_brute / t_wave.median,
+        "wave_relative_echo": got,
+        "rayleigh_relative_echo": brute,
+        "relative_difference": got / brute - 1.0,
+        "frequencies": float(n_freq),
+    }
+
+
+def scaling(repeats: int) -> dict[str, object]:
+    """Cost against the number of surface samples (spacing 0.4 … 1.2 mm)."""
+    base = dataclasses.replace(load_setup("immersion-5mhz"), reflection="wave")
+    pos = base.reference_position[None]
+    frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
+    rows = []
+    for spacing in (0.4e-3, 0.6e-3, 0.8e-3, 1.2e-3):
+        setup = dataclasses.replace(base, wave_spacing=spacing)
+        model = setup.wave_model
+        from echocal.raytrace import _as_shapes
+
+        samples = int(
+            np.count_nonzero(
+                model.surface_samples(_as_shapes(setup.specimen), pos[0], frames[0])[2]
+            )
+        )
+        t = measure(lambda s=setup: s.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+        rows.append((spacing, samples, t.median))
+    n = np.log([r[1] for r in rows])
+    t = np.log([r[2] for r in rows])
+    slope = float(np.polyfit(n, t, 1)[0])
+    return {"rows": rows, "slope": slope}
+
+
+def lobe_figure(path: Path) -> dict[str, float]:
+    from echocal.lobe import echo_lobe
+    from echocal.plots import save_figure
+    from echocal.plots.lobe import plot_lobe
+
+    ray = load_setup("immersion-5mhz")
+    lobes = [echo_lobe(ray), echo_lobe(dataclasses.replace(ray, reflection="wave"))]
+    save_figure(
+        plot_lobe(lobes, title="immersion-5mhz: echo lobe of the ray and wave models"), path
+    )
+    return {lobe.model: lobe.minus6db_deg for lobe in lobes}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats, cheaper reference")
+    parser.add_argument("--smoke", action="store_true", help="one repeat of everything cheap")
+    parser.add_argument("--json", type=Path, help="write every number to this file")
+    args = parser.parse_args()
+    cheap = args.quick or args.smoke
+    repeats = 1 if args.smoke else (3 if args.quick else 7)
+    result: dict[str, object] = {"machine": machine_info(("numpy", "scipy", "numba"))}
+    speed = ray_vs_wave(repeats)
+    result["ray_vs_wave"] = speed
+    print(
+        f"HEADLINE one A-scan, immersion-5mhz: ray {fmt_time(speed['ray_s'])}, wave "
+        f"{fmt_time(speed['wave_s'])}: the wave model costs {speed['ratio']:.1f}x the ray model"
+    )
+    brute = wave_vs_rayleigh(accuracy=0.5 if cheap else 1.0, n_freq=8 if args.smoke else 24)
+    result["wave_vs_rayleigh"] = brute
+    print(
+        f"HEADLINE 0.5 deg tilt at 10 mm: wave {fmt_time(brute['wave_s'])}, brute-force "
+        f"Rayleigh {fmt_time(brute['rayleigh_s'])} ({brute['speedup']:.0f}x); relative echo "
+        f"{brute['wave_relative_echo']:.4f} vs {brute['rayleigh_relative_echo']:.4f} "
+        f"({100 * brute['relative_difference']:+.2f} %)"
+    )
+    if not args.smoke:
+        scale = scaling(repeats)
+        result["scaling"] = scale
+        for spacing, samples, seconds in scale["rows"]:  # type: ignore[union-attr]
+            print(f"  spacing {1e3 * spacing:.1f} mm: {samples} samples, {fmt_time(seconds)}")
+        print(f"HEADLINE cost ~ samples^{scale['slope']:.2f} (1 = linear)")
+    if not cheap:
+        widths = lobe_figure(ROOT / "docs" / "physics-lobe.png")
+        result["minus6db_deg"] = widths
+        print(f"HEADLINE -6 dB half-widths: {widths}")
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=2, default=float), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
