@@ -254,10 +254,10 @@ class WaveEchoModel:
         ]
         if reflection is not None and np.any(reflection.imag != 0.0):
             parts.append((weights * reflection.imag, -1j))  # e^{−iωt} phase → numpy's
-        path_t, path_w = 0.0, 0.0
+        path_w = 0.0
         for w, factor in parts:
             grid = np.zeros(n_fft)
-            st, sw = kernel(
+            _, sw = kernel(
                 self.probe.kind,
                 prm,
                 points,
@@ -270,7 +270,7 @@ class WaveEchoModel:
                 scratch,
             )
             if factor == 1.0:
-                path_t, path_w = st, sw
+                path_w = sw
             spectrum += factor * scipy.fft.rfft(grid)
         spectrum *= self._transfer
         if self.attenuation is not None and path_w > 0.0:
