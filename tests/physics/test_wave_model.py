@@ -85,7 +85,7 @@ def _halfwidth(radius: float, d: float) -> float:
     top = _envelope_peak(model, d, 0.0)
     guess = math.degrees(0.6 * C / F0 / (2 * radius))
     return scipy.optimize.brentq(
-        lambda t: _envelope_peak(model, d, t) / top - 0.5, 0.2 * guess, 3.0 * guess, xtol=1e-4
+        lambda t: _envelope_peak(model, d, t) / top - 0.5, 0.3 * guess, 1.5 * guess, xtol=1e-4
     )
 
 
@@ -110,8 +110,8 @@ def test_tilt_lobe_at_long_range_is_the_exact_broadband_far_field_lobe() -> None
     tilts = np.array([1.0, 2.0, 3.0])
     want = ref.tilt_envelope_curve(radius, d, F0, tilts, sigma_t=SIGMA_T)
     got = np.array([_envelope_peak(model, d, t) / top for t in tilts])
-    # measured: within 0.026 of the exact curve (2.6 % of the peak; 0.1 % at 25 mm)
-    np.testing.assert_allclose(got, want, atol=0.03)
+    # measured: within 0.003 of the exact curve (0.3 % of the peak)
+    np.testing.assert_allclose(got, want, atol=0.01)
     ka = 2 * math.pi * F0 / C * radius
     np.testing.assert_allclose(got, ref.pulse_echo_far_field(ka, tilts), atol=0.08)
 

@@ -64,7 +64,7 @@ _GRID_OVERSAMPLING = 5.0
 _FRESNEL_MARGIN = 1.0
 _SPACING_WAVELENGTHS = 2.7
 """Default surface-sample spacing, in wavelengths at the pulse's centre frequency."""
-_SPREAD = 2.5
+_SPREAD = 1.6
 """The fan reaches this many Fresnel-zone widths √(λd) beyond the probe's rim."""
 """The correlation grid samples at least this many times the pulse's highest frequency."""
 
@@ -142,7 +142,7 @@ class WaveEchoModel:
         lam = self._wavelength
         f_lo = max(self.pulse.bandwidth_6db[0], 0.3 * self.pulse.center_frequency)
         lam_lo = self.sound_speed / f_lo
-        # diffracted beam: half-angle ~ 2.5 λ_lo/(2a) past the first null; near the face the
+        # diffracted beam: half-angle _SPREAD·λ_lo/(2a) past the first null; near the face the
         # edge waves need a margin of a couple of Fresnel-zone widths
         tan_spread = min(_SPREAD * lam_lo / (2.0 * a), 1.0)
         margin = 2.0 * lam + _FRESNEL_MARGIN * math.sqrt(lam_lo * max(distance, lam))

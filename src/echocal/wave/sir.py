@@ -54,9 +54,12 @@ def _jit(func: Callable[..., Any]) -> Callable[..., Any]:
     return njit(cache=True, nogil=True)(func)
 
 
-# 2-point Gauss–Legendre nodes and weights on [0, 1]
+# 2-point Gauss–Legendre nodes and weights on [0, 1] (smooth pieces), and 3-point ones
+# (pieces at a breakpoint, after the substitution t = t_b ± span·u²)
 _GL_X = np.array([0.2113248654051871, 0.7886751345948129])
 _GL_W = np.array([0.5, 0.5])
+_GL3_X = np.array([0.1127016653792583, 0.5, 0.8872983346207417])
+_GL3_W = np.array([5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0])
 
 DISC = 0
 """Aperture code: flat circular piston (parameters: radius)."""
@@ -113,6 +116,61 @@ def _arc_bowl(t, c, rf, d, cos_beta, sin_beta, cos_tmax, m_e, m_e1):
 
 
 @_jit
+def _add_node(kind, prm, geo, c, t, weight, k, b_lo, dt, h, hm):
+    """Add one quadrature node at time t [s] with weight [s] to the B-spline coefficients
+    k, k+1, k+2 of h and h_m (bin k starts at ``b_lo``)."""
+    if kind == DISC:
+        om, mdot = _arc_disc(t, c, geo[0], geo[1], prm[0], geo[2], geo[3])
+        j_f = 1.0
+    else:
+        om, mdot = _arc_bowl(t, c, prm[1], geo[0], geo[1], geo[2], prm[2], geo[3], geo[4])
+        j_f = prm[1] / geo[0]
+    hv = weight / dt * c * j_f * om / math.pi
+    hmv = hv * mdot / (c * t)
+    u = (t - b_lo) / dt
+    w_prev = 0.5 * (1.0 - u) * (1.0 - u)
+    w_next = 0.5 * u * u
+    w_here = 1.0 - w_prev - w_next
+    h[k] += w_prev * hv
+    h[k + 1] += w_here * hv
+    h[k + 2] += w_next * hv
+    hm[k] += w_prev * hmv
+    hm[k + 1] += w_here * hmv
+    hm[k + 2] += w_next * hmv
+
+
+@_jit
+def _add_singular(kind, prm, geo, c, lo, hi, at_lo, k, b_lo, dt, h, hm):
+    """[lo, hi] with a √-type breakpoint at ``lo`` (``at_lo``) or at ``hi``: substitute
+    t = t_b ± span·u² (a polynomial integrand in u) and use 3-point Gauss–Legendre."""
+    span = hi - lo
+    for j in range(3):
+        x = _GL3_X[j]
+        t = lo + span * x * x if at_lo else hi - span * x * x
+        _add_node(kind, prm, geo, c, t, _GL3_W[j] * 2.0 * span * x, k, b_lo, dt, h, hm)
+
+
+@_jit
+def _add_piece(kind, prm, geo, c, lo, hi, singular_lo, singular_hi, k, b_lo, dt, h, hm):
+    """Integrate the smooth piece [lo, hi] of one bin against the B-splines.
+
+    Inside the support, 2-point Gauss–Legendre (exact for the quadratic B-spline weight
+    times a locally linear SIR).  At a breakpoint of the closed form the SIR behaves like
+    √(t − t_b): :func:`_add_singular`; a piece with breakpoints at both ends is split."""
+    if singular_lo and singular_hi:
+        mid = 0.5 * (lo + hi)
+        _add_singular(kind, prm, geo, c, lo, mid, True, k, b_lo, dt, h, hm)
+        _add_singular(kind, prm, geo, c, mid, hi, False, k, b_lo, dt, h, hm)
+    elif singular_lo or singular_hi:
+        _add_singular(kind, prm, geo, c, lo, hi, singular_lo, k, b_lo, dt, h, hm)
+    else:
+        span = hi - lo
+        for j in range(2):
+            t = lo + span * _GL_X[j]
+            _add_node(kind, prm, geo, c, t, _GL_W[j] * span, k, b_lo, dt, h, hm)
+
+
+@_jit
 def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
     """Quadratic B-spline coefficients of h [m/s] and h_m [m/s] on a grid of spacing ``dt``.
 
@@ -121,8 +179,8 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
     sinc³(fΔ), so the aliases of the (not band-limited) SIR fall off as sinc³ and the
     projection itself is undone exactly in the frequency domain.  ``geo`` holds the
     sample's geometry (see :func:`_sample_geometry`); the support is [t_lo, t_hi] with
-    one internal breakpoint t_mid.  Each smooth piece of each bin is integrated by 2-point
-    Gauss–Legendre.  Writes coefficients k0 − 1 … k0 + K to ``h[0 : K + 2]`` and
+    one internal breakpoint t_mid.  Each smooth piece of each bin is integrated by
+    :func:`_add_piece`.  Writes coefficients k0 − 1 … k0 + K to ``h[0 : K + 2]`` and
     ``hm[0 : K + 2]`` and returns (k0 − 1, K + 2)."""
     k0 = int(math.floor((t_lo - t0) / dt))  # noqa: RUF046 (numba)
     k1 = int(math.floor((t_hi - t0) / dt))  # noqa: RUF046 (numba)
@@ -140,29 +198,9 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
             hi = min(b_hi, p_hi)
             if hi <= lo:
                 continue
-            span = hi - lo
-            for j in range(2):
-                t = lo + _GL_X[j] * span
-                if kind == DISC:
-                    om, mdot = _arc_disc(t, c, geo[0], geo[1], prm[0], geo[2], geo[3])
-                    jac = 1.0
-                else:
-                    om, mdot = _arc_bowl(
-                        t, c, prm[1], geo[0], geo[1], geo[2], prm[2], geo[3], geo[4]
-                    )
-                    jac = prm[1] / geo[0]
-                hv = _GL_W[j] * span / dt * c * jac * om / math.pi
-                hmv = hv * mdot / (c * t)
-                u = (t - b_lo) / dt
-                w_prev = 0.5 * (1.0 - u) * (1.0 - u)
-                w_next = 0.5 * u * u
-                w_here = 1.0 - w_prev - w_next
-                h[k] += w_prev * hv
-                h[k + 1] += w_here * hv
-                h[k + 2] += w_next * hv
-                hm[k] += w_prev * hmv
-                hm[k + 1] += w_here * hmv
-                hm[k + 2] += w_next * hmv
+            _add_piece(
+                kind, prm, geo, c, lo, hi, lo == p_lo, hi == p_hi, k, b_lo, dt, h, hm
+            )
     return k0 - 1, n + 2
 
 
