@@ -51,6 +51,7 @@ _COMMAND_MODULES = (
     "echocal.cli.setup",
     "echocal.cli.record",
     "echocal.cli.instrument",
+    "echocal.cli.rig",
     "echocal.cli.scan",
     "echocal.cli.sweep",
     "echocal.cli.experiments",
