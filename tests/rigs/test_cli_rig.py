@@ -294,3 +294,75 @@ def test_rig_check_refuses_bad_visa_rigs_in_one_line(
         assert word in message, message
     if "missing" not in message:
         assert len(err.strip().splitlines()) == 1, err
+
+
+# -- the python driver -----------------------------------------------------------------------
+LAB_MODULE = '''
+import numpy as np
+from echocal.ascan import AScan
+from echocal.measurement import PositionerLimits
+
+
+class Stage:
+    """A lab's own stage: remembers where it was sent."""
+
+    def __init__(self, z_max):
+        self.limits = PositionerLimits(z=(0.0, z_max))
+        self.pose = None
+
+    def move_to(self, pose):
+        self.pose = pose
+        return pose
+
+    def position(self):
+        from echocal.geometry import Pose
+        return self.pose or Pose(0.0, 0.0, 0.0)
+
+    def identify(self):
+        return "LAB,STAGE,1"
+
+    def close(self):
+        pass
+
+
+class Pulser:
+    def __init__(self, n):
+        self.n = n
+
+    def acquire(self):
+        return AScan(samples=np.arange(self.n, dtype=float), fs=1e8, start_time=1e-6)
+
+    def close(self):
+        pass
+'''
+
+
+def test_python_driver_builds_the_labs_own_classes(tmp_path, capsys, monkeypatch):
+    (tmp_path / "lab_devices.py").write_text(LAB_MODULE, encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    rig = tmp_path / "rig.toml"
+    rig.write_text(
+        '[rig]\nname = "own"\n'
+        '[rig.positioner]\ndriver = "python"\nclass = "lab_devices:Stage"\n'
+        "options = { z_max = 0.1 }\n"
+        '[rig.receiver]\ndriver = "python"\nclass = "lab_devices.Pulser"\noptions = { n = 64 }\n',
+        encoding="utf-8",
+    )
+    code, out, err = run_main(["rig", "check", str(rig), "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["positioner"] == "LAB,STAGE,1" and report["receiver"] == "Pulser"
+    assert report["limits"]["z"] == [0.0, 0.1] and report["ascan"]["n_samples"] == 64
+    good = rig.read_text()
+    rig.write_text(
+        good.replace(
+            '"lab_devices.Pulser"\noptions = { n = 64 }',
+            '"lab_devices:Stage"\noptions = { z_max = 0.2 }',
+        )
+    )
+    code, _, err = run_main(["rig", "check", str(rig)], capsys, monkeypatch)
+    assert code == 2 and "rig.receiver.class: lab_devices:Stage is not a Receiver" in flat(err)
+    # the lab's own failure is one line naming its class and call, not a traceback
+    rig.write_text(good.replace("z_max = 0.1", "z_max = -1"))
+    code, _, err = run_main(["rig", "check", str(rig)], capsys, monkeypatch)
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1

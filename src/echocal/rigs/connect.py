@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from echocal.ascan import AScan
-from echocal.errors import ConfigError, EchocalValueError
+from echocal.errors import ConfigError, EchocalError, EchocalValueError, InstrumentError
 from echocal.measurement.hardware import (
     HardwareSource,
     Positioner,
@@ -87,12 +87,59 @@ def _python_device(config: PythonDriver, where: str, protocol: type) -> Any:
         device = cls(**config.options)
     except TypeError as exc:
         raise ConfigError(f"{where}.options: {config.class_} refused them: {exc}") from None
+    except EchocalError:
+        raise
+    except Exception as exc:  # the lab's own code: its failure, in one line
+        raise InstrumentError(
+            f"{where}: {config.class_}(...) failed: {type(exc).__name__}: {exc}"
+        ) from None
     if not isinstance(device, protocol):
         raise ConfigError(
             f"{where}.class: {config.class_} is not a {protocol.__name__} (it needs "
             f"{', '.join(sorted(_protocol_members(protocol)))})"
         )
-    return device
+    return _Guarded(device, config.class_)
+
+
+class _Guarded:
+    """A lab's own device whose non-echocal exceptions become one-line InstrumentErrors
+    naming the class and the call (echocal's own errors, e.g. LimitError, pass as they are)."""
+
+    def __init__(self, device: Any, name: str) -> None:
+        self._device = device
+        self._name = name
+
+    def _call(self, what: str, *args: Any) -> Any:
+        try:
+            member = getattr(self._device, what)
+            return member(*args) if callable(member) else member
+        except EchocalError:
+            raise
+        except Exception as exc:
+            raise InstrumentError(
+                f"{self._name}.{what}: {type(exc).__name__}: {exc}"
+            ) from None
+
+    @property
+    def limits(self) -> PositionerLimits:
+        return self._call("limits")
+
+    def move_to(self, pose: Any) -> Any:
+        return self._call("move_to", pose)
+
+    def position(self) -> Any:
+        return self._call("position")
+
+    def acquire(self) -> AScan:
+        return self._call("acquire")
+
+    def identify(self) -> str:
+        if callable(getattr(self._device, "identify", None)):
+            return self._call("identify")
+        return type(self._device).__name__
+
+    def close(self) -> None:
+        self._call("close")
 
 
 def _protocol_members(protocol: type) -> set[str]:
