@@ -152,7 +152,7 @@ def _calibrate_measured(
 
 def _on_instrument(
     run: _Run,
-    instrument: str,
+    instrument: str | None,
     timeout: float | None,
     setup: str | None,
     position: str | None,

@@ -8,6 +8,7 @@ where it stopped (see :func:`echocal.measurement.record`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import typer
@@ -150,6 +151,7 @@ def register(app: typer.Typer) -> None:
                 "position (mm unless a unit is given; repeat it for several positions)"
             )
         if not positions:
+            assert config is not None
             x, y, z = (float(v) for v in config.positioner.reference_position)
             positions = [(x, y, z)]
         grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
@@ -158,7 +160,11 @@ def register(app: typer.Typer) -> None:
         sidecar = partial_path(out)
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
-        source = open_rig(rig) if rig is not None else resolve_setup(setup, snr=snr, seed=seed)
+        if rig is not None:
+            source: Any = open_rig(rig)
+        else:
+            assert setup is not None
+            source = resolve_setup(setup, snr=snr, seed=seed)
         with source:
             _record(
                 source,

@@ -8,6 +8,7 @@ figures into ``--out``; resumable (an interrupted scan keeps its finished points
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -128,7 +129,7 @@ def register(app: typer.Typer) -> None:
         with ExitStack() as stack:
             if rig is not None:  # the setup gives only the pulse and the sound speed
                 hardware = stack.enter_context(open_rig(rig))
-                on_rig = {"pulse": base.pulse, "sound_speed": base.sound_speed}
+                on_rig: dict[str, Any] = {"pulse": base.pulse, "sound_speed": base.sound_speed}
             check_scan(
                 hardware if rig is not None else base,
                 scan_grid,

@@ -116,9 +116,7 @@ class _Guarded:
         except EchocalError:
             raise
         except Exception as exc:
-            raise InstrumentError(
-                f"{self._name}.{what}: {type(exc).__name__}: {exc}"
-            ) from None
+            raise InstrumentError(f"{self._name}.{what}: {type(exc).__name__}: {exc}") from None
 
     @property
     def limits(self) -> PositionerLimits:

@@ -107,7 +107,9 @@ def motion_preset(name: str, **overrides: Any) -> MotionPreset:
         raise EchocalValueError(
             f"unknown motion command {unknown[0]!r}; known: {', '.join(sorted(fields))}"
         )
-    clean = {k: tuple(v) if k in ("setup", "limit_codes") else v for k, v in overrides.items()}
+    clean: dict[str, Any] = {
+        k: tuple(v) if k in ("setup", "limit_codes") else v for k, v in overrides.items()
+    }
     return dataclasses.replace(preset, **clean)
 
 
@@ -308,7 +310,8 @@ class VisaPositioner:
                 continue
             command = self.preset.position.format(axis=axis.id)
             values.append(self.instrument.query_float(command) / axis.scale)
-        return Pose(*values)
+        x, y, z, azimuth, coelevation = values
+        return Pose(x, y, z, azimuth, coelevation)
 
     def close(self) -> None:
         """Close the VISA resource."""

@@ -175,7 +175,7 @@ def scope_preset(name: str, **overrides: Any) -> ScopePreset:
             f"unknown scope command {unknown[0]!r}; known: {', '.join(sorted(fields))}"
         )
     tuples = {"setup", "average_on", "average_off", "acquire", "preamble_fields"}
-    clean = {k: tuple(v) if k in tuples else v for k, v in overrides.items()}
+    clean: dict[str, Any] = {k: tuple(v) if k in tuples else v for k, v in overrides.items()}
     if "preamble_queries" in clean:
         clean["preamble_queries"] = tuple(dict(clean["preamble_queries"]).items())
     return dataclasses.replace(preset, **clean)
