@@ -1,6 +1,6 @@
 """Rigs: a positioner and a receiver from the lab's own stack, described in a rig file.
 
-* :func:`connect_rig` / :func:`check_rig` — a ``[rig]`` TOML file (:mod:`echocal.rigs.config`)
+* :func:`connect_rig` / :func:`check_rig` — a ``[rig]`` TOML file (``echocal.rigs.config``)
   to a connected :class:`Rig` (a :class:`~echocal.measurement.HardwareSource`);
 * :class:`VisaReceiver` — a SCPI oscilloscope through PyVISA, presets
   :data:`SCOPE_PRESETS` (Keysight, Tektronix, Rigol);

@@ -26,7 +26,7 @@ import contextlib
 import time
 import warnings
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 
@@ -34,8 +34,6 @@ from echocal._validate import nonnegative_float, positive_float
 from echocal.errors import EchocalValueError, InstrumentError
 
 __all__ = ["Nonsense", "VisaInstrument", "import_pyvisa", "resource_manager"]
-
-T = TypeVar("T")
 
 _RESOURCE_MANAGERS: dict[str, Any] = {}
 
@@ -150,7 +148,7 @@ class VisaInstrument:
         self._closed = True
 
     # -- exchange ---------------------------------------------------------------------------
-    def call(self, command: str, action: Callable[[Any], T]) -> T:
+    def call(self, command: str, action: Callable[[Any], Any]) -> Any:
         """Run ``action(resource)`` for ``command`` under the fault policy."""
         pyvisa = import_pyvisa()
         last: BaseException | None = None
