@@ -18,7 +18,7 @@ import xarray as xr
 
 from cli_helpers import flat, run_main, tiny_setup_toml
 from echocal.geometry import Pose
-from echocal.measurement import InstrumentServer
+from echocal.measurement import Faults, InstrumentServer
 from echocal.setups import load_setup
 
 pytest.importorskip("pyvisa_sim")
@@ -366,3 +366,36 @@ def test_python_driver_builds_the_labs_own_classes(tmp_path, capsys, monkeypatch
     rig.write_text(good.replace("z_max = 0.1", "z_max = -1"))
     code, _, err = run_main(["rig", "check", str(rig)], capsys, monkeypatch)
     assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_record_on_a_rig_that_dies_keeps_what_was_measured_and_resumes(
+    setup_file, tmp_path, capsys, monkeypatch
+):
+    """The rig goes away after three A-scans: the recording keeps them and says so; the
+    same command, with the rig back, measures only the two missing ones."""
+    grid = ["--azimuth", "0", "--coelevation", "-4:4:5", "--position", "0,0,16"]
+    out = tmp_path / "rig.nc"
+    start = Pose(0.0, 0.0, 0.016)
+    # each A-scan is MOVE + POS? + ACQ?; connecting is *IDN? + LIMITS? (twice: both devices)
+    faults = Faults(drop_after=4 + 3 * 3, drop_forever=True)
+    with InstrumentServer(load_setup(setup_file), initial_pose=start, faults=faults) as dying:
+        rig = _tcp_rig(tmp_path, ":".join(map(str, dying.address)), setup_file)
+        rig.write_text(rig.read_text().replace("timeout = 30", "timeout = 30\nretries = 1"))
+        args = ["record", "--rig", str(rig), "--out", str(out), *grid, "--batch-size", "1"]
+        code, _, err = run_main([*args, "--no-progress"], capsys, monkeypatch)
+    assert code == 2 and not out.exists()
+    assert "3 of 5 measurements are saved" in flat(err) and "run the same command again" in err
+    with InstrumentServer(load_setup(setup_file), initial_pose=start) as back:
+        text = rig.read_text()
+        rig.write_text(
+            text.replace(
+                text.split('address = "')[1].split('"')[0], ":".join(map(str, back.address))
+            )
+        )
+        code, _, err = run_main([*args, "--no-progress"], capsys, monkeypatch)
+        assert code == 0, err
+        assert "resuming" in err and "resumed after 3" in flat(err)
+        assert back.n_acquisitions == 2  # only the two missing A-scans were measured
+    with xr.open_dataset(out) as data:
+        assert data["samples"].shape == (1, 1, 5, 1, 256)
+        assert np.all(np.isfinite(data["samples"].values))

@@ -5,8 +5,8 @@ plan on the simulated ophyd devices.
 Each path gets its own simulator built from the same setup file (same seed, so the same
 noise stream); ``auto`` in the tilt parameterization, the same x0 and seed.  The
 simulator measures batches, the rig and the plan one pose at a time, the rig through a
-socket: the points measured, the values, the estimate and the stopping reason must agree
-exactly.
+socket: the number of measurements and the stopping reason must agree exactly, the points
+measured, the values and the estimate to rounding.
 """
 
 from __future__ import annotations
@@ -80,9 +80,12 @@ def test_simulator_tcp_rig_and_bluesky_calibrate_identically(tmp_path: Path):
     # the plate's normal (30, 4) deg as tilts: the estimate is within 0.5 deg of it
     truth = convert_angles(30.0, 4.0, "azimuth-coelevation", "tilt")
     assert np.hypot(*(np.asarray(direct.x) - np.asarray(truth))) < 0.5
+    # the same measurements in the same order, with the same values and estimate; equal to
+    # rounding only (1e-9 relative): the simulator's compiled kernels and BLAS may sum in a
+    # different order from one run to the next (seen: 2e-14 under pytest-xdist)
     for other in (on_rig, on_bluesky):
-        np.testing.assert_array_equal(other.points, direct.points)
-        np.testing.assert_array_equal(other.values, direct.values)
-        np.testing.assert_array_equal(other.x, direct.x)
         assert (other.n_measurements, other.status) == (direct.n_measurements, direct.status)
+        np.testing.assert_allclose(other.points, direct.points, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(other.values, direct.values, rtol=1e-9, atol=0)
+        np.testing.assert_allclose(other.x, direct.x, rtol=1e-9, atol=1e-12)
     assert len(events) == direct.n_measurements
