@@ -7,6 +7,7 @@ figures into ``--out``; resumable (an interrupted scan keeps its finished points
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -128,60 +129,62 @@ def register(app: typer.Typer) -> None:
         effective = seed if seed is not None else _seed_of(base)
         with ExitStack() as stack:
             if rig is not None:  # the setup gives only the pulse and the sound speed
-                hardware = stack.enter_context(open_rig(rig))
-                on_rig: dict[str, Any] = {"pulse": base.pulse, "sound_speed": base.sound_speed}
+                source: Any = stack.enter_context(open_rig(rig))
+                extra: dict[str, Any] = {"pulse": base.pulse, "sound_speed": base.sound_speed}
+                metadata = {"setup": setup, "seed": effective, "rig": source.description}
+                reseed = None  # a rig's noise is its own
+            else:
+                source, extra = base, {}
+                metadata = {"setup": setup, "specimen": base.specimen.name, "seed": effective}
+
+                def reseed(run_seed: int) -> Any:
+                    return resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
+
             check_scan(
-                hardware if rig is not None else base,
+                source,
                 scan_grid,
                 method=method,
                 budget_per_point=budget_per_point,
-                pulse=on_rig["pulse"] if rig is not None else None,
+                pulse=extra.get("pulse"),
             )
+            options = {
+                "method": method,
+                "budget_per_point": budget_per_point,
+                "rng": effective,
+                "progress": progress,
+                "metadata": metadata,
+                "overwrite": overwrite,
+                **extra,
+            }
             _scan(
-                setup,
-                specimen,
-                snr,
-                seed,
-                effective,
+                source,
                 scan_grid,
                 out,
-                method,
-                budget_per_point,
-                cold,
-                overwrite,
-                figures,
-                progress,
-                as_json,
-                base=hardware if rig is not None else base,
-                rig=on_rig if rig is not None else None,
+                options,
+                reseed=reseed,
+                cold=cold,
+                figures=figures,
+                as_json=as_json,
             )
 
 
 def _scan(
-    setup,
-    specimen,
-    snr,
-    seed,
-    effective,
-    scan_grid,
-    out,
-    method,
-    budget_per_point,
-    cold,
-    overwrite,
-    figures,
-    progress,
-    as_json,
+    base: Any,
+    scan_grid: Any,
+    out: Path,
+    options: dict[str, Any],
     *,
-    base,
-    rig,
+    reseed: Callable[[int], Any] | None,
+    cold: bool,
+    figures: bool,
+    as_json: bool,
 ) -> None:
-    """Scan with ``base`` (a simulated setup, or a rig with ``rig`` = its pulse and sound
-    speed): warm (and cold) runs, resume, figures and the report."""
+    """Scan with ``base`` (a simulated setup or a rig) and ``options`` for
+    :func:`~echocal.scanning.scan_surface`: warm (and cold) runs, resume (a simulator
+    ``reseed``-ed so a resumed run does not repeat the noise), figures and the report."""
     import numpy as np
 
     from echocal.cli._common import write_json
-    from echocal.cli._setup_option import resolve_setup
     from echocal.errors import DataFileError
     from echocal.scanning import partial_path, scan_surface
     from echocal.scanning.store import saved_points
@@ -196,29 +199,13 @@ def _scan(
         sidecar = partial_path(path)
         done = saved_points(path) if sidecar.exists() else 0
         source = base
-        if done and rig is None:
+        if done and reseed is not None:
             # a fresh process restarts the noise: do not repeat the first points' draws
-            run_seed = int(np.random.SeedSequence([effective, done]).generate_state(1)[0])
-            source = resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
+            seed = int(np.random.SeedSequence([options["rng"], done]).generate_state(1)[0])
+            source = reseed(seed)
         try:
             results[label] = scan_surface(
-                source,
-                scan_grid,
-                method=method,
-                budget_per_point=budget_per_point,
-                warm_start=warm,
-                rng=effective,
-                progress=progress,
-                out=path,
-                metadata={
-                    "setup": setup,
-                    "specimen": None if rig else source.specimen.name,
-                    "seed": effective,
-                    **({"rig": source.description} if rig else {}),
-                },
-                overwrite=overwrite,
-                log=_say,
-                **(rig or {}),
+                source, scan_grid, warm_start=warm, out=path, log=_say, **options
             )
         except KeyboardInterrupt:
             _say(
@@ -229,8 +216,8 @@ def _scan(
         if figures and warm:
             from echocal.plots.surface import save_surface_figures
 
-            specimen_drawn = None if rig else source.specimen
-            save_surface_figures(results[label], out, specimen=specimen_drawn)
+            specimen = getattr(source, "specimen", None)  # a rig has none to draw
+            save_surface_figures(results[label], out, specimen=specimen)
     summary = results["warm"].summary
     report = {
         "out": str(out),
