@@ -399,3 +399,27 @@ def test_record_on_a_rig_that_dies_keeps_what_was_measured_and_resumes(
     with xr.open_dataset(out) as data:
         assert data["samples"].shape == (1, 1, 5, 1, 256)
         assert np.all(np.isfinite(data["samples"].values))
+
+
+def test_calibrate_on_a_rig_that_dies_saves_what_it_measured(
+    setup_file, tmp_path, capsys, monkeypatch
+):
+    # connecting asks *IDN? twice (one per device) and LIMITS?; each A-scan is MOVE, POS?,
+    # ACQ?: the rig is gone after 5 A-scans
+    faults = Faults(drop_after=3 + 3 * 5, drop_forever=True)
+    start = Pose(0.0, 0.0, 0.016)
+    with InstrumentServer(load_setup(setup_file), initial_pose=start, faults=faults) as dying:
+        rig = _tcp_rig(tmp_path, ":".join(map(str, dying.address)), setup_file)
+        rig.write_text(rig.read_text().replace("timeout = 30", "timeout = 30\nretries = 1"))
+        out = tmp_path / "cal"
+        code, _, err = run_main(
+            ["calibrate", "--rig", str(rig), "--position", "0,0,16", "--out", str(out)],
+            capsys,
+            monkeypatch,
+        )
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert "the run stopped after 5 measurements" in flat(err) and "partial_log.json" in err
+    log = json.loads((out / "partial_log.json").read_text())
+    assert log["n_measurements"] == 5 and log["source"]["kind"] == "rig"
+    assert log["source"]["file"] == str(rig) and len(log["values"]) == 5
+    assert not (out / "result.json").exists()

@@ -247,3 +247,26 @@ def test_a_move_that_never_finishes_times_out(tmp_path):
     stage = _stage(library, motion_timeout=0.1, poll_interval=0.01)
     with pytest.raises(InstrumentError, match="axes z did not stop within 0.1 s"):
         stage.move_to(Pose(0.0, 0.0, 0.03, 0.0, 0.0))
+
+
+def test_a_rig_file_sets_the_serial_line(tmp_path):
+    from echocal.rigs import connect_rig
+
+    rig_file = tmp_path / "rig.toml"
+    axes = "".join(
+        f'{a} = {{ id = "{i}" }}\n'
+        for a, i in zip(
+            ("x", "y", "z", "azimuth", "coelevation"), ("X", "Y", "Z", "AZ", "COEL"), strict=True
+        )
+    )
+    rig_file.write_text(
+        '[rig]\n[rig.positioner]\ndriver = "visa"\nresource = "ASRL1::INSTR"\n'
+        'library = "@echocal-sim"\nbaud_rate = 19200\n[rig.positioner.axes]\n'
+        + axes
+        + '[rig.receiver]\ndriver = "visa"\nresource = "TCPIP0::rigol.sim::INSTR"\n'
+        'library = "@echocal-sim"\npreset = "rigol"\n',
+        encoding="utf-8",
+    )
+    with connect_rig(rig_file) as rig:
+        assert rig.positioner.instrument._handle.baud_rate == 19200
+        assert rig.identities["receiver"].startswith("RIGOL")

@@ -119,6 +119,9 @@ class _Visa(_Model):
     preset: str
     timeout: Seconds = 2.0
     retries: int = Field(default=2, ge=0)
+    read_termination: str = "\n"
+    write_termination: str = "\n"
+    baud_rate: int | None = Field(default=None, gt=0)
     commands: dict[str, Any] = Field(default_factory=dict)
 
 

@@ -152,6 +152,9 @@ def _visa(config: Any, base_dir: Path) -> Any:
         library=_library(config.library, base_dir),
         timeout=config.timeout,
         retries=config.retries,
+        read_termination=config.read_termination,
+        write_termination=config.write_termination,
+        baud_rate=config.baud_rate,
     )
 
 

@@ -212,7 +212,7 @@ def calibrate_plan(
             targets = zip(axes, pose.as_array(), strict=True)
             yield from bps.mv(*[v for motor, value in targets for v in (motor, float(value))])
             reading = yield from bps.trigger_and_read([detector, *axes])
-            bridge.replies.put(_ascan(reading, keys, pose))
+            bridge.replies.put(_ascan(reading, keys, _reached(reading, axes, pose)))
     except BaseException as exc:
         bridge.replies.put(_Aborted(f"calibrate_plan stopped: {type(exc).__name__}: {exc}"))
         worker.join(timeout=10.0)
@@ -224,8 +224,18 @@ def calibrate_plan(
     return outcome
 
 
+def _reached(reading: Mapping[str, Any], axes: list[Any], requested: Pose) -> Pose:
+    """The pose the motors read back (their readback is keyed by their name, as ophyd's
+    motors do), else the one requested."""
+    names = [str(getattr(motor, "name", "")) for motor in axes]
+    if not all(name in reading for name in names):
+        return requested
+    x, y, z, az, coel = (float(reading[name]["value"]) for name in names)
+    return Pose(x, y, z, az, coel, gimbal=requested.gimbal)
+
+
 def _ascan(reading: Mapping[str, Any], keys: Mapping[str, Any], pose: Pose) -> AScan:
-    """The A-scan of one ``trigger_and_read`` reading."""
+    """The A-scan of one ``trigger_and_read`` reading, measured at ``pose``."""
     samples = np.asarray(_value(reading, keys["samples"], "samples"), dtype=np.float64)
     numbers = {
         k: float(keys[k]) if not isinstance(keys[k], str) else float(_value(reading, keys[k], k))

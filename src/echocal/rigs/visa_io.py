@@ -93,6 +93,7 @@ class VisaInstrument:
     retries : how many times a command is sent again after a transport fault (>= 0).
     backoff : [s] wait before the first retry; doubled for each further retry (>= 0).
     read_termination, write_termination : line endings of the instrument's messages.
+    baud_rate : [bit/s] of a serial line (ASRL resources); None leaves the VISA default.
     """
 
     def __init__(
@@ -105,6 +106,7 @@ class VisaInstrument:
         backoff: float = 0.05,
         read_termination: str = "\n",
         write_termination: str = "\n",
+        baud_rate: int | None = None,
     ) -> None:
         if not isinstance(resource, str) or not resource.strip():
             raise EchocalValueError(f"resource must be a VISA resource name; got {resource!r}")
@@ -117,6 +119,7 @@ class VisaInstrument:
         self.backoff = nonnegative_float("backoff", backoff)
         self.read_termination = read_termination
         self.write_termination = write_termination
+        self.baud_rate = baud_rate
         self._handle: Any = None
         self._closed = False
         self.n_reconnects = 0
@@ -133,6 +136,8 @@ class VisaInstrument:
             handle.timeout = self.timeout * 1e3  # PyVISA counts milliseconds
             handle.read_termination = self.read_termination
             handle.write_termination = self.write_termination
+            if self.baud_rate is not None:  # a serial line (ASRL resources)
+                handle.baud_rate = int(self.baud_rate)
             self._handle = handle
         return self._handle
 
