@@ -25,7 +25,7 @@ try:
     from ophyd import Component, Device, Signal, SoftPositioner
     from ophyd.device import create_device_from_components
     from ophyd.status import DeviceStatus
-except ImportError:  # pragma: no cover - depends on the installed extras
+except ImportError:  # without the bluesky extra
     raise ImportError(
         "echocal's Bluesky devices need ophyd: pip install 'echocal[bluesky]' (bluesky, ophyd)"
     ) from None

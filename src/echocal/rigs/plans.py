@@ -37,7 +37,7 @@ from echocal.signal import Pulse
 
 try:
     import bluesky.plan_stubs as bps
-except ImportError:  # pragma: no cover - depends on the installed extras
+except ImportError:  # without the bluesky extra
     raise ImportError(
         "echocal's Bluesky plans need bluesky: pip install 'echocal[bluesky]' (bluesky, ophyd)"
     ) from None
