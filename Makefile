@@ -11,7 +11,7 @@ BIN     = $(VENV)/bin
 $(BIN)/echocal: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,fast,docs]"
+	$(BIN)/python -m pip install --quiet -e ".[test,fast,docs,visa,bluesky]"
 	touch $(BIN)/echocal
 
 setup: $(BIN)/echocal

@@ -53,6 +53,7 @@ _COMMAND_MODULES = (
     "echocal.cli.material",
     "echocal.cli.record",
     "echocal.cli.instrument",
+    "echocal.cli.rig",
     "echocal.cli.scan",
     "echocal.cli.sweep",
     "echocal.cli.experiments",

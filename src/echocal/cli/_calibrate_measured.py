@@ -33,16 +33,31 @@ from echocal.measurement.base import BaseSource
 
 
 def _check_measured_options(
-    replay: Path | None, instrument: str | None, snr: str | None, specimen: str | None
+    replay: Path | None,
+    instrument: str | None,
+    snr: str | None,
+    specimen: str | None,
+    rig: Path | None = None,
 ) -> None:
     """Refuse what a recording or a rig cannot honour (before any work)."""
     from echocal.errors import EchocalValueError
 
-    if replay is not None and instrument is not None:
+    given = [
+        name
+        for name, v in (("--replay", replay), ("--instrument", instrument), ("--rig", rig))
+        if v is not None
+    ]
+    if len(given) > 1:
         raise EchocalValueError(
-            "--replay and --instrument are mutually exclusive: calibrate on one source"
+            f"{' and '.join(given)} are mutually exclusive: calibrate on one source"
         )
-    what = "a recording (--replay)" if replay is not None else "a rig (--instrument)"
+    what = (
+        "a recording (--replay)"
+        if replay is not None
+        else "a rig (--rig)"
+        if rig is not None
+        else "a rig (--instrument)"
+    )
     if snr is not None:
         raise EchocalValueError(
             f"--snr applies to a simulated setup only: {what} has its own noise; drop --snr"
@@ -82,6 +97,7 @@ def _calibrate_measured(
     out: Path,
     plots: bool,
     json_output: bool,
+    rig: Path | None = None,
 ) -> None:
     """Calibrate on a recording or a rig: the same objective and call, no truth known."""
     from echocal._validate import one_of
@@ -97,9 +113,9 @@ def _calibrate_measured(
     start = parse_pair(x0, "--x0") if x0 is not None else None
     seed = 0 if seed is None else seed
     common: dict[str, Any] = {"parameterization": parameterization, "start": start, "seed": seed}
-    if instrument is not None:
+    if instrument is not None or rig is not None:
         done = _on_instrument(
-            run, instrument, timeout, setup, position, out=out, plots=plots, **common
+            run, instrument, timeout, setup, position, rig=rig, out=out, plots=plots, **common
         )
     else:
         assert replay is not None
@@ -136,7 +152,7 @@ def _calibrate_measured(
 
 def _on_instrument(
     run: _Run,
-    instrument: str,
+    instrument: str | None,
     timeout: float | None,
     setup: str | None,
     position: str | None,
@@ -146,38 +162,39 @@ def _on_instrument(
     seed: int,
     out: Path,
     plots: bool,
+    rig: Path | None = None,
 ) -> _Measured:
-    """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT``."""
+    """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT`` or
+    ``--rig FILE``."""
     from echocal._validate import positive_float
-    from echocal.errors import EchocalError, EchocalValueError
+    from echocal.cli._rig_option import open_rig, require_position, rig_setup
+    from echocal.errors import EchocalError
     from echocal.measurement.hardware import HardwareSource
     from echocal.measurement.objective import SourceObjective
 
-    host, port = _parse_address(instrument)
-    if position is None:
-        raise EchocalValueError(
-            "--position X,Y,Z is required with --instrument: the rig is calibrated at "
-            "one position (mm unless a unit is given)"
-        )
-    where = _parse_position(position)
-    if setup is None:
-        raise EchocalValueError(
-            "--instrument needs the transmitted pulse for the matched filter: pass "
-            "--setup NAME|FILE whose [pulse] is the rig's (see `echocal setup list`)"
-        )
+    option = "--rig" if rig is not None else "--instrument"
+    host, port = _parse_address(instrument) if instrument is not None else ("", 0)
+    where = _parse_position(require_position(position, option))
+    setup = rig_setup(setup, rig, option)
     pulse = _setup_pulse(setup)
     wait: dict[str, Any] = {}
     if timeout is not None:
         wait["timeout"] = positive_float("--timeout", timeout)
-    with HardwareSource.connect(host, port, **wait) as rig:
-        _check_reachable(rig.limits, where)
-        tally = _Tally(rig)
+    connect = (
+        (lambda: open_rig(rig))
+        if rig is not None
+        else (lambda: HardwareSource.connect(host, port, **wait))
+    )
+    with connect() as hardware:
+        _check_reachable(hardware.limits, where)
+        tally = _Tally(hardware)
         objective = SourceObjective(tally, where, pulse=pulse, parameterization=parameterization)
         tally.logged = lambda: objective.n_measurements
+        where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
         source = {
-            "kind": "instrument",
-            "address": f"{host}:{port}",
-            "description": rig.description,
+            "kind": "rig" if rig is not None else "instrument",
+            **where_from,
+            "description": hardware.description,
         }
         x0 = (0.0, 0.0) if start is None else start
         try:

@@ -28,6 +28,7 @@ from echocal.cli._common import (
     parse_pose,
     write_json,
 )
+from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 
 
@@ -68,6 +69,7 @@ def register(app: typer.Typer) -> None:
                 "instrument-server`); needs --position and --setup (for the pulse).",
             ),
         ] = None,
+        rig: Annotated[Path | None, typer.Option("--rig", help=RIG_HELP)] = None,
         timeout: Annotated[
             float | None,
             typer.Option(
@@ -159,13 +161,13 @@ def register(app: typer.Typer) -> None:
         before the fault is saved to partial_log.json in --out).
         """
         run = _Run.parse(method, budget, max_iter, settle, preset, option, search_radius)
-        if replay is not None or instrument is not None:
+        if replay is not None or instrument is not None or rig is not None:
             from echocal.cli._calibrate_measured import (
                 _calibrate_measured,
                 _check_measured_options,
             )
 
-            _check_measured_options(replay, instrument, snr, specimen)
+            _check_measured_options(replay, instrument, snr, specimen, rig)
             _calibrate_measured(
                 run,
                 replay=replay,
@@ -180,6 +182,7 @@ def register(app: typer.Typer) -> None:
                 out=out,
                 plots=plots,
                 json_output=json_output,
+                rig=rig,
             )
             return
         _check_source_options(replay, replay_mode, instrument, timeout)

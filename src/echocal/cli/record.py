@@ -8,11 +8,13 @@ where it stopped (see :func:`echocal.measurement.record`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import typer
 
 from echocal.cli._common import check_out_file
+from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP
 
 GRID_HELP = "FIRST:LAST:COUNT in degrees, e.g. -10:10:21 (or with units: -0.2rad:0.2rad:5)"
@@ -79,7 +81,13 @@ def register(app: typer.Typer) -> None:
 
     @app.command("record")
     def record_command(
-        setup: str = typer.Option(..., "--setup", help=SETUP_HELP),
+        setup: str | None = typer.Option(
+            None,
+            "--setup",
+            help=SETUP_HELP + " Required unless --rig; with --rig optional: its pulse is "
+            "stored for the replay's matched filter (default: the rig file's setup).",
+        ),
+        rig: Path | None = typer.Option(None, "--rig", help=RIG_HELP),
         out: Path = typer.Option(..., "--out", help="Replay file to write (.nc)."),
         azimuth: str = typer.Option(..., "--azimuth", help=f"Azimuth grid: {GRID_HELP}"),
         coelevation: str = typer.Option(
@@ -111,106 +119,196 @@ def register(app: typer.Typer) -> None:
 
         Ctrl-C keeps what was measured; the same command again resumes.
         """
-        from echocal.cli._common import write_json
+        from echocal.cli._rig_option import open_rig, refuse_simulation_options
         from echocal.cli._setup_option import resolve_setup
-        from echocal.errors import DataFileError, EchocalError
+        from echocal.errors import DataFileError, EchocalValueError
         from echocal.measurement.recording import (
             RecordingGrid,
             check_recording_size,
-            discard_partial,
-            partial_matches,
             partial_path,
-            record,
-            saved_count,
         )
+        from echocal.rigs import load_rig_config
         from echocal.setups import load_setup_config
 
         check_out_file(out, suffix=".nc", what="a NetCDF replay file")
         az = parse_axis(azimuth, "--azimuth")
         coel = parse_axis(coelevation, "--coelevation")
         positions = [parse_position(p) for p in position or []]
-        config, _ = load_setup_config(setup)
-        seed = config.seed if seed is None else seed
+        if rig is not None:
+            refuse_simulation_options(snr=snr, seed=seed)
+            if setup is None:
+                setup = load_rig_config(rig)[0].rig.setup
+        elif setup is None:
+            raise EchocalValueError(
+                "--setup NAME|FILE is required (a simulated setup), or --rig FILE (a rig)"
+            )
+        config = None if setup is None else load_setup_config(setup)[0]
+        if config is not None:
+            seed = config.seed if seed is None else seed
+        if not positions and config is None:
+            raise EchocalValueError(
+                "--position X,Y,Z is required with --rig when no setup gives a reference "
+                "position (mm unless a unit is given; repeat it for several positions)"
+            )
         if not positions:
+            assert config is not None
             x, y, z = (float(v) for v in config.positioner.reference_position)
             positions = [(x, y, z)]
         grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
-        total = check_recording_size(grid, repeats, config.window.n_samples)
+        n_samples = None if rig is not None or config is None else config.window.n_samples
+        total = check_recording_size(grid, repeats, n_samples)
         sidecar = partial_path(out)
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
-        source = resolve_setup(setup, snr=snr, seed=seed)
-        stale = partial_matches(out, source, grid, repeats) is False
-        if stale and overwrite:
-            discard_partial(out)
-            _say(
-                f"--overwrite: discarded the partial recording {sidecar} (made with another "
-                "grid, repeat count or setup); recording from the start"
-            )
-        elif stale:  # before any "resuming" news: it would not resume
-            raise DataFileError(
-                f"cannot resume: {sidecar} was recorded with another grid, repeat count or "
-                "setup; pass --overwrite to discard it and record from the start, or record "
-                "to another --out"
-            )
-        done = saved_count(out) if sidecar.exists() else 0
-        if seed is not None and done:
-            # A fresh process restarts the noise generator: re-seed from (seed, done) so the
-            # resumed measurements do not repeat the noise draws of the first ones.
-            run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
-            source = resolve_setup(setup, snr=snr, seed=run_seed)
-        if done:
-            _say(f"resuming {out}: {done} of {total} measurements already saved in {sidecar}")
-        try:
-            path = record(
+        if rig is not None:
+            source: Any = open_rig(rig)
+        else:
+            assert setup is not None
+            source = resolve_setup(setup, snr=snr, seed=seed)
+        with source:
+            _record(
                 source,
                 grid,
                 out,
+                total,
+                setup,
+                seed,
+                snr,
+                config,
+                rig,
                 repeats=repeats,
+                overwrite=overwrite,
                 progress=progress,
                 batch_size=batch_size,
-                setup={
-                    # a file as an absolute path: a replay elsewhere still finds a sampled
-                    # pulse's file relative to it
-                    "setup": str(Path(setup).resolve()) if Path(setup).is_file() else setup,
-                    "seed": seed,
-                    "snr": snr,
-                    "config": config.model_dump(),
-                },
-                overwrite=overwrite,
+                as_json=as_json,
             )
-        except KeyboardInterrupt:
-            _say(
-                f"[yellow]interrupted:[/] {saved_count(out)} of {total} measurements are saved "
-                f"in {sidecar}; run the same command again to resume"
-            )
-            raise typer.Exit(130) from None
-        except EchocalError:
-            if sidecar.exists() and saved_count(out):
-                _say(
-                    f"{saved_count(out)} of {total} measurements are saved in {sidecar}; "
-                    "fix the problem and run the same command again to resume"
-                )
-            raise
-        n_p, n_a, n_c = grid.shape
-        if as_json:
-            write_json(
-                {
-                    "path": str(path),
-                    "n_ascans": total,
-                    "shape": {
-                        "position": n_p,
-                        "azimuth": n_a,
-                        "coelevation": n_c,
-                        "repeat": repeats,
-                        "time": source.window.n_samples,
-                    },
-                    "resumed_after": done,
-                    "source": source.description,
-                }
-            )
+
+
+def _record(
+    source,
+    grid,
+    out: Path,
+    total: int,
+    setup,
+    seed,
+    snr,
+    config,
+    rig,
+    *,
+    repeats: int,
+    overwrite: bool,
+    progress: bool,
+    batch_size: int,
+    as_json: bool,
+) -> None:
+    """Record ``grid`` with ``source`` (a simulated setup or a rig) into ``out``: resume,
+    interruption and report."""
+    from echocal.cli._common import write_json
+    from echocal.cli._setup_option import resolve_setup
+    from echocal.errors import DataFileError, EchocalError
+    from echocal.measurement.recording import (
+        discard_partial,
+        partial_matches,
+        partial_path,
+        record,
+        saved_count,
+    )
+
+    sidecar = partial_path(out)
+    stale = partial_matches(out, source, grid, repeats) is False
+    if stale and overwrite:
+        discard_partial(out)
         _say(
-            f"recorded {total} A-scans ({n_p} position(s) x {n_a} azimuths x {n_c} "
-            f"co-elevations x {repeats} repeat(s)) of {source.description} to {path}"
-            + (f" (resumed after {done})" if done else "")
+            f"--overwrite: discarded the partial recording {sidecar} (made with another "
+            "grid, repeat count or setup); recording from the start"
         )
+    elif stale:  # before any "resuming" news: it would not resume
+        raise DataFileError(
+            f"cannot resume: {sidecar} was recorded with another grid, repeat count or "
+            "setup; pass --overwrite to discard it and record from the start, or record "
+            "to another --out"
+        )
+    done = saved_count(out) if sidecar.exists() else 0
+    if seed is not None and done and rig is None:
+        # A fresh process restarts the noise generator: re-seed from (seed, done) so the
+        # resumed measurements do not repeat the noise draws of the first ones.
+        run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
+        source = resolve_setup(setup, snr=snr, seed=run_seed)
+    if done:
+        _say(f"resuming {out}: {done} of {total} measurements already saved in {sidecar}")
+    try:
+        path = record(
+            source,
+            grid,
+            out,
+            repeats=repeats,
+            progress=progress,
+            batch_size=batch_size,
+            setup=_provenance(setup, seed, snr, config, rig),
+            overwrite=overwrite,
+        )
+    except KeyboardInterrupt:
+        _say(
+            f"[yellow]interrupted:[/] {saved_count(out)} of {total} measurements are saved "
+            f"in {sidecar}; run the same command again to resume"
+        )
+        raise typer.Exit(130) from None
+    except EchocalError:
+        if sidecar.exists() and saved_count(out):
+            _say(
+                f"{saved_count(out)} of {total} measurements are saved in {sidecar}; "
+                "fix the problem and run the same command again to resume"
+            )
+        raise
+    n_p, n_a, n_c = grid.shape
+    n_time = _n_time(path)
+    if as_json:
+        write_json(
+            {
+                "path": str(path),
+                "n_ascans": total,
+                "shape": {
+                    "position": n_p,
+                    "azimuth": n_a,
+                    "coelevation": n_c,
+                    "repeat": repeats,
+                    "time": n_time,
+                },
+                "resumed_after": done,
+                "source": source.description,
+            }
+        )
+    _say(
+        f"recorded {total} A-scans ({n_p} position(s) x {n_a} azimuths x {n_c} "
+        f"co-elevations x {repeats} repeat(s)) of {source.description} to {path}"
+        + (f" (resumed after {done})" if done else "")
+    )
+
+
+def _n_time(path: Path) -> int:
+    """Samples per A-scan of the recording at ``path`` (a rig says only when it measures)."""
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="h5netcdf") as data:
+        return int(data.sizes["time"])
+
+
+def _provenance(setup, seed, snr, config, rig) -> dict:
+    """What the replay file stores of the source: the setup (its pulse is the matched
+    filter's template for a replay) and, on a rig, the rig file."""
+    info = {
+        # a file as an absolute path: a replay elsewhere still finds a sampled
+        # pulse's file relative to it
+        "setup": str(Path(setup).resolve()) if setup and Path(setup).is_file() else setup,
+        "seed": seed,
+        "snr": snr,
+        "config": None if config is None else config.model_dump(),
+    }
+    if rig is not None:
+        from echocal.rigs import load_rig_config
+
+        info["rig"] = {
+            "file": str(Path(rig).resolve()),
+            "config": load_rig_config(rig)[0].model_dump(by_alias=True),
+        }
+    return info

@@ -7,10 +7,13 @@ figures into ``--out``; resumable (an interrupted scan keeps its finished points
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import typer
 
+from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP
 
 GRID_HELP = (
@@ -60,7 +63,13 @@ def register(app: typer.Typer) -> None:
 
     @app.command("scan")
     def scan_command(
-        setup: str = typer.Option(..., "--setup", help=SETUP_HELP),
+        setup: str | None = typer.Option(
+            None,
+            "--setup",
+            help=SETUP_HELP + " Required unless --rig; with --rig it gives the pulse (the "
+            "matched filter's template) and the sound speed (default: the rig file's setup).",
+        ),
+        rig: Path | None = typer.Option(None, "--rig", help=RIG_HELP),
         grid: str = typer.Option(..., "--grid", help=f"Raster: {GRID_HELP}."),
         out: Path = typer.Option(..., "--out", help="Output folder (scan.nc + figures)."),
         specimen: str | None = typer.Option(None, "--specimen", help=SPECIMEN_HELP),
@@ -98,100 +107,154 @@ def register(app: typer.Typer) -> None:
         point fail (a height outside the positioner's limits, a budget below what the
         method needs) are refused before anything is written.
         """
+        from contextlib import ExitStack
 
-        import numpy as np
-
-        from echocal.cli._common import write_json
+        from echocal.cli._rig_option import open_rig, refuse_simulation_options, rig_setup
         from echocal.cli._setup_option import resolve_setup
-        from echocal.errors import DataFileError
-        from echocal.scanning import ScanGrid, check_scan, partial_path, scan_surface
-        from echocal.scanning.store import saved_points
+        from echocal.errors import EchocalValueError
+        from echocal.scanning import ScanGrid, check_scan
         from echocal.units import parse_length
 
         gx, gy = parse_grid(grid)
         scan_grid = ScanGrid.regular(x=gx, y=gy, z=parse_length("--z", z))
+        if rig is not None:
+            refuse_simulation_options(specimen=specimen, snr=snr)
+            setup = rig_setup(setup, rig, "--rig")
+        elif setup is None:
+            raise EchocalValueError(
+                "--setup NAME|FILE is required (a simulated setup), or --rig FILE (a rig)"
+            )
         base = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
         # one effective seed for the noise and the calibration: --seed, else the setup's
         effective = seed if seed is not None else _seed_of(base)
-        check_scan(base, scan_grid, method=method, budget_per_point=budget_per_point)
-        if out.exists() and not out.is_dir():
-            raise DataFileError(f"--out {out}: exists and is not a folder")
-        out.mkdir(parents=True, exist_ok=True)
-        runs = {"warm": True, "cold": False} if cold else {"warm": True}
-        results = {}
-        for label, warm in runs.items():
-            path = out / ("scan.nc" if warm else "scan-cold.nc")
-            sidecar = partial_path(path)
-            done = saved_points(path) if sidecar.exists() else 0
-            source = base
-            if done:
-                # a fresh process restarts the noise: do not repeat the first points' draws
-                run_seed = int(np.random.SeedSequence([effective, done]).generate_state(1)[0])
-                source = resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
-            try:
-                results[label] = scan_surface(
-                    source,
-                    scan_grid,
-                    method=method,
-                    budget_per_point=budget_per_point,
-                    warm_start=warm,
-                    rng=effective,
-                    progress=progress,
-                    out=path,
-                    metadata={"setup": setup, "specimen": source.specimen.name, "seed": effective},
-                    overwrite=overwrite,
-                    log=_say,
-                )
-            except KeyboardInterrupt:
-                _say(
-                    f"[yellow]interrupted:[/] finished points are saved in {sidecar}; "
-                    "run the same command again to resume"
-                )
-                raise typer.Exit(130) from None
-            if figures and warm:
-                from echocal.plots.surface import save_surface_figures
+        with ExitStack() as stack:
+            if rig is not None:  # the setup gives only the pulse and the sound speed
+                source: Any = stack.enter_context(open_rig(rig))
+                extra: dict[str, Any] = {"pulse": base.pulse, "sound_speed": base.sound_speed}
+                metadata = {"setup": setup, "seed": effective, "rig": source.description}
+                reseed = None  # a rig's noise is its own
+            else:
+                source, extra = base, {}
+                metadata = {"setup": setup, "specimen": base.specimen.name, "seed": effective}
 
-                save_surface_figures(results[label], out, specimen=source.specimen)
-        summary = results["warm"].summary
-        report = {
-            "out": str(out),
-            "scan": summary,
-            "wall_time": results["warm"].dataset.attrs["wall_time"],
-        }
-        if cold:
-            cs = results["cold"].summary
-            report["cold"] = cs
-            report["cold_over_warm_measurements"] = (
-                cs["measurements_total"] / summary["measurements_total"]
-                if summary["measurements_total"]
-                else None
+                def reseed(run_seed: int) -> Any:
+                    return resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
+
+            check_scan(
+                source,
+                scan_grid,
+                method=method,
+                budget_per_point=budget_per_point,
+                pulse=extra.get("pulse"),
             )
-        if as_json:
-            write_json(report)
-        ne, he = summary.get("normal_error_deg"), summary.get("height_error_abs_m")
-        lines = [
-            f"scanned {summary['points']} points: {summary['found']} found, "
-            f"{summary['missing']} missing {summary['missing_by_status'] or ''}".rstrip(),
-            *(
-                f"  {name}: {message}"
-                for name, message in summary.get("missing_messages", {}).items()
-            ),
-            f"measurements: {summary['measurements_total']} total, "
-            f"{summary['measurements_per_point']:.1f} per point "
-            f"(median {summary['measurements_per_point_median']:g})",
-        ]
-        if ne is not None and he is not None:
-            lines.append(
-                f"normal error: median {_fmt(ne['median'], 1, 'deg')}, "
-                f"p90 {_fmt(ne['p90'], 1, 'deg')}; |height error|: median "
-                f"{_fmt(he['median'], 1e3, 'mm')}, p90 {_fmt(he['p90'], 1e3, 'mm')}"
+            options = {
+                "method": method,
+                "budget_per_point": budget_per_point,
+                "rng": effective,
+                "progress": progress,
+                "metadata": metadata,
+                "overwrite": overwrite,
+                **extra,
+            }
+            _scan(
+                source,
+                scan_grid,
+                out,
+                options,
+                reseed=reseed,
+                cold=cold,
+                figures=figures,
+                as_json=as_json,
             )
-        if cold:
-            lines.append(
-                f"cold starts: {report['cold']['measurements_total']} measurements, "
-                f"{report['cold']['found']} found; warm starts save a factor "
-                f"{report['cold_over_warm_measurements']:.2f}"
+
+
+def _scan(
+    base: Any,
+    scan_grid: Any,
+    out: Path,
+    options: dict[str, Any],
+    *,
+    reseed: Callable[[int], Any] | None,
+    cold: bool,
+    figures: bool,
+    as_json: bool,
+) -> None:
+    """Scan with ``base`` (a simulated setup or a rig) and ``options`` for
+    :func:`~echocal.scanning.scan_surface`: warm (and cold) runs, resume (a simulator
+    ``reseed``-ed so a resumed run does not repeat the noise), figures and the report."""
+    import numpy as np
+
+    from echocal.cli._common import write_json
+    from echocal.errors import DataFileError
+    from echocal.scanning import partial_path, scan_surface
+    from echocal.scanning.store import saved_points
+
+    if out.exists() and not out.is_dir():
+        raise DataFileError(f"--out {out}: exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    runs = {"warm": True, "cold": False} if cold else {"warm": True}
+    results = {}
+    for label, warm in runs.items():
+        path = out / ("scan.nc" if warm else "scan-cold.nc")
+        sidecar = partial_path(path)
+        done = saved_points(path) if sidecar.exists() else 0
+        source = base
+        if done and reseed is not None:
+            # a fresh process restarts the noise: do not repeat the first points' draws
+            seed = int(np.random.SeedSequence([options["rng"], done]).generate_state(1)[0])
+            source = reseed(seed)
+        try:
+            results[label] = scan_surface(
+                source, scan_grid, warm_start=warm, out=path, log=_say, **options
             )
-        lines.append(f"results: {out / 'scan.nc'}" + (" and figures" if figures else ""))
-        for line in lines:
-            _say(line)
+        except KeyboardInterrupt:
+            _say(
+                f"[yellow]interrupted:[/] finished points are saved in {sidecar}; "
+                "run the same command again to resume"
+            )
+            raise typer.Exit(130) from None
+        if figures and warm:
+            from echocal.plots.surface import save_surface_figures
+
+            specimen = getattr(source, "specimen", None)  # a rig has none to draw
+            save_surface_figures(results[label], out, specimen=specimen)
+    summary = results["warm"].summary
+    report = {
+        "out": str(out),
+        "scan": summary,
+        "wall_time": results["warm"].dataset.attrs["wall_time"],
+    }
+    if cold:
+        cs = results["cold"].summary
+        report["cold"] = cs
+        report["cold_over_warm_measurements"] = (
+            cs["measurements_total"] / summary["measurements_total"]
+            if summary["measurements_total"]
+            else None
+        )
+    if as_json:
+        write_json(report)
+    ne, he = summary.get("normal_error_deg"), summary.get("height_error_abs_m")
+    lines = [
+        f"scanned {summary['points']} points: {summary['found']} found, "
+        f"{summary['missing']} missing {summary['missing_by_status'] or ''}".rstrip(),
+        *(f"  {name}: {message}" for name, message in summary.get("missing_messages", {}).items()),
+        f"measurements: {summary['measurements_total']} total, "
+        f"{summary['measurements_per_point']:.1f} per point "
+        f"(median {summary['measurements_per_point_median']:g})",
+    ]
+    if ne is not None and he is not None:
+        lines.append(
+            f"normal error: median {_fmt(ne['median'], 1, 'deg')}, "
+            f"p90 {_fmt(ne['p90'], 1, 'deg')}; |height error|: median "
+            f"{_fmt(he['median'], 1e3, 'mm')}, p90 {_fmt(he['p90'], 1e3, 'mm')}"
+        )
+    if cold:
+        lines.append(
+            f"cold starts: {report['cold']['measurements_total']} measurements, "
+            f"{report['cold']['found']} found; warm starts save a factor "
+            f"{report['cold_over_warm_measurements']:.2f}"
+        )
+    lines.append(f"results: {out / 'scan.nc'}" + (" and figures" if figures else ""))
+    for line in lines:
+        _say(line)
