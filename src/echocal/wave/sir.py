@@ -198,9 +198,7 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
             hi = min(b_hi, p_hi)
             if hi <= lo:
                 continue
-            _add_piece(
-                kind, prm, geo, c, lo, hi, lo == p_lo, hi == p_hi, k, b_lo, dt, h, hm
-            )
+            _add_piece(kind, prm, geo, c, lo, hi, lo == p_lo, hi == p_hi, k, b_lo, dt, h, hm)
     return k0 - 1, n + 2
 
 
