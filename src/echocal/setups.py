@@ -174,15 +174,24 @@ Point = tuple[Position, Position, Position]
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    @pydantic.field_validator("*", mode="before")
+    @pydantic.model_validator(mode="before")
     @classmethod
-    def _no_bool(cls, value: Any, info: pydantic.ValidationInfo) -> Any:
-        """``true`` where a number belongs is refused (pydantic would read it as 1)."""
-        if isinstance(value, bool) and info.field_name is not None:
-            annotation = cls.model_fields[info.field_name].annotation
+    def _no_bool(cls, data: Any) -> Any:
+        """``true`` where a number belongs is refused (pydantic would read it as 1).
+
+        A model-level check (a field validator on every field would also touch the
+        discriminator fields of tagged unions, which pydantic forbids); the message names
+        the field first and :func:`_format_errors` moves it into the path."""
+        if not isinstance(data, dict):
+            return data
+        for name, value in data.items():
+            field = cls.model_fields.get(name)
+            if field is None or not isinstance(value, bool):
+                continue
+            annotation = field.annotation
             if annotation is not bool and bool not in typing.get_args(annotation):
-                raise ValueError(f"must be a number; got {str(value).lower()}")
-        return value
+                raise ValueError(f"{name}: must be a number; got {str(value).lower()}")
+        return data
 
 
 class MediumConfig(_Model):
@@ -740,6 +749,9 @@ def _format_errors(
         ):
             message = f"{message}, got {item['input']!r}"
         message = message.replace("Value error, ", "").replace("Input should be", "must be")
+        field, sep, rest = message.partition(": ")
+        if sep and field.isidentifier() and rest.startswith("must be a number"):
+            where, message = f"{where}.{field}" if parts else field, rest  # see _Model._no_bool
         lines.append(f"{where}: {message}")
     return lines
 
