@@ -126,7 +126,7 @@ def test_no_echo_found_exits_1_and_still_writes_the_result(tmp_path):
     assert "no echo found" in human.output and "estimate" not in human.output
     saved = json.loads((tmp_path / "result.json").read_text())
     assert saved["status"] == 4
-    summary = CliRunner().invoke(app, [*args, "--json"])
+    summary = CliRunner().invoke(app, [*args, "--json", "--overwrite"])
     assert summary.exit_code == 1
     data = json.loads(summary.stdout)
     assert data["success"] is False and data["estimate_deg"] is None and data["status"] == 4

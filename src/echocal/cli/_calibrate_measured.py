@@ -27,6 +27,7 @@ from echocal.cli.calibrate import (
     _parse_position,
     _report,
     _Run,
+    prepare_out,
     save_pngs,
 )
 from echocal.measurement.base import BaseSource
@@ -495,7 +496,7 @@ def _save_measured(
 ) -> dict[str, str]:
     """Write result.json and (with ``plots``) the convergence and path plots of a run on a
     recording (``maps``) or a rig (None: no map)."""
-    out.mkdir(parents=True, exist_ok=True)
+    prepare_out(out)
     result.save_json(out / "result.json")
     if not plots:
         return {}

@@ -30,6 +30,7 @@ from echocal.cli._common import (
 )
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.io import check_out_dir, refuse_existing_output
 
 
 def register(app: typer.Typer) -> None:
@@ -150,6 +151,13 @@ def register(app: typer.Typer) -> None:
         json_output: Annotated[
             bool, typer.Option("--json", help="Print the result as one JSON object.")
         ] = False,
+        overwrite: Annotated[
+            bool,
+            typer.Option(
+                "--overwrite",
+                help="Replace the result and plots in an --out that already holds files.",
+            ),
+        ] = False,
     ) -> None:
         """Calibrate the orientation at one position: on a simulated setup (and compare
         with its true optimum), on a recording (--replay FILE) or on a rig (--instrument
@@ -161,6 +169,7 @@ def register(app: typer.Typer) -> None:
         before the fault is saved to partial_log.json in --out).
         """
         run = _Run.parse(method, budget, max_iter, settle, preset, option, search_radius)
+        refuse_existing_output(out, overwrite=overwrite)
         if replay is not None or instrument is not None or rig is not None:
             from echocal.cli._calibrate_measured import (
                 _calibrate_measured,
@@ -295,7 +304,7 @@ def _calibrate_simulated(
     # the effective seed: --seed, else the setup file's, else 0
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)
     evaluation = evaluate_run(virtual, where, result)
-    out.mkdir(parents=True, exist_ok=True)
+    prepare_out(out)
     result.save_json(out / "result.json")
     figures = _save_plots(virtual, where, evaluation, out) if plots else {}
     found = result.success
@@ -321,6 +330,17 @@ def _calibrate_simulated(
     _report(
         summary, result, out, json_output, lambda: _print_estimate(result, evaluation, virtual, out)
     )
+
+
+CALIBRATE_FILES = ("result.json", "convergence.png", "path.png", "partial_log.json")
+"""What ``echocal calibrate`` writes in --out."""
+
+
+def prepare_out(out: Path) -> None:
+    """Make --out ready for a result: create it and remove what an earlier calibration left
+    there (the run began only after :func:`~echocal.io.refuse_existing_output` accepted
+    --out: empty, or --overwrite given), so no stale plot stays beside the new result."""
+    check_out_dir(out, overwrite=True, own_files=CALIBRATE_FILES)
 
 
 EXIT_NO_ECHO = 1
