@@ -472,6 +472,12 @@ class ModelBased(Optimizer):
         xs = self._supported_max()
         return xs if xs is not None else self._incumbent
 
+    @property
+    def concave(self) -> bool:
+        """True when the fitted model is concave and its maximum, supported by the data,
+        is the recommendation (not the incumbent fallback)."""
+        return self._supported_max() is not None
+
     def recommend_value(self) -> float | None:
         if self._model is None:
             return None

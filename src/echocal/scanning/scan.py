@@ -41,6 +41,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -59,6 +60,7 @@ from echocal._validate import (
     positive_int,
 )
 from echocal.calibrate import build_optimizer, calibrate, method_names
+from echocal.calibrate.result import NO_ECHO_STATUSES, SUCCESS_STATUSES
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import PARAMETERIZATIONS
@@ -77,11 +79,12 @@ from echocal.specimen import Specimen
 
 __all__ = ["CONVERGED_STATUSES", "check_scan", "echo_snr", "scan_surface"]
 
-CONVERGED_STATUSES = frozenset({0, 5, 7})
+CONVERGED_STATUSES = SUCCESS_STATUSES
 """Calibration statuses (:data:`echocal.calibrate.STATUS_MESSAGES`) after which a point's
-orientation is trusted: the method's own convergence (a short step, a complete search,
-a settled recommendation).  A run stopped by the budget or the iteration limit is
-``unconverged``: its estimate is wherever the method happened to be."""
+orientation is trusted: a calibration's ``success`` — the method's own convergence (a
+short step, a complete search, a settled recommendation) with its evidence.  A run
+stopped by the budget or the iteration limit is ``unconverged``: its estimate is
+wherever the method happened to be."""
 
 FloatArray = NDArray[np.float64]
 
@@ -230,15 +233,18 @@ def _measure_point(
     )
     try:
         x0 = np.clip(start, objective.bounds[:, 0], objective.bounds[:, 1])
-        result = calibrate(
-            objective,
-            ctx.method,
-            x0=x0,
-            budget=ctx.budget - ctx.tof_repeats,
-            rng=rng,
-            settle=(ctx.tol, ctx.patience),
-            **ctx.options,
-        )
+        with warnings.catch_warnings():  # the point's status says so ("at-limit")
+            warnings.filterwarnings("ignore", "the estimate .* angle limits", UserWarning)
+            result = calibrate(
+                objective,
+                ctx.method,
+                x0=x0,
+                budget=ctx.budget - ctx.tof_repeats,
+                rng=rng,
+                settle=(ctx.tol, ctx.patience),
+                final_check=0,  # the time-of-flight A-scans below measure the estimate
+                **ctx.options,
+            )
     except EchocalError as exc:
         record.update(status=STATUS["source-error"], message=str(exc))
         record["n_measurements"] = record["n_calibration"] = objective.n_measurements
@@ -247,8 +253,10 @@ def _measure_point(
     record["n_calibration"] = result.n_measurements
     record["n_measurements"] = result.n_measurements
     record["a"], record["b"] = (float(v) for v in result.x)
-    if result.status in (4, 6):
+    if result.status in NO_ECHO_STATUSES:
         record.update(status=STATUS["no-echo"], message=result.message)
+    elif result.status == 8:
+        record.update(status=STATUS["at-limit"], message="estimate on the angle limits")
     elif result.status not in CONVERGED_STATUSES:
         record.update(
             status=STATUS["unconverged"],
@@ -256,10 +264,6 @@ def _measure_point(
             f"the method converged: no clear echo here, or budget_per_point ({ctx.budget}) "
             "too small",
         )
-    elif np.any(np.isclose(result.x, objective.bounds.ravel()[[0, 2]], atol=1e-6)) or np.any(
-        np.isclose(result.x, objective.bounds.ravel()[[1, 3]], atol=1e-6)
-    ):
-        record.update(status=STATUS["at-limit"], message="estimate on the angle limits")
     else:
         pose = objective.pose(*result.x)
         try:
