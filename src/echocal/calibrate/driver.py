@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from echocal._blas import one_blas_thread
 from echocal._rng import RngLike, as_generator
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import (
@@ -209,6 +210,7 @@ def _settle_test(
     return test
 
 
+@one_blas_thread  # bit-reproducible: a seeded run gives the same numbers in any process
 def calibrate(
     objective: Objective,
     method: str = "auto",

@@ -196,7 +196,7 @@ def _refine_exp_fit(d: FloatArray, y: FloatArray, coef: FloatArray) -> FloatArra
 
     r0 = res(start)
     try:
-        out = least_squares(res, start, jac=jac, method="lm", max_nfev=200)
+        out = least_squares(res, start, jac=jac, method="trf", max_nfev=200)
     except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
         return coef
     if not (np.all(np.isfinite(out.x)) and out.cost < 0.5 * float(r0 @ r0)):
@@ -216,7 +216,7 @@ def _refine_exp_fit(d: FloatArray, y: FloatArray, coef: FloatArray) -> FloatArra
             return np.vstack([jac(beta), wp * np.eye(6)[3:]])
 
         try:
-            out2 = least_squares(res_p, out.x, jac=jac_p, method="lm", max_nfev=200)
+            out2 = least_squares(res_p, out.x, jac=jac_p, method="trf", max_nfev=200)
             if np.all(np.isfinite(out2.x)):
                 out = out2
         except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
