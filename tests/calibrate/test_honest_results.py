@@ -130,3 +130,22 @@ def test_a_claim_outside_the_sampled_region_or_on_a_convex_model_is_refused():
 def test_energy_noise_grows_with_the_echo():
     # pure noise: sigma; an echo of energy E adds the cross term: sigma^2 (1 + 2 E / floor)
     np.testing.assert_allclose(energy_sigma(np.array([1.0, 5.0]), 1.0, 0.1), [0.1, 0.3])
+
+
+def test_model_based_never_measures_a_point_a_third_time():
+    # the peak lies beyond the corner of the limits: the model kept proposing the corner,
+    # clipped onto (2, 2), and measured it 13 times with the estimate frozen
+    objective = FunctionObjective(
+        peak((2.4, 2.4), width=0.5),
+        noise_sigma=0.1,
+        rng=1,
+        noise_floor=0.0,
+        bounds=[[-2.0, 2.0], [-2.0, 2.0]],
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the estimate is on the limits (status 8)
+        result = calibrate(objective, "model-based", x0=(0.0, 0.0), budget=60, rng=0, final_check=0)
+    _, counts = np.unique(np.round(result.points, 9), axis=0, return_counts=True)
+    assert counts.max() <= 2
+    np.testing.assert_allclose(result.x, (2.0, 2.0))
+    assert result.status == 8
