@@ -37,7 +37,7 @@ CASES = {
 }
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture()  # per test: each case gets a fresh noise stream, whatever ran before
 def plate():
     # A broad lobe (4 mm probe at 1 MHz) so the thesis's gradient methods have a slope
     # to follow from 3° away; 16 x 16 rays keep each measurement cheap.

@@ -17,6 +17,9 @@ from cli_helpers import run_main
 from echocal.cli import app
 from echocal.cli._common import parse_options
 
+NOT_CONVERGED = 3
+"""The exit status of a run stopped by --max-iter or --budget before it converged."""
+
 # the thesis setup at its reference position: 4 measurements per gradient iteration
 FAST = ["calibrate", "--method", "gradient", "--max-iter", "1", "--no-plots"]
 
@@ -79,7 +82,7 @@ def test_confirm_false_reaches_the_method_as_false(tmp_path):
     # bool("False") is True: the string must become the boolean False, not the opposite
     args = ["calibrate", "--option", "confirm=False", "--max-iter", "1", "--no-plots"]
     result = CliRunner().invoke(app, [*args, "--out", str(tmp_path), "--json"])
-    assert result.exit_code == 0, result.output
+    assert result.exit_code == NOT_CONVERGED, result.output  # one iteration: no claim
     options = json.loads((tmp_path / "result.json").read_text())["options"]
     assert options["confirm"] is False
 
@@ -88,7 +91,7 @@ def test_result_options_are_the_effective_ones_without_memory_addresses(tmp_path
     result = CliRunner().invoke(
         app, ["calibrate", "--max-iter", "1", "--no-plots", "--out", str(tmp_path)]
     )
-    assert result.exit_code == 0, result.output
+    assert result.exit_code == NOT_CONVERGED, result.output
     text = (tmp_path / "result.json").read_text()
     assert "0x" not in text and "bound method" not in text
     options = json.loads(text)["options"]
@@ -101,7 +104,7 @@ def test_result_options_are_the_effective_ones_without_memory_addresses(tmp_path
 def test_run_keywords_pass_through_option(tmp_path):
     args = [*FAST, "--option", "final_check=2", "--out", str(tmp_path), "--json"]
     result = CliRunner().invoke(app, args)
-    assert result.exit_code == 0, result.output
+    assert result.exit_code == NOT_CONVERGED, result.output
     assert json.loads(result.stdout)["n_measurements"] == 4 + 2  # one FD iteration + check
 
 
@@ -126,7 +129,7 @@ def test_no_echo_found_exits_1_and_still_writes_the_result(tmp_path):
     assert "no echo found" in human.output and "estimate" not in human.output
     saved = json.loads((tmp_path / "result.json").read_text())
     assert saved["status"] == 4
-    summary = CliRunner().invoke(app, [*args, "--json"])
+    summary = CliRunner().invoke(app, [*args, "--json", "--overwrite"])
     assert summary.exit_code == 1
     data = json.loads(summary.stdout)
     assert data["success"] is False and data["estimate_deg"] is None and data["status"] == 4
@@ -150,7 +153,7 @@ def test_the_setup_files_seed_is_used_unless_seed_is_given(tmp_path):
     def values(*args):
         out = tmp_path / str(len(list(tmp_path.iterdir())))
         result = CliRunner().invoke(app, [*FAST, *args, "--out", str(out), "--json"])
-        assert result.exit_code == 0, result.output
+        assert result.exit_code == NOT_CONVERGED, result.output
         return json.loads((out / "result.json").read_text())["values"]
 
     seeded = str(_setup_with_seed(tmp_path, 5))

@@ -130,8 +130,10 @@ def bare(plate: Path, folder: Path) -> Path:
 
 def calibrate_json(args: list[str], capsys, monkeypatch) -> dict:
     code, out, err = run_main(["calibrate", *args, "--json"], capsys, monkeypatch)
-    assert code == 0, err
-    return json.loads(out)
+    assert code in (0, 3), err  # converged, or an estimate at the end of the budget
+    summary = json.loads(out)
+    assert summary["exit_code"] == code and summary["success"] is (code == 0)
+    return summary
 
 
 def beam_error(estimate, truth, parameterization: str = "azimuth-coelevation") -> float:
@@ -191,7 +193,7 @@ def test_replay_plots_show_the_recordings_own_map(recording, tmp_path, capsys, m
     out = tmp_path / "plots"
     args = ["--replay", str(recording), "--x0", "26,17", "--out", str(out), "--budget", "20"]
     code, stdout, err = run_main(["calibrate", *args], capsys, monkeypatch)
-    assert code == 0, err
+    assert code in (0, 3), err  # converged, or an estimate at the end of the budget
     shown = flat(stdout)
     assert "estimate" in shown and "no truth is known" in shown and "echo found after" in shown
     assert {p.name for p in out.iterdir()} == {"result.json", "convergence.png", "path.png"}
@@ -205,7 +207,8 @@ def test_setup_pulse_overrides_the_recorded_one_with_a_warning(
     code, out, err = run_main(
         ["calibrate", *args, "--no-plots", "--out", str(tmp_path), "--json"], capsys, monkeypatch
     )
-    assert code == 0, err
+    # a 5 MHz template on a 1 MHz recording may see no echo at the estimate (exit 1)
+    assert code in (0, 1, 3), err
     summary = json.loads(out)
     assert summary["pulse"] == {
         "name": "gabor",
@@ -259,7 +262,7 @@ def test_instrument_plots_the_path_without_a_map(plate, tmp_path, capsys, monkey
         args = ["--instrument", f"{host}:{port}", "--setup", str(plate), "--position", "0,0,20"]
         args += ["--x0", "-9,16", "--budget", "12", "--out", str(tmp_path)]
         code, out, err = run_main(["calibrate", *args], capsys, monkeypatch)
-    assert code == 0, err
+    assert code in (0, 3), err  # converged, or an estimate at the end of the budget
     assert "a rig does not know its optimum" in flat(out)
     assert {p.name for p in tmp_path.iterdir()} == {"result.json", "convergence.png", "path.png"}
 

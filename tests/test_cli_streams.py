@@ -23,8 +23,8 @@ def test_a_listing_is_on_stdout():
 def test_a_calibration_summary_is_on_stdout_and_json_stays_pure(tmp_path):
     args = ("calibrate", "--setup", "thesis", "--x0", "0,0", "--budget", "20", "--no-plots")
     human = _run(*args, "--out", str(tmp_path / "a"))
-    assert human.returncode == 0, human.stderr
+    assert human.returncode in (0, 3), human.stderr  # converged, or stopped by --budget
     assert "estimate" in human.stdout and "measurements" in human.stdout
     machine = _run(*args, "--out", str(tmp_path / "b"), "--json")
-    assert machine.returncode == 0, machine.stderr
+    assert machine.returncode == human.returncode, machine.stderr
     assert json.loads(machine.stdout)["n_measurements"] <= 20  # one JSON object, nothing else

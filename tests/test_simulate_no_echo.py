@@ -34,7 +34,7 @@ def test_pure_noise_reports_no_echo_with_its_significance(tmp_path):
     assert data["tof_s"] is None and data["distance_m"] is None
     # a significance of pure noise is ~N(0, 1): far below the threshold (P(g > 4.5) ~ 3e-6)
     assert data["significance"] < data["detection_threshold"] == 4.5
-    human = run(*args, "--out", str(tmp_path))
+    human = run(*args, "--out", str(tmp_path), "--overwrite")
     assert "no echo detected" in human.output and "significance g =" in human.output
     assert "distance" in human.output and " mm" not in human.output  # no distance printed
 

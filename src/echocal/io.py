@@ -6,13 +6,20 @@ import contextlib
 import math
 import os
 import secrets
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from echocal.errors import DataFileError
 
-__all__ = ["atomic_path", "atomic_write_text", "file_in_the_way", "json_ready"]
+__all__ = [
+    "atomic_path",
+    "atomic_write_text",
+    "check_out_dir",
+    "file_in_the_way",
+    "json_ready",
+    "refuse_existing_output",
+]
 
 
 @contextlib.contextmanager
@@ -54,6 +61,45 @@ def file_in_the_way(path: str | os.PathLike[str]) -> Path | None:
         if folder.exists():
             return None if folder.is_dir() else folder
     return None
+
+
+def refuse_existing_output(out_dir: str | os.PathLike[str], *, overwrite: bool) -> Path:
+    """The one rule of every command that writes an output folder: a folder that already
+    holds files is refused unless ``overwrite`` — results are never replaced silently.
+    Checks only (nothing is written): call it before measuring anything."""
+    folder = Path(out_dir)
+    if folder.exists() and not folder.is_dir():
+        raise DataFileError(f"output folder {str(folder)!r} exists and is not a folder")
+    blocker = file_in_the_way(folder)
+    if blocker is not None:
+        raise DataFileError(
+            f"cannot write {str(folder)!r}: {blocker} is not a directory; choose another folder"
+        )
+    if folder.is_dir() and any(folder.iterdir()) and not overwrite:
+        raise DataFileError(
+            f"output folder {str(folder)!r} already holds results; choose another folder "
+            "or pass overwrite=True (CLI: --overwrite) to replace them"
+        )
+    return folder
+
+
+def check_out_dir(
+    out_dir: str | os.PathLike[str], *, overwrite: bool, own_files: Iterable[str] = ()
+) -> Path:
+    """:func:`refuse_existing_output`, then make the folder ready: the files this command
+    writes (``own_files``, names inside ``out_dir``) are removed, so none left by an
+    earlier run (a plot the new run does not make, say) stays beside the new result —
+    nothing else is touched — and the folder is created if needed.  Returns the folder."""
+    folder = refuse_existing_output(out_dir, overwrite=overwrite)
+    for name in own_files:
+        stale = folder / name
+        if stale.is_file() or stale.is_symlink():
+            stale.unlink()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _unwritable(folder, exc) from None
+    return folder
 
 
 def _unwritable(target: Path, exc: OSError) -> DataFileError:

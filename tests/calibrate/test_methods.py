@@ -42,7 +42,7 @@ def test_converges_on_noiseless_concave_problem(method, problem, quad_objective,
 
 def test_grid_finds_the_optimum_to_its_resolution(gauss_objective):
     res = calibrate(gauss_objective(), "grid", x0=(0.0, 0.0), span=2.0, step=0.1)
-    assert res.status == 5 and res.n_measurements == 41 * 41
+    assert res.status == 5 and res.n_measurements == 41 * 41 + 1  # + the final measurement
     # a node of the grid lies within 0.1/sqrt(2) of OPT; the 3x3-mean argmax of a
     # symmetric peak is that node or a neighbour: error <= one diagonal step
     assert np.hypot(*(res.x - OPT)) <= 0.1 * np.sqrt(2) + 1e-9
@@ -78,7 +78,7 @@ def test_measurements_per_iteration_are_locked(method, per_iter, gauss_objective
 
 def test_spsa_gain_calibration_is_counted_and_uses_symmetric_perturbations(gauss_objective):
     obj = gauss_objective()
-    res = calibrate(obj, "spsa", x0=X0, rng=1, max_iter=10, n_gain_estimates=4)
+    res = calibrate(obj, "spsa", x0=X0, rng=1, max_iter=10, n_gain_estimates=4, final_check=0)
     # 4 calibration estimates x 2 + 10 iterations x 2
     assert res.n_measurements == 28 == obj.n_measurements
     assert res.iteration_measurements[1] == 10
@@ -218,7 +218,14 @@ def test_grid_measures_its_whole_grid_whatever_the_iteration_and_settle_defaults
     # neither (a partial grid reported as "converged" is a wrong answer)
     objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
     result = calibrate(
-        objective, method="grid", x0=(0.0, 0.0), span=15.0, step=0.25, settle=(0.01, 8), rng=0
+        objective,
+        method="grid",
+        x0=(0.0, 0.0),
+        span=15.0,
+        step=0.25,
+        settle=(0.01, 8),
+        rng=0,
+        final_check=0,
     )
     assert result.n_measurements == 121 * 121  # every node, once
     assert result.status == 5  # "grid finished", not 1 (iteration limit) or 7 (settled)
@@ -265,7 +272,11 @@ def test_grid_does_not_ask_to_widen_a_grid_clipped_at_the_bounds(gauss_objective
     import warnings
 
     objective = gauss_objective(bounds=[[-2.0, 0.5], [-2.0, 2.0]])
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         result = calibrate(objective, "grid", x0=(0.0, 0.0), span=1.0, step=0.25)
     assert result.x[0] == 0.5
+    # the one warning is the estimate's: on the positioner's limits (status 8, no success)
+    assert [str(w.message) for w in caught if "span" in str(w.message)] == []
+    assert len(caught) == 1 and "angle limits" in str(caught[0].message)
+    assert result.status == 8 and not result.success

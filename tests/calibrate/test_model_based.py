@@ -89,7 +89,7 @@ def test_acquisition_finds_a_narrow_peak_from_pure_noise(local):
     res = calibrate(
         obj, local, x0=OPT, acquire={"spacing": 1.0}, max_iter=60, rng=0, budget=400, **opts
     )
-    assert res.success, res.message
+    assert res.status in (1, 2) and res.acquisition_measurements is not None, res.message
     # tolerance: 30 dB noise on a 0.5 deg peak; Newton (delta 0.5) is the less precise
     tol = 0.05 if local == "model-based" else 0.1
     assert np.hypot(*(res.x - opt)) < tol
@@ -97,7 +97,9 @@ def test_acquisition_finds_a_narrow_peak_from_pure_noise(local):
 
 def test_auto_uses_the_noise_level_of_the_objective_and_reuses_the_first_ring():
     obj = FunctionObjective(gaussian, noise_sigma=SNR30, rng=1)
-    res = calibrate(obj, "auto", x0=OPT + np.array([1.0, 0.5]), max_iter=1, rng=0, confirm=False)
+    res = calibrate(
+        obj, "auto", x0=OPT + np.array([1.0, 0.5]), max_iter=1, rng=0, confirm=False, final_check=0
+    )
     # echo found in the first 7 points (x0 + hexagon), which double as the model's design:
     # one model-based iteration later the run has used exactly 8 measurements
     assert res.options["noise_sigma"] == SNR30 and res.n_measurements == 8

@@ -56,7 +56,7 @@ def test_runs_that_cannot_run_are_refused_with_every_reason():
     position, x0, newton, auto = problems
     assert position.startswith("position:") and "z=500 mm outside [5, 100] mm" in position
     assert x0.startswith("x0.points.0:") and "tilt_x" in x0 and "100" in x0
-    assert newton.startswith("methods.0 (newton):") and "budget >= 9" in newton
+    assert newton.startswith("methods.0 (newton):") and "budget >= 10" in newton
     assert auto.startswith("methods.1 (auto") and "fine_radius" in auto and "'abc'" in auto
 
 
@@ -89,13 +89,14 @@ def test_a_malformed_method_entry_keeps_the_other_methods_checked():
 
 def test_the_budget_at_the_methods_minimum_passes_and_runs():
     # the check's bound is calibrate's own: one short of it is refused, at it the run works
-    (problem,) = _problems({**OK, "budget": 8, "methods": [{"name": "newton"}]})
-    assert "budget >= 9" in problem
-    spec = load_sweep({**OK, "budget": 9, "methods": [{"name": "newton"}]})
+    # (newton: 9 per iteration + the final measurement at the estimate)
+    (problem,) = _problems({**OK, "budget": 9, "methods": [{"name": "newton"}]})
+    assert "budget >= 10" in problem
+    spec = load_sweep({**OK, "budget": 10, "methods": [{"name": "newton"}]})
     assert run_problems(spec) == []
     row, _ = run_case(expand(spec)[0])
     assert row["status"] >= 0, row["message"]
-    assert 0 < row["n_measurements"] <= 9
+    assert 0 < row["n_measurements"] <= 10
 
 
 def test_check_cli_lists_the_problems_and_exits_2(tmp_path, capsys, monkeypatch):
@@ -105,7 +106,7 @@ def test_check_cli_lists_the_problems_and_exits_2(tmp_path, capsys, monkeypatch)
     )
     code, out, err = run_main(["sweep", "check", str(sweep)], capsys, monkeypatch)
     assert code == 2 and out == ""
-    assert "Traceback" not in err and "budget >= 9" in err
+    assert "Traceback" not in err and "budget >= 10" in err
 
 
 @pytest.mark.parametrize(
@@ -113,7 +114,7 @@ def test_check_cli_lists_the_problems_and_exits_2(tmp_path, capsys, monkeypatch)
     [
         ("quick", ["--workers", "0"], "workers must be >= 1"),
         ("quick", ["--scheduler", "localhost:8786"], "tcp://HOST:PORT"),
-        ("bad", [], "budget >= 9"),
+        ("bad", [], "budget >= 10"),
     ],
 )
 def test_run_refuses_before_writing_anything(

@@ -436,5 +436,9 @@ class Acquisition(Optimizer):
         return self.local.recommend_value() if self.local is not None else None
 
     @property
+    def concave(self) -> bool | None:
+        return self.local.concave if self.local is not None else None
+
+    @property
     def iterate(self) -> FloatArray:
         return self.local.iterate if self.local is not None else self._iterate.copy()

@@ -184,3 +184,10 @@ class Optimizer:
     def recommend_value(self) -> float | None:
         """The model's value at :meth:`recommend` in the caller's units, when a model exists."""
         return None
+
+    @property
+    def concave(self) -> bool | None:
+        """Whether the method's model of f is concave at :meth:`recommend` and has its
+        maximum there — evidence a convergence claim needs; None for a method without
+        a model of the curvature."""
+        return None

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from echocal._blas import one_blas_thread
 from echocal._rng import RngLike, as_generator
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import (
@@ -24,6 +25,7 @@ from echocal.calibrate._options import (
 )
 from echocal.calibrate.acquisition import Acquisition
 from echocal.calibrate.base import Optimizer
+from echocal.calibrate.evidence import judge
 from echocal.calibrate.objective import Objective
 from echocal.calibrate.presets import method_options, presets
 from echocal.calibrate.registry import get_method
@@ -208,6 +210,7 @@ def _settle_test(
     return test
 
 
+@one_blas_thread  # bit-reproducible: a seeded run gives the same numbers in any process
 def calibrate(
     objective: Objective,
     method: str = "auto",
@@ -221,7 +224,7 @@ def calibrate(
     callback: Callable[[CalibrationState], bool | None] | None = None,
     acquire: bool | Mapping[str, Any] = False,
     preset: str | None = None,
-    final_check: int = 0,
+    final_check: int = 1,
     **options: Any,
 ) -> CalibrationResult:
     """Find the orientation [deg] maximizing ``objective`` with ``method``.
@@ -247,8 +250,12 @@ def calibrate(
         in front of the method.
     preset : take the method's options from a preset (``"thesis"``, ``"thesis-table-4"``,
         ...); explicit ``options`` override them.
-    final_check : measure the estimate this many times at the end (counted) and report
-        their mean as ``fun``.
+    final_check : the final step moves to the estimate and measures it this many times
+        (default 1; counted, and kept out of the method's budget so the run still never
+        exceeds ``budget``); their mean is reported as ``fun`` and ``final_value``, and
+        the echo there is part of the evidence for ``success``.  0 disables it (the
+        positioner is then left at the last point the method probed).  Not done when no
+        echo was found (status 4 or 6).
     **options : method options (see ``echocal methods NAME``); unknown names are warned
         about (with the nearest valid name) and ignored; a value of the wrong type (e.g. a
         string for a number or a boolean) raises EchocalValueError naming the option.
@@ -282,11 +289,15 @@ def calibrate(
         budget = positive_int("budget", budget)
         limit = budget if limit is None else min(limit, budget)
     need = objective.cost(opt.min_budget)
-    if limit is not None and limit < need:
+    reserve = objective.cost(final_check)  # the final measurements at the estimate
+    if limit is not None and limit < need + reserve:
         raise EchocalValueError(
             f"budget={limit} is smaller than one iteration of method {method!r} needs "
-            f"({need} measurements); allowed: budget >= {need}"
+            f"({need} measurements) plus the final measurement(s) at the estimate "
+            f"(final_check={final_check}: {reserve}); allowed: budget >= {need + reserve}"
+            + (" (or final_check=0)" if reserve and limit >= need else "")
         )
+    limit = None if limit is None else limit - reserve
     rows = getattr(opt, "n_rows", None)  # an exhaustive method: its whole set, row by row
     wrapped = isinstance(opt, Acquisition) and hasattr(opt.local_class, "n_rows")
     if rows is not None or wrapped:  # (behind a search, its rows are known once it starts)
@@ -363,23 +374,20 @@ def calibrate(
     x = opt.recommend()
     fun = opt.recommend_value()
     log = objective.log
+    searched = log.points[start:], log.values[start:]
+    final = final_value = None
+    if final_check and status != 4 and np.any(np.isfinite(searched[1])):
+        final = objective(np.repeat(x[None, :], final_check, axis=0))
+        good = final[np.isfinite(final)]
+        fun = final_value = float(good.mean()) if good.size else None
+        log = objective.log
     pts_all, vals_all, times = log.points[start:], log.values[start:], log.times[start:]
-    if final_check:
-        left = None if limit is None else limit - (objective.n_measurements - start)
-        if left is None or left >= objective.cost(final_check):
-            check = objective(np.repeat(x[None, :], final_check, axis=0))
-            good = check[np.isfinite(check)]
-            fun = float(good.mean()) if good.size else None
-            log = objective.log
-            pts_all, vals_all = log.points[start:], log.values[start:]
-            times = log.times[start:]
     if fun is None:
         at = np.all(np.isclose(pts_all, x, rtol=0.0, atol=1e-12), axis=1) & np.isfinite(vals_all)
         fun = float(vals_all[at].mean()) if np.any(at) else None
-    if not np.any(np.isfinite(vals_all)) and len(vals_all):
-        status = 6
+    status, detail = judge(status, x, opt, objective, searched, final)
     n_nan = int(np.count_nonzero(np.isnan(vals_all)))
-    message = STATUS_MESSAGES[status]
+    message = STATUS_MESSAGES[status] + detail
     if n_nan:
         message += f"; {n_nan} measurement(s) returned NaN (treated as the worst value seen)"
     return CalibrationResult(
@@ -402,4 +410,5 @@ def calibrate(
         names=objective.names,
         times=times,
         acquisition_measurements=_acquisition_cost(opt, objective),
+        final_value=final_value,
     )

@@ -196,7 +196,7 @@ def _refine_exp_fit(d: FloatArray, y: FloatArray, coef: FloatArray) -> FloatArra
 
     r0 = res(start)
     try:
-        out = least_squares(res, start, jac=jac, method="lm", max_nfev=200)
+        out = least_squares(res, start, jac=jac, method="trf", max_nfev=200)
     except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
         return coef
     if not (np.all(np.isfinite(out.x)) and out.cost < 0.5 * float(r0 @ r0)):
@@ -216,7 +216,7 @@ def _refine_exp_fit(d: FloatArray, y: FloatArray, coef: FloatArray) -> FloatArra
             return np.vstack([jac(beta), wp * np.eye(6)[3:]])
 
         try:
-            out2 = least_squares(res_p, out.x, jac=jac_p, method="lm", max_nfev=200)
+            out2 = least_squares(res_p, out.x, jac=jac_p, method="trf", max_nfev=200)
             if np.all(np.isfinite(out2.x)):
                 out = out2
         except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
@@ -323,6 +323,8 @@ class ModelBased(Optimizer):
             ok = np.isfinite(hv)
             self._x, self._y = hp[ok], hv[ok]
         self._trust = self.radius
+        self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
+        self._n_fresh = 0
         self._design = self._initial_design()
         self._model: QuadraticModel | None = None
         self._mode = "design"
@@ -421,8 +423,18 @@ class ModelBased(Optimizer):
         return xs if dist <= self._trust else None
 
     def _ask(self) -> FloatArray:
+        """The next point: the design, else the model's proposal (:meth:`_propose`) —
+        unless that point was measured twice already (see :meth:`_fresh_point`)."""
         if len(self._design):
             return self._design
+        cand = self._propose()
+        if self._times_measured(cand[0]) >= 2:
+            cand = self._fresh_point()[None, :]
+            self._mode = "approach"
+            self._step_len = float(np.hypot(*(cand[0] - self._incumbent)))
+        return cand
+
+    def _propose(self) -> FloatArray:
         m = self._model
         xs = self._supported_max()
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
@@ -449,8 +461,32 @@ class ModelBased(Optimizer):
         self._step_len = float(np.hypot(*(cand - self._incumbent)))
         return cand[None, :]
 
+    def _times_measured(self, point: FloatArray) -> int:
+        """How often ``point`` [deg] (as the positioner reaches it: clipped) was measured,
+        NaN results included (to 1e-9°)."""
+        if not len(self._tried):
+            return 0
+        near = np.all(np.abs(self._tried - self.clip(point)) <= 1e-9, axis=1)
+        return int(np.count_nonzero(near))
+
+    def _fresh_point(self) -> FloatArray:
+        """A point [deg] on the trust circle around the incumbent, at golden-angle steps of
+        direction, that was measured fewer than twice: the model's own proposal was (it
+        cannot learn more there — measured twice already, e.g. clipped onto a limit — and
+        re-measuring it froze the estimate for 49 measurements), so it looks elsewhere."""
+        self._pred = None  # not the model's step: no trust-radius verdict on it
+        for k in range(1, 64):
+            self._n_fresh += 1
+            ang = self._n_fresh * _GOLDEN
+            radius = self._trust * (1.0 + (k // 16))  # all directions tried: farther out
+            cand = self._incumbent + radius * np.array([np.cos(ang), np.sin(ang)])
+            if self._times_measured(cand) < 2:
+                return cand
+        return cand
+
     def _tell(self, points: FloatArray, values: FloatArray) -> bool:
         ok = ~self.last_nan
+        self._tried = np.vstack([self._tried, points])
         self._x = np.vstack([self._x, points[ok]])
         self._y = np.concatenate([self._y, values[ok]])
         self._design = np.zeros((0, 2))
@@ -471,6 +507,12 @@ class ModelBased(Optimizer):
     def _recommend(self) -> FloatArray:
         xs = self._supported_max()
         return xs if xs is not None else self._incumbent
+
+    @property
+    def concave(self) -> bool:
+        """True when the fitted model is concave and its maximum, supported by the data,
+        is the recommendation (not the incumbent fallback)."""
+        return self._supported_max() is not None
 
     def recommend_value(self) -> float | None:
         if self._model is None:

@@ -100,6 +100,14 @@ class Newton(Optimizer):
         """Length [deg] of the step to the next candidate (used by the xtol rule)."""
         return float(np.hypot(*(self._candidate - self._iterate)))
 
+    @property
+    def concave(self) -> bool | None:
+        """True when the FD Hessian measured at the iterate is negative definite."""
+        if self._state is None:
+            return None
+        h = self._state[2]
+        return bool(np.linalg.eigvalsh(0.5 * (h + h.T))[-1] < 0.0)
+
     def _ask(self) -> FloatArray:
         return nine_points(self._candidate, self.delta)
 

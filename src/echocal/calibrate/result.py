@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from echocal.errors import DataFileError
 from echocal.io import atomic_write_text
 
-__all__ = ["STATUS_MESSAGES", "SUCCESS_STATUSES", "CalibrationResult"]
+__all__ = ["NO_ECHO_STATUSES", "STATUS_MESSAGES", "SUCCESS_STATUSES", "CalibrationResult"]
 
 FloatArray = NDArray[np.float64]
 
@@ -27,11 +27,21 @@ STATUS_MESSAGES: dict[int, str] = {
     5: "search complete",
     6: "no finite measurement: every value was NaN",
     7: "converged: the recommendation settled (stayed within settle tolerance)",
+    8: "estimate at the positioner's angle limit: the optimum may lie beyond reach",
+    9: "no echo clearly above the noise floor at the estimate",
+    10: "not converged: the measurements do not support the estimate",
 }
 """The one status table: status code -> message."""
 
-SUCCESS_STATUSES = frozenset({0, 1, 2, 3, 5, 7})
-"""Statuses after which ``x`` is a usable estimate (check ``status`` for why the run stopped)."""
+SUCCESS_STATUSES = frozenset({0, 5, 7})
+"""Statuses of a run that met its convergence rule (``xtol``: 0, ``settle``: 7; an
+exhaustive search that measured all its points: 5) with the evidence behind it (see
+:mod:`echocal.calibrate.evidence`) — what ``success`` means, as scipy's does.  A run
+stopped by its budget (2), its iteration limit (1) or a callback (3) still returns its
+last estimate, with ``success`` False."""
+
+NO_ECHO_STATUSES = frozenset({4, 6, 9})
+"""Statuses of a run that found no echo: ``x`` is not an estimate of anything."""
 
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
 
@@ -43,9 +53,11 @@ class CalibrationResult:
     Attributes
     ----------
     x : [deg], shape (2,) — the estimate (the method's recommendation).
-    fun : [energy units] — model value at ``x`` if the method has a model, else the
-        mean of the values measured exactly at ``x``, else None.
-    success, status, message : why the run stopped (:data:`STATUS_MESSAGES`).
+    fun : [energy units] — the mean of the final measurements at ``x`` when it was
+        measured (the default), else the model's value at ``x`` if the method has a
+        model, else the mean of the values measured exactly at ``x``, else None.
+    success : the run met its convergence rule with evidence (:data:`SUCCESS_STATUSES`).
+    status, message : why the run stopped (:data:`STATUS_MESSAGES`).
     n_measurements : every measurement of this run (setup, repeats, acquisition, checks).
     n_iterations : completed iterations.
     points : [deg], shape (n_measurements, 2) — all measured points in order.
@@ -61,6 +73,9 @@ class CalibrationResult:
     times : [s], shape (n_measurements,) — wall-clock time of each measurement.
     acquisition_measurements : measurements the acquisition phase spent before it found
         the echo and handed over (None without an acquisition phase or if it never did).
+    final_value : [energy units] the mean of the final measurements at ``x`` (counted in
+        ``n_measurements``; ``final_check`` of them), None when the run did not measure
+        its estimate.
     """
 
     x: FloatArray
@@ -82,6 +97,7 @@ class CalibrationResult:
     names: tuple[str, str] = ("azimuth", "coelevation")
     times: FloatArray = field(default_factory=lambda: np.zeros(0))
     acquisition_measurements: int | None = None
+    final_value: float | None = None
 
     @property
     def nfev(self) -> int:
@@ -106,7 +122,7 @@ class CalibrationResult:
                 v = arr.tolist()
             elif f.name == "names":
                 v = list(v)
-            elif f.name == "fun" and v is not None and not math.isfinite(v):
+            elif f.name in ("fun", "final_value") and v is not None and not math.isfinite(v):
                 v = None
             elif f.name == "options":
                 v = _jsonable(v)

@@ -11,6 +11,15 @@ first spends ``n_gain_estimates`` SP gradient estimates at x0 (2 measurements
 each, counted like any other, not counted as iterations) and sets
 ε = first_step · (A + 1)^ρ / mean|ĝ|, so the first step is about ``first_step``
 degrees long whatever the energy unit.
+
+Step bound (Spall 1998, §III, "blocking"/bounding the step): every step is at most
+``max_step`` degrees long, by default ``first_step``.  Gains calibrated where the echo is
+weak (far from the peak, on noise) are large, and near a narrow peak the gradient is a
+hundred times larger: unbounded, one step flew from 0.1° beside the 5 MHz probe's peak
+to the positioner's limit 25° away (``echocal calibrate --setup immersion-5mhz --method
+spsa --x0=-1,2 --seed 1``); bounded, 12 starts 1–3° off end with a median error of 0.33°
+(all within 0.5°), against 13° unbounded — and the thesis setup's broad lobe is
+unaffected (median 0.105° either way).
 """
 
 from __future__ import annotations
@@ -39,7 +48,7 @@ class SPSA(Optimizer):
     rho, gamma : decay exponents ρ (0.602) and γ (0.101).
     first_step : [deg] target length of the first step when calibrating ε.
     n_gain_estimates : SP gradient estimates used for calibration (2 measurements each).
-    max_step : [deg] cap on a step length (None: no cap).
+    max_step : [deg] cap on a step length (None: ``first_step``).
     """
 
     batch_size = 2
@@ -68,7 +77,9 @@ class SPSA(Optimizer):
         self.gamma = nonnegative_float("gamma", gamma)
         self.first_step = positive_float("first_step", first_step)
         self.n_gain_estimates = positive_int("n_gain_estimates", n_gain_estimates)
-        self.max_step = None if max_step is None else positive_float("max_step", max_step)
+        self.max_step = (
+            self.first_step if max_step is None else positive_float("max_step", max_step)
+        )
         self._k = 0
         self._delta = np.ones(2)
         self._ck = self.c

@@ -27,6 +27,9 @@ from echocal.cli.calibrate import (
     _parse_position,
     _report,
     _Run,
+    exit_code,
+    found_echo,
+    prepare_out,
     save_pngs,
 )
 from echocal.measurement.base import BaseSource
@@ -121,7 +124,7 @@ def _calibrate_measured(
         assert replay is not None
         done = _on_replay(run, replay, replay_mode, setup, position, out=out, plots=plots, **common)
     result, pulse = done.result, done.pulse
-    found = result.success
+    found = found_echo(result)
     summary = {
         "setup": setup,
         "seed": seed,
@@ -135,16 +138,18 @@ def _calibrate_measured(
         "method": result.method,
         "parameterization": parameterization,
         "names": list(result.names),
-        "success": found,
+        "success": result.success,
         "estimate_deg": [float(v) for v in result.x] if found else None,
         "truth_deg": None,  # only a simulation knows its optimum
         "error_deg": None,
         **done.extra,
         "n_measurements": result.n_measurements,
         "acquisition_measurements": result.acquisition_measurements,
+        "final_value": result.final_value,
         "n_iterations": result.n_iterations,
         "status": result.status,
         "message": result.message,
+        "exit_code": exit_code(result),
         "files": {"result": str(out / "result.json"), **done.figures},
     }
     _report(summary, result, out, json_output, lambda: _print_measured_estimate(done, out))
@@ -495,7 +500,7 @@ def _save_measured(
 ) -> dict[str, str]:
     """Write result.json and (with ``plots``) the convergence and path plots of a run on a
     recording (``maps``) or a rig (None: no map)."""
-    out.mkdir(parents=True, exist_ok=True)
+    prepare_out(out)
     result.save_json(out / "result.json")
     if not plots:
         return {}

@@ -30,6 +30,7 @@ from echocal.cli._common import (
 )
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.io import check_out_dir, refuse_existing_output
 
 
 def register(app: typer.Typer) -> None:
@@ -147,20 +148,43 @@ def register(app: typer.Typer) -> None:
             "echocal-out/calibrate"
         ),
         plots: Annotated[bool, typer.Option(help="Save the convergence and path plots.")] = True,
+        final_measure: Annotated[
+            bool,
+            typer.Option(
+                help="End by moving to the estimate and measuring it (counted, within "
+                "--budget; reported as final_value, and part of the evidence for success). "
+                "--no-final-measure leaves the positioner at the last pose the method "
+                "probed.  --option final_check=N measures it N times."
+            ),
+        ] = True,
         json_output: Annotated[
             bool, typer.Option("--json", help="Print the result as one JSON object.")
+        ] = False,
+        overwrite: Annotated[
+            bool,
+            typer.Option(
+                "--overwrite",
+                help="Replace the result and plots in an --out that already holds files.",
+            ),
         ] = False,
     ) -> None:
         """Calibrate the orientation at one position: on a simulated setup (and compare
         with its true optimum), on a recording (--replay FILE) or on a rig (--instrument
         HOST:PORT), where no truth is known.
 
-        Exit status: 0 when the method returned an estimate; 1 when no echo was found
-        (the acquisition search failed, or every measurement failed) — the result files
-        are still written; 2 for bad input or a rig that failed mid-run (what was measured
-        before the fault is saved to partial_log.json in --out).
+        Exit status: 0 when the run converged (its stopping rule fired with evidence:
+        "success": true); 1 when no echo was found (the acquisition search failed, every
+        measurement failed, or the estimate shows no echo); 2 for bad input or a rig that
+        failed mid-run (what was measured before the fault is saved to partial_log.json
+        in --out); 3 when the run ended on its budget or iteration limit, or its
+        convergence was not supported by the measurements (an estimate is reported, not
+        a converged one); 4 when the estimate lies on the positioner's angle limits.
+        The result files are written in every case but 2.
         """
-        run = _Run.parse(method, budget, max_iter, settle, preset, option, search_radius)
+        run = _Run.parse(
+            method, budget, max_iter, settle, preset, option, search_radius, final_measure
+        )
+        refuse_existing_output(out, overwrite=overwrite)
         if replay is not None or instrument is not None or rig is not None:
             from echocal.cli._calibrate_measured import (
                 _calibrate_measured,
@@ -238,11 +262,22 @@ class _Run:
         preset: str | None,
         option: list[str] | None,
         search_radius: float | None,
+        final_measure: bool = True,
     ) -> _Run:
-        """Check --method, --option, --search-radius and --settle (before any measurement)."""
+        """Check --method, --option, --search-radius, --settle and --no-final-measure
+        (before any measurement)."""
+        from echocal.errors import EchocalValueError
+
         search = _search_options(method, search_radius)
         extra = parse_options(option, "--option")
         run_keywords = _check_options(method, extra, search)
+        if not final_measure:
+            if "final_check" in run_keywords:
+                raise EchocalValueError(
+                    "--no-final-measure and --option final_check=N both set the final "
+                    "measurements at the estimate; give one"
+                )
+            run_keywords["final_check"] = 0
         return cls(
             method, budget, max_iter, _parse_settle(settle), preset, search, extra, run_keywords
         )
@@ -295,10 +330,10 @@ def _calibrate_simulated(
     # the effective seed: --seed, else the setup file's, else 0
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)
     evaluation = evaluate_run(virtual, where, result)
-    out.mkdir(parents=True, exist_ok=True)
+    prepare_out(out)
     result.save_json(out / "result.json")
     figures = _save_plots(virtual, where, evaluation, out) if plots else {}
-    found = result.success
+    found = found_echo(result)
     summary = {
         "setup": virtual.name,
         "seed": virtual.rng if isinstance(virtual.rng, int) else None,
@@ -307,15 +342,17 @@ def _calibrate_simulated(
         "method": result.method,
         "parameterization": parameterization,
         "names": list(result.names),
-        "success": found,
+        "success": result.success,
         "estimate_deg": [float(v) for v in result.x] if found else None,
         "truth_deg": [float(v) for v in evaluation.truth],
         "error_deg": evaluation.error if found else None,
         "n_measurements": result.n_measurements,
         "acquisition_measurements": result.acquisition_measurements,
+        "final_value": result.final_value,
         "n_iterations": result.n_iterations,
         "status": result.status,
         "message": result.message,
+        "exit_code": exit_code(result),
         "files": {"result": str(out / "result.json"), **figures},
     }
     _report(
@@ -323,8 +360,39 @@ def _calibrate_simulated(
     )
 
 
+CALIBRATE_FILES = ("result.json", "convergence.png", "path.png", "partial_log.json")
+"""What ``echocal calibrate`` writes in --out."""
+
+
+def prepare_out(out: Path) -> None:
+    """Make --out ready for a result: create it and remove what an earlier calibration left
+    there (the run began only after :func:`~echocal.io.refuse_existing_output` accepted
+    --out: empty, or --overwrite given), so no stale plot stays beside the new result."""
+    check_out_dir(out, overwrite=True, own_files=CALIBRATE_FILES)
+
+
 EXIT_NO_ECHO = 1
 """Exit status of a calibration that found no echo (result files written all the same)."""
+EXIT_NOT_CONVERGED = 3
+"""Exit status of a calibration that returned an estimate without converging."""
+EXIT_AT_LIMIT = 4
+"""Exit status of a calibration whose estimate lies on the positioner's angle limits."""
+
+
+def found_echo(result: Any) -> bool:
+    """Whether ``result`` has an estimate of anything (its status is not a no-echo one)."""
+    from echocal.calibrate.result import NO_ECHO_STATUSES
+
+    return result.status not in NO_ECHO_STATUSES
+
+
+def exit_code(result: Any) -> int:
+    """The exit status of ``echocal calibrate`` for ``result`` (see its ``--help``)."""
+    if result.success:
+        return 0
+    if not found_echo(result):
+        return EXIT_NO_ECHO
+    return EXIT_AT_LIMIT if result.status == 8 else EXIT_NOT_CONVERGED
 
 
 def _report(
@@ -335,15 +403,21 @@ def _report(
     print_estimate: Callable[[], None],
 ) -> None:
     """Print ``summary`` (``--json``), the estimate or the failure; exit with
-    :data:`EXIT_NO_ECHO` when no echo was found."""
+    :func:`exit_code` (0 only for a converged run)."""
+    code = exit_code(result)
     if json_output:
         write_json(summary)
-    elif result.success:
-        print_estimate()
-    else:
+    elif code == EXIT_NO_ECHO:
         _print_failure(result, out)
-    if not result.success:
-        raise typer.Exit(code=EXIT_NO_ECHO)
+    else:
+        print_estimate()
+        if code:
+            console.print(
+                f"[yellow]warning:[/] not converged (status {result.status}): "
+                f"{escape(result.message)}; the estimate is the run's last recommendation"
+            )
+    if code:
+        raise typer.Exit(code=code)
 
 
 def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> None:

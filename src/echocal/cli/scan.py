@@ -7,7 +7,6 @@ figures into ``--out``; resumable (an interrupted scan keeps its finished points
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -132,13 +131,9 @@ def register(app: typer.Typer) -> None:
                 source: Any = stack.enter_context(open_rig(rig))
                 extra: dict[str, Any] = {"pulse": base.pulse, "sound_speed": base.sound_speed}
                 metadata = {"setup": setup, "seed": effective, "rig": source.description}
-                reseed = None  # a rig's noise is its own
             else:
                 source, extra = base, {}
                 metadata = {"setup": setup, "specimen": base.specimen.name, "seed": effective}
-
-                def reseed(run_seed: int) -> Any:
-                    return resolve_setup(setup, specimen=specimen, snr=snr, seed=run_seed)
 
             check_scan(
                 source,
@@ -161,7 +156,6 @@ def register(app: typer.Typer) -> None:
                 scan_grid,
                 out,
                 options,
-                reseed=reseed,
                 cold=cold,
                 figures=figures,
                 as_json=as_json,
@@ -174,20 +168,17 @@ def _scan(
     out: Path,
     options: dict[str, Any],
     *,
-    reseed: Callable[[int], Any] | None,
     cold: bool,
     figures: bool,
     as_json: bool,
 ) -> None:
     """Scan with ``base`` (a simulated setup or a rig) and ``options`` for
-    :func:`~echocal.scanning.scan_surface`: warm (and cold) runs, resume (a simulator
-    ``reseed``-ed so a resumed run does not repeat the noise), figures and the report."""
-    import numpy as np
-
+    :func:`~echocal.scanning.scan_surface`: warm (and cold) runs, resume (each point's
+    noise restarts from its own seed, so a resumed run equals an uninterrupted one),
+    figures and the report."""
     from echocal.cli._common import write_json
     from echocal.errors import DataFileError
     from echocal.scanning import partial_path, scan_surface
-    from echocal.scanning.store import saved_points
 
     if out.exists() and not out.is_dir():
         raise DataFileError(f"--out {out}: exists and is not a folder")
@@ -197,15 +188,9 @@ def _scan(
     for label, warm in runs.items():
         path = out / ("scan.nc" if warm else "scan-cold.nc")
         sidecar = partial_path(path)
-        done = saved_points(path) if sidecar.exists() else 0
-        source = base
-        if done and reseed is not None:
-            # a fresh process restarts the noise: do not repeat the first points' draws
-            seed = int(np.random.SeedSequence([options["rng"], done]).generate_state(1)[0])
-            source = reseed(seed)
         try:
             results[label] = scan_surface(
-                source, scan_grid, warm_start=warm, out=path, log=_say, **options
+                base, scan_grid, warm_start=warm, out=path, log=_say, **options
             )
         except KeyboardInterrupt:
             _say(
@@ -216,7 +201,7 @@ def _scan(
         if figures and warm:
             from echocal.plots.surface import save_surface_figures
 
-            specimen = getattr(source, "specimen", None)  # a rig has none to draw
+            specimen = getattr(base, "specimen", None)  # a rig has none to draw
             save_surface_figures(results[label], out, specimen=specimen)
     summary = results["warm"].summary
     report = {

@@ -12,8 +12,17 @@ import typer
 from echocal.cli._common import output, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.constants import ECHO_THRESHOLD
-from echocal.io import atomic_path, atomic_write_text, json_ready
+from echocal.io import (
+    atomic_path,
+    atomic_write_text,
+    check_out_dir,
+    json_ready,
+    refuse_existing_output,
+)
 from echocal.units import parse_quantity
+
+SIMULATE_FILES = ("ascan.csv", "ascan.nc", "ascan.png", "ascan.svg")
+"""What ``echocal simulate`` writes in --out (removed first with --overwrite)."""
 
 
 def register(app: typer.Typer) -> None:
@@ -55,6 +64,12 @@ def register(app: typer.Typer) -> None:
         json_output: Annotated[
             bool, typer.Option("--json", help="Print the result as one JSON object.")
         ] = False,
+        overwrite: Annotated[
+            bool,
+            typer.Option(
+                "--overwrite", help="Replace the A-scan files in an --out that already holds files."
+            ),
+        ] = False,
     ) -> None:
         """Simulate one A-scan; print time of flight, distance and pseudo-energy; save it.
 
@@ -74,6 +89,7 @@ def register(app: typer.Typer) -> None:
 
         if fmt not in ("csv", "nc"):
             raise typer.BadParameter(f"--format must be csv or nc; got {fmt!r}")
+        refuse_existing_output(out, overwrite=overwrite)
         virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
         target = parse_pose(pose)
         scan = virtual.measure(target)
@@ -112,7 +128,7 @@ def register(app: typer.Typer) -> None:
         energy_window = _energy_window(scan.samples, window, pulse)
         if energy_window is not None:
             summary["energy_window_s"] = list(energy_window)
-        out.mkdir(parents=True, exist_ok=True)
+        check_out_dir(out, overwrite=overwrite, own_files=SIMULATE_FILES)
         data_path = out / f"ascan.{fmt}"
         _save_ascan(data_path, scan, summary)
         fig = plot_ascan(

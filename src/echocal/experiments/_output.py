@@ -16,27 +16,14 @@ from typing import Any
 import pandas as pd
 from matplotlib.figure import Figure
 
-from echocal.errors import DataFileError
 from echocal.experiments._findings import Finding
-from echocal.io import atomic_path, atomic_write_text
+from echocal.io import atomic_path, atomic_write_text, check_out_dir
 from echocal.plots import save_figure
 
 __all__ = ["FINDINGS_FILE", "check_out_dir", "write_figure", "write_summary", "write_table"]
 
 FINDINGS_FILE = "findings.json"
 FORMAT_VERSION = 1
-
-
-def check_out_dir(out_dir: Path, *, overwrite: bool) -> None:
-    """Refuse a non-empty ``out_dir`` unless ``overwrite`` (results are never replaced silently)."""
-    if out_dir.exists() and not out_dir.is_dir():
-        raise DataFileError(f"output folder {str(out_dir)!r} exists and is not a folder")
-    if out_dir.is_dir() and any(out_dir.iterdir()) and not overwrite:
-        raise DataFileError(
-            f"output folder {str(out_dir)!r} already holds results; choose another folder "
-            "or pass overwrite=True (CLI: --overwrite) to replace them"
-        )
-    out_dir.mkdir(parents=True, exist_ok=True)
 
 
 def write_table(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Protocol, Self, runtime_checkable
 
+from echocal._rng import RngLike
 from echocal.ascan import AScan
 from echocal.geometry import Pose
 from echocal.measurement.limits import PositionerLimits
@@ -61,6 +62,12 @@ class BaseSource:
 
     def close(self) -> None:
         """Nothing to release by default."""
+
+    def reseed(self, rng: RngLike) -> None:
+        """Restart the source's random stream (simulated noise, random repeats) from
+        ``rng`` — so a job can give each of its parts numbers of their own, the same when
+        the part is measured again after an interruption.  A source whose noise is
+        physical (a rig) has nothing to restart: the default does nothing."""
 
     def __enter__(self) -> Self:
         return self

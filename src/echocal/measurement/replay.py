@@ -183,6 +183,10 @@ class ReplaySource(BaseSource):
         self._closed = False
 
     # -- opening ----------------------------------------------------------------------------
+    def reseed(self, rng: RngLike) -> None:
+        """Restart the draws of ``random-repeat`` mode from ``rng`` (seed or Generator)."""
+        self._rng = as_generator(rng)
+
     @classmethod
     def open(
         cls,

@@ -389,6 +389,11 @@ class VirtualSetup(BaseSource):
         """Poses simulated at once (see ``_BATCH_ELEMENTS``)."""
         return max(1, _BATCH_ELEMENTS // max(self.transducer.n_rays, self.window.n_samples))
 
+    def reseed(self, rng: RngLike) -> None:
+        """Restart the receiver noise from ``rng`` (seed or Generator): the A-scans that
+        follow are those of a setup built with ``rng=rng``."""
+        object.__setattr__(self, "_generator", as_generator(rng))
+
     def simulate(
         self, poses: Sequence[Pose], *, noise: bool = True, rng: RngLike = None
     ) -> FloatArray:

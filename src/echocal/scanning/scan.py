@@ -41,6 +41,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -59,6 +60,7 @@ from echocal._validate import (
     positive_int,
 )
 from echocal.calibrate import build_optimizer, calibrate, method_names
+from echocal.calibrate.result import NO_ECHO_STATUSES, SUCCESS_STATUSES
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import PARAMETERIZATIONS
@@ -77,11 +79,15 @@ from echocal.specimen import Specimen
 
 __all__ = ["CONVERGED_STATUSES", "check_scan", "echo_snr", "scan_surface"]
 
-CONVERGED_STATUSES = frozenset({0, 5, 7})
+_NOISE_STREAM = 7
+"""Entropy word that separates a point's noise stream from its calibration's."""
+
+CONVERGED_STATUSES = SUCCESS_STATUSES
 """Calibration statuses (:data:`echocal.calibrate.STATUS_MESSAGES`) after which a point's
-orientation is trusted: the method's own convergence (a short step, a complete search,
-a settled recommendation).  A run stopped by the budget or the iteration limit is
-``unconverged``: its estimate is wherever the method happened to be."""
+orientation is trusted: a calibration's ``success`` — the method's own convergence (a
+short step, a complete search, a settled recommendation) with its evidence.  A run
+stopped by the budget or the iteration limit is ``unconverged``: its estimate is
+wherever the method happened to be."""
 
 FloatArray = NDArray[np.float64]
 
@@ -207,12 +213,31 @@ class _Context:
     pulse: Pulse | None
     sound_speed: float
     options: dict[str, Any] = field(default_factory=dict)
+    min_attempt: int = 1
+    """The fewest measurements an attempt at a point needs (one iteration + time of flight)."""
 
 
 def _measure_point(
-    ctx: _Context, position: FloatArray, start: FloatArray, rng: np.random.Generator
+    ctx: _Context,
+    position: FloatArray,
+    start: FloatArray,
+    seed: list[int],
+    budget: int | None = None,
 ) -> dict[str, Any]:
-    """Calibrate, then time of flight, at one probe position; a JSON-ready record."""
+    """Calibrate, then time of flight, at one probe position; a JSON-ready record.
+
+    seed : the attempt's own entropy: the calibration's generator and, when the source
+        can (:meth:`~echocal.measurement.BaseSource.reseed`), its noise start from it, so
+        the point's numbers do not depend on what was measured before it (a resumed scan
+        equals an uninterrupted one).
+    budget : measurements this attempt may use, time of flight included (default
+        ``ctx.budget``).
+    """
+    budget = ctx.budget if budget is None else budget
+    rng = np.random.default_rng(seed)
+    reseed = getattr(ctx.source, "reseed", None)
+    if callable(reseed):
+        reseed(np.random.default_rng([*seed, _NOISE_STREAM]))
     record: dict[str, Any] = {
         "status": STATUS["found"],
         "a": np.nan,
@@ -230,15 +255,18 @@ def _measure_point(
     )
     try:
         x0 = np.clip(start, objective.bounds[:, 0], objective.bounds[:, 1])
-        result = calibrate(
-            objective,
-            ctx.method,
-            x0=x0,
-            budget=ctx.budget - ctx.tof_repeats,
-            rng=rng,
-            settle=(ctx.tol, ctx.patience),
-            **ctx.options,
-        )
+        with warnings.catch_warnings():  # the point's status says so ("at-limit")
+            warnings.filterwarnings("ignore", "the estimate .* angle limits", UserWarning)
+            result = calibrate(
+                objective,
+                ctx.method,
+                x0=x0,
+                budget=budget - ctx.tof_repeats,
+                rng=rng,
+                settle=(ctx.tol, ctx.patience),
+                final_check=0,  # the time-of-flight A-scans below measure the estimate
+                **ctx.options,
+            )
     except EchocalError as exc:
         record.update(status=STATUS["source-error"], message=str(exc))
         record["n_measurements"] = record["n_calibration"] = objective.n_measurements
@@ -247,8 +275,10 @@ def _measure_point(
     record["n_calibration"] = result.n_measurements
     record["n_measurements"] = result.n_measurements
     record["a"], record["b"] = (float(v) for v in result.x)
-    if result.status in (4, 6):
+    if result.status in NO_ECHO_STATUSES:
         record.update(status=STATUS["no-echo"], message=result.message)
+    elif result.status == 8:
+        record.update(status=STATUS["at-limit"], message="estimate on the angle limits")
     elif result.status not in CONVERGED_STATUSES:
         record.update(
             status=STATUS["unconverged"],
@@ -256,10 +286,6 @@ def _measure_point(
             f"the method converged: no clear echo here, or budget_per_point ({ctx.budget}) "
             "too small",
         )
-    elif np.any(np.isclose(result.x, objective.bounds.ravel()[[0, 2]], atol=1e-6)) or np.any(
-        np.isclose(result.x, objective.bounds.ravel()[[1, 3]], atol=1e-6)
-    ):
-        record.update(status=STATUS["at-limit"], message="estimate on the angle limits")
     else:
         pose = objective.pose(*result.x)
         try:
@@ -302,7 +328,7 @@ def check_scan(
     x0: ArrayLike = (0.0, 0.0),
     pulse: Pulse | None = None,
     method_options: Mapping[str, Any] | None = None,
-) -> None:
+) -> int:
     """Refuse a scan whose every point would fail, before anything is measured or written.
 
     Checks the method and parameterization names, the probe heights against the
@@ -313,7 +339,8 @@ def check_scan(
     first measurement (at ``x0``) does not fail at every grid point — the probe inside
     the specimen, a window that cannot contain the echo.  Raises
     :class:`~echocal.errors.EchocalValueError` or :class:`~echocal.errors.LimitError`
-    naming the setting and what is allowed.
+    naming the setting and what is allowed.  Returns the fewest measurements one attempt
+    at a point needs (that iteration and the time-of-flight A-scans).
     """
     one_of("parameterization", parameterization, PARAMETERIZATIONS)
     one_of("method", method, method_names())
@@ -373,6 +400,7 @@ def check_scan(
             f"measurements for one iteration, plus {tof_repeats} time-of-flight A-scans; "
             f"allowed: budget_per_point >= {need + tof_repeats} (--budget-per-point)"
         )
+    return need + tof_repeats
 
 
 def _check_echo_possible(
@@ -442,9 +470,12 @@ def scan_surface(
     method : calibration method (:func:`echocal.calibrate.method_names`).
     parameterization : ``"tilt"`` (default: no pole at normal incidence) or
         ``"azimuth-coelevation"``.
-    budget_per_point : [measurements] cap per point, time-of-flight repeats included.
+    budget_per_point : [measurements] cap per point, time-of-flight repeats and the
+        second look included.
     warm_start : start each point from its finished neighbours (else from ``x0``).
-    rng : seed or Generator; each point draws its own seed from it in scan order.
+    rng : seed or Generator; each point draws its own seed from it in scan order, for its
+        calibration and (on a source that can, e.g. the simulator) its noise: a resumed
+        scan measures the same numbers as an uninterrupted one.
     progress : show a progress bar with ETA on stderr.
     out : NetCDF file to write (atomically); the scan is then resumable from
         ``<out>.partial/`` and refuses to resume a different scan.
@@ -475,7 +506,7 @@ def scan_surface(
     -----
     Whole-run mistakes (:func:`check_scan`) are refused before anything is written.
     """
-    check_scan(
+    min_attempt = check_scan(
         source,
         grid,
         method=method,
@@ -505,6 +536,7 @@ def scan_surface(
         pulse=pulse,
         sound_speed=positive_float("sound_speed", SOUND_SPEED_WATER if c0 is None else c0),
         options=dict(method_options or {}),
+        min_attempt=min_attempt,
     )
     gen = as_generator(rng)
     order = grid.order(start)
@@ -570,7 +602,7 @@ def scan_surface(
             if warm_start:
                 guess = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
             guess = ctx.x0 if guess is None else guess
-            rec = _measure_point(ctx, positions[key], guess, np.random.default_rng(seeds[i]))
+            rec = _measure_point(ctx, positions[key], guess, [int(seeds[i])])
             rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and guess is not ctx.x0))
             records[key] = rec
             if rec["status"] == 0:
@@ -601,13 +633,17 @@ def scan_surface(
                 break
             pending.discard(key)
             i, old = index[key], records[key]
+            left = ctx.budget - int(old["n_measurements"])  # budget_per_point is a cap
+            if left < ctx.min_attempt:
+                continue
             others = {k: v for k, v in found.items() if k != key}
             guess = _predict(others, xy[key], {k: xy[k] for k in others}, radius)
             new = _measure_point(
                 ctx,
                 positions[key],
                 ctx.x0 if guess is None else guess,  # None only without neighbours (not here)
-                np.random.default_rng([int(seeds[i]), 1]),
+                [int(seeds[i]), 1],
+                left,
             )
             new["warm"] = True
             best = new if _score(new) >= _score(old) else old

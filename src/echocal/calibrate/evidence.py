@@ -1,0 +1,175 @@
+"""What a calibration result may claim: the evidence behind ``success`` (private to the driver).
+
+A run *converged* only when its own stopping rule fired (``xtol`` or ``settle``, as in
+scipy's ``success``) **and** the data support the estimate:
+
+- it does not sit on the positioner's angle limits (the optimum may lie beyond reach:
+  status 8, whatever the stopping rule said);
+- the final measurement at the estimate shows an echo clearly above the noise floor
+  (the matched-filter significance above :data:`~echocal.constants.ECHO_THRESHOLD`
+  when the objective has a detector, else the value ``5 σ`` above the noise floor:
+  status 9);
+- a method with a model has a concave one there (:attr:`Optimizer.concave`);
+- the estimate lies inside the region sampled (the convex hull of the measured points);
+- no measured point is clearly stronger than the estimate's own final measurement
+  (by ``5 σ`` of the difference, σ the noise of an energy at that level, see
+  :func:`energy_sigma`, and by 0.1 %) — a quadratic model fitted over a double-humped
+  lobe, as a large probe sees over a cylinder, puts its maximum between the humps
+  (status 10 otherwise).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.spatial import Delaunay, QhullError
+
+from echocal.calibrate._fd import FloatArray
+from echocal.calibrate.base import Optimizer
+from echocal.calibrate.objective import Objective
+from echocal.constants import ECHO_THRESHOLD
+
+__all__ = ["at_limit", "echo_at_estimate", "energy_sigma", "judge", "unsupported_claim"]
+
+_K = 5.0
+"""Evidence margin in standard deviations."""
+_RELATIVE = 1e-3
+"""A measured point must beat the estimate by this fraction too (0.1 %: a lobe of width w
+drops by that much 0.045 w from its peak, far below a settle tolerance's worth)."""
+
+
+def at_limit(x: FloatArray, bounds: FloatArray, atol: float = 1e-6) -> bool:
+    """True when ``x`` [deg] (2,) lies on a finite bound of ``bounds`` [deg] (2, 2)."""
+    finite = np.isfinite(bounds)
+    near = np.isclose(x[:, None], bounds, rtol=0.0, atol=atol) & finite
+    return bool(np.any(near))
+
+
+def energy_sigma(values: FloatArray, floor: float, sigma: float) -> FloatArray:
+    """[energy units] noise σ of an energy-like metric measured at ``values`` (k,).
+
+    For a windowed energy of W samples with per-sample noise σₙ, pure noise has mean
+    ``floor`` = W σₙ² and σ = σₙ² √(2W); at an echo of energy E = value − floor the
+    cross term adds 4 σₙ² E, i.e. σ² (1 + 2E / floor)."""
+    echo = np.maximum(np.asarray(values, dtype=np.float64) - floor, 0.0)
+    ratio = 2.0 * echo / floor if floor > 0.0 else np.zeros_like(echo)
+    return sigma * np.sqrt(1.0 + ratio)
+
+
+def echo_at_estimate(objective: Objective, final: FloatArray) -> bool | None:
+    """Whether the final measurements ``final`` (n,) at the estimate show an echo clearly
+    above the noise floor; None when the objective cannot tell (no detector, no noise)."""
+    significance = objective.detections()
+    if significance is not None and np.any(np.isfinite(significance)):
+        g = significance[np.isfinite(significance)]
+        return bool(g.sum() / np.sqrt(g.size) > ECHO_THRESHOLD)  # Stouffer over repeats
+    floor, sigma = objective.noise_estimate()
+    good = final[np.isfinite(final)]
+    if floor is None or sigma is None or not good.size:
+        return None
+    return bool(good.mean() > floor + _K * sigma / np.sqrt(good.size))
+
+
+def _inside_hull(x: FloatArray, points: FloatArray) -> bool:
+    """True when ``x`` (2,) lies in the convex hull of ``points`` (n, 2) [deg] (its edge
+    included, to 1e-9 relative)."""
+    pts = np.unique(points[np.all(np.isfinite(points), axis=1)], axis=0)
+    if len(pts) < 3:
+        return bool(len(pts) and np.any(np.all(np.isclose(pts, x, atol=1e-9), axis=1)))
+    try:
+        hull = Delaunay(pts)
+    except QhullError:  # all on one line: no area was sampled
+        return False
+    return bool(hull.find_simplex(x[None, :], tol=1e-9)[0] >= 0)
+
+
+def unsupported_claim(
+    x: FloatArray,
+    points: FloatArray,
+    values: FloatArray,
+    final: FloatArray | None,
+    *,
+    concave: bool | None,
+    noise: tuple[float | None, float | None],
+) -> str | None:
+    """Why a converged-looking run's estimate ``x`` [deg] (2,) is not supported by its
+    measurements (``points`` (n, 2) [deg], ``values`` (n,)), or None when it is.
+
+    final : the values measured at ``x`` at the end (None: not measured);
+    concave : the method's model is concave at ``x`` (None: the method has no model);
+    noise : the objective's ``(noise_floor, noise_sigma)``.
+    """
+    if concave is False:
+        return "the method's model is not concave at the estimate"
+    if not _inside_hull(x, points):
+        return "the estimate lies outside the region sampled"
+    good = None if final is None else final[np.isfinite(final)]
+    if good is None or not good.size:
+        return None
+    floor, sigma = noise
+    if floor is None or sigma is None:
+        return None
+    level = float(good.mean())
+    mask = np.isfinite(values)
+    spread = np.hypot(
+        energy_sigma(values[mask], floor, sigma),
+        energy_sigma(np.array([level]), floor, sigma)[0] / np.sqrt(good.size),
+    )
+    stronger = values[mask] - level > _K * spread + _RELATIVE * abs(level)
+    if np.any(stronger):
+        best = int(np.argmax(np.where(stronger, values[mask], -np.inf)))
+        p = points[mask][best]
+        return (
+            f"a measured point ({p[0]:.3f}, {p[1]:.3f}) deg is clearly stronger than the "
+            f"estimate ({values[mask][best]:.4g} against {level:.4g})"
+        )
+    return None
+
+
+def judge(
+    status: int,
+    x: FloatArray,
+    opt: Optimizer,
+    objective: Objective,
+    searched: tuple[FloatArray, FloatArray],
+    final: FloatArray | None,
+) -> tuple[int, str]:
+    """The status a run may report, and a detail for its message ("" or "; ...").
+
+    status : why the loop stopped; x : [deg] (2,) the estimate; searched : the points (n, 2)
+    [deg] and values (n,) the run measured before its final measurement ``final`` (k,) at
+    ``x`` (None if none).  Warns when the estimate is at the angle limits."""
+    points, values = searched
+    if len(values) and not np.any(np.isfinite(values)):
+        return 6, ""
+    if status == 4:
+        return status, ""
+    if at_limit(x, objective.bounds):
+        names = objective.names
+        warnings.warn(
+            f"the estimate ({names[0]}={x[0]:.3f}, {names[1]}={x[1]:.3f}) deg lies on the "
+            "positioner's angle limits: the optimum may be beyond reach; move the probe, "
+            "widen the limits or start elsewhere (status 8, not a success)",
+            UserWarning,
+            stacklevel=3,
+        )
+        return 8, ""
+    if final is not None and echo_at_estimate(objective, final) is False:
+        return 9, " (measured there at the end)"
+    if status in (0, 7):
+        reason = unsupported_claim(
+            x,
+            points,
+            values,
+            final,
+            concave=opt.concave,
+            noise=objective.noise_estimate(),
+        )
+        if reason is not None:
+            return 10, f" ({STATUS_CLAIMS[status]}, but {reason})"
+    return status, ""
+
+
+STATUS_CLAIMS = {0: "the iterate stopped moving", 7: "the recommendation settled"}
+"""What the stopping rule of a withdrawn convergence claim said."""
