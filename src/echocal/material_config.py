@@ -38,7 +38,6 @@ __all__ = [
     "AttenuationConfig",
     "MaterialConfig",
     "MaterialSpec",
-    "Temperature",
     "build_material",
     "build_medium",
 ]
