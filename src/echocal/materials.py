@@ -278,6 +278,7 @@ def water(temperature: float = 20.0) -> Material:
         attenuation=WATER.attenuation,
     )
 
+
 # Solids.  Speeds and densities: Krautkrämer & Krautkrämer, *Ultrasonic Testing of
 # Materials*, 4th ed. (1990), Appendix table; Olympus, *Ultrasonic Transducers Technical
 # Notes* (2006), material sound velocities; steel as issue #14 (mild steel).  Longitudinal
