@@ -35,6 +35,7 @@ from echocal import (
     transmission_fluid_solid,
     transmission_normal,
     transmission_solid_fluid,
+    water,
 )
 from echocal.coefficients import snell_angle
 from echocal.setups import load_setup, validate_setup_file
@@ -338,6 +339,21 @@ def test_doubtful_material_warns_and_fluid_takes_no_shear_attenuation():
         Material(density=1000.0, longitudinal_speed=1480.0, shear_attenuation=Attenuation())
 
 
+def test_water_at_a_temperature_matches_the_tables():
+    # Del Grosso & Mader 1972 (speed) and Kell 1975 / CRC (density), independent tables
+    speeds = {0: 1402.39, 10: 1447.27, 20: 1482.34, 30: 1509.13, 40: 1528.89}
+    densities = {0: 999.84, 10: 999.70, 25: 997.05, 40: 992.22, 60: 983.20}
+    for t, c in speeds.items():
+        assert water(t).longitudinal_speed == pytest.approx(c, abs=0.06)
+    for t, rho in densities.items():
+        assert water(t).density == pytest.approx(rho, abs=0.01)
+    assert water().longitudinal_speed == pytest.approx(WATER.longitudinal_speed, abs=0.1)
+    with pytest.raises(EchocalValueError, match=r"temperature must lie in \[0, 95\]"):
+        water(-5)
+    with pytest.raises(EchocalValueError, match="temperature must be a number"):
+        water(True)
+
+
 # ---------------------------------------------------------------- setups
 def _setup(tmp_path, medium: str = "", material_line: str = "", name: str = "s.toml"):
     text = tiny_setup_toml(specimen=f'builtin = "flat-plate"\n{material_line}')
@@ -353,6 +369,9 @@ def test_setup_materials_and_the_sound_speed_in_effect(tmp_path):
     named = load_setup(_setup(tmp_path, '[medium]\nmaterial = "water"', 'material = "Steel"'))
     assert named.sound_speed == named.medium.longitudinal_speed == 1482.3  # the material's
     assert named.material is STEEL
+    warm = load_setup(_setup(tmp_path, "[medium]\ntemperature = 30"))
+    assert warm.sound_speed == warm.medium.longitudinal_speed == water(30).longitudinal_speed
+    assert warm.medium.density == water(30).density
     explicit = load_setup(_setup(tmp_path, '[medium]\nmaterial = "water"\nsound_speed = 1490'))
     assert explicit.sound_speed == explicit.medium.longitudinal_speed == 1490.0  # given wins
     assert explicit.medium.density == WATER.density
@@ -404,6 +423,14 @@ def test_setup_inline_material_and_toml_round_trip(tmp_path, capsys, monkeypatch
         ("", 'material = { density = 7850, longitudinal_speed = 5900, attenuation = '
          '{ alpha0 = "-1 dB/mm" } }', "specimen.material.attenuation.alpha0: must be greater"),
         ("", "material = 3", "specimen.material: must be a material name"),
+        ("[medium]\ntemperature = 120", "", "medium.temperature: must be less than or equal"),
+        (
+            "[medium]\nmaterial = { density = 1260, longitudinal_speed = 1920 }\ntemperature = 20",
+            "",
+            "medium.temperature: applies to the built-in water only",
+        ),
+        ("", "material = { density = 7850, longitudinal_speed = 5.9 }",
+         "specimen.material.longitudinal_speed: 5.9 m/s is implausible"),
         ("[noise]\nsnr_db = true", "", "noise.snr_db: must be a number; got true"),
         ("[noise]\nadc_bits = false", "", "noise.adc_bits: must be a number; got false"),
     ],

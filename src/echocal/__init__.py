@@ -63,6 +63,7 @@ if TYPE_CHECKING:  # the same names, eagerly, for type checkers and IDEs
         transmission_fluid_solid,
         transmission_normal,
         transmission_solid_fluid,
+        water,
     )
     from echocal.measurement import (
         HardwareSource,
@@ -102,6 +103,7 @@ _LAZY: dict[str, str] = {
     "transmission_fluid_solid": "echocal.materials",
     "transmission_normal": "echocal.materials",
     "transmission_solid_fluid": "echocal.materials",
+    "water": "echocal.materials",
     "AScan": "echocal.ascan",
     "BudgetExhaustedError": "echocal.errors",
     "CalibrationResult": "echocal.calibrate",
@@ -225,6 +227,7 @@ __all__ = [
     "transmission_fluid_solid",
     "transmission_normal",
     "transmission_solid_fluid",
+    "water",
 ]
 
 

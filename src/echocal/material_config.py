@@ -1,9 +1,10 @@
-"""The ``material`` entries of setup files: a built-in name or an inline table.
+"""The ``[medium]`` and ``material`` entries of setup files: a name or an inline table.
 
 ::
 
     [medium]
     material = "water"                  # a built-in fluid (the default)
+    temperature = 22                    # [°C] water's speed and density at 22 °C
 
     [specimen]
     builtin = "flat-plate"
@@ -21,25 +22,40 @@ Quantities take units (``kg/m3``, ``g/cm3``; ``m/s``, ``mm/us``; ``Np/m``, ``dB/
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+from dataclasses import replace
 from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag
 
 from echocal.errors import EchocalError
-from echocal.materials import Attenuation, Material, material
-from echocal.units import parse_quantity
+from echocal.materials import Attenuation, Material, material, water
+from echocal.units import parse_quantity, plausible_speed
 
-__all__ = ["LOC_TAGS", "AttenuationConfig", "MaterialConfig", "MaterialSpec", "build_material"]
+__all__ = [
+    "LOC_TAGS",
+    "AttenuationConfig",
+    "MaterialConfig",
+    "MaterialSpec",
+    "build_material",
+    "build_medium",
+]
 
 
-def _unit(kind: str, si_unit: str) -> BeforeValidator:
-    """Text with a unit → SI float; bools refused (pydantic would read ``true`` as 1.0)."""
+def _unit(
+    kind: str, si_unit: str, check: Callable[[str, float], float] | None = None
+) -> BeforeValidator:
+    """Text with a unit → SI float; bools refused (pydantic would read ``true`` as 1.0);
+    ``check(field, value)`` — a plausible range — applies to every finite number."""
 
     def parse(value: Any) -> Any:
         if isinstance(value, bool):
             raise ValueError(f"must be a number; got {str(value).lower()}")
         if isinstance(value, str) and kind:
-            return parse_quantity("value", value, kind, si_unit)
+            value = parse_quantity("value", value, kind, si_unit)
+        if check is not None and isinstance(value, int | float) and math.isfinite(value):
+            check("", value)
         return value
 
     return BeforeValidator(parse)
@@ -47,6 +63,12 @@ def _unit(kind: str, si_unit: str) -> BeforeValidator:
 
 Density = Annotated[float, _unit("density", "kg/m3"), Field(gt=0, allow_inf_nan=False)]
 SpeedValue = Annotated[float, _unit("speed", "m/s"), Field(ge=0, allow_inf_nan=False)]
+PlausibleSpeed = Annotated[
+    float, _unit("speed", "m/s", check=plausible_speed), Field(gt=0, allow_inf_nan=False)
+]
+"""A sound speed [m/s], 100 to 20 000 m/s (a bare 1.48 is refused: did you mean mm/us?)."""
+Temperature = Annotated[float, _unit("", ""), Field(ge=0, le=95, allow_inf_nan=False)]
+"""[°C] of liquid water."""
 AlphaValue = Annotated[float, _unit("attenuation", "Np/m"), Field(ge=0, allow_inf_nan=False)]
 FrequencyValue = Annotated[float, _unit("frequency", "Hz"), Field(gt=0, allow_inf_nan=False)]
 Exponent = Annotated[float, _unit("", ""), Field(ge=0, le=4, allow_inf_nan=False)]
@@ -70,7 +92,7 @@ class MaterialConfig(_Model):
 
     name: str = "custom"
     density: Density
-    longitudinal_speed: SpeedValue
+    longitudinal_speed: PlausibleSpeed
     shear_speed: SpeedValue = 0.0
     attenuation: AttenuationConfig | None = None
     shear_attenuation: AttenuationConfig | None = None
@@ -97,6 +119,37 @@ MaterialSpec = Annotated[
     ),
 ]
 """A setup file's ``material``: a built-in name or an inline table."""
+
+
+def build_medium(config: Any) -> tuple[Material | None, list[str]]:
+    """The fluid of a setup's ``[medium]`` (``material``, ``sound_speed``, ``temperature``)
+    with the sound speed in effect, and its problems, each with its field path.
+
+    The sound speed in effect is ``sound_speed`` when given; else the material's, if
+    ``material`` or ``temperature`` is given (water at ``temperature`` [°C]:
+    :func:`~echocal.materials.water`); else the file's default (the thesis's c₀).
+    """
+    given = config.model_fields_set
+    if config.temperature is not None:
+        if not (isinstance(config.material, str) and config.material.strip().lower() == "water"):
+            return None, [
+                "medium.temperature: applies to the built-in water only; for another fluid "
+                "give its sound_speed (or a material table)"
+            ]
+        medium: Material | None = water(config.temperature)
+        problems: list[str] = []
+    else:
+        medium, problems = build_material("medium.material", config.material)
+    if medium is None:
+        return None, problems
+    if not medium.is_fluid:
+        return None, [
+            f"medium.material: {medium.name!r} is a solid (shear_speed {medium.shear_speed:g} "
+            "m/s); the coupling medium must be a fluid (shear_speed 0)"
+        ]
+    if "sound_speed" in given or not given & {"material", "temperature"}:
+        medium = replace(medium, longitudinal_speed=config.sound_speed)
+    return medium, []
 
 
 def _attenuation(config: AttenuationConfig | None) -> Attenuation | None:

@@ -71,6 +71,7 @@ __all__ = [
     "transmission_fluid_solid",
     "transmission_normal",
     "transmission_solid_fluid",
+    "water",
 ]
 
 NEPER_TO_DB = 20.0 / math.log(10.0)
@@ -249,6 +250,34 @@ WATER = Material(
     attenuation=Attenuation(alpha0=0.0253, f_ref=1.0e6, exponent=2.0),
 )
 """Pure water at 20 °C (the default coupling medium)."""
+
+_MARCZAK = (1402.385, 5.038813, -5.799136e-2, 3.287156e-4, -1.398845e-6, 2.787860e-9)
+"""Sound speed of pure water [m/s] as a polynomial in T [°C], 0–95 °C (Marczak 1997,
+J. Acoust. Soc. Am. 102, 2776; within 0.02 m/s of Del Grosso & Mader 1972)."""
+_KELL = (999.83952, 16.945176, -7.9870401e-3, -46.170461e-6, 105.56302e-9, -280.54253e-12)
+_KELL_B = 16.879850e-3
+"""Density of air-free water [kg/m³] = Σ aᵢTⁱ / (1 + b·T), 0–150 °C (Kell 1975)."""
+
+
+def water(temperature: float = 20.0) -> Material:
+    """Pure water at ``temperature`` [°C] (0 to 95): sound speed (Marczak 1997) and
+    density (Kell 1975) at that temperature; the attenuation stays the 20 °C value of
+    :data:`WATER` (α falls by about 2 % per °C around 20 °C: Pinkerton 1949).
+
+    ``water(20)`` gives 1482.4 m/s and 998.2 kg/m³ (:data:`WATER` rounds to 1482.3).
+    """
+    t = _real("temperature", temperature)
+    if not 0.0 <= t <= 95.0:
+        raise EchocalValueError(f"temperature must lie in [0, 95] °C (liquid water); got {t:g}")
+    speed = sum(a * t**i for i, a in enumerate(_MARCZAK))
+    density = sum(a * t**i for i, a in enumerate(_KELL)) / (1.0 + _KELL_B * t)
+    return Material(
+        name="water",
+        density=round(density, 3),
+        longitudinal_speed=round(speed, 2),
+        attenuation=WATER.attenuation,
+    )
+
 
 # Solids.  Speeds and densities: Krautkrämer & Krautkrämer, *Ultrasonic Testing of
 # Materials*, 4th ed. (1990), Appendix table; Olympus, *Ultrasonic Transducers Technical

@@ -56,8 +56,13 @@ from pydantic import (
 from echocal.constants import DEFAULT_CENTER_FREQUENCY, SOUND_SPEED_WATER
 from echocal.echo import echo_model_names
 from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownNameError
-from echocal.material_config import LOC_TAGS, MaterialSpec, build_material
-from echocal.materials import Material
+from echocal.material_config import (
+    LOC_TAGS,
+    MaterialSpec,
+    Temperature,
+    build_material,
+    build_medium,
+)
 from echocal.measurement.limits import PositionerLimits, limit_problems
 from echocal.measurement.virtual import (
     MAX_SIMULATED_SAMPLES,
@@ -197,13 +202,15 @@ class _Model(BaseModel):
 class MediumConfig(_Model):
     """The coupling medium: a fluid ``material`` (water by default) and its sound speed.
 
-    ``sound_speed`` (100 to 20 000 m/s), when given, wins over the material's (a measured
-    water temperature); else a ``material`` given names its speed; with neither, the
-    thesis's c₀ = 1480 m/s applies (water's density and attenuation still do).
+    The sound speed in effect is ``sound_speed`` (100 to 20 000 m/s) when given (a
+    measured one); else the material's, if ``material`` or ``temperature`` is given (water
+    at ``temperature`` [°C], 0 to 95); else the thesis's c₀ = 1480 m/s (water's density
+    and attenuation still apply).
     """
 
     material: MaterialSpec = "water"
     sound_speed: Speed = SOUND_SPEED_WATER
+    temperature: Temperature | None = None
 
 
 class ShapeConfig(_Model):
@@ -589,7 +596,7 @@ def _build_parts(
         if part is not None and not found:
             parts[section] = part
 
-    run("medium", lambda: _build_medium(config.medium))
+    run("medium", lambda: build_medium(config.medium))
     medium = parts.get("medium")
     c0 = medium.longitudinal_speed if medium is not None else config.medium.sound_speed
     if "specimen" not in invalid and config.specimen.material is not None:
@@ -620,21 +627,6 @@ def _build_parts(
     if "specimen" in parts and "positioner" in parts:
         problems.extend(_reference_problems(parts["specimen"], config.positioner))
     return parts, problems
-
-
-def _build_medium(config: MediumConfig) -> tuple[Material | None, list[str]]:
-    """The medium's fluid, with the sound speed in effect (see :class:`MediumConfig`)."""
-    medium, problems = build_material("medium.material", config.material)
-    if medium is None:
-        return None, problems
-    if not medium.is_fluid:
-        return None, [
-            f"medium.material: {medium.name!r} is a solid (shear_speed {medium.shear_speed:g} "
-            "m/s); the coupling medium must be a fluid (shear_speed 0)"
-        ]
-    if "sound_speed" in config.model_fields_set or "material" not in config.model_fields_set:
-        medium = dataclasses.replace(medium, longitudinal_speed=config.sound_speed)
-    return medium, []
 
 
 def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:

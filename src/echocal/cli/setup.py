@@ -23,6 +23,7 @@ _UNITS = {
     "shear_speed": "m/s",
     "alpha0": "Np/m",
     "f_ref": "Hz",
+    "temperature": "°C",
     "center": "m",
     "width": "m",
     "height": "m",
