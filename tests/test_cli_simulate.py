@@ -59,7 +59,7 @@ def test_same_seed_same_ascan(tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--pose", "0,0,20", "--snr", "nan"], "snr_db must be finite"),
+        (["--pose", "0,0,20", "--snr", "nan"], "--snr must be finite"),
         (["--pose", "0,0,20", "--setup", "nowhere"], "unknown setup"),
         (["--pose", "0,0,20", "--format", "xlsx"], "--format must be csv or nc"),
         (["--pose", "0,0,20MHz"], "not a length unit"),

@@ -57,6 +57,15 @@ def positive_int(name: str, value: Any) -> int:
     return int(value)
 
 
+def capped_float(name: str, value: Any, cap: float, why: str) -> float:
+    """Return ``value`` as a float with ``0 < value <= cap``; ``why`` (the unit and the
+    reason for the cap) completes the message of a larger value."""
+    out = positive_float(name, value)
+    if out > cap:
+        raise EchocalValueError(f"{name} must be at most {cap:g} {why}; got {out:g}")
+    return out
+
+
 def in_range(name: str, value: Any, low: float, high: float) -> float:
     """Return ``value`` as a finite float with ``low <= value <= high``."""
     out = finite_float(name, value)

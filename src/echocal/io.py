@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import contextlib
+import errno
+import glob
 import math
 import os
+import re
 import secrets
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -14,10 +17,12 @@ from echocal.errors import DataFileError
 
 __all__ = [
     "atomic_path",
+    "atomic_write_bytes",
     "atomic_write_text",
     "check_out_dir",
     "file_in_the_way",
     "json_ready",
+    "netcdf_bytes",
     "refuse_existing_output",
 ]
 
@@ -40,11 +45,17 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         )
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
+        _remove_stale_temporaries(target)
         tmp = _create_unique(target)
     except OSError as exc:
         raise _unwritable(target, exc) from None
     try:
-        yield tmp
+        try:
+            yield tmp
+        except DataFileError:
+            raise
+        except OSError as exc:  # the writer failed (file-size limit, disk full, ...)
+            raise _unwritable(target, exc) from None
         try:
             os.replace(tmp, target)
         except OSError as exc:
@@ -102,8 +113,48 @@ def check_out_dir(
     return folder
 
 
+_WHY = {
+    errno.EFBIG: "File too large (a file-size limit, `ulimit -f`, or the file system's "
+    "maximum); free the limit or write elsewhere",
+    errno.ENOSPC: "No space left on the device; free some space or write elsewhere",
+}
+
+
 def _unwritable(target: Path, exc: OSError) -> DataFileError:
-    return DataFileError(f"cannot write {target}: {exc.strerror or exc}; choose a writable path")
+    why = _WHY.get(exc.errno or 0)
+    if why is None and "errno = 27" in str(exc):  # HDF5 reports EFBIG in its message
+        why = _WHY[errno.EFBIG]
+    if why is None:
+        reason = exc.strerror or str(exc).split(" (", 1)[0]
+        why = f"{reason}; choose a writable path"
+    return DataFileError(f"cannot write {target}: {why}")
+
+
+_TEMPORARY = re.compile(r"\.(\d+)-[0-9a-f]{12}\.partial")
+"""The pid in a temporary's name: ``.NAME.<pid>-<12 hex>.partial<suffix>``."""
+
+
+def _remove_stale_temporaries(target: Path) -> None:
+    """Delete temporaries of ``target`` left by a writer that was killed (its process is
+    gone): a kill during a final write must not leave a hidden file behind for ever."""
+    pattern = f".{glob.escape(target.name)}.*.partial{glob.escape(target.suffix)}"
+    for tmp in target.parent.glob(pattern):
+        found = _TEMPORARY.search(tmp.name[len(target.name) + 1 :])
+        if found is not None and not _alive(int(found.group(1))):
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process (EPERM): alive
+        return True
+    return True
 
 
 def _create_unique(target: Path) -> Path:
@@ -113,8 +164,8 @@ def _create_unique(target: Path) -> Path:
     setting it — process-wide, racing other threads' file creation (Dask workers, the
     instrument server).  ``os.open`` with mode 0666 lets the kernel apply the umask.
     """
-    for _ in range(100):
-        name = f".{target.name}.{secrets.token_hex(6)}.partial{target.suffix}"
+    for _ in range(100):  # the pid lets a later writer remove it if this process is killed
+        name = f".{target.name}.{os.getpid()}-{secrets.token_hex(6)}.partial{target.suffix}"
         tmp = target.parent / name
         try:
             os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
@@ -122,6 +173,23 @@ def _create_unique(target: Path) -> Path:
             continue
         return tmp
     raise FileExistsError(f"no free temporary name beside {target}")  # pragma: no cover
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+
+
+def netcdf_bytes(dataset: Any, **to_netcdf: Any) -> bytes:
+    """``dataset`` (an ``xarray.Dataset``) as the bytes of a NetCDF-4 file (h5netcdf).
+
+    Written in memory, then to disk with :func:`atomic_write_bytes`: a write that fails
+    (a file-size limit, a full disk) is then a plain ``OSError`` naming the file — HDF5
+    writing to the disk itself crashes the process (SIGSEGV) when the disk refuses.
+    """
+    data = dataset.to_netcdf(None, engine="h5netcdf", **to_netcdf)
+    return bytes(data)
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:

@@ -71,6 +71,7 @@ from echocal.measurement.virtual import (
     check_sample_count,
 )
 from echocal.signal import Pulse, RecordingWindow, make_pulse, pulse_names
+from echocal.signal.noise import SNR_DB_RANGE
 from echocal.signal.pulses import parse_bandwidth, plausible_bandwidth, pulse_options
 from echocal.signal.window import check_window
 from echocal.specimen import (
@@ -124,8 +125,8 @@ def _quantity(
             value = parse_quantity(
                 "value", value, kind, _SI_UNIT[kind], allow_infinite=allow_infinite
             )
-        elif isinstance(value, bool):  # pydantic would read true as 1.0
-            raise ValueError(f"must be a number; got {str(value).lower()}")
+        elif isinstance(value, bool):
+            _refuse_bool(value)
         elif not isinstance(value, int | float):
             return value  # the field reports the wrong type
         if not math.isfinite(value):
@@ -135,7 +136,8 @@ def _quantity(
                 f"{value:g} {_SI_UNIT[kind]} is implausible here; numbers are SI "
                 f"({_SI_UNIT[kind]}) — did you mean '{value:g} mm'?"
                 if kind == "length"
-                else f"{value:g} is implausible here; give a unit, e.g. '{value:g} MHz'"
+                else f"{value:g} is implausible here; give a unit, e.g. "
+                f"'{value:g} {_HINT_UNIT.get(kind, 'MHz')}'"
             )
         if check is not None:
             check("", value)
@@ -144,12 +146,28 @@ def _quantity(
     return BeforeValidator(parse)
 
 
+def _refuse_bool(value: Any) -> Any:
+    """TOML's ``true``/``false`` where a number belongs: refused (pydantic would read 1/0)."""
+    if isinstance(value, bool):
+        raise ValueError(
+            f"a number is expected, not the boolean {str(value).lower()}; give a value "
+            "(with a unit where the field has one)"
+        )
+    return value
+
+
+NotBool = BeforeValidator(_refuse_bool)
+"""Marks a plain number field (no unit): a TOML boolean is refused, not read as 1 or 0."""
+
+
 def _not_nan(value: float) -> float:
     if math.isnan(value):
         raise ValueError("must be a number or ±inf (unlimited), not NaN")
     return value
 
 
+_HINT_UNIT = {"time": "us", "frequency": "MHz"}
+"""The unit a bare number of each kind was probably meant in (the refusal's hint)."""
 _SI_UNIT = {"length": "m", "time": "s", "frequency": "Hz", "speed": "m/s", "angle": "deg"}
 
 ProbeLength = Annotated[
@@ -172,8 +190,14 @@ Time = Annotated[float, _quantity("time", plausible_max=1.0), Field(allow_inf_na
 Speed = Annotated[
     float, _quantity("speed", check=plausible_speed), Field(gt=0, allow_inf_nan=False)
 ]
-Angle = Annotated[float, _quantity("angle"), Field(allow_inf_nan=False)]
+Angle = Annotated[float, _quantity("angle"), Field(ge=-360, le=360, allow_inf_nan=False)]
+"""An angle [deg] within one turn either side of 0 (every orientation)."""
 Point = tuple[Position, Position, Position]
+
+
+MAX_SCALE = 1e6
+"""The largest scale factor a setup takes (a mesh's units to metres, the ADC's full scale as
+a multiple of the reference echo): beyond it a value is a typo, not a setting."""
 
 
 class _Model(BaseModel):
@@ -242,7 +266,9 @@ class SpecimenConfig(_Model):
     builtin: str | None = None
     shapes: list[ShapeConfig] | None = None
     mesh: str | None = None
-    mesh_scale: float = Field(default=1.0, gt=0)
+    mesh_scale: Annotated[float, NotBool] = Field(
+        default=1.0, gt=0, le=MAX_SCALE, allow_inf_nan=False
+    )
     name: str | None = None
     material: MaterialSpec | None = None
     """The part's material; None: a perfect reflector (the thesis)."""
@@ -262,8 +288,8 @@ class TransducerConfig(_Model):
 
     width: ProbeLength = 0.01
     height: ProbeLength | None = None
-    n_h: int = Field(default=64, ge=1, le=1024)
-    n_v: int | None = Field(default=None, ge=1, le=1024)
+    n_h: Annotated[int, NotBool] = Field(default=64, ge=1, le=1024)
+    n_v: Annotated[int | None, NotBool] = Field(default=None, ge=1, le=1024)
     pinhole_distance: ProbeLength = 0.02
     focus: ProbeLength | None = None
     aperture: Literal["rectangular", "circular"] = "rectangular"
@@ -293,7 +319,7 @@ class WindowConfig(_Model):
 
     fs: SamplingRate = 100e6
     start: Time = 0.0
-    n_samples: int = Field(default=4096, ge=16, le=MAX_SIMULATED_SAMPLES)
+    n_samples: Annotated[int, NotBool] = Field(default=4096, ge=16, le=MAX_SIMULATED_SAMPLES)
 
 
 def _none_word(value: Any) -> Any:
@@ -304,12 +330,14 @@ def _none_word(value: Any) -> Any:
 class NoiseConfig(_Model):
     """Receiver noise: SNR of the reference echo (``"none"``: noiseless), ADC, saturation."""
 
-    snr_db: Annotated[float | None, BeforeValidator(_none_word)] = Field(
-        default=30.0, allow_inf_nan=False
+    snr_db: Annotated[float | None, NotBool, BeforeValidator(_none_word)] = Field(
+        default=30.0, allow_inf_nan=False, ge=SNR_DB_RANGE[0], le=SNR_DB_RANGE[1]
     )
-    adc_bits: Annotated[int | None, BeforeValidator(_none_word)] = Field(default=None, ge=1, le=32)
-    full_scale: Annotated[float | None, BeforeValidator(_none_word)] = Field(
-        default=None, gt=0, allow_inf_nan=False
+    adc_bits: Annotated[int | None, NotBool, BeforeValidator(_none_word)] = Field(
+        default=None, ge=1, le=32
+    )
+    full_scale: Annotated[float | None, NotBool, BeforeValidator(_none_word)] = Field(
+        default=None, gt=0, le=MAX_SCALE, allow_inf_nan=False
     )
 
 
@@ -341,7 +369,7 @@ class SetupConfig(_Model):
 
     name: str = "setup"
     description: str = ""
-    seed: int | None = Field(default=None, ge=0)
+    seed: Annotated[int | None, NotBool] = Field(default=None, ge=0)
     medium: MediumConfig = MediumConfig()
     specimen: SpecimenConfig = SpecimenConfig(builtin="flat-plate")
     transducer: TransducerConfig = TransducerConfig()

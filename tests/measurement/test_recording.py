@@ -104,7 +104,7 @@ def test_unwritable_targets_are_named_data_file_errors(tmp_path: Path) -> None:
         record(GaussianEchoSource(), GRID, tmp_path / "folder.nc", progress=False, overwrite=True)
     # the sidecar's parent is a regular file: mkdir fails (as on a read-only disk)
     (tmp_path / "plain").write_text("")
-    with pytest.raises(DataFileError, match="cannot create the partial recording"):
+    with pytest.raises(DataFileError, match="plain is not a directory"):
         record(GaussianEchoSource(), GRID, tmp_path / "plain" / "a.nc", progress=False)
 
 

@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._rng import RngLike
+from echocal._validate import capped_float
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import (
     accepted_options,
@@ -59,7 +60,14 @@ from echocal.calibrate.registry import get_method, register_method
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import EchocalValueError
 
-__all__ = ["Acquisition", "Detector", "NoiseModel", "hex_spiral", "search_rings"]
+__all__ = [
+    "MAX_SEARCH_RADIUS",
+    "Acquisition",
+    "Detector",
+    "NoiseModel",
+    "hex_spiral",
+    "search_rings",
+]
 
 NoiseModel = Callable[[], tuple[float | None, float | None]]
 """A live ``(noise_floor, noise_sigma)`` estimate [energy units] (either may be None)."""
@@ -71,6 +79,11 @@ _CONFIRM_LEVEL = 1.0
 
 Detector = Callable[[], "FloatArray | None"]
 """The detection significances of the points just measured, shape (k,), or None."""
+
+MAX_SEARCH_RADIUS = 180.0
+"""[deg] the farthest an acquisition search may go from x0: 180 deg of beam tilt reach every
+orientation, and the search's memory and time grow with the radius squared."""
+_CAP_WHY = "deg (180 deg of tilt reach every orientation)"
 
 
 def _local_options(
@@ -228,7 +241,7 @@ class Acquisition(Optimizer):
         self.local_options = _local_options(local, self._local_cls, local_options)
         self._local_normalize = normalize
         self.spacing = positive_float("spacing", spacing)
-        self.max_radius = positive_float("max_radius", max_radius)
+        self.max_radius = capped_float("max_radius", max_radius, MAX_SEARCH_RADIUS, _CAP_WHY)
         self.threshold = positive_float("threshold", threshold)
         self.first_threshold = positive_float("first_threshold", first_threshold)
         self.confirm = strict_bool("confirm", confirm)

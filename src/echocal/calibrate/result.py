@@ -131,8 +131,8 @@ class CalibrationResult:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> CalibrationResult:
-        """Inverse of :meth:`to_dict`."""
-        kw = dict(data)
+        """Inverse of :meth:`to_dict` (a stored ``provenance`` is not part of the result)."""
+        kw = {k: v for k, v in data.items() if k != "provenance"}
         for name in _ARRAYS:
             if name in kw:
                 raw = kw[name]
@@ -147,9 +147,15 @@ class CalibrationResult:
             kw["names"] = tuple(kw["names"])
         return cls(**kw)
 
-    def save_json(self, path: str | os.PathLike[str]) -> None:
-        """Write the result as JSON, atomically."""
-        atomic_write_text(path, json.dumps(self.to_dict(), indent=1))
+    def save_json(
+        self, path: str | os.PathLike[str], *, provenance: dict[str, Any] | None = None
+    ) -> None:
+        """Write the result as JSON, atomically; ``provenance`` (a record of
+        :mod:`echocal.provenance`) is stored beside it under ``"provenance"``."""
+        data = self.to_dict()
+        if provenance is not None:
+            data["provenance"] = provenance
+        atomic_write_text(path, json.dumps(data, indent=1))
 
     @classmethod
     def load_json(cls, path: str | os.PathLike[str]) -> CalibrationResult:

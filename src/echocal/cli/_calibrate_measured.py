@@ -101,6 +101,8 @@ def _calibrate_measured(
     plots: bool,
     json_output: bool,
     rig: Path | None = None,
+    token: str | None = None,
+    provenance: Any = None,
 ) -> None:
     """Calibrate on a recording or a rig: the same objective and call, no truth known."""
     from echocal._validate import one_of
@@ -118,11 +120,31 @@ def _calibrate_measured(
     common: dict[str, Any] = {"parameterization": parameterization, "start": start, "seed": seed}
     if instrument is not None or rig is not None:
         done = _on_instrument(
-            run, instrument, timeout, setup, position, rig=rig, out=out, plots=plots, **common
+            run,
+            instrument,
+            timeout,
+            setup,
+            position,
+            rig=rig,
+            out=out,
+            plots=plots,
+            token=token,
+            provenance=provenance,
+            **common,
         )
     else:
         assert replay is not None
-        done = _on_replay(run, replay, replay_mode, setup, position, out=out, plots=plots, **common)
+        done = _on_replay(
+            run,
+            replay,
+            replay_mode,
+            setup,
+            position,
+            out=out,
+            plots=plots,
+            provenance=provenance,
+            **common,
+        )
     result, pulse = done.result, done.pulse
     found = found_echo(result)
     summary = {
@@ -168,10 +190,11 @@ def _on_instrument(
     out: Path,
     plots: bool,
     rig: Path | None = None,
+    token: str | None = None,
+    provenance: Any = None,
 ) -> _Measured:
     """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT`` or
     ``--rig FILE``."""
-    from echocal._validate import positive_float
     from echocal.cli._rig_option import open_rig, require_position, rig_setup
     from echocal.errors import EchocalError
     from echocal.measurement.hardware import HardwareSource
@@ -184,11 +207,11 @@ def _on_instrument(
     pulse = _setup_pulse(setup)
     wait: dict[str, Any] = {}
     if timeout is not None:
-        wait["timeout"] = positive_float("--timeout", timeout)
+        wait["timeout"] = _check_timeout(timeout)
     connect = (
         (lambda: open_rig(rig))
         if rig is not None
-        else (lambda: HardwareSource.connect(host, port, **wait))
+        else (lambda: HardwareSource.connect(host, port, token=token, **wait))
     )
     with connect() as hardware:
         _check_reachable(hardware.limits, where)
@@ -222,7 +245,15 @@ def _on_instrument(
                 )
                 raise
             raise _with_note(exc, note) from exc
-        figures = _save_measured(result, out, None, plots)
+        record = run.provenance(
+            provenance,
+            result,
+            setup=setup,
+            source={**source, "identification": hardware.description},
+            position=where,
+            seed=seed,
+        )
+        figures = _save_measured(result, out, None, plots, record)
         return _Measured(
             result=result,
             where=where,
@@ -246,6 +277,7 @@ def _on_replay(
     seed: int,
     out: Path,
     plots: bool,
+    provenance: Any = None,
 ) -> _Measured:
     """Open the recording, check the options against it, calibrate, save: ``--replay FILE``."""
     from echocal._validate import one_of
@@ -270,6 +302,22 @@ def _on_replay(
         )
         result = run(objective, start, seed)
         maps = RecordingMap(recording, index, pulse, objective.metric, parameterization)
+        from echocal.provenance import file_digest
+
+        record = run.provenance(
+            provenance,
+            result,
+            setup=setup,
+            source={
+                "kind": "replay",
+                "file": str(Path(replay).resolve()),
+                "sha256": file_digest(replay),
+                "mode": recording.mode,
+                "description": recording.description,
+            },
+            position=where,
+            seed=seed,
+        )
         best = None if maps.best is None else [float(v) for v in maps.best]
         return _Measured(
             result=result,
@@ -283,7 +331,7 @@ def _on_replay(
                 "description": recording.description,
             },
             extra={"recording_best_deg": best},
-            figures=_save_measured(result, out, maps, plots),
+            figures=_save_measured(result, out, maps, plots, record),
         )
 
 
@@ -329,6 +377,7 @@ def _save_interrupted(
     the batch the fault cut short (``unfinished_batch`` of them; the method never saw
     their values, computed here with the objective's metric).  If the file cannot be
     written the sentence says so instead (the run's own error stays the one reported)."""
+    from echocal._signals import how
     from echocal.geometry import convert_angles
     from echocal.io import atomic_write_text, json_ready
     from echocal.measurement.objective import ascan_metric
@@ -362,7 +411,7 @@ def _save_interrupted(
         best = {"index": i, "point_deg": points[i], "value": values[i]}
     record = {
         "status": "interrupted",
-        "error": "interrupted (Ctrl-C)" if isinstance(exc, KeyboardInterrupt) else str(exc),
+        "error": how(exc) if isinstance(exc, KeyboardInterrupt) else str(exc),
         **context,
         "position_m": objective.position,
         "metric": objective.metric,
@@ -402,6 +451,14 @@ def _with_note(exc: BaseException, note: str) -> Exception:
 
     kind = next((k for k in (InstrumentError, LimitError) if isinstance(exc, k)), EchocalError)
     return kind(f"{exc}; {note}")
+
+
+def _check_timeout(timeout: float) -> float:
+    """``--timeout`` [s], > 0 and at most :data:`~echocal.measurement.hardware.MAX_TIMEOUT`."""
+    from echocal._validate import capped_float
+    from echocal.measurement.hardware import _TIMEOUT_WHY, MAX_TIMEOUT
+
+    return capped_float("--timeout", timeout, MAX_TIMEOUT, _TIMEOUT_WHY)
 
 
 def _parse_address(text: str) -> tuple[str, int]:
@@ -496,12 +553,16 @@ def _replay_pulse(recording: Any, setup: str | None) -> tuple[Any, str]:
 
 
 def _save_measured(
-    result: Any, out: Path, maps: RecordingMap | None, plots: bool
+    result: Any,
+    out: Path,
+    maps: RecordingMap | None,
+    plots: bool,
+    provenance: dict[str, Any] | None = None,
 ) -> dict[str, str]:
-    """Write result.json and (with ``plots``) the convergence and path plots of a run on a
-    recording (``maps``) or a rig (None: no map)."""
+    """Write result.json (with its ``provenance``) and (with ``plots``) the convergence and
+    path plots of a run on a recording (``maps``) or a rig (None: no map)."""
     prepare_out(out)
-    result.save_json(out / "result.json")
+    result.save_json(out / "result.json", provenance=provenance)
     if not plots:
         return {}
     from echocal.plots.calibration import measured_convergence_figure, path_figure

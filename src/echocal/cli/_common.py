@@ -34,11 +34,25 @@ output = Console(emoji=False, width=None if sys.stdout.isatty() else 200)
 def run_cli(app: typer.Typer) -> None:
     """Run ``app``; usage errors (a misspelt option, a missing value), echocal errors and
     paths the operating system refuses become one red line and exit code 2, not a traceback
-    or a box; Ctrl-C ends with "aborted" and exit code 1.
+    or a box.  Ctrl-C, SIGTERM and SIGHUP all interrupt the command the same way (what it
+    measured is kept, see :mod:`echocal._signals`) and end it with "aborted" and the
+    shell's code for the signal (130, 143, 129).  Output locks the command held
+    (:func:`~echocal.locking.hold_output_lock`) are released when it ends.
     """
+    from echocal._signals import INTERRUPTED, Terminated, exit_code, how, terminate_like_ctrl_c
+    from echocal.locking import release_held_locks
+
     warnings.showwarning = _show_warning
     try:
-        code = app(standalone_mode=False)
+        with terminate_like_ctrl_c() as stopped_by:
+            try:
+                code = app(standalone_mode=False)
+            finally:
+                release_held_locks()
+        if stopped_by and code == INTERRUPTED:  # typer's code for any KeyboardInterrupt
+            stop = Terminated(stopped_by[0])
+            console.print(f"aborted: {how(stop)}", highlight=False)
+            code = exit_code(stop)
     except _NO_ARGS_IS_HELP as exc:
         exc.show()  # a bare group (`echocal`, `echocal sweep`): its help
         sys.exit(exc.exit_code)
@@ -47,9 +61,9 @@ def run_cli(app: typer.Typer) -> None:
         _fail(exc.format_message() + hint)
     except click_exceptions.ClickException as exc:  # e.g. a file the parser could not open
         _fail(exc.format_message())
-    except typer.Abort:  # Ctrl-C
-        console.print("aborted", highlight=False)
-        sys.exit(1)
+    except (typer.Abort, KeyboardInterrupt) as exc:  # Ctrl-C, SIGTERM, SIGHUP
+        console.print(f"aborted: {how(exc)}", highlight=False)
+        sys.exit(exit_code(exc))
     except EchocalError as exc:
         _fail(str(exc))
     except OSError as exc:  # a path the operating system refused (permissions, not a dir, ...)

@@ -37,7 +37,10 @@ def resolve_setup(
 def _parse_snr(text: str) -> float | None:
     if text.strip().lower() in ("none", "inf", "off"):
         return None
+    from echocal.signal.noise import check_snr_db
+
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise EchocalValueError(f"--snr must be a number in dB or 'none'; got {text!r}") from None
+    return check_snr_db("--snr", value)

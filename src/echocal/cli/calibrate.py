@@ -31,6 +31,7 @@ from echocal.cli._common import (
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.io import check_out_dir, refuse_existing_output
+from echocal.locking import hold_output_lock
 
 
 def register(app: typer.Typer) -> None:
@@ -38,6 +39,7 @@ def register(app: typer.Typer) -> None:
 
     @app.command("calibrate")
     def calibrate_command(
+        ctx: typer.Context,
         setup: Annotated[
             str | None,
             typer.Option(
@@ -76,6 +78,14 @@ def register(app: typer.Typer) -> None:
             typer.Option(
                 help="[s] With --instrument: how long one reply may take, a move included "
                 "(default 2); a transport fault is retried 3 times."
+            ),
+        ] = None,
+        token: Annotated[
+            str | None,
+            typer.Option(
+                envvar="ECHOCAL_INSTRUMENT_TOKEN",
+                help="With --instrument: the rig's shared secret (instrument-server --token), "
+                "sent first on every connection; also read from $ECHOCAL_INSTRUMENT_TOKEN.",
             ),
         ] = None,
         method: Annotated[str, typer.Option(help="Calibration method (see `echocal methods`).")] = (
@@ -167,6 +177,15 @@ def register(app: typer.Typer) -> None:
                 help="Replace the result and plots in an --out that already holds files.",
             ),
         ] = False,
+        from_file: Annotated[
+            Path | None,
+            typer.Option(
+                "--from",
+                help="Rerun the calibration recorded in a result.json (its provenance: the "
+                "same setup, source, position, seed, method and options); the setup and a "
+                "recording must be unchanged (their SHA-256 digests are checked).",
+            ),
+        ] = None,
     ) -> None:
         """Calibrate the orientation at one position: on a simulated setup (and compare
         with its true optimum), on a recording (--replay FILE) or on a rig (--instrument
@@ -181,10 +200,22 @@ def register(app: typer.Typer) -> None:
         a converged one); 4 when the estimate lies on the positioner's angle limits.
         The result files are written in every case but 2.
         """
+        if from_file is not None:  # the recorded parameters, then this call's output options
+            from echocal.cli._rerun import rerun_parameters
+
+            recorded = rerun_parameters(from_file, ctx)
+            own: dict[str, Any] = {"out": out, "plots": plots, "json_output": json_output}
+            return calibrate_command(ctx, **recorded, **own, token=token, overwrite=overwrite)
+        from echocal.cli._rerun import recorded_parameters
+        from echocal.provenance import start
+
+        given = {k: v for k, v in locals().items() if k in ctx.params}  # the options only
+        provenance = start("calibrate", recorded_parameters(given))
         run = _Run.parse(
             method, budget, max_iter, settle, preset, option, search_radius, final_measure
         )
         refuse_existing_output(out, overwrite=overwrite)
+        hold_output_lock(out)  # one writer per --out, from the first measurement to the last file
         if replay is not None or instrument is not None or rig is not None:
             from echocal.cli._calibrate_measured import (
                 _calibrate_measured,
@@ -198,6 +229,7 @@ def register(app: typer.Typer) -> None:
                 replay_mode=replay_mode,
                 instrument=instrument,
                 timeout=timeout,
+                token=token,
                 setup=setup,
                 position=position,
                 parameterization=parameterization,
@@ -207,6 +239,7 @@ def register(app: typer.Typer) -> None:
                 plots=plots,
                 json_output=json_output,
                 rig=rig,
+                provenance=provenance,
             )
             return
         _check_source_options(replay, replay_mode, instrument, timeout)
@@ -224,6 +257,7 @@ def register(app: typer.Typer) -> None:
             out=out,
             plots=plots,
             json_output=json_output,
+            provenance=provenance,
         )
 
 
@@ -282,6 +316,39 @@ class _Run:
             method, budget, max_iter, _parse_settle(settle), preset, search, extra, run_keywords
         )
 
+    def provenance(
+        self,
+        opened: Any,
+        result: Any,
+        *,
+        setup: str | None,
+        source: dict[str, Any],
+        position: Any,
+        seed: int | None,
+    ) -> dict[str, Any] | None:
+        """The provenance record of ``result`` (None without an ``opened`` record): the setup
+        and its digest, the source, position [m], seed, method with every option."""
+        if opened is None:
+            return None
+        from echocal.provenance import setup_digest
+
+        return opened.finish(
+            setup=None if setup is None else setup_digest(setup),
+            source=source,
+            position_m=[float(v) for v in position],
+            seed=seed,
+            method={
+                "name": result.method,
+                "options": result.options,
+                "budget": self.budget,
+                "max_iter": self.max_iter,
+                "settle": self.settle,
+                "preset": self.preset,
+                "parameterization": result.parameterization,
+                "x0": [float(v) for v in result.iterates[0]],
+            },
+        )
+
     def __call__(self, objective: Any, x0: tuple[float, float], rng: Any) -> Any:
         """Run the calibration; its warnings become one ``warning:`` line each on stderr."""
         from echocal.calibrate import calibrate
@@ -319,6 +386,7 @@ def _calibrate_simulated(
     out: Path,
     plots: bool,
     json_output: bool,
+    provenance: Any = None,
 ) -> None:
     """Calibrate on a simulated setup and judge the estimate against its true optimum."""
     from echocal.evaluation import evaluate_run
@@ -331,7 +399,17 @@ def _calibrate_simulated(
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)
     evaluation = evaluate_run(virtual, where, result)
     prepare_out(out)
-    result.save_json(out / "result.json")
+    result.save_json(
+        out / "result.json",
+        provenance=run.provenance(
+            provenance,
+            result,
+            setup=setup,
+            source={"kind": "simulator", "specimen": specimen, "snr_db": snr},
+            position=where,
+            seed=virtual.rng if isinstance(virtual.rng, int) else None,
+        ),
+    )
     figures = _save_plots(virtual, where, evaluation, out) if plots else {}
     found = found_echo(result)
     summary = {
@@ -527,11 +605,12 @@ def _search_options(method: str, radius: float | None) -> dict[str, Any]:
     searches, else an acquisition phase in front of it."""
     if radius is None:
         return {}
-    from echocal._validate import positive_float
+    from echocal._validate import capped_float
     from echocal.calibrate import Acquisition, get_method
+    from echocal.calibrate.acquisition import _CAP_WHY, MAX_SEARCH_RADIUS
     from echocal.calibrate.auto import AUTO_SEARCH
 
-    radius = positive_float("--search-radius", radius)
+    radius = capped_float("--search-radius", radius, MAX_SEARCH_RADIUS, _CAP_WHY)
     if issubclass(get_method(method), Acquisition):
         return {"max_radius": radius}
     return {"acquire": {"max_radius": radius, **AUTO_SEARCH}}  # auto's search geometry

@@ -10,7 +10,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
 from echocal.cli._common import check_out_file
@@ -122,14 +121,17 @@ def register(app: typer.Typer) -> None:
         from echocal.cli._rig_option import open_rig, refuse_simulation_options
         from echocal.cli._setup_option import resolve_setup
         from echocal.errors import DataFileError, EchocalValueError
+        from echocal.locking import hold_output_lock
         from echocal.measurement.recording import (
             RecordingGrid,
             check_recording_size,
             partial_path,
         )
+        from echocal.provenance import start
         from echocal.rigs import load_rig_config
         from echocal.setups import load_setup_config
 
+        opened = start("record", {"setup": setup, "azimuth": azimuth, "coelevation": coelevation})
         check_out_file(out, suffix=".nc", what="a NetCDF replay file")
         az = parse_axis(azimuth, "--azimuth")
         coel = parse_axis(coelevation, "--coelevation")
@@ -157,6 +159,7 @@ def register(app: typer.Typer) -> None:
         grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
         n_samples = None if rig is not None or config is None else config.window.n_samples
         total = check_recording_size(grid, repeats, n_samples)
+        hold_output_lock(out, folder=False)  # one recording per file, from here to the end
         sidecar = partial_path(out)
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
@@ -181,6 +184,7 @@ def register(app: typer.Typer) -> None:
                 progress=progress,
                 batch_size=batch_size,
                 as_json=as_json,
+                opened=opened,
             )
 
 
@@ -200,11 +204,11 @@ def _record(
     progress: bool,
     batch_size: int,
     as_json: bool,
+    opened: Any = None,
 ) -> None:
     """Record ``grid`` with ``source`` (a simulated setup or a rig) into ``out``: resume,
     interruption and report."""
     from echocal.cli._common import write_json
-    from echocal.cli._setup_option import resolve_setup
     from echocal.errors import DataFileError, EchocalError
     from echocal.measurement.recording import (
         discard_partial,
@@ -229,11 +233,8 @@ def _record(
             "to another --out"
         )
     done = saved_count(out) if sidecar.exists() else 0
-    if seed is not None and done and rig is None:
-        # A fresh process restarts the noise generator: re-seed from (seed, done) so the
-        # resumed measurements do not repeat the noise draws of the first ones.
-        run_seed = int(np.random.SeedSequence([seed, done]).generate_state(1)[0])
-        source = resolve_setup(setup, snr=snr, seed=run_seed)
+    # resumed, record() continues a simulator's noise stream after the saved A-scans: the
+    # file equals an uninterrupted recording's
     if done:
         _say(f"resuming {out}: {done} of {total} measurements already saved in {sidecar}")
     try:
@@ -246,13 +247,20 @@ def _record(
             batch_size=batch_size,
             setup=_provenance(setup, seed, snr, config, rig),
             overwrite=overwrite,
+            provenance=(
+                None
+                if opened is None
+                else _origin(opened, source, grid, repeats, setup, seed, snr, rig)
+            ),
         )
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
+        from echocal._signals import exit_code, how
+
         _say(
-            f"[yellow]interrupted:[/] {saved_count(out)} of {total} measurements are saved "
+            f"[yellow]{how(exc)}:[/] {saved_count(out)} of {total} measurements are saved "
             f"in {sidecar}; run the same command again to resume"
         )
-        raise typer.Exit(130) from None
+        raise typer.Exit(exit_code(exc)) from None
     except EchocalError:
         if sidecar.exists() and saved_count(out):
             _say(
@@ -282,6 +290,24 @@ def _record(
         f"recorded {total} A-scans ({n_p} position(s) x {n_a} azimuths x {n_c} "
         f"co-elevations x {repeats} repeat(s)) of {source.description} to {path}"
         + (f" (resumed after {done})" if done else "")
+    )
+
+
+def _origin(opened, source, grid, repeats: int, setup, seed, snr, rig) -> dict:
+    """The recording's provenance record (:mod:`echocal.provenance`), end time set when the
+    file is written."""
+    from echocal.provenance import setup_digest
+
+    origin = (
+        {"kind": "rig", "file": str(Path(rig).resolve()), "identification": source.description}
+        if rig is not None
+        else {"kind": "simulator", "snr_db": snr}
+    )
+    return opened.finish(  # type: ignore[no-any-return]
+        setup=None if setup is None else setup_digest(setup),
+        source=origin,
+        seed=seed,
+        method={"name": "record", "grid": grid.to_dict(), "repeats": repeats},
     )
 
 

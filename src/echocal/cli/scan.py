@@ -111,9 +111,11 @@ def register(app: typer.Typer) -> None:
         from echocal.cli._rig_option import open_rig, refuse_simulation_options, rig_setup
         from echocal.cli._setup_option import resolve_setup
         from echocal.errors import EchocalValueError
+        from echocal.provenance import setup_digest, start
         from echocal.scanning import ScanGrid, check_scan
         from echocal.units import parse_length
 
+        opened = start("scan", {"setup": setup, "grid": grid, "z": z, "method": method})
         gx, gy = parse_grid(grid)
         scan_grid = ScanGrid.regular(x=gx, y=gy, z=parse_length("--z", z))
         if rig is not None:
@@ -135,6 +137,16 @@ def register(app: typer.Typer) -> None:
                 source, extra = base, {}
                 metadata = {"setup": setup, "specimen": base.specimen.name, "seed": effective}
 
+            metadata["provenance"] = opened.finish(  # finished when scan.nc is written
+                setup=setup_digest(setup),
+                source=(
+                    {"kind": "rig", "file": str(rig), "identification": source.description}
+                    if rig is not None
+                    else {"kind": "simulator", "specimen": specimen, "snr_db": snr}
+                ),
+                seed=effective,
+                method={"name": method, "budget_per_point": budget_per_point, "z_m": scan_grid.z},
+            )
             check_scan(
                 source,
                 scan_grid,
@@ -178,11 +190,12 @@ def _scan(
     figures and the report."""
     from echocal.cli._common import write_json
     from echocal.errors import DataFileError
+    from echocal.locking import hold_output_lock
     from echocal.scanning import partial_path, scan_surface
 
     if out.exists() and not out.is_dir():
         raise DataFileError(f"--out {out}: exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
+    hold_output_lock(out)  # one scan at a time in --out (creates the folder)
     runs = {"warm": True, "cold": False} if cold else {"warm": True}
     results = {}
     for label, warm in runs.items():
@@ -192,12 +205,14 @@ def _scan(
             results[label] = scan_surface(
                 base, scan_grid, warm_start=warm, out=path, log=_say, **options
             )
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
+            from echocal._signals import exit_code, how
+
             _say(
-                f"[yellow]interrupted:[/] finished points are saved in {sidecar}; "
+                f"[yellow]{how(exc)}:[/] finished points are saved in {sidecar}; "
                 "run the same command again to resume"
             )
-            raise typer.Exit(130) from None
+            raise typer.Exit(exit_code(exc)) from None
         if figures and warm:
             from echocal.plots.surface import save_surface_figures
 

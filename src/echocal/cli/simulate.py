@@ -13,12 +13,14 @@ from echocal.cli._common import output, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.constants import ECHO_THRESHOLD
 from echocal.io import (
-    atomic_path,
+    atomic_write_bytes,
     atomic_write_text,
     check_out_dir,
     json_ready,
+    netcdf_bytes,
     refuse_existing_output,
 )
+from echocal.locking import hold_output_lock
 from echocal.units import parse_quantity
 
 SIMULATE_FILES = ("ascan.csv", "ascan.nc", "ascan.png", "ascan.svg")
@@ -128,6 +130,7 @@ def register(app: typer.Typer) -> None:
         energy_window = _energy_window(scan.samples, window, pulse)
         if energy_window is not None:
             summary["energy_window_s"] = list(energy_window)
+        hold_output_lock(out)  # one writer per --out
         check_out_dir(out, overwrite=overwrite, own_files=SIMULATE_FILES)
         data_path = out / f"ascan.{fmt}"
         _save_ascan(data_path, scan, summary)
@@ -252,5 +255,4 @@ def _save_ascan(path: Path, scan: Any, summary: dict[str, Any]) -> None:
             "echocal_format": "ascan/1",
         },
     )
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+    atomic_write_bytes(path, netcdf_bytes(ds))

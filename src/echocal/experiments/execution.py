@@ -14,8 +14,9 @@ folder skips the finished ones.  Runs are pure functions of their case
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -23,13 +24,17 @@ from typing import Any
 
 import pandas as pd
 
+from echocal import provenance
 from echocal._progress import ProgressBar
 from echocal._validate import positive_int
 from echocal.errors import EchocalValueError
 from echocal.experiments import storage
+from echocal.experiments._workers import stop_workers, worker_pool
 from echocal.experiments.runner import FAILED, run_case
 from echocal.experiments.summary import summarize
 from echocal.experiments.sweep import RunCase, SweepSpec, expand, load_sweep
+from echocal.locking import output_lock
+from echocal.provenance import setup_digest
 
 __all__ = ["DEFAULT_WORKERS", "SweepResults", "load_results", "run_sweep"]
 
@@ -37,7 +42,8 @@ DEFAULT_WORKERS = 2
 """Local worker processes when ``workers`` is not given."""
 
 Outcome = tuple[dict[str, Any], pd.DataFrame]
-Closer = Callable[[], None]
+Closer = Callable[[bool], None]
+"""Stops a back end; its argument: the sweep was interrupted (or failed)."""
 
 
 @dataclass(frozen=True)
@@ -129,7 +135,8 @@ def run_sweep(
     ----------
     spec_or_path : a :class:`SweepSpec`, a built-in sweep name, a TOML path or a dict.
     out_dir : results folder; a folder of the same sweep is resumed (finished runs are
-        skipped), one of another sweep is refused unless ``overwrite``.
+        skipped), one of another sweep is refused unless ``overwrite``; one another
+        process is writing is refused (:class:`~echocal.locking.OutputLockedError`).
     scheduler : ``"tcp://HOST:PORT"`` of a Dask distributed scheduler; None runs locally.
         Workers need echocal installed and, for a setup file, the same path readable.
     workers : local worker processes (default :data:`DEFAULT_WORKERS`); 1 runs in this
@@ -140,36 +147,49 @@ def run_sweep(
     """
     # everything is checked (the sweep, its runs, the workers, the scheduler) before the
     # results folder is touched: a refused call leaves no output behind
+    opened = provenance.start("sweep run", {"sweep": str(spec_or_path), "out": str(out_dir)})
     n = DEFAULT_WORKERS if workers is None else positive_int("workers", workers)
     if scheduler is not None:
         _check_scheduler(scheduler)
     spec = load_sweep(spec_or_path)
     cases = expand(spec)
     client = None if scheduler is None else _connect(scheduler)
-    try:
-        digest = storage.prepare_folder(out_dir, spec, len(cases), overwrite=overwrite)
-        done = storage.finished_case_ids(out_dir)
-    except BaseException:
+    with contextlib.ExitStack() as stack:
+        try:
+            stack.enter_context(output_lock(out_dir))  # one sweep at a time in out_dir
+            digest = storage.prepare_folder(out_dir, spec, len(cases), overwrite=overwrite)
+            done = storage.finished_case_ids(out_dir)
+        except BaseException:
+            if client is not None:
+                client.close()
+            raise
+        todo = [case for case in cases if case.case_id not in done]
+        # back ends start before the progress bar's thread: worker processes fork from a
+        # single-threaded parent
         if client is not None:
-            client.close()
-        raise
-    todo = [case for case in cases if case.case_id not in done]
-    # back ends start before the progress bar's thread: worker processes fork from a
-    # single-threaded parent
-    if client is not None:
-        outcomes, close = _dask_outcomes(todo, client, digest)
-    else:
-        outcomes, close = _local_outcomes(todo, n)
-    try:
-        with _SweepBar(spec.name, len(cases), len(cases) - len(todo), progress) as bar:
-            for row, history in outcomes:
-                storage.write_part(out_dir, row, history)
-                bar.advance(failed=row["status"] == FAILED)
-                if callback is not None:
-                    callback(row)
-    finally:
-        close()
-    storage.consolidate(out_dir, [case.case_id for case in cases])
+            outcomes, close = _dask_outcomes(todo, client, digest)
+        else:
+            outcomes, close = _local_outcomes(todo, n)
+        interrupted = True
+        try:
+            with _SweepBar(spec.name, len(cases), len(cases) - len(todo), progress) as bar:
+                for row, history in outcomes:
+                    storage.write_part(out_dir, row, history)
+                    bar.advance(failed=row["status"] == FAILED)
+                    if callback is not None:
+                        callback(row)
+            interrupted = False
+        finally:
+            close(interrupted)
+        record = opened.finish_json(
+            setup=setup_digest(spec.setup),
+            source={"kind": "simulator", "scheduler": scheduler or f"local ({n} workers)"},
+            position_m=spec.position,
+            seed=spec.seed,
+            method={"sweep": spec.name, "hash": digest, "spec": spec.model_dump(mode="json")},
+            runs={"total": len(cases), "computed": len(todo), "resumed": len(cases) - len(todo)},
+        )
+        storage.consolidate(out_dir, [case.case_id for case in cases], record)
     return SweepResults(
         out_dir=Path(out_dir), spec=spec, hash=digest, n_cases=len(cases), n_new=len(todo)
     )
@@ -181,12 +201,13 @@ def _local_outcomes(cases: Sequence[RunCase], workers: int) -> tuple[Iterator[Ou
 
     Worker processes use the platform's default start method (fork on Linux: instant,
     and scripts need no ``if __name__ == "__main__"`` guard; the parent has no threads
-    yet).  Returns the results iterator and a function that stops the pool (cancelling
-    runs not yet started).
+    yet) and die with this process (:mod:`echocal.experiments._workers`).  Returns the
+    results iterator and a function that stops the pool (cancelling runs not yet started;
+    interrupted, terminating the workers).
     """
     if workers == 1 or len(cases) <= 1:
-        return (run_case(case) for case in cases), lambda: None
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(cases)))
+        return (run_case(case) for case in cases), lambda interrupted: None
+    pool = worker_pool(min(workers, len(cases)))  # workers die with this process
     pending = {pool.submit(run_case, case) for case in cases}
 
     def results() -> Iterator[Outcome]:
@@ -196,7 +217,7 @@ def _local_outcomes(cases: Sequence[RunCase], workers: int) -> tuple[Iterator[Ou
             for future in finished:
                 yield future.result()
 
-    return results(), lambda: pool.shutdown(wait=True, cancel_futures=True)
+    return results(), lambda interrupted: stop_workers(pool, interrupted=interrupted)
 
 
 def _check_scheduler(scheduler: str) -> None:
@@ -238,7 +259,7 @@ def _dask_outcomes(
             yield future.result()
             future.release()
 
-    def close() -> None:
+    def close(interrupted: bool) -> None:
         if futures:
             client.cancel(futures)
         client.close()

@@ -45,7 +45,8 @@ SWEEP_JSON = "sweep.json"
 RUNS = "runs.parquet"
 HISTORY = "history.parquet"
 PARTS = "parts"
-_OURS = (SWEEP_JSON, RUNS, HISTORY, PARTS)
+PROVENANCE = "provenance.json"
+_OURS = (SWEEP_JSON, RUNS, HISTORY, PARTS, PROVENANCE)
 
 
 def part_key(case_id: str) -> str:
@@ -168,8 +169,13 @@ def finished_case_ids(out_dir: str | Path) -> set[str]:
     return set(read_runs(out_dir)["case_id"])
 
 
-def consolidate(out_dir: str | Path, order: Sequence[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
+def consolidate(
+    out_dir: str | Path, order: Sequence[str], provenance: str | None = None
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Merge parts into ``runs.parquet`` / ``history.parquet`` (sorted by ``order``); drop parts.
+
+    ``provenance`` (a JSON record, :mod:`echocal.provenance`) goes into ``runs.parquet``'s
+    key-value metadata (pandas ``attrs``) and into ``provenance.json``.
 
     Only finished runs are kept: history of a run whose row was never written (killed
     between the two writes) is discarded, and that run will be redone on resume.
@@ -185,6 +191,9 @@ def consolidate(out_dir: str | Path, order: Sequence[str]) -> tuple[pd.DataFrame
     history = history.reset_index(drop=True)
     with atomic_path(out / HISTORY) as tmp:
         history.to_parquet(tmp, index=False)
+    if provenance is not None:  # in the file's key-value metadata, and beside it
+        runs.attrs["provenance"] = provenance
+        atomic_write_text(out / PROVENANCE, provenance + "\n")
     with atomic_path(out / RUNS) as tmp:
         runs.to_parquet(tmp, index=False)
     if (out / PARTS).is_dir():

@@ -46,6 +46,7 @@ from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownName
 from echocal.setups import Angle, Point, _format_errors, builtin_setup_names, load_setup_config
 
 __all__ = [
+    "MAX_SWEEP_RUNS",
     "MethodSpec",
     "RunCase",
     "SweepSpec",
@@ -59,6 +60,23 @@ __all__ = [
 ]
 
 _NOISELESS = ("none", "off", "inf")
+
+
+MAX_SWEEP_RUNS = 100_000
+"""The most runs one sweep may hold: each takes seconds, so more is weeks on a workstation and
+almost always a mistyped count (``seeds = 100000000``)."""
+
+
+def _seed_count(value: Any) -> Any:
+    """``seeds``: a count or list of at most :data:`MAX_SWEEP_RUNS` (checked before a range
+    of a hundred million seeds is ever built)."""
+    n = len(value) if isinstance(value, list) else value
+    if isinstance(n, int) and not isinstance(n, bool) and n > MAX_SWEEP_RUNS:
+        raise ValueError(
+            f"{n:,} seeds exceed the cap of {MAX_SWEEP_RUNS:,} runs per sweep (a run takes "
+            "seconds: split the study into several sweeps)"
+        )
+    return value
 
 
 def _snr(value: Any) -> Any:
@@ -132,7 +150,7 @@ class SweepSpec(_Model):
     settle: tuple[Annotated[float, Field(gt=0)], Annotated[int, Field(ge=1)]] | None = None
     tolerance: float = Field(default=0.1, gt=0, allow_inf_nan=False)
     seed: int = Field(default=0, ge=0)
-    seeds: int | list[Annotated[int, Field(ge=0)]] = 1
+    seeds: Annotated[int | list[Annotated[int, Field(ge=0)]], BeforeValidator(_seed_count)] = 1
     snr_db: SnrList = None
     x0: X0Spec = X0Spec(points=[(0.0, 0.0)])
     methods: list[MethodSpec] = Field(default_factory=list)
@@ -704,6 +722,14 @@ def expand(spec: SweepSpec) -> list[RunCase]:
     ]
     if spec.x0.offset is not None:
         starts.append(("offset", (float(spec.x0.offset[0]), float(spec.x0.offset[1]))))
+    n_seeds = spec.seeds if isinstance(spec.seeds, int) else len(spec.seeds)
+    count = sum(len(_grid(m.options)) for m in spec.methods) * len(spec.snr_db or [None])
+    count *= len(starts) * n_seeds
+    if count > MAX_SWEEP_RUNS:
+        raise ConfigError(
+            f"sweep {spec.name!r}: {count:,} runs exceed the cap of {MAX_SWEEP_RUNS:,} runs per "
+            "sweep (methods x option grid x SNRs x starts x seeds); split it into smaller sweeps"
+        )
     cases = [
         RunCase(
             sweep=spec.name,

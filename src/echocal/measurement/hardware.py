@@ -40,7 +40,7 @@ import time
 from collections.abc import Callable
 from typing import Protocol, TypeVar, runtime_checkable
 
-from echocal._validate import nonnegative_float, positive_float
+from echocal._validate import capped_float, nonnegative_float
 from echocal.ascan import AScan
 from echocal.errors import EchocalValueError, InstrumentError, LimitError
 from echocal.geometry import Pose
@@ -117,6 +117,11 @@ class _LineReader:
     def close(self) -> None:
         self._file.close()
 
+MAX_TIMEOUT = 600.0
+"""[s] the longest wait allowed for one reply (a move included): a larger timeout would
+leave a dead rig unnoticed for hours."""
+_TIMEOUT_WHY = "s (the longest one reply may take, a move included; a dead rig must be noticed)"
+
 
 class TcpInstrument:
     """One TCP connection to an instrument speaking the echocal line protocol.
@@ -127,6 +132,8 @@ class TcpInstrument:
     timeout : [s] for connecting and for each complete reply (> 0).
     retries : how many times a command is sent again after a transport fault (>= 0).
     backoff : [s] wait before the first retry; doubled for each further retry (>= 0).
+    token : the instrument's shared secret: sent as ``AUTH <token>`` on every (re)connection;
+        a refusal raises :class:`~echocal.errors.InstrumentError` at once (no retry).
 
     The connection is opened lazily by the first command and re-opened after a fault.
     See the module docstring for the fault policy.
@@ -140,10 +147,12 @@ class TcpInstrument:
         timeout: float = 2.0,
         retries: int = 3,
         backoff: float = 0.05,
+        token: str | None = None,
     ) -> None:
+        self.token = protocol.check_token(token)
         self.host = str(host)
         self.port = int(port)
-        self.timeout = positive_float("timeout", timeout)
+        self.timeout = capped_float("timeout", timeout, MAX_TIMEOUT, _TIMEOUT_WHY)
         if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
             raise EchocalValueError(f"retries must be an integer >= 0; got {retries!r}")
         self.retries = retries
@@ -168,6 +177,12 @@ class TcpInstrument:
             sock.settimeout(self.timeout)
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             self._sock, self._reader = sock, _LineReader(sock)
+            if self.token is not None:
+                sock.sendall(protocol.encode_line(f"AUTH {self.token}"))
+                reply = self._reader.readline()
+                if reply != "OK":
+                    _check_err(reply)  # ERR AUTH: refused
+                    raise _AuthRefused(f"answered {reply[:60]!r} to AUTH (no token expected?)")
         return self._reader
 
     def _drop(self) -> None:
@@ -206,6 +221,9 @@ class TcpInstrument:
                 return parse(reader)
             except LimitError:
                 raise
+            except _AuthRefused as exc:  # a wrong token stays wrong: no retry
+                self._drop()
+                raise InstrumentError(f"{name}: instrument at {self.address} {exc}") from None
             except _InstrumentReported as exc:  # ERR reply: the connection is still in step
                 raise InstrumentError(f"{name}: instrument at {self.address} {exc}") from None
             except InstrumentError as exc:  # nonsense (ProtocolError): reset, no retry
@@ -233,6 +251,10 @@ class TcpInstrument:
         return self.query_line("*IDN?")
 
 
+class _AuthRefused(InstrumentError):
+    """The instrument refused the token (private; not retried)."""
+
+
 class _InstrumentReported(InstrumentError):
     """The instrument answered ``ERR`` (private: re-raised as InstrumentError)."""
 
@@ -244,6 +266,11 @@ def _check_err(reply: str) -> str:
         message = parts[2] if len(parts) > 2 else reply
         if code == "LIMIT":
             raise LimitError(f"instrument refused: {message}")
+        if code == "AUTH":
+            raise _AuthRefused(
+                f"refused the connection: {message} (echocal: --token SECRET or "
+                "$ECHOCAL_INSTRUMENT_TOKEN)"
+            )
         raise _InstrumentReported(f"reported error {code or '?'}: {message}")
     return reply
 
@@ -259,8 +286,9 @@ def _ok(reader: _LineReader) -> None:
 
 
 def _ascan(reader: _LineReader) -> AScan:
-    fs, start, n = protocol.decode_ascan_header(_check_err(reader.readline()))
-    samples = protocol.decode_samples(reader.readline(), n)
+    header = _check_err(reader.readline())
+    fs, start, n = protocol.decode_ascan_header(header)
+    samples = protocol.decode_samples(reader.readline(), n, crc=protocol.payload_crc(header))
     return AScan(samples=samples, fs=fs, start_time=start)
 
 
@@ -358,13 +386,16 @@ class HardwareSource(BaseSource):
         retries: int = 3,
         backoff: float = 0.05,
         settle_time: float = 0.0,
+        token: str | None = None,
     ) -> HardwareSource:
         """Connect to an instrument speaking the echocal protocol (one shared TCP connection).
 
         Asks ``*IDN?`` (the description) and ``LIMITS?`` at once, so a wrong
-        address fails here with :class:`~echocal.errors.InstrumentError`.
+        address (or ``token``) fails here with :class:`~echocal.errors.InstrumentError`.
         """
-        instrument = TcpInstrument(host, port, timeout=timeout, retries=retries, backoff=backoff)
+        instrument = TcpInstrument(
+            host, port, timeout=timeout, retries=retries, backoff=backoff, token=token
+        )
         try:
             idn = instrument.identify()
             positioner = TcpPositioner(instrument)

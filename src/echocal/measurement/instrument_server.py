@@ -17,10 +17,12 @@ instrument would.
 from __future__ import annotations
 
 import contextlib
+import hmac
 import socket
 import socketserver
 import threading
 import time
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -30,6 +32,9 @@ from echocal.errors import LimitError
 from echocal.geometry import Pose
 from echocal.measurement import protocol
 from echocal.measurement.base import MeasurementSource
+
+AUTH_CODE = "AUTH"
+"""Error code of a connection refused for a missing or wrong token."""
 
 __all__ = ["MALFORMED_KINDS", "Faults", "InstrumentServer", "serve_forever"]
 
@@ -77,6 +82,7 @@ class _Handler(socketserver.StreamRequestHandler):
     def handle(self) -> None:
         owner = self.server.owner
         owner._connections.add(self.request)
+        authenticated = owner.token is None
         try:
             while True:
                 raw = self.rfile.readline(protocol.MAX_LINE_BYTES + 1)
@@ -85,6 +91,16 @@ class _Handler(socketserver.StreamRequestHandler):
                 if len(raw) > protocol.MAX_LINE_BYTES:  # the rest of it would parse as commands
                     self.wfile.write(_err("SYNTAX", "command line is too long"))
                     return
+                if not authenticated:  # the first line must be AUTH <token>: else goodbye
+                    authenticated = owner._authenticate(raw)
+                    self.wfile.write(
+                        protocol.encode_line("OK")
+                        if authenticated
+                        else _err(AUTH_CODE, "this instrument needs its token first: AUTH <token>")
+                    )
+                    if not authenticated:
+                        return
+                    continue
                 reply = owner._dispatch(raw)
                 if reply is None:  # injected drop
                     return
@@ -119,6 +135,9 @@ class InstrumentServer:
     move_time : [s] each ``MOVE`` takes (the instrument is busy meanwhile).
     faults : failures to inject (default: none).
     initial_pose : where the positioner starts (default: the origin clipped to the limits).
+    token : a shared secret: each connection must first send ``AUTH <token>`` (answered
+        ``OK``; a wrong or missing token gets ``ERR AUTH`` and the connection is closed).
+        None (the default) asks nothing — fine on loopback, not on a network.
 
     Use as a context manager: ``with InstrumentServer(src) as server: ...server.address``.
     """
@@ -132,8 +151,10 @@ class InstrumentServer:
         move_time: float = 0.0,
         faults: Faults | None = None,
         initial_pose: Pose | None = None,
+        token: str | None = None,
     ) -> None:
         self.source = source
+        self.token = protocol.check_token(token)
         self.move_time = nonnegative_float("move_time", move_time)
         self.faults = faults or Faults()
         self.pose = initial_pose or source.limits.clip(Pose(0.0, 0.0, 0.0))
@@ -190,6 +211,12 @@ class InstrumentServer:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+    def _authenticate(self, raw: bytes) -> bool:
+        """Whether ``raw`` is ``AUTH <token>`` with this server's token (constant time)."""
+        name, _, given = raw.decode(protocol.ENCODING, errors="replace").strip().partition(" ")
+        assert self.token is not None
+        return name == "AUTH" and hmac.compare_digest(given.encode(), self.token.encode())
 
     # -- command execution ------------------------------------------------------------------
     def _once(self, name: str, due: bool) -> bool:
@@ -251,6 +278,9 @@ class InstrumentServer:
     def _limits(self, args: str) -> tuple[list[bytes], float, bool]:
         return [protocol.encode_line(protocol.encode_limits(self.source.limits))], 0.0, False
 
+    def _auth(self, args: str) -> tuple[list[bytes], float, bool]:
+        return [protocol.encode_line("OK")], 0.0, False  # already authenticated (or no token)
+
     def _bye(self, args: str) -> tuple[list[bytes], float, bool]:
         return [protocol.encode_line("OK")], 0.0, True
 
@@ -271,6 +301,7 @@ class InstrumentServer:
         "ACQ?": _acq,
         "LIMITS?": _limits,
         "BYE": _bye,
+        "AUTH": _auth,
     }
 
 
@@ -279,17 +310,19 @@ def _err(code: str, message: str) -> bytes:
 
 
 def _garble(kind: str, header: str, payload: str, samples: Any) -> tuple[str, str]:
-    _, fs, start, n = header.split()
+    _, fs, start, n, crc = header.split()
     if kind == "count":
-        return f"ASCAN {fs} {start} {int(n) + 1}", payload
+        return f"ASCAN {fs} {start} {int(n) + 1} {crc}", payload
     if kind == "number":
-        return f"ASCAN fs=? {start} {n}", payload
-    if kind == "base64":
-        return header, "!!not-base64!!" + payload[14:]
+        return f"ASCAN fs=? {start} {n} {crc}", payload
+    if kind == "base64":  # with the CRC of what is sent: the base64 check must catch it
+        bad_payload = "!!not-base64!!" + payload[14:]
+        crc = f"crc32={zlib.crc32(bad_payload.encode('ascii')):08x}"
+        return f"ASCAN {fs} {start} {n} {crc}", bad_payload
     if kind == "nan":
         bad = samples.copy()
         bad[len(bad) // 2] = float("nan")
-        return header, protocol.encode_ascan(bad, 1.0, 0.0)[1]
+        return protocol.encode_ascan(bad, float(fs), float(start))  # a valid CRC of NaNs
     return "HELLO 42", payload  # "reply": an unknown reply
 
 
@@ -300,13 +333,14 @@ def serve_forever(
     move_time: float = 0.0,
     *,
     on_ready: Callable[[tuple[str, int]], None] | None = None,
+    token: str | None = None,
 ) -> None:
     """Serve ``source`` on ``host:port`` until interrupted (Ctrl-C); for the CLI.
 
     ``on_ready(address)`` is called once the socket listens (e.g. to print the address).
     Port 5025 is the customary port of SCPI instruments.
     """
-    server = InstrumentServer(source, host=host, port=port, move_time=move_time)
+    server = InstrumentServer(source, host=host, port=port, move_time=move_time, token=token)
     if on_ready is not None:
         on_ready(server.address)
     with contextlib.suppress(KeyboardInterrupt):

@@ -63,6 +63,12 @@ def limit_problems(**axes: tuple[float, float]) -> list[str]:
         if math.isnan(low) or math.isnan(high):
             problems.append(f"{name}: bounds must be numbers, not NaN; got [{low}, {high}]")
             continue
+        if low == high and math.isinf(low):
+            problems.append(
+                f"{name}: [{low}, {high}] holds no position; give finite bounds, or "
+                "[-inf, inf] for an unlimited axis"
+            )
+            continue
         if low > high:
             problems.append(
                 f"{name}: must be an interval with low <= high; "

@@ -39,11 +39,12 @@ from __future__ import annotations
 import base64
 import binascii
 import math
+import zlib
 
 import numpy as np
 from numpy.typing import NDArray
 
-from echocal.errors import InstrumentError
+from echocal.errors import EchocalValueError, InstrumentError
 from echocal.geometry import Pose
 from echocal.measurement.limits import PositionerLimits
 
@@ -53,6 +54,7 @@ __all__ = [
     "GIMBAL",
     "MAX_LINE_BYTES",
     "ProtocolError",
+    "check_token",
     "decode_ascan_header",
     "decode_floats",
     "decode_limits",
@@ -63,13 +65,14 @@ __all__ = [
     "encode_line",
     "encode_pose",
     "format_float",
+    "payload_crc",
 ]
 
 ENCODING = "utf-8"
 MAX_LINE_BYTES = 64 * 1024 * 1024
 """Longest accepted line [bytes] (an A-scan of ~6 million samples); longer is nonsense."""
 
-COMMANDS = ("*IDN?", "MOVE", "POS?", "ACQ?", "LIMITS?", "BYE")
+COMMANDS = ("*IDN?", "MOVE", "POS?", "ACQ?", "LIMITS?", "BYE", "AUTH")
 """Every command the protocol knows."""
 
 GIMBAL = "GIMBAL"
@@ -157,7 +160,8 @@ def decode_limits(text: str) -> PositionerLimits:
 
 
 def encode_ascan(samples: NDArray[np.float64], fs: float, start_time: float) -> tuple[str, str]:
-    """Header ``"ASCAN fs start n"`` and payload (base64 of little-endian float64 samples).
+    """Header ``"ASCAN fs start n crc32=XXXXXXXX"`` and payload (base64 of little-endian
+    float64 samples); the CRC-32 of the payload line lets the client refuse a garbled one.
 
     Parameters
     ----------
@@ -166,13 +170,19 @@ def encode_ascan(samples: NDArray[np.float64], fs: float, start_time: float) -> 
     start_time : [s] time of the first sample.
     """
     data = np.ascontiguousarray(samples, dtype="<f8")
-    header = f"ASCAN {format_float(fs)} {format_float(start_time)} {data.size}"
-    return header, base64.b64encode(data.tobytes()).decode("ascii")
+    payload = base64.b64encode(data.tobytes()).decode("ascii")
+    crc = zlib.crc32(payload.encode("ascii"))
+    header = f"ASCAN {format_float(fs)} {format_float(start_time)} {data.size} crc32={crc:08x}"
+    return header, payload
 
 
 def decode_ascan_header(text: str) -> tuple[float, float, int]:
-    """Parse ``"ASCAN fs start n"`` into (fs [Hz], start_time [s], n_samples)."""
+    """Parse ``"ASCAN fs start n [crc32=XXXXXXXX]"`` into (fs [Hz], start_time [s],
+    n_samples); the optional checksum is read by :func:`payload_crc`."""
     tokens = text.split()
+    if len(tokens) == 5:
+        payload_crc(text)  # a malformed checksum field is refused here
+        tokens = tokens[:4]
     if len(tokens) != 4 or tokens[0] != "ASCAN":
         raise ProtocolError(f"expected an 'ASCAN fs start n' header; got {text[:80]!r}")
     fs, start = decode_floats(" ".join(tokens[1:3]), 2, "ASCAN header")
@@ -185,8 +195,30 @@ def decode_ascan_header(text: str) -> tuple[float, float, int]:
     return fs, start, n
 
 
-def decode_samples(text: str, n_samples: int) -> NDArray[np.float64]:
-    """Decode an A-scan payload line, checking it holds exactly ``n_samples`` finite samples."""
+def payload_crc(header: str) -> int | None:
+    """The CRC-32 an ``ASCAN`` header announces for its payload line (None: no checksum,
+    as from an older instrument)."""
+    tokens = header.split()
+    if len(tokens) != 5:
+        return None
+    name, _, value = tokens[4].partition("=")
+    try:
+        if name != "crc32" or len(value) != 8:
+            raise ValueError
+        return int(value, 16)
+    except ValueError:
+        raise ProtocolError(
+            f"ASCAN header: the fifth field must be crc32=XXXXXXXX (8 hex digits); got "
+            f"{tokens[4][:40]!r}"
+        ) from None
+
+
+def decode_samples(text: str, n_samples: int, crc: int | None = None) -> NDArray[np.float64]:
+    """Decode an A-scan payload line, checking it holds exactly ``n_samples`` finite samples
+    and, when ``crc`` is given (the header's :func:`payload_crc`), that its CRC-32 matches:
+    a payload garbled in transit is refused, never read as other numbers."""
+    if crc is not None and zlib.crc32(text.strip().encode("ascii", errors="replace")) != crc:
+        raise ProtocolError("A-scan payload fails its CRC-32 check: garbled in transit")
     try:
         raw = base64.b64decode(text.strip().encode("ascii"), validate=True)
     except (binascii.Error, UnicodeEncodeError, ValueError):
@@ -199,3 +231,20 @@ def decode_samples(text: str, n_samples: int) -> NDArray[np.float64]:
     if not np.all(np.isfinite(samples)):
         raise ProtocolError("A-scan payload holds NaN or inf samples")
     return samples
+
+
+def check_token(token: str | None) -> str | None:
+    """A token: printable text without spaces, 8 to 256 characters (None: no token)."""
+    if token is None:
+        return None
+    if (
+        not isinstance(token, str)
+        or not 8 <= len(token) <= 256
+        or not token.isprintable()
+        or any(c.isspace() for c in token)
+    ):
+        raise EchocalValueError(
+            "token must be 8 to 256 printable characters without spaces (e.g. from "
+            "`python -c 'import secrets; print(secrets.token_urlsafe())'`)"
+        )
+    return token

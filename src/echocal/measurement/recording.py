@@ -35,12 +35,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_array, positive_int
-from echocal.ascan import AScan
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import Pose
-from echocal.io import atomic_path, atomic_write_text, json_ready
+from echocal.io import atomic_write_bytes, json_ready, netcdf_bytes
+from echocal.locking import output_lock
+from echocal.measurement._partial_recording import PARTIAL_FORMAT, _Partial
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.replay import DIMS, FORMAT
+from echocal.provenance import stamped
 
 __all__ = [
     "MAX_RECORDING_ASCANS",
@@ -58,8 +60,6 @@ __all__ = [
     "simulation_errors",
 ]
 
-PARTIAL_FORMAT = "replay-partial/1"
-"""Format name in the manifest of a partial recording."""
 
 MAX_RECORDING_ASCANS = 1_000_000
 """The most A-scans one recording may hold (poses × repeats): a million A-scans are days
@@ -371,90 +371,6 @@ def recording_dataset(
     )
 
 
-def _short(value: Any, limit: int = 60) -> str:
-    """``repr(value)``, cut to ``limit`` characters (a grid's angle lists run to kilobytes)."""
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
-
-
-class _Partial:
-    """The sidecar directory: chunk files plus a manifest (private)."""
-
-    def __init__(self, directory: Path, fingerprint: dict[str, Any]) -> None:
-        self.dir = directory
-        self.manifest_path = directory / "manifest.json"
-        if self.manifest_path.exists():
-            try:
-                self.manifest = json.loads(self.manifest_path.read_text(encoding="utf-8"))
-                old = self.manifest["fingerprint"]
-            except (OSError, ValueError, KeyError) as exc:
-                raise DataFileError(
-                    f"partial recording {directory} is unreadable ({exc}); delete it to start over"
-                ) from None
-            differ = sorted(
-                k for k in fingerprint.keys() | old.keys() if fingerprint.get(k) != old.get(k)
-            )
-            if differ:
-                recorded = ", ".join(f"{k}={_short(old.get(k))}" for k in differ)
-                raise DataFileError(
-                    f"cannot resume: partial recording {directory} was made with a different "
-                    f"{', '.join(differ)} (recorded {recorded}); "
-                    "record to another path, pass overwrite=True (CLI: --overwrite) to discard "
-                    "it, or delete the partial directory"
-                )
-        else:
-            self.manifest = {"format": PARTIAL_FORMAT, "fingerprint": fingerprint, "chunks": []}
-            try:
-                directory.mkdir(parents=True, exist_ok=True)
-                self._save()
-            except OSError as exc:
-                raise DataFileError(
-                    f"cannot create the partial recording {directory}: {exc.strerror or exc}"
-                ) from None
-
-    @property
-    def n_done(self) -> int:
-        return sum(int(c["count"]) for c in self.manifest["chunks"])
-
-    def _save(self) -> None:
-        atomic_write_text(self.manifest_path, json.dumps(self.manifest, indent=1))
-
-    def check_format(self, ascan: AScan, index: int) -> None:
-        fmt = {"fs": ascan.fs, "start_time": ascan.start_time, "n_samples": ascan.n_samples}
-        known = self.manifest.get("ascan")
-        if known is None:
-            self.manifest["ascan"] = fmt
-        elif known != fmt:
-            raise EchocalValueError(
-                f"measurement {index} has fs/start_time/n_samples {fmt}; earlier ones had "
-                f"{known} — a recording needs one sampling format"
-            )
-
-    def write_chunk(self, start: int, rows: list[NDArray[np.float64]]) -> None:
-        name = f"chunk-{start:09d}.npy"
-        with atomic_path(self.dir / name) as tmp, tmp.open("wb") as fh:
-            np.save(fh, np.stack(rows))
-        self.manifest["chunks"].append({"file": name, "start": start, "count": len(rows)})
-        self._save()
-
-    def load(self, total: int) -> NDArray[np.float64]:
-        parts, expected = [], 0
-        for chunk in self.manifest["chunks"]:
-            if int(chunk["start"]) != expected:
-                raise DataFileError(f"partial recording {self.dir}: chunks are not contiguous")
-            try:
-                arr = np.load(self.dir / chunk["file"])
-            except (OSError, ValueError) as exc:
-                raise DataFileError(
-                    f"partial recording {self.dir}: {chunk['file']}: {exc}"
-                ) from None
-            parts.append(arr)
-            expected += int(chunk["count"])
-        if expected != total:
-            raise DataFileError(f"partial recording {self.dir} holds {expected} of {total} A-scans")
-        return np.concatenate(parts, axis=0)
-
-
 def record(
     source: MeasurementSource,
     grid: RecordingGrid,
@@ -466,6 +382,7 @@ def record(
     chunk_size: int = 256,
     setup: Mapping[str, Any] | None = None,
     overwrite: bool = False,
+    provenance: Mapping[str, Any] | None = None,
 ) -> Path:
     """Measure ``grid`` with ``source`` and write a replay file to ``path``; resumable.
 
@@ -481,6 +398,8 @@ def record(
         a batch loses (and later re-measures) that batch.
     chunk_size : measurements per chunk file in the sidecar directory.
     setup : JSON-ready description of the setup, stored with the source description.
+    provenance : a provenance record (:mod:`echocal.provenance`), stored as the file's
+        ``provenance`` attribute (JSON), its end time set when the file is written.
     overwrite : replace an existing final file (otherwise that is an error) and discard a
         partial recording made with another grid/repeats/source.  A compatible partial
         recording is resumed.
@@ -503,6 +422,8 @@ def record(
     DataFileError : the final file exists (without ``overwrite``) or a partial recording
         there was made with a different grid/repeats/source (with ``overwrite`` such a
         partial recording is discarded and the recording starts over).
+    OutputLockedError : another process is recording to ``path`` (see
+        :func:`~echocal.locking.output_lock`).
     LimitError : a grid pose lies outside ``source.limits`` (nothing is measured).
     EchocalValueError : the recording is too large (:func:`check_recording_size`).
     """
@@ -533,65 +454,69 @@ def record(
         raise LimitError(
             f"{len(bad)} grid pose(s) lie outside the source's limits, e.g. #{i}: {'; '.join(v)}"
         )
-    fingerprint = _fingerprint(source, grid, repeats)
-    if overwrite and partial_matches(target, source, grid, repeats) is False:
-        discard_partial(target)  # --overwrite: start over instead of refusing to resume
-    if not sidecar.exists():
-        _check_measurable(source, grid)
-    partial = _Partial(sidecar, fingerprint)
-    total = len(poses) * repeats
-    done = partial.n_done
+    with output_lock(target, folder=False):  # one writer per file
+        fingerprint = _fingerprint(source, grid, repeats)
+        if overwrite and partial_matches(target, source, grid, repeats) is False:
+            discard_partial(target)  # --overwrite: start over instead of refusing to resume
+        if not sidecar.exists():
+            _check_measurable(source, grid)
+        partial = _Partial(sidecar, fingerprint)
+        total = len(poses) * repeats
+        done = partial.n_done
+        if done and hasattr(source, "skip_noise"):  # a simulator: continue its noise stream,
+            source.skip_noise(done)  # so a resumed recording equals an uninterrupted one
 
-    rows: list[NDArray[np.float64]] = []
-    row_start = done
-    columns = (
-        TextColumn(f"recording {target.name}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeRemainingColumn(),
-    )
-    with Progress(*columns, console=Console(stderr=True), disable=not progress) as bar:
-        task = bar.add_task("record", total=total, completed=done)
-        try:
-            index = done
-            while index < total:
-                batch = list(range(index, min(index + batch_size, total)))
-                batch_poses = [poses[i // repeats] for i in batch]
-                if len(batch) == 1:
-                    ascans = [source.measure(batch_poses[0])]
-                else:
-                    ascans = list(source.measure_many(batch_poses))
-                for i, ascan in zip(batch, ascans, strict=True):
-                    partial.check_format(ascan, i)
-                    rows.append(ascan.samples)
-                index = batch[-1] + 1
-                bar.update(task, completed=index)
-                if len(rows) >= chunk_size:
+        rows: list[NDArray[np.float64]] = []
+        row_start = done
+        columns = (
+            TextColumn(f"recording {target.name}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeRemainingColumn(),
+        )
+        with Progress(*columns, console=Console(stderr=True), disable=not progress) as bar:
+            task = bar.add_task("record", total=total, completed=done)
+            try:
+                index = done
+                while index < total:
+                    batch = list(range(index, min(index + batch_size, total)))
+                    batch_poses = [poses[i // repeats] for i in batch]
+                    if len(batch) == 1:
+                        ascans = [source.measure(batch_poses[0])]
+                    else:
+                        ascans = list(source.measure_many(batch_poses))
+                    for i, ascan in zip(batch, ascans, strict=True):
+                        partial.check_format(ascan, i)
+                        rows.append(ascan.samples)
+                    index = batch[-1] + 1
+                    bar.update(task, completed=index)
+                    if len(rows) >= chunk_size:
+                        partial.write_chunk(row_start, rows)
+                        row_start, rows = index, []
+            finally:
+                if rows:  # keep what was measured, also on KeyboardInterrupt or a source error
                     partial.write_chunk(row_start, rows)
-                    row_start, rows = index, []
-        finally:
-            if rows:  # keep what was measured, also on KeyboardInterrupt or a source error
-                partial.write_chunk(row_start, rows)
-            elif partial.n_done == 0 and isinstance(sys.exc_info()[1], Exception):
-                # failed (not interrupted) before saving anything: nothing to resume
-                shutil.rmtree(sidecar, ignore_errors=True)
+                elif partial.n_done == 0 and isinstance(sys.exc_info()[1], Exception):
+                    # failed (not interrupted) before saving anything: nothing to resume
+                    shutil.rmtree(sidecar, ignore_errors=True)
 
-    data = partial.load(total)
-    n_p, n_a, n_c = grid.shape
-    fmt = partial.manifest["ascan"]
-    dataset = recording_dataset(
-        data.reshape(n_p, n_a, n_c, repeats, -1),
-        grid,
-        fs=fmt["fs"],
-        start_time=fmt["start_time"],
-        source_info={
-            "description": source.description,
-            "limits": source.limits.as_dict(),
-            "setup": dict(setup) if setup is not None else None,
-            "repeats": repeats,
-        },
-    )
-    with atomic_path(target) as tmp:
-        dataset.to_netcdf(tmp, engine="h5netcdf")
-    shutil.rmtree(sidecar)
-    return target
+        data = partial.load(total)
+        n_p, n_a, n_c = grid.shape
+        fmt = partial.manifest["ascan"]
+        dataset = recording_dataset(
+            data.reshape(n_p, n_a, n_c, repeats, -1),
+            grid,
+            fs=fmt["fs"],
+            start_time=fmt["start_time"],
+            source_info={
+                "description": source.description,
+                "limits": source.limits.as_dict(),
+                "setup": dict(setup) if setup is not None else None,
+                "repeats": repeats,
+            },
+        )
+        if provenance is not None:
+            dataset.attrs["provenance"] = stamped({"provenance": dict(provenance)})["provenance"]
+        atomic_write_bytes(target, netcdf_bytes(dataset))  # a failed write: one error
+        shutil.rmtree(sidecar)
+        return target

@@ -153,10 +153,9 @@ class ReceiverSettings:
 
     def __post_init__(self) -> None:
         if self.snr_db is not None:
-            snr = float(self.snr_db)
-            if not np.isfinite(snr):
-                raise EchocalValueError(f"noise.snr_db must be finite or None; got {snr}")
-            object.__setattr__(self, "snr_db", snr)
+            from echocal.signal.noise import check_snr_db
+
+            object.__setattr__(self, "snr_db", check_snr_db("noise.snr_db", self.snr_db))
         if self.full_scale is not None:
             object.__setattr__(
                 self, "full_scale", positive_float("noise.full_scale", self.full_scale)
@@ -486,6 +485,21 @@ class VirtualSetup(BaseSource):
             )
             for row, pose in zip(samples, poses, strict=True)
         ]
+
+    def skip_noise(self, n_ascans: int) -> None:
+        """Advance the receiver noise past ``n_ascans`` A-scans, as if they were measured.
+
+        A resumed recording calls it for the A-scans already saved: the noise of every later
+        A-scan is then exactly that of an uninterrupted recording (the noise of one A-scan is
+        ``n_samples`` consecutive standard normal draws, however they were batched).
+        """
+        if not self._receiver.noise_sigma:
+            return  # a noiseless receiver draws nothing
+        left = int(n_ascans) * self.window.n_samples
+        while left > 0:
+            block = min(left, 1 << 22)
+            self._generator.standard_normal(block)
+            left -= block
 
     def close(self) -> None:
         """Mark the setup closed; later measurements raise."""

@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from echocal.errors import DataFileError
 from echocal.geometry import convert_angles, orientation_normal
-from echocal.io import atomic_path
+from echocal.io import atomic_write_bytes, netcdf_bytes
 from echocal.scanning.grid import ScanGrid
 from echocal.specimen import Specimen
 
@@ -140,8 +140,7 @@ class SurfaceScan:
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the Dataset as NetCDF (h5netcdf), atomically."""
         target = Path(path)
-        with atomic_path(target) as tmp:
-            self.dataset.to_netcdf(tmp, engine="h5netcdf")
+        atomic_write_bytes(target, netcdf_bytes(self.dataset))  # a failed write: one error
         return target
 
     @classmethod

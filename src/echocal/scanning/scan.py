@@ -66,6 +66,7 @@ from echocal.errors import DataFileError, EchocalError, EchocalValueError, Limit
 from echocal.geometry import PARAMETERIZATIONS
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.objective import SourceObjective
+from echocal.provenance import stamped
 from echocal.scanning.dataset import STATUS, SurfaceScan, surface_dataset
 from echocal.scanning.grid import ScanGrid
 from echocal.scanning.store import (
@@ -492,7 +493,9 @@ def scan_surface(
     pulse : matched-filter template (default: the source's own).
     sound_speed : [m/s] c₀ (default: the source's, else water).
     method_options : extra options of the calibration method.
-    metadata : extra JSON-ready attributes to store (e.g. the setup name and seed).
+    metadata : extra JSON-ready attributes to store (e.g. the setup name and seed); a
+        ``provenance`` record (:mod:`echocal.provenance`) is stored as JSON, finished when
+        the file is written.
     start : ``"centre"`` (default) or ``"corner"``: where the serpentine order begins
         (:meth:`ScanGrid.order`).
     on_point : called with (points done, total) after each point (e.g. to interrupt
@@ -662,7 +665,7 @@ def scan_surface(
         truth = getattr(source, "specimen", None)
     attrs = {
         **{k: v for k, v in settings.items() if k not in ("grid",)},
-        **dict(metadata or {}),
+        **stamped(metadata),  # a provenance record gets its end time now
         "resumed_points": resumed,
         "wall_time": wall,
         "settings": json.dumps(settings, sort_keys=True, default=str),

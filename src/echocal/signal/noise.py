@@ -17,6 +17,7 @@ default length 2 × the pulse's −20 dB duration).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,7 +29,7 @@ from echocal.signal.processing import _energy_window
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
 
-__all__ = ["Receiver", "noise_sigma_for_snr", "signal_power"]
+__all__ = ["SNR_DB_RANGE", "Receiver", "check_snr_db", "noise_sigma_for_snr", "signal_power"]
 
 
 def signal_power(
@@ -41,6 +42,23 @@ def signal_power(
     """[a.u.²] mean power of the reference echo inside its pseudo-energy window, ``(...,)``."""
     energy, count, _peak = _energy_window(reference_samples, window, pulse, window_length)
     return energy / np.maximum(count, 1)
+
+
+SNR_DB_RANGE = (-100.0, 200.0)
+"""[dB] the SNRs a receiver may have: beyond 200 dB the noise is below any float's
+resolution of the echo (use no noise instead), below -100 dB no echo is measurable."""
+
+
+def check_snr_db(name: str, snr_db: Any) -> float:
+    """``snr_db`` [dB] as a float within :data:`SNR_DB_RANGE` (one clear error otherwise)."""
+    low, high = SNR_DB_RANGE
+    snr = finite_float(name, snr_db)
+    if not low <= snr <= high:
+        raise EchocalValueError(
+            f"{name} must lie in [{low:g}, {high:g}] dB (for a noiseless receiver give "
+            f"'none'); got {snr:g}"
+        )
+    return snr
 
 
 def noise_sigma_for_snr(
@@ -61,7 +79,7 @@ def noise_sigma_for_snr(
     EchocalValueError
         ``snr_db`` not finite, or a reference echo with zero power.
     """
-    snr = finite_float("snr_db", snr_db)
+    snr = check_snr_db("snr_db", snr_db)
     power = signal_power(reference_samples, window, pulse, window_length=window_length)
     if np.any(power <= 0.0):
         raise EchocalValueError("reference_samples must hold an echo; its power is zero")

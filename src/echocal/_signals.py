@@ -1,0 +1,105 @@
+"""Termination signals end a command the way Ctrl-C does (private).
+
+A long command (a calibration on a rig, a recording, a scan, a sweep) already keeps what it
+measured when Ctrl-C raises :class:`KeyboardInterrupt`.  SIGTERM (``kill``, a batch system,
+systemd) and SIGHUP (a closed terminal or SSH session) would otherwise end the process at
+once and lose it.  :func:`terminate_like_ctrl_c` makes them raise :class:`Terminated`, a
+``KeyboardInterrupt``, so the same cleanup runs; the command then exits with the shell's
+code for that signal (128 + its number: 130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP).
+
+It also ignores SIGXFSZ, so writing past a file-size limit (``ulimit -f``) is an
+``OSError`` (EFBIG) naming the file, not a killed process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+
+__all__ = [
+    "INTERRUPTED",
+    "TERMINATION_SIGNALS",
+    "Terminated",
+    "exit_code",
+    "how",
+    "terminate_like_ctrl_c",
+]
+
+TERMINATION_SIGNALS: tuple[signal.Signals, ...] = tuple(
+    getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+"""The signals turned into :class:`Terminated` (those the platform has)."""
+
+INTERRUPTED = 128 + int(signal.SIGINT)
+"""130: the exit code of a command stopped by Ctrl-C (and what typer returns for any
+``KeyboardInterrupt``)."""
+
+
+class Terminated(KeyboardInterrupt):
+    """A termination signal arrived: handled exactly as Ctrl-C (``KeyboardInterrupt``)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+    def __str__(self) -> str:
+        return f"terminated by {signal.Signals(self.signum).name}"
+
+
+def _interrupt(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt behind ``exc`` (itself, or the cause of click's ``Abort``)."""
+    seen = 0
+    while exc is not None and seen < 8:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        exc = exc.__cause__ or exc.__context__
+        seen += 1
+    return None
+
+
+def exit_code(exc: BaseException | None = None) -> int:
+    """The shell's exit code for the interruption behind ``exc``: 128 + the signal number
+    (130 for Ctrl-C / SIGINT, 143 for SIGTERM, 129 for SIGHUP)."""
+    found = _interrupt(exc)
+    signum = found.signum if isinstance(found, Terminated) else int(signal.SIGINT)
+    return 128 + signum
+
+
+def how(exc: BaseException | None = None) -> str:
+    """``"interrupted (Ctrl-C)"`` or ``"terminated by SIGTERM"``: what stopped a run."""
+    found = _interrupt(exc)
+    return str(found) if isinstance(found, Terminated) else "interrupted (Ctrl-C)"
+
+
+@contextlib.contextmanager
+def terminate_like_ctrl_c() -> Iterator[list[int]]:
+    """While active, SIGTERM and SIGHUP raise :class:`Terminated` in the main thread and
+    SIGXFSZ is ignored; the previous handlers are restored on exit.
+
+    Yields the list of termination signals received (empty, or the one that stopped the
+    command: a caller that only sees an exit code, typer's 130 for any interrupt, learns
+    which signal it was).  The first termination signal raises; further ones while the
+    command cleans up (saving what it measured) are ignored — SIGKILL still ends the
+    process.  Outside the main thread (where Python cannot set handlers) this does nothing.
+    """
+    fired: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield fired
+        return
+
+    def handler(signum: int, frame: object) -> None:
+        if fired:
+            return  # already stopping: let the cleanup finish
+        fired.append(signum)
+        raise Terminated(signum)
+
+    previous = {sig: signal.signal(sig, handler) for sig in TERMINATION_SIGNALS}
+    if hasattr(signal, "SIGXFSZ"):
+        previous[signal.SIGXFSZ] = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    try:
+        yield fired
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)

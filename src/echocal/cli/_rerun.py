@@ -1,0 +1,85 @@
+"""``echocal calibrate --from result.json``: rerun a calibration from its provenance (private).
+
+The command stores its own parameters in the provenance record of ``result.json``
+(:func:`rerun_parameters` is their inverse): the setup and a recording as absolute paths,
+everything else as typed.  A rerun refuses a setup or recording whose content changed
+since (their SHA-256 digests are in the record): the same numbers need the same inputs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from echocal.errors import ConfigError
+
+NOT_RECORDED = ("ctx", "from_file", "out", "plots", "json_output", "token", "overwrite")
+"""calibrate parameters that are the rerun's own (where to write, how to print; the token
+is a secret and never written to a file)."""
+
+
+def recorded_parameters(given: dict[str, Any]) -> dict[str, Any]:
+    """The parameters of one ``echocal calibrate`` to store for a rerun: files as absolute
+    paths (a rerun may start elsewhere)."""
+    out = {k: v for k, v in given.items() if k not in NOT_RECORDED}
+    for key in ("setup", "replay"):
+        value = out.get(key)
+        if value is not None and Path(value).is_file():
+            out[key] = str(Path(value).resolve())
+        elif isinstance(value, Path):
+            out[key] = str(value)
+    return out
+
+
+def rerun_parameters(path: Path, ctx: Any) -> dict[str, Any]:
+    """The parameters recorded in ``path`` (a ``result.json``), checked for a rerun.
+
+    Raises :class:`~echocal.errors.ConfigError` for another command's file, options given
+    beside ``--from`` (they would change the run), or a setup or recording that changed.
+    """
+    from echocal.provenance import file_digest, read_provenance, setup_digest
+
+    record = read_provenance(path)
+    if record.get("command") != "calibrate":
+        raise ConfigError(
+            f"--from {path}: written by `echocal {record.get('command')}`, not calibrate"
+        )
+    extra = sorted(
+        f"--{name.replace('_', '-')}"
+        for name in ctx.params
+        if name not in NOT_RECORDED and _given(ctx, name)
+    )
+    if extra:
+        raise ConfigError(
+            f"--from {path} reruns the recorded calibration as it was; drop {', '.join(extra)}"
+            " (only --out, --plots/--no-plots, --json, --token and --overwrite may change)"
+        )
+    params = dict(record.get("parameters") or {})
+    unknown = sorted(set(params) - set(ctx.params))
+    if unknown:
+        raise ConfigError(f"--from {path}: unknown recorded parameters {', '.join(unknown)}")
+    setup = record.get("setup")
+    if isinstance(setup, dict) and setup.get("sha256") and params.get("setup"):
+        now = setup_digest(str(params["setup"]))["sha256"]
+        if now != setup["sha256"]:
+            raise ConfigError(
+                f"--from {path}: setup {params['setup']} has changed since the run (sha256 "
+                f"{setup['sha256'][:12]}… then, {now[:12]}… now); restore it to rerun"
+            )
+    source = record.get("source")
+    if isinstance(source, dict) and source.get("kind") == "replay" and source.get("sha256"):
+        now = file_digest(source["file"])
+        if now != source["sha256"]:
+            raise ConfigError(
+                f"--from {path}: recording {source['file']} has changed since the run "
+                f"(sha256 {source['sha256'][:12]}… then, {now[:12]}… now)"
+            )
+    if params.get("replay") is not None:
+        params["replay"] = Path(params["replay"])
+    return params
+
+
+def _given(ctx: Any, name: str) -> bool:
+    """Whether option ``name`` was given on the command line (not a default)."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name in ("COMMANDLINE", "ENVIRONMENT", "PROMPT")
