@@ -303,7 +303,7 @@ def _origin(opened, source, grid, repeats: int, setup, seed, snr, rig) -> dict:
         if rig is not None
         else {"kind": "simulator", "snr_db": snr}
     )
-    return opened.finish(  # type: ignore[no-any-return]
+    return opened.finish(
         setup=None if setup is None else setup_digest(setup),
         source=origin,
         seed=seed,
