@@ -251,3 +251,19 @@ def test_cli_refuses_a_boolean_width_in_one_line(tmp_path, capsys, monkeypatch):
     assert "boolean" in out + err or "must be a number" in out + err
     assert "valid" not in (out + err).replace("invalid", "")
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("keep", [0.5, 0.1, 40])
+def test_a_truncated_binary_stl_is_one_line_naming_the_file(keep, tmp_path):
+    import trimesh
+
+    whole = tmp_path / "box.stl"
+    trimesh.creation.box(extents=(0.01, 0.01, 0.01)).export(whole)
+    data = whole.read_bytes()
+    cut = tmp_path / "cut.stl"
+    cut.write_bytes(data[: int(keep * len(data)) if keep < 1 else keep])
+    path = tmp_path / "mesh.toml"
+    path.write_text('name = "m"\n[specimen]\nmesh = "cut.stl"\nmesh_scale = 1.0\n')
+    problems = validate_setup_file(path)
+    assert len(problems) == 1 and "cut.stl" in problems[0] and "truncated" in problems[0]
+    assert "charset" not in problems[0] and "No module" not in problems[0]

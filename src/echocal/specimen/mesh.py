@@ -167,6 +167,8 @@ class TriangleMesh(Shape):
         factor = _size("TriangleMesh.load", "scale", scale)
         if not p.is_file():
             raise DataFileError(f"mesh file not found: {p}")
+        if p.suffix.lower() == ".stl":
+            _check_binary_stl(p)
         try:
             loaded = trimesh.load_mesh(str(p), process=False)
         except Exception as exc:  # trimesh raises many types for unreadable files
@@ -404,3 +406,29 @@ def _build_hierarchy(
         )
     soa = [(np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)) for lo, hi in levels]
     return soa, padded
+
+
+def _check_binary_stl(path: Path) -> None:
+    """Refuse a binary STL whose size disagrees with its triangle count (a truncated
+    download or copy), naming the file and both sizes; an ASCII STL passes."""
+    try:
+        size = path.stat().st_size
+        with path.open("rb") as fh:
+            head = fh.read(84)
+            ascii_start = head.lstrip().startswith(b"solid") and b"facet" in fh.read(1024)
+    except OSError as exc:
+        raise DataFileError(f"cannot read mesh file {path}: {exc.strerror or exc}") from None
+    if ascii_start:
+        return
+    if size < 84:
+        raise DataFileError(
+            f"mesh file {path} is truncated: {size} bytes, less than a binary STL's 84-byte "
+            "header; copy or export it again"
+        )
+    count = int.from_bytes(head[80:84], "little")
+    expected = 84 + 50 * count
+    if size < expected:  # (a few trailing bytes, as some exporters write, are harmless)
+        raise DataFileError(
+            f"mesh file {path} is truncated: its header announces {count} "
+            f"triangles ({expected} bytes) but it holds {size} bytes; copy or export it again"
+        )
