@@ -92,8 +92,10 @@ def test_a_fault_on_the_wire_is_survived_or_stops_cleanly(
     assert "CRC-32" in err and "saved" in flat(err), err
     log = json.loads((out / "partial_log.json").read_text())
     # every A-scan before the garbled one is kept, with its pose, value and time
-    assert log["n_measurements"] == acquisitions - 1 == 2
-    assert len(log["values"]) == len(log["poses"]) == len(log["times"]) == 2
+    # (2 before the third A-scan; more only if a slow machine made the client retry one)
+    assert 2 <= log["n_measurements"] <= acquisitions - 1
+    n = log["n_measurements"]
+    assert len(log["values"]) == len(log["poses"]) == len(log["times"]) == n
     assert np.all(np.isfinite(log["values"]))
     assert not (out / "result.json").exists()  # no result claims what was not measured
 
