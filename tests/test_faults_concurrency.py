@@ -116,3 +116,32 @@ def test_the_lock_is_reentrant_in_one_process_and_released_after(tmp_path):
 def test_lock_errors_are_data_file_errors():
     assert issubclass(OutputLockedError, DataFileError)
     assert issubclass(OutputLockedError, OSError)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(sys.platform == "win32", reason="needs setrlimit (POSIX)")
+def test_a_scan_whose_final_write_fails_names_the_file_and_keeps_its_points(folder):
+    """`ulimit -f`: the final NetCDF write is refused by the kernel. Before, HDF5 crashed
+    (SIGSEGV, exit 139); now one error names the file, the points stay in the partial
+    store, and the same command without the limit finishes the scan."""
+    import resource
+
+    args = ["scan", "--setup", "tiny.toml", "--grid", "-2:2:2,0:0:1", "--z", "16"]
+    args += ["--no-figures", "--no-progress"]
+    warm = echocal([*args, "--out", "warm"], folder)  # compiles and caches the kernels
+    assert warm.wait(timeout=300) == 0, warm.communicate()
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (8192, resource.RLIM_INFINITY))
+
+    limited = echocal([*args, "--out", "out"], folder, preexec_fn=small_files)
+    _, err = limited.communicate(timeout=300)
+    assert limited.returncode == 2, err  # not -11 (SIGSEGV) nor -25 (SIGXFSZ)
+    assert err.count("error:") == 1 and "Traceback" not in err
+    assert "cannot write out/scan.nc: File too large" in " ".join(err.split())
+    assert (folder / "out" / "scan.nc.partial" / "points.jsonl").read_text().count("\n") == 3
+    assert not list((folder / "out").glob(".scan.nc.*"))  # no half-written temporary
+    again = echocal([*args, "--out", "out"], folder)
+    _, err = again.communicate(timeout=300)
+    assert again.returncode == 0, err
+    assert (folder / "out" / "scan.nc").is_file()
