@@ -135,7 +135,7 @@ def echo_lobe(
     """The echo lobe of ``setup`` at ``position`` [m] (default: its reference position).
 
     The lobe is centred on the strongest direction of normal incidence on the surface
-    (:meth:`~echocal.measurement.virtual.VirtualSetup.normal_incidence_directions`), and
+    (``VirtualSetup.normal_incidence_directions``), and
     tilts the first gimbal angle α from −``max_tilt`` to +``max_tilt`` [deg] (default:
     three far-field −6 dB half-widths of the probe) in ``n_points`` steps.  The recording
     window keeps the setup's sampling rate and is moved to hold the echo.

@@ -1,4 +1,4 @@
-"""The wave echo model: diffraction-correct echoes of piston probes (see :mod:`.model`)."""
+"""The wave echo model: diffraction-correct echoes of piston probes (see ``echocal.wave.model``)."""
 
 from echocal.wave.model import WaveEchoModel
 from echocal.wave.probe import PistonProbe, curvature_for_focus, oneil_on_axis

@@ -9,7 +9,7 @@ Pipeline per pose (DESIGN.md, "Physics models")::
 scattered back to a transducer by a surface S on which the Kirchhoff (physical-optics)
 boundary values hold is V ∝ ∫_S R·p_inc ∂ₙp_inc dS, with p_inc the transducer's own
 transmit field.  Both p_inc and ∂ₙp_inc follow from the closed-form spatial impulse
-response h of the piston (:mod:`echocal.wave.sir`):
+response h of the piston (``echocal.wave.sir``):
 p = ρ ∂ₜh * v and ∂ₙh = (1/c) ∂ₜh_m + h_m/(ct), m the surface normal pointing away from
 the probe.  The second term is smaller by 1/(kR) and in quadrature with the first; it
 changes amplitudes by O((kR)⁻²) ≈ 10⁻⁵ at 5 MHz and 10 mm, and is left out.  Hence

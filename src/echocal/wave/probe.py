@@ -118,7 +118,7 @@ class PistonProbe:
 
     @property
     def kind(self) -> int:
-        """Aperture code of :mod:`echocal.wave.sir`."""
+        """Aperture code of ``echocal.wave.sir``."""
         return sir.DISC if self.curvature is None else sir.BOWL
 
     @property
