@@ -46,7 +46,8 @@ def test_netcdf_output_has_units(tmp_path):
     run("--pose", "0,0,20", "--format", "nc", "--out", str(tmp_path))
     with xr.open_dataset(tmp_path / "ascan.nc", engine="h5netcdf") as ds:
         assert ds["time"].attrs["units"] == "s"
-        assert ds.attrs["echocal_format"] == "ascan/1"
+        assert ds.attrs["echocal_format"] == "ascan/2"
+        assert ds.attrs["Conventions"] == "CF-1.10"
         assert json.loads(ds.attrs["summary"])["setup"] == "thesis"
 
 

@@ -17,6 +17,7 @@ from echocal.measurement.recording import (
     MAX_RECORDING_ASCANS,
     RecordingGrid,
     check_recording_size,
+    save_recording,
 )
 
 
@@ -75,8 +76,8 @@ def test_replay_with_duplicate_positions_names_the_file_and_them(
     bad = tmp_path / "dup.nc"
     with xr.open_dataset(good, engine="h5netcdf") as ds:
         data = ds.load()
-    data = data.assign_coords(position_x=("position", [0.0, 0.0], {"units": "m"}))
-    data.to_netcdf(bad, engine="h5netcdf")
+    data = data.assign_coords(position_x=("position", [0.0, 0.0], data["position_x"].attrs))
+    save_recording(data, bad)
     with pytest.raises(DataFileError) as info:
         ReplaySource.open(bad)
     message = str(info.value)

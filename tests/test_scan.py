@@ -104,7 +104,7 @@ def test_curved_parts_at_30_db_meet_the_accuracy_targets(specimen):
     pts = np.stack([ds[f"surface_{a}"].values for a in "xyz"], -1)
     assert np.allclose(pts, probe - ds["distance"].values[..., None] * n, atol=1e-12)
     assert np.allclose(np.linalg.norm(n, axis=-1), 1.0)
-    assert ds["distance"].attrs["units"] == "m" and ds["normal_error"].attrs["units"] == "deg"
+    assert ds["distance"].attrs["units"] == "m" and ds["normal_error"].attrs["units"] == "degree"
 
 
 def test_warm_starts_need_fewer_measurements_than_cold_starts():

@@ -14,7 +14,7 @@ from echocal._validate import finite_float, positive_float
 from echocal.errors import EchocalValueError
 from echocal.geometry import Pose
 
-__all__ = ["AScan"]
+__all__ = ["ASCAN_FORMAT", "AScan", "load_ascan", "save_ascan"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,3 +69,87 @@ class AScan:
     def is_finite(self) -> bool:
         """True when every sample is finite (a receiver fault gives NaN)."""
         return bool(np.all(np.isfinite(self.samples)))
+
+
+ASCAN_FORMAT = "ascan/2"
+"""``echocal_format`` of an A-scan file (``ascan/1``, before echocal's NetCDF schema, still
+loads)."""
+
+_POSE_VARIABLES = (
+    ("x", "m", "probe position x"),
+    ("y", "m", "probe position y"),
+    ("z", "m", "probe position z"),
+    ("azimuth", "degree", "probe azimuth"),
+    ("coelevation", "degree", "probe co-elevation"),
+)
+
+
+def save_ascan(
+    scan: AScan, path: Any, *, summary: Mapping[str, Any] | None = None, title: str | None = None
+) -> Any:
+    """Write ``scan`` as a NetCDF file in echocal's schema (``ascan/2``), atomically.
+
+    Variables: ``amplitude`` (time) [1], coordinate ``time`` [s], and the pose as scalar
+    coordinates ``x``, ``y``, ``z`` [m], ``azimuth``, ``coelevation`` [degree] (when
+    known).  Attributes: ``sampling_rate_hz``, ``start_time_s`` and ``summary`` (JSON:
+    what was computed from it, e.g. time of flight and energy).  Returns the path.
+    """
+    import json
+
+    import xarray as xr
+
+    from echocal.io import json_ready
+    from echocal.netcdf import write_netcdf
+
+    coords: dict[str, Any] = {
+        "time": ("time", scan.times, {"units": "s", "long_name": "time after the transmit pulse"})
+    }
+    if scan.pose is not None:
+        for name, unit, long_name in _POSE_VARIABLES:
+            coords[name] = (
+                (),
+                float(getattr(scan.pose, name)),
+                {"units": unit, "long_name": long_name},
+            )
+    ds = xr.Dataset(
+        {
+            "amplitude": (
+                "time",
+                scan.samples,
+                {"units": "1", "long_name": "received amplitude (arbitrary units)"},
+            )
+        },
+        coords=coords,
+        attrs={
+            "sampling_rate_hz": scan.fs,
+            "start_time_s": scan.start_time,
+            "summary": json.dumps(json_ready(dict(summary or {})), allow_nan=False),
+        },
+    )
+    source = str(scan.metadata.get("source", "echocal"))
+    return write_netcdf(ds, path, fmt=ASCAN_FORMAT, title=title or "echocal A-scan", source=source)
+
+
+def load_ascan(path: Any) -> AScan:
+    """Read an A-scan file written by :func:`save_ascan` (or an ``ascan/1`` file).
+
+    The file's ``summary`` becomes ``metadata["summary"]``.  Raises
+    :class:`~echocal.errors.DataFileError` for a missing, damaged or foreign file.
+    """
+    import json
+
+    from echocal.errors import DataFileError
+    from echocal.netcdf import format_version, open_netcdf
+
+    with open_netcdf(path, what="A-scan file") as ds:
+        version = format_version(ds, "ascan")
+        if version not in (1, 2) or "amplitude" not in ds.variables:
+            raise DataFileError(f"{path}: not an echocal A-scan file ({ASCAN_FORMAT!r} expected)")
+        samples = np.asarray(ds["amplitude"].values, dtype=np.float64)
+        times = np.asarray(ds["time"].values, dtype=np.float64)
+        fs = float(ds.attrs["sampling_rate_hz" if version == 2 else "fs_hz"])
+        pose = None
+        if all(name in ds.variables for name, _, _ in _POSE_VARIABLES):
+            pose = Pose(*(float(ds[name].values) for name, _, _ in _POSE_VARIABLES))
+        summary = json.loads(ds.attrs.get("summary", "{}"))
+    return AScan(samples, fs, float(times[0]), pose, {"summary": summary})

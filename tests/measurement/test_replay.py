@@ -15,6 +15,7 @@ from echocal.errors import DataFileError, LimitError, UnknownNameError
 from echocal.geometry import Pose
 from echocal.measurement.recording import RecordingGrid, record, recording_dataset
 from echocal.measurement.replay import ReplaySource
+from echocal.netcdf import ENCODING
 
 # azimuth step 10 deg, co-elevation step 5 deg; positions 4 mm apart
 GRID = RecordingGrid.regular(
@@ -40,13 +41,19 @@ def test_file_layout_units_and_attributes(noisy_file: Path) -> None:
     with xr.open_dataset(noisy_file, engine="h5netcdf") as ds:
         assert ds["samples"].dims == ("position", "azimuth", "coelevation", "repeat", "time")
         assert ds["samples"].shape == (2, 5, 5, REPEATS, 256)
-        assert ds.attrs["echocal_format"] == "replay/1"
-        assert ds.attrs["fs"] == 50e6
-        assert ds.attrs["start_time"] == 20e-6
+        assert ds.attrs["echocal_format"] == "replay/2"
+        assert ds.attrs["Conventions"] == "CF-1.10"
+        assert ds.attrs["sampling_rate_hz"] == 50e6
+        assert ds.attrs["start_time_s"] == 20e-6
         units = {n: ds[n].attrs["units"] for n in ("azimuth", "coelevation", "time", "position_x")}
-        assert units == {"azimuth": "deg", "coelevation": "deg", "time": "s", "position_x": "m"}
+        assert units == {
+            "azimuth": "degree",
+            "coelevation": "degree",
+            "time": "s",
+            "position_x": "m",
+        }
         np.testing.assert_allclose(np.diff(ds["time"].values), 1 / 50e6, rtol=1e-9)
-        source = json.loads(ds.attrs["source"])
+        source = json.loads(ds.attrs["source_info"])
         assert source["setup"] == {"name": "fake"}
         assert "gaussian echo fake" in source["description"]
         assert RecordingGrid.from_dict(json.loads(ds.attrs["grid"])) == GRID
@@ -169,7 +176,9 @@ def test_unknown_mode_lists_the_modes(clean_file: Path) -> None:
 
 # -- bad files ---------------------------------------------------------------------------------
 def _write(ds: xr.Dataset, path: Path) -> Path:
-    ds.to_netcdf(path, engine="h5netcdf")
+    """Write ``ds`` as it is (no schema attributes added), with checksums."""
+    encoding = {n: ENCODING for n, v in ds.variables.items() if v.dtype.kind in "if" and v.ndim}
+    ds.to_netcdf(path, engine="h5netcdf", encoding=encoding)
     return path
 
 
@@ -184,6 +193,7 @@ def test_missing_file(tmp_path: Path) -> None:
         ReplaySource.open(tmp_path / "nope.nc")
 
 
+@pytest.mark.foreign_netcdf
 def test_unreadable_file(tmp_path: Path) -> None:
     path = tmp_path / "text.nc"
     path.write_text("this is not HDF5")
@@ -191,11 +201,13 @@ def test_unreadable_file(tmp_path: Path) -> None:
         ReplaySource.open(path)
 
 
+@pytest.mark.foreign_netcdf
 def test_good_handmade_file_opens(tmp_path: Path) -> None:
     with ReplaySource.open(_write(_good_dataset(), tmp_path / "ok.nc")) as replay:
         assert replay.measure(Pose(0, 0, 0.02, 10.0, 5.0)).n_samples == 8
 
 
+@pytest.mark.foreign_netcdf
 @pytest.mark.parametrize(
     ("mutate", "message"),
     [
@@ -204,10 +216,10 @@ def test_good_handmade_file_opens(tmp_path: Path) -> None:
         (lambda ds: ds.drop_vars("samples"), "variable 'samples' is missing"),
         (lambda ds: ds.drop_vars("coelevation"), "coordinate 'coelevation' is missing"),
         (lambda ds: _drop_units(ds, "azimuth"), "'azimuth' has no 'units' attribute"),
-        (lambda ds: _set_units(ds, "azimuth", "rad"), "'azimuth' must be in 'deg'; got 'rad'"),
+        (lambda ds: _set_units(ds, "azimuth", "rad"), "'azimuth' must be in 'degree'; got 'rad'"),
         (lambda ds: _set_units(ds, "position_z", "mm"), "'position_z' must be in 'm'"),
-        (lambda ds: _drop_attr(ds, "fs"), "attribute 'fs' is missing"),
-        (lambda ds: ds.assign_attrs(fs=-1.0), "'fs' must be > 0"),
+        (lambda ds: _drop_attr(ds, "sampling_rate_hz"), "attribute 'sampling_rate_hz' is missing"),
+        (lambda ds: ds.assign_attrs(sampling_rate_hz=-1.0), "'sampling_rate_hz' must be > 0"),
         (lambda ds: ds.transpose("time", ...), "must have dims"),
     ],
 )

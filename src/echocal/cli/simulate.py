@@ -13,11 +13,9 @@ from echocal.cli._common import output, parse_pose, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.constants import ECHO_THRESHOLD
 from echocal.io import (
-    atomic_write_bytes,
     atomic_write_text,
     check_out_dir,
     json_ready,
-    netcdf_bytes,
     refuse_existing_output,
 )
 from echocal.locking import hold_output_lock
@@ -238,21 +236,12 @@ def _parse_gate(text: str, window: Any) -> Any:
 
 
 def _save_ascan(path: Path, scan: Any, summary: dict[str, Any]) -> None:
-    """Write the A-scan as CSV (time_s, amplitude) or NetCDF with units, atomically."""
+    """Write the A-scan as CSV (time_s, amplitude) or NetCDF (echocal's schema), atomically."""
     if path.suffix == ".csv":
         lines = ["# " + json.dumps(json_ready(summary), allow_nan=False), "time_s,amplitude"]
         lines += [f"{t:.9e},{x:.9e}" for t, x in zip(scan.times, scan.samples, strict=True)]
         atomic_write_text(path, "\n".join(lines) + "\n")
         return
-    import xarray as xr
+    from echocal.ascan import save_ascan
 
-    ds = xr.Dataset(
-        {"amplitude": ("time", scan.samples, {"units": "a.u.", "long_name": "A-scan"})},
-        coords={"time": ("time", scan.times, {"units": "s"})},
-        attrs={
-            "fs_hz": scan.fs,
-            "summary": json.dumps(json_ready(summary), allow_nan=False),
-            "echocal_format": "ascan/1",
-        },
-    )
-    atomic_write_bytes(path, netcdf_bytes(ds))
+    save_ascan(scan, path, summary=summary, title="echocal simulated A-scan")

@@ -21,7 +21,7 @@ from echocal.measurement.hardware import Receiver as HardwareReceiver
 from echocal.measurement.instrument_server import Faults, InstrumentServer
 from echocal.measurement.limits import PositionerLimits
 from echocal.measurement.objective import SourceObjective
-from echocal.measurement.recording import RecordingGrid, record
+from echocal.measurement.recording import RecordingGrid, record, recording_dataset, save_recording
 from echocal.measurement.replay import ReplaySource
 from echocal.measurement.virtual import ReceiverSettings, VirtualSetup
 
@@ -41,4 +41,6 @@ __all__ = [
     "TcpInstrument",
     "VirtualSetup",
     "record",
+    "recording_dataset",
+    "save_recording",
 ]

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from echocal._validate import finite_array, positive_int
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import Pose
-from echocal.io import atomic_write_bytes, json_ready, netcdf_bytes
+from echocal.io import json_ready
 from echocal.locking import output_lock
 from echocal.measurement._partial_recording import PARTIAL_FORMAT, _Partial
 from echocal.measurement.base import MeasurementSource
@@ -56,6 +56,7 @@ __all__ = [
     "partial_path",
     "record",
     "recording_dataset",
+    "save_recording",
     "saved_count",
     "simulation_errors",
 ]
@@ -333,41 +334,67 @@ def recording_dataset(
     start_time: float,
     source_info: Mapping[str, Any],
 ) -> Any:
-    """Build the replay ``xarray.Dataset``.
+    """Build the replay ``xarray.Dataset`` (schema ``replay/2``, see docs/netcdf-schema.md).
 
     Parameters
     ----------
     samples : shape ``(n_positions, n_azimuth, n_coelevation, n_repeats, n_samples)``.
     fs : [Hz]; start_time : [s].
-    source_info : JSON-ready description of the source (stored in attribute ``source``).
+    source_info : JSON-ready description of the source (attribute ``source_info``).
+
+    Write it with :func:`save_recording`.
     """
     import xarray as xr
-
-    import echocal
 
     positions = np.asarray(grid.positions)
     n_samples = samples.shape[-1]
     coords = {
-        "azimuth": ("azimuth", np.asarray(grid.azimuth), {"units": "deg"}),
-        "coelevation": ("coelevation", np.asarray(grid.coelevation), {"units": "deg"}),
-        "repeat": ("repeat", np.arange(samples.shape[3])),
-        "time": ("time", start_time + np.arange(n_samples) / fs, {"units": "s"}),
+        "azimuth": ("azimuth", np.asarray(grid.azimuth), _attrs("degree", "probe azimuth")),
+        "coelevation": (
+            "coelevation",
+            np.asarray(grid.coelevation),
+            _attrs("degree", "probe co-elevation"),
+        ),
+        "repeat": ("repeat", np.arange(samples.shape[3]), _attrs("1", "repeat index")),
+        "time": (
+            "time",
+            start_time + np.arange(n_samples) / fs,
+            _attrs("s", "time after the transmit pulse"),
+        ),
     }
     for i, c in enumerate("xyz"):
-        coords[f"position_{c}"] = ("position", positions[:, i], {"units": "m"})
+        coords[f"position_{c}"] = ("position", positions[:, i], _attrs("m", f"probe position {c}"))
+    description = str(source_info.get("description", "unknown source"))
     return xr.Dataset(
-        {"samples": (DIMS, samples, {"units": "1", "long_name": "received amplitude"})},
+        {"samples": (DIMS, samples, _attrs("1", "received amplitude (arbitrary units)"))},
         coords=coords,
         attrs={
             "echocal_format": FORMAT,
-            "fs": float(fs),
-            "start_time": float(start_time),
-            "source": json.dumps(json_ready(dict(source_info))),
+            "source": description,
+            "sampling_rate_hz": float(fs),
+            "start_time_s": float(start_time),
+            "source_info": json.dumps(json_ready(dict(source_info))),
             "grid": json.dumps(grid.to_dict()),
-            "echocal_version": echocal.__version__,
-            "comment": "fs in Hz, start_time in s; samples dims "
-            "(position, azimuth, coelevation, repeat, time)",
+            "comment": "samples dims (position, azimuth, coelevation, repeat, time)",
         },
+    )
+
+
+def _attrs(units: str, long_name: str) -> dict[str, str]:
+    return {"units": units, "long_name": long_name}
+
+
+def save_recording(dataset: Any, path: str | os.PathLike[str]) -> Path:
+    """Write a replay Dataset (from :func:`recording_dataset`) atomically, compressed and
+    checksummed (:func:`echocal.netcdf.write_netcdf`)."""
+    from echocal.netcdf import write_netcdf
+
+    return write_netcdf(
+        dataset,
+        path,
+        fmt=FORMAT,
+        title="echocal replay recording: A-scans on a grid of probe orientations",
+        source=dataset.attrs.get("source", "unknown source"),
     )
 
 
@@ -517,6 +544,6 @@ def record(
         )
         if provenance is not None:
             dataset.attrs["provenance"] = stamped({"provenance": dict(provenance)})["provenance"]
-        atomic_write_bytes(target, netcdf_bytes(dataset))  # a failed write: one error
+        save_recording(dataset, target)
         shutil.rmtree(sidecar)
         return target

@@ -5,12 +5,17 @@ NetCDF-4 file (xarray, h5netcdf engine) holding A-scans recorded on a grid of
 orientations at one or more positions, with repeats per point:
 
 * variable ``samples``, dims ``(position, azimuth, coelevation, repeat, time)``;
-* coordinates ``azimuth`` and ``coelevation`` [deg] (strictly increasing),
+* coordinates ``azimuth`` and ``coelevation`` [degree] (strictly increasing),
   ``position_x``, ``position_y``, ``position_z`` [m] along ``position``,
   ``repeat`` (index) and ``time`` [s]; each with a ``units`` attribute;
-* attributes ``echocal_format = "replay/1"``, ``fs`` [Hz], ``start_time`` [s],
-  ``source`` (JSON: the recorded source's description, limits and setup) and
-  ``grid`` (JSON: the recording grid).
+* attributes ``echocal_format = "replay/2"``, ``sampling_rate_hz``, ``start_time_s``,
+  ``source_info`` (JSON: the recorded source's description, limits and setup) and
+  ``grid`` (JSON: the recording grid), plus echocal's NetCDF schema
+  (:mod:`echocal.netcdf`: CF-1.10, compressed, Fletcher-32 checksums).
+
+A file whose checksums fail is refused on opening.  A ``replay/1`` file (echocal before
+the schema: no checksums, ``fs``/``start_time``/``source`` attributes, ``deg``) still
+opens, with a warning; ``echocal convert OLD NEW`` rewrites it as ``replay/2``.
 
 How :meth:`ReplaySource.measure` answers a pose (the ``mode``):
 
@@ -60,18 +65,19 @@ from echocal.errors import DataFileError, LimitError
 from echocal.geometry import Pose
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
+from echocal.netcdf import open_netcdf
 
 __all__ = ["DIMS", "FORMAT", "MODES", "REQUIRED_COORDS", "ReplaySource"]
 
-FORMAT = "replay/1"
+FORMAT = "replay/2"
 """Value of the ``echocal_format`` attribute of a replay file."""
 
 DIMS = ("position", "azimuth", "coelevation", "repeat", "time")
 """Dimensions of the ``samples`` variable, in this order."""
 
 REQUIRED_COORDS = {
-    "azimuth": "deg",
-    "coelevation": "deg",
+    "azimuth": "degree",
+    "coelevation": "degree",
     "time": "s",
     "position_x": "m",
     "position_y": "m",
@@ -79,7 +85,10 @@ REQUIRED_COORDS = {
 }
 """Coordinates a replay file must have, with the ``units`` attribute each must carry."""
 
-REQUIRED_ATTRS = ("fs", "start_time", "source")
+REQUIRED_ATTRS = ("sampling_rate_hz", "start_time_s", "source_info")
+
+_V1_ATTRS = {"fs": "sampling_rate_hz", "start_time": "start_time_s", "source": "source_info"}
+"""replay/1 attribute -> replay/2 attribute."""
 
 MODES = ("nearest", "random-repeat", "interpolate")
 """How :meth:`ReplaySource.measure` answers a pose; see the module docstring."""
@@ -148,9 +157,9 @@ class ReplaySource(BaseSource):
         )
         self.n_repeats = int(dataset.sizes["repeat"])
         self.n_samples = int(dataset.sizes["time"])
-        self.fs = float(dataset.attrs["fs"])
-        self.start_time = float(dataset.attrs["start_time"])
-        self.source_info: dict[str, Any] = json.loads(dataset.attrs["source"])
+        self.fs = float(dataset.attrs["sampling_rate_hz"])
+        self.start_time = float(dataset.attrs["start_time_s"])
+        self.source_info: dict[str, Any] = json.loads(dataset.attrs["source_info"])
         if position_tolerance is None:
             if len(self.positions) > 1:
                 d = np.linalg.norm(self.positions[:, None] - self.positions[None], axis=-1)
@@ -200,22 +209,15 @@ class ReplaySource(BaseSource):
 
         Raises
         ------
-        DataFileError : the file is missing, unreadable, not an echocal replay recording,
-            or lacks a variable, coordinate, ``units`` attribute or attribute (named).
+        DataFileError : the file is missing, unreadable, damaged (a checksum fails), not
+            an echocal replay recording, or lacks a variable, coordinate, ``units``
+            attribute or attribute (named).
         """
-        import xarray as xr
-
         one_of("mode", mode, MODES)
         file = Path(path)
-        if not file.is_file():
-            raise DataFileError(f"replay file not found: {file}")
+        ds = open_netcdf(file, what="replay file")
         try:
-            ds = xr.open_dataset(file, engine="h5netcdf")
-        except Exception as exc:  # any reader failure means "not readable as NetCDF-4"
-            raise DataFileError(
-                f"cannot read replay file {file} as NetCDF-4/HDF5: {type(exc).__name__}: {exc}"
-            ) from None
-        try:
+            ds = _upgrade(ds, file)
             _validate(ds, file)
             return cls(ds, path=file, mode=mode, rng=rng, position_tolerance=position_tolerance)
         except BaseException:
@@ -348,6 +350,36 @@ def _bilinear(
     return corners, weights
 
 
+def _upgrade(ds: Any, file: Path) -> Any:
+    """A ``replay/1`` file (before the NetCDF schema) read as ``replay/2``, with a warning
+    that it has no checksums; any other file unchanged."""
+    if format_version(ds) != 1:
+        return ds
+    import warnings
+
+    warnings.warn(
+        f"{file} is a replay/1 file without checksums (echocal before 0.2): a damaged "
+        f"sample would go unnoticed; `echocal convert {file} NEW.nc` rewrites it as replay/2",
+        stacklevel=3,
+    )
+    attrs = {_V1_ATTRS.get(k, k): v for k, v in ds.attrs.items()}
+    attrs["echocal_format"] = FORMAT
+    ds = ds.assign_attrs(attrs)
+    for k in _V1_ATTRS:
+        ds.attrs.pop(k, None)
+    for name in ("azimuth", "coelevation"):
+        if name in ds.variables and ds[name].attrs.get("units") == "deg":
+            ds[name].attrs["units"] = "degree"
+    return ds
+
+
+def format_version(ds: Any) -> int:
+    """The N of ``echocal_format = "replay/N"`` (0: not a replay file)."""
+    from echocal.netcdf import format_version as version
+
+    return version(ds, "replay")
+
+
 def _validate(ds: Any, file: Path) -> None:
     """Check that ``ds`` is an echocal replay recording; DataFileError naming what is wrong."""
     fmt = ds.attrs.get("echocal_format")
@@ -361,6 +393,12 @@ def _validate(ds: Any, file: Path) -> None:
         )
     if "samples" not in ds.variables:
         raise DataFileError(f"{file}: variable 'samples' is missing")
+    if "samples" in (ds.encoding.get("unchecked_variables") or ()):
+        raise DataFileError(
+            f"{file}: variable 'samples' has no Fletcher-32 checksum, so damage would go "
+            "unnoticed; write replay files with echocal.measurement.save_recording (or "
+            "`echocal record`)"
+        )
     if tuple(ds["samples"].dims) != DIMS:
         raise DataFileError(
             f"{file}: variable 'samples' must have dims {DIMS}; got {tuple(ds['samples'].dims)}"
@@ -377,15 +415,15 @@ def _validate(ds: Any, file: Path) -> None:
         if name not in ds.attrs:
             raise DataFileError(f"{file}: attribute {name!r} is missing")
     try:
-        fs = float(ds.attrs["fs"])
-        float(ds.attrs["start_time"])
-        json.loads(ds.attrs["source"])
+        fs = float(ds.attrs["sampling_rate_hz"])
+        float(ds.attrs["start_time_s"])
+        json.loads(ds.attrs["source_info"])
     except (TypeError, ValueError) as exc:
         raise DataFileError(
-            f"{file}: malformed attribute (fs, start_time or source): {exc}"
+            f"{file}: malformed attribute (sampling_rate_hz, start_time_s or source_info): {exc}"
         ) from None
     if not fs > 0:
-        raise DataFileError(f"{file}: attribute 'fs' must be > 0 [Hz]; got {fs}")
+        raise DataFileError(f"{file}: attribute 'sampling_rate_hz' must be > 0 [Hz]; got {fs}")
     for axis in ("azimuth", "coelevation"):
         values = np.asarray(ds[axis].values, dtype=np.float64)
         if values.size == 0 or np.any(np.diff(values) <= 0) or not np.all(np.isfinite(values)):

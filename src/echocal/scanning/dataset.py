@@ -6,9 +6,9 @@ Variables (NaN where a point is missing; ``status`` says why):
 name               units   meaning
 =================  ======  ===================================================
 probe_z            m       probe height
-tilt_x, tilt_y     deg     estimated orientation as gimbal tilts
-azimuth            deg     ... as azimuth (canonical: co-elevation >= 0)
-coelevation        deg     ... as co-elevation
+tilt_x, tilt_y     degree  estimated orientation as gimbal tilts
+azimuth            degree  ... as azimuth (canonical: co-elevation >= 0)
+coelevation        degree  ... as co-elevation
 normal_x/_y/_z     1       unit surface normal n (the beam travels along −n)
 tof                s       pulse-echo time of flight at the estimate
 distance           m       c₀·tof/2, along the beam
@@ -17,15 +17,18 @@ echo_snr           1       matched-envelope peak / its median (detection statist
 n_measurements     1       A-scans used at the point (calibration + time of flight)
 status             1       0 found, see ``flag_meanings``
 message            -       why a point is missing ("" where found)
-found              bool    status == 0
-warm               bool    the point started from its neighbours
-normal_error       deg     vs the true normal below the measured point (truth)
+found              1       status == 0 (int8: 1 or 0)
+warm               1       the point started from its neighbours (int8)
+normal_error       degree  vs the true normal below the measured point (truth)
 height_error       m       measured z − true surface z below the point (with a truth)
 =================  ======  ===================================================
 
 Summaries (in ``attrs`` and :attr:`SurfaceScan.summary`): points found/missing (by
 status, with the most common message of each), total and per-point measurements,
 median / p90 / max of both errors.
+
+Written in echocal's NetCDF schema (:mod:`echocal.netcdf`, docs/netcdf-schema.md):
+CF-1.10, ``long_name`` and UDUNITS ``units`` on every variable, compressed, checksummed.
 """
 
 from __future__ import annotations
@@ -42,14 +45,14 @@ from numpy.typing import NDArray
 
 from echocal.errors import DataFileError
 from echocal.geometry import convert_angles, orientation_normal
-from echocal.io import atomic_write_bytes, netcdf_bytes
 from echocal.scanning.grid import ScanGrid
 from echocal.specimen import Specimen
 
 __all__ = ["FORMAT", "STATUS", "SurfaceScan", "surface_dataset"]
 
-FORMAT = "surface-scan/1"
-"""Format name stored in the NetCDF attributes."""
+FORMAT = "surface-scan/2"
+"""``echocal_format`` of a scan file (``surface-scan/1``, before echocal's NetCDF schema,
+still loads)."""
 
 STATUS: dict[str, int] = {
     "found": 0,
@@ -62,26 +65,31 @@ STATUS: dict[str, int] = {
 }
 """Per-point status codes: 0 found, else why the point is missing."""
 
-_UNITS = {
-    "probe_z": "m",
-    "tilt_x": "deg",
-    "tilt_y": "deg",
-    "azimuth": "deg",
-    "coelevation": "deg",
-    "normal_x": "1",
-    "normal_y": "1",
-    "normal_z": "1",
-    "tof": "s",
-    "distance": "m",
-    "surface_x": "m",
-    "surface_y": "m",
-    "surface_z": "m",
-    "echo_snr": "1",
-    "n_measurements": "1",
-    "status": "1",
-    "normal_error": "deg",
-    "height_error": "m",
+_VARIABLES = {
+    "probe_z": ("m", "probe height"),
+    "tilt_x": ("degree", "estimated orientation: gimbal tilt about x"),
+    "tilt_y": ("degree", "estimated orientation: gimbal tilt about y"),
+    "azimuth": ("degree", "estimated orientation: azimuth"),
+    "coelevation": ("degree", "estimated orientation: co-elevation"),
+    "normal_x": ("1", "surface normal, x component"),
+    "normal_y": ("1", "surface normal, y component"),
+    "normal_z": ("1", "surface normal, z component"),
+    "tof": ("s", "pulse-echo time of flight at the estimate"),
+    "distance": ("m", "distance from the probe to the surface along the beam"),
+    "surface_x": ("m", "surface point x"),
+    "surface_y": ("m", "surface point y"),
+    "surface_z": ("m", "surface point z"),
+    "echo_snr": ("1", "echo detection statistic (matched-envelope peak / median)"),
+    "n_measurements": ("1", "A-scans used at the point"),
+    "status": ("1", "point status (0 found, else why it is missing)"),
+    "found": ("1", "1 where the surface was found (status 0)"),
+    "warm": ("1", "1 where the point started from its neighbours"),
+    "normal_error": ("degree", "angle between the measured and the true normal"),
+    "height_error": ("m", "measured minus true surface height"),
+    "x": ("m", "probe position x"),
+    "y": ("m", "probe position y"),
 }
+"""units (UDUNITS) and long_name of each variable of a scan file."""
 
 FloatArray = NDArray[np.float64]
 
@@ -138,22 +146,47 @@ class SurfaceScan:
         return pts[self.found]
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the Dataset as NetCDF (h5netcdf), atomically."""
-        target = Path(path)
-        atomic_write_bytes(target, netcdf_bytes(self.dataset))  # a failed write: one error
-        return target
+        """Write the Dataset in echocal's NetCDF schema (compressed, checksummed), atomically."""
+        from echocal.netcdf import write_netcdf
+
+        return write_netcdf(
+            self.dataset,
+            path,
+            fmt=FORMAT,
+            title="echocal surface scan: surface normal and distance per scan point",
+            source=str(self.dataset.attrs.get("source", "echocal scan")),
+        )
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> SurfaceScan:
-        """Read a file written by :meth:`save`."""
+        """Read a file written by :meth:`save` (or a ``surface-scan/1`` file of echocal
+        before its NetCDF schema).  A damaged file is refused (checksums)."""
+        from echocal.netcdf import format_version, open_netcdf
+
         try:
-            with xr.open_dataset(path, engine="h5netcdf") as ds:
+            with open_netcdf(path, what="surface scan") as ds:
                 data = ds.load()
         except (OSError, ValueError) as exc:
             raise DataFileError(f"cannot read surface scan {str(path)!r}: {exc}") from None
-        if data.attrs.get("format") != FORMAT:
+        version = format_version(data, "surface-scan", legacy_key="format")
+        if version == 1:
+            data = _upgrade_v1(data)
+        elif version != 2:
             raise DataFileError(f"{path}: not a surface scan (format {FORMAT!r} expected)")
         return cls(data)
+
+
+def _upgrade_v1(data: xr.Dataset) -> xr.Dataset:
+    """A ``surface-scan/1`` Dataset in the names and units of ``surface-scan/2``."""
+    attrs = {k: v for k, v in data.attrs.items() if k not in ("format", "sound_speed")}
+    attrs["echocal_format"] = FORMAT
+    if "sound_speed" in data.attrs:
+        attrs["sound_speed_m_s"] = data.attrs["sound_speed"]
+    data.attrs = attrs
+    for name, (unit, long_name) in _VARIABLES.items():
+        if name in data.variables:
+            data[name].attrs.update(units=unit, long_name=long_name)
+    return data
 
 
 def surface_dataset(
@@ -248,21 +281,17 @@ def surface_dataset(
         summary["height_error_abs_m"] = _quantiles(np.abs(herr))
         summary["truth"] = truth.name
     ds = xr.Dataset(data, coords={"x": ("x", np.array(grid.x)), "y": ("y", np.array(grid.y))})
-    for name, unit in _UNITS.items():
-        if name in ds:
-            ds[name].attrs["units"] = unit
-    ds["x"].attrs["units"] = ds["y"].attrs["units"] = "m"
+    for name, (unit, long_name) in _VARIABLES.items():
+        if name in ds.variables:
+            ds[name].attrs.update(units=unit, long_name=long_name)
     ds["status"].attrs["flag_values"] = np.array(list(STATUS.values()), dtype=np.int64)
     ds["status"].attrs["flag_meanings"] = " ".join(n.replace("-", "_") for n in STATUS)
     ds["message"].attrs["long_name"] = "why the point is missing (empty where found)"
-    ds["found"].attrs["units"] = ds["warm"].attrs["units"] = "1"
-    ds["found"].attrs["long_name"] = "1 where the surface was found (status 0)"
-    ds["warm"].attrs["long_name"] = "1 where the point started from its neighbours"
     ds.attrs.update(
         {
-            "format": FORMAT,
+            "echocal_format": FORMAT,
             "parameterization": parameterization,
-            "sound_speed": float(sound_speed),
+            "sound_speed_m_s": float(sound_speed),
             "grid": json.dumps(grid.to_dict()),
             "summary": json.dumps(summary),
         }
