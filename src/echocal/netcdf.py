@@ -38,6 +38,7 @@ __all__ = [
     "CONVENTIONS",
     "ENCODING",
     "UDUNITS",
+    "convert",
     "format_version",
     "open_netcdf",
     "schema_problems",
@@ -96,16 +97,19 @@ def write_netcdf(
         raise ValueError(f"variables without long_name/units: {', '.join(missing)}")
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
     out = dataset.copy()
+    history = f"{now} written by echocal {echocal.__version__}"
+    if dataset.attrs.get("history"):  # CF: the newest line first, earlier ones kept
+        history += "\n" + str(dataset.attrs["history"])
     out.attrs = {
-        "Conventions": CONVENTIONS,
         "title": title,
         "institution": INSTITUTION,
         "source": source,
-        "history": f"{now} written by echocal {echocal.__version__}",
-        "echocal_format": fmt,
-        "echocal_version": echocal.__version__,
         **dataset.attrs,
         **dict(attrs or {}),
+        "Conventions": CONVENTIONS,
+        "history": history,
+        "echocal_format": fmt,
+        "echocal_version": echocal.__version__,
     }
     encoding = {
         str(name): dict(ENCODING)
@@ -194,26 +198,28 @@ def verify_checksums(path: str | os.PathLike[str], *, what: str = "file") -> lis
             ) from None
     with handle:
         names: list[str] = []
-        handle.visititems(lambda n, obj: names.append(n) if _is_variable(obj) else None)
-        for name in names:
-            try:
+        name = "/"
+        try:
+            handle.visititems(lambda n, obj: names.append(n) if _is_variable(obj) else None)
+            for name in names:
                 dset = handle[name]
                 if dset.dtype.kind in "biuf" and dset.shape:
                     for block in dset.iter_chunks() if dset.chunks else [()]:
                         dset[block]
                     if not dset.fletcher32:
                         unchecked.append(name)
-            except Exception as exc:
-                failed = "filter returned failure" in str(exc) or "checksum" in str(exc)
-                problem = (
-                    "fails its Fletcher-32 checksum (or decompression)"
-                    if failed
-                    else f"is unreadable ({_reason(exc)})"
-                )
-                raise DataFileError(
-                    f"{what} {file} is damaged: variable {name!r} {problem}; "
-                    "its data cannot be trusted: use an intact copy"
-                ) from None
+        except Exception as exc:
+            failed = "filter returned failure" in str(exc) or "checksum" in str(exc)
+            problem = (
+                "fails its Fletcher-32 checksum (or decompression)"
+                if failed and name != "/"
+                else f"is unreadable ({_reason(exc)})"
+            )
+            part = "its header" if name == "/" else f"variable {name!r}"
+            raise DataFileError(
+                f"{what} {file} is damaged: {part} {problem}; "
+                "its data cannot be trusted: use an intact copy"
+            ) from None
     return unchecked
 
 
@@ -279,3 +285,45 @@ def schema_problems(path: str | os.PathLike[str]) -> list[str]:
                 if dset.compression != "gzip" or not dset.shuffle:
                     problems.append(f"{name}: not deflate+shuffle compressed")
     return problems
+
+
+def convert(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> str:
+    """Rewrite an echocal NetCDF file of an older format in the current schema.
+
+    Reads ``source`` (``replay/1``, ``surface-scan/1``, ``ascan/1``, or already current)
+    and writes ``target`` (compressed, checksummed).  Returns the format written.
+
+    Raises
+    ------
+    DataFileError : ``source`` is missing, damaged, or not an echocal file.
+    """
+    import warnings
+
+    with open_netcdf(source, what="file") as ds:
+        attrs = dict(ds.attrs)
+    kind = str(attrs.get("echocal_format") or attrs.get("format") or "").rpartition("/")[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the "no checksums" warning: we are adding them
+        if kind == "replay":
+            from echocal.measurement.recording import save_recording
+            from echocal.measurement.replay import FORMAT, ReplaySource
+
+            with ReplaySource.open(source) as replay:
+                save_recording(replay._ds.load(), target)
+            return FORMAT
+        if kind == "surface-scan":
+            from echocal.scanning.dataset import FORMAT as SCAN_FORMAT
+            from echocal.scanning.dataset import SurfaceScan
+
+            SurfaceScan.load(source).save(target)
+            return SCAN_FORMAT
+        if kind == "ascan":
+            from echocal.ascan import ASCAN_FORMAT, load_ascan, save_ascan
+
+            scan = load_ascan(source)
+            save_ascan(scan, target, summary=scan.metadata["summary"])
+            return ASCAN_FORMAT
+    raise DataFileError(
+        f"{source} is not an echocal replay, scan or A-scan file (attribute "
+        "'echocal_format' is missing or unknown); there is nothing to convert"
+    )

@@ -52,6 +52,7 @@ _COMMAND_MODULES = (
     "echocal.cli.setup",
     "echocal.cli.material",
     "echocal.cli.record",
+    "echocal.cli.convert",
     "echocal.cli.instrument",
     "echocal.cli.rig",
     "echocal.cli.scan",

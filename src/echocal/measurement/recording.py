@@ -41,7 +41,7 @@ from echocal.io import json_ready
 from echocal.locking import output_lock
 from echocal.measurement._partial_recording import PARTIAL_FORMAT, _Partial
 from echocal.measurement.base import MeasurementSource
-from echocal.measurement.replay import DIMS, FORMAT
+from echocal.measurement.replay import DIMS, FORMAT, VARIABLES
 from echocal.provenance import stamped
 
 __all__ = [
@@ -348,25 +348,17 @@ def recording_dataset(
 
     positions = np.asarray(grid.positions)
     n_samples = samples.shape[-1]
-    coords = {
-        "azimuth": ("azimuth", np.asarray(grid.azimuth), _attrs("degree", "probe azimuth")),
-        "coelevation": (
-            "coelevation",
-            np.asarray(grid.coelevation),
-            _attrs("degree", "probe co-elevation"),
-        ),
-        "repeat": ("repeat", np.arange(samples.shape[3]), _attrs("1", "repeat index")),
-        "time": (
-            "time",
-            start_time + np.arange(n_samples) / fs,
-            _attrs("s", "time after the transmit pulse"),
-        ),
+    values = {
+        "azimuth": ("azimuth", np.asarray(grid.azimuth)),
+        "coelevation": ("coelevation", np.asarray(grid.coelevation)),
+        "repeat": ("repeat", np.arange(samples.shape[3])),
+        "time": ("time", start_time + np.arange(n_samples) / fs),
+        **{f"position_{c}": ("position", positions[:, i]) for i, c in enumerate("xyz")},
     }
-    for i, c in enumerate("xyz"):
-        coords[f"position_{c}"] = ("position", positions[:, i], _attrs("m", f"probe position {c}"))
+    coords = {name: (*pair, _attrs(name)) for name, pair in values.items()}
     description = str(source_info.get("description", "unknown source"))
     return xr.Dataset(
-        {"samples": (DIMS, samples, _attrs("1", "received amplitude (arbitrary units)"))},
+        {"samples": (DIMS, samples, _attrs("samples"))},
         coords=coords,
         attrs={
             "echocal_format": FORMAT,
@@ -380,7 +372,8 @@ def recording_dataset(
     )
 
 
-def _attrs(units: str, long_name: str) -> dict[str, str]:
+def _attrs(name: str) -> dict[str, str]:
+    units, long_name = VARIABLES[name]
     return {"units": units, "long_name": long_name}
 
 

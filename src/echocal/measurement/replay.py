@@ -67,7 +67,7 @@ from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
 from echocal.netcdf import open_netcdf
 
-__all__ = ["DIMS", "FORMAT", "MODES", "REQUIRED_COORDS", "ReplaySource"]
+__all__ = ["DIMS", "FORMAT", "MODES", "REQUIRED_COORDS", "VARIABLES", "ReplaySource"]
 
 FORMAT = "replay/2"
 """Value of the ``echocal_format`` attribute of a replay file."""
@@ -84,6 +84,18 @@ REQUIRED_COORDS = {
     "position_z": "m",
 }
 """Coordinates a replay file must have, with the ``units`` attribute each must carry."""
+
+VARIABLES = {
+    "samples": ("1", "received amplitude (arbitrary units)"),
+    "azimuth": ("degree", "probe azimuth"),
+    "coelevation": ("degree", "probe co-elevation"),
+    "repeat": ("1", "repeat index"),
+    "time": ("s", "time after the transmit pulse"),
+    "position_x": ("m", "probe position x"),
+    "position_y": ("m", "probe position y"),
+    "position_z": ("m", "probe position z"),
+}
+"""(units, long_name) of each variable of a replay file."""
 
 REQUIRED_ATTRS = ("sampling_rate_hz", "start_time_s", "source_info")
 
@@ -358,8 +370,9 @@ def _upgrade(ds: Any, file: Path) -> Any:
     import warnings
 
     warnings.warn(
-        f"{file} is a replay/1 file without checksums (echocal before 0.2): a damaged "
-        f"sample would go unnoticed; `echocal convert {file} NEW.nc` rewrites it as replay/2",
+        f"{file} is a replay/1 file without checksums (written before echocal's NetCDF "
+        f"schema): a damaged sample would go unnoticed; `echocal convert {file} NEW.nc` "
+        "rewrites it as replay/2",
         stacklevel=3,
     )
     attrs = {_V1_ATTRS.get(k, k): v for k, v in ds.attrs.items()}
@@ -367,9 +380,13 @@ def _upgrade(ds: Any, file: Path) -> Any:
     ds = ds.assign_attrs(attrs)
     for k in _V1_ATTRS:
         ds.attrs.pop(k, None)
-    for name in ("azimuth", "coelevation"):
-        if name in ds.variables and ds[name].attrs.get("units") == "deg":
-            ds[name].attrs["units"] = "degree"
+    for name, (unit, long_name) in VARIABLES.items():
+        if name in ds.variables:
+            if ds[name].attrs.get("units") in (None, "deg", unit):  # "deg" in replay/1
+                ds[name].attrs["units"] = unit
+            ds[name].attrs.setdefault("long_name", long_name)
+    info = json.loads(str(ds.attrs.get("source_info", "{}")))
+    ds.attrs["source"] = str(info.get("description", "unknown source"))
     return ds
 
 
