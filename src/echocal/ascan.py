@@ -150,6 +150,7 @@ def load_ascan(path: Any) -> AScan:
         fs = float(ds.attrs["sampling_rate_hz" if version == 2 else "fs_hz"])
         pose = None
         if all(name in ds.variables for name, _, _ in _POSE_VARIABLES):
-            pose = Pose(*(float(ds[name].values) for name, _, _ in _POSE_VARIABLES))
+            x, y, z, azimuth, coelevation = (float(ds[n].values) for n, _, _ in _POSE_VARIABLES)
+            pose = Pose(x, y, z, azimuth, coelevation)
         summary = json.loads(ds.attrs.get("summary", "{}"))
     return AScan(samples, fs, float(times[0]), pose, {"summary": summary})
