@@ -198,3 +198,19 @@ def test_convert_refuses_a_foreign_file(tmp_path, capsys, monkeypatch):
         f["data"] = np.zeros(3)
     code, _, err = run_main(["convert", str(foreign), str(tmp_path / "x.nc")], capsys, monkeypatch)
     assert code == 2 and "not an echocal replay, scan or A-scan file" in flat(err)
+
+
+def test_calibrate_saves_the_ascan_at_its_estimate(recording, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "cal"
+    args = ["calibrate", "--replay", str(recording), "--x0", "1,1", "--out", str(out), "--json"]
+    code, stdout, err = run_main(args, capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads(stdout)
+    assert summary["files"]["ascan"] == str(out / "ascan.nc")
+    assert (out / "ascan.png").is_file()
+    scan = load_ascan(out / "ascan.nc")
+    with ReplaySource.open(recording) as replay:  # independent: the recording at that pose
+        pose = Pose(0.0, 0.0, 0.016, *summary["estimate_deg"])
+        np.testing.assert_array_equal(scan.samples, replay.measure(pose).samples)
+    assert scan.metadata["summary"]["counted"] is True  # the driver's final measurement
+    assert scan.metadata["summary"]["estimate_deg"] == summary["estimate_deg"]

@@ -30,6 +30,7 @@ from echocal.cli.calibrate import (
     exit_code,
     found_echo,
     prepare_out,
+    save_final_ascan,
     save_pngs,
 )
 from echocal.measurement.base import BaseSource
@@ -253,7 +254,7 @@ def _on_instrument(
             position=where,
             seed=seed,
         )
-        figures = _save_measured(result, out, None, plots, record)
+        figures = _save_measured(result, out, None, plots, objective, record)
         return _Measured(
             result=result,
             where=where,
@@ -331,7 +332,7 @@ def _on_replay(
                 "description": recording.description,
             },
             extra={"recording_best_deg": best},
-            figures=_save_measured(result, out, maps, plots, record),
+            figures=_save_measured(result, out, maps, plots, objective, record),
         )
 
 
@@ -557,14 +558,17 @@ def _save_measured(
     out: Path,
     maps: RecordingMap | None,
     plots: bool,
+    objective: Any,
     provenance: dict[str, Any] | None = None,
 ) -> dict[str, str]:
-    """Write result.json (with its ``provenance``) and (with ``plots``) the convergence and
-    path plots of a run on a recording (``maps``) or a rig (None: no map)."""
+    """Write result.json (with its ``provenance``), the A-scan at the estimate
+    (:func:`save_final_ascan`) and (with ``plots``) the convergence and path plots of a run
+    on a recording (``maps``) or a rig (None: no map)."""
     prepare_out(out)
     result.save_json(out / "result.json", provenance=provenance)
+    final = save_final_ascan(objective, result, out, plots)
     if not plots:
-        return {}
+        return final
     from echocal.plots.calibration import measured_convergence_figure, path_figure
 
     label = result.method
@@ -599,7 +603,7 @@ def _save_measured(
             db_floor=-40.0,
             show_measurements=True,
         )
-    return save_pngs({"convergence": conv, "path": path}, out)
+    return {**final, **save_pngs({"convergence": conv, "path": path}, out)}
 
 
 def _print_measured_estimate(done: _Measured, out: Path) -> None:

@@ -411,6 +411,7 @@ def _calibrate_simulated(
         ),
     )
     figures = _save_plots(virtual, where, evaluation, out) if plots else {}
+    figures.update(save_final_ascan(objective, result, out, plots))
     found = found_echo(result)
     summary = {
         "setup": virtual.name,
@@ -438,7 +439,14 @@ def _calibrate_simulated(
     )
 
 
-CALIBRATE_FILES = ("result.json", "convergence.png", "path.png", "partial_log.json")
+CALIBRATE_FILES = (
+    "result.json",
+    "convergence.png",
+    "path.png",
+    "partial_log.json",
+    "ascan.nc",
+    "ascan.png",
+)
 """What ``echocal calibrate`` writes in --out."""
 
 
@@ -664,6 +672,63 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         show_measurements=True,
     )
     return save_pngs({"convergence": conv, "path": path}, out)
+
+
+def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dict[str, str]:
+    """Save the A-scan measured at the estimate: ``out/ascan.nc`` (echocal's NetCDF schema,
+    see docs/netcdf-schema.md) and, with ``plots``, ``out/ascan.png``.
+
+    It is the driver's final measurement at the estimate (``final_check``, counted in the
+    result's measurements) when the run made one; otherwise (``--option final_check=0``,
+    or no budget left for it) the estimate is measured once more here, through the
+    objective's source (a rig moves there), not counted: the file's summary says which.
+    Nothing is measured or written when no echo was found.  Returns name -> path.
+    """
+    if not found_echo(result):
+        return {}
+    from echocal.ascan import save_ascan
+    from echocal.measurement.objective import ascan_metric
+    from echocal.plots import plot_ascan
+    from echocal.signal.window import RecordingWindow
+
+    scan = objective.last_scan if result.final_value is not None else None
+    counted = scan is not None
+    if scan is None:
+        scan = objective.source.measure(objective.pose(*result.x))
+    value = ascan_metric(scan, objective.metric, objective.pulse, objective.window_length)
+    summary = {
+        "estimate_deg": [float(v) for v in result.x],
+        "names": list(result.names),
+        "parameterization": result.parameterization,
+        "metric": objective.metric,
+        "value": float(value),
+        "counted": counted,
+        "note": "the run's final measurement at the estimate (in n_measurements)"
+        if counted
+        else "measured once at the estimate after the run; not in n_measurements",
+    }
+    files = {
+        "ascan": str(
+            save_ascan(
+                scan,
+                out / "ascan.nc",
+                summary=summary,
+                title="echocal A-scan measured at the calibration's estimate",
+            )
+        )
+    }
+    if plots:
+        window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
+        a, b = result.x
+        fig = plot_ascan(
+            scan.samples,
+            window,
+            pulse=objective.pulse,
+            title=f"A-scan at the estimate ({result.names[0]} {a:.3f}°, "
+            f"{result.names[1]} {b:.3f}°)",
+        )
+        files["ascan_plot"] = save_pngs({"ascan": fig}, out)["ascan"]
+    return files
 
 
 def save_pngs(figures: dict[str, Any], out: Path) -> dict[str, str]:

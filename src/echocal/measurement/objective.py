@@ -146,6 +146,11 @@ class SourceObjective(Objective):
         self._peaks = np.zeros(0)  # matched-envelope peak of each A-scan of the last batch
         self._warned_coarse = False
 
+    @property
+    def last_scan(self) -> AScan | None:
+        """The last A-scan measured (the last of the last batch), None before any."""
+        return self._last_scan
+
     def pose(self, a: float, b: float) -> Pose:
         """The pose measured for orientation ``(a, b)`` [deg]."""
         return pose_from_angles(self.position, float(a), float(b), self.parameterization)
