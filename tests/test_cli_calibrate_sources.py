@@ -168,7 +168,7 @@ def test_replay_finds_the_simulators_optimum(recording, truth, tmp_path, capsys,
     saved = CalibrationResult.load_json(out / "result.json")
     np.testing.assert_array_equal(saved.x, summary["estimate_deg"])
     assert saved.n_measurements == summary["n_measurements"] == len(saved.points)
-    assert sorted(p.name for p in out.iterdir()) == ["result.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["ascan.nc", "result.json"]
 
 
 def test_replay_in_tilts_interpolated_stays_on_the_recording(
@@ -196,7 +196,13 @@ def test_replay_plots_show_the_recordings_own_map(recording, tmp_path, capsys, m
     assert code in (0, 3), err  # converged, or an estimate at the end of the budget
     shown = flat(stdout)
     assert "estimate" in shown and "no truth is known" in shown and "echo found after" in shown
-    assert {p.name for p in out.iterdir()} == {"result.json", "convergence.png", "path.png"}
+    assert {p.name for p in out.iterdir()} == {
+        "result.json",
+        "convergence.png",
+        "path.png",
+        "ascan.nc",
+        "ascan.png",
+    }
     assert all((out / name).stat().st_size > 10_000 for name in ("convergence.png", "path.png"))
 
 
@@ -240,7 +246,8 @@ def test_instrument_reaches_the_simulated_estimate(plate, truth, tmp_path, capsy
         host, port = server.address
         args = ["--instrument", f"{host}:{port}", "--setup", str(plate), "--position", "0,0,20"]
         rig = calibrate_json([*args, *common, "--out", str(tmp_path / "rig")], capsys, monkeypatch)
-        assert server.n_acquisitions == rig["n_measurements"]
+        # every counted measurement, plus the A-scan at the estimate (ascan.nc, not counted)
+        assert server.n_acquisitions == rig["n_measurements"] + 1
     assert rig["source"]["kind"] == "instrument"
     assert rig["source"]["address"] == f"{host}:{port}"
     assert rig["truth_deg"] is None and rig["error_deg"] is None
@@ -264,7 +271,14 @@ def test_instrument_plots_the_path_without_a_map(plate, tmp_path, capsys, monkey
         code, out, err = run_main(["calibrate", *args], capsys, monkeypatch)
     assert code in (0, 3), err  # converged, or an estimate at the end of the budget
     assert "a rig does not know its optimum" in flat(out)
-    assert {p.name for p in tmp_path.iterdir()} == {"result.json", "convergence.png", "path.png"}
+    # the rig moved to the estimate and measured it once more: ascan.nc and its plot
+    assert {p.name for p in tmp_path.iterdir()} == {
+        "result.json",
+        "convergence.png",
+        "path.png",
+        "ascan.nc",
+        "ascan.png",
+    }
 
 
 # -- the rig fails mid-run -----------------------------------------------------------------------

@@ -95,7 +95,7 @@ def test_record_on_a_rig_equals_the_simulator_sample_for_sample(
     with xr.open_dataset(on_rig) as a, xr.open_dataset(on_sim) as b:
         assert a["samples"].shape == b["samples"].shape == (1, 1, 3, 1, 256)
         np.testing.assert_array_equal(a["samples"].values, b["samples"].values)
-        stored = json.loads(a.attrs["source"])
+        stored = json.loads(a.attrs["source_info"])
     assert stored["setup"]["rig"]["config"]["rig"]["positioner"]["driver"] == "tcp"
     assert stored["setup"]["config"]["pulse"]["name"] == "gabor"  # a replay finds its pulse
 
