@@ -246,8 +246,8 @@ def test_instrument_reaches_the_simulated_estimate(plate, truth, tmp_path, capsy
         host, port = server.address
         args = ["--instrument", f"{host}:{port}", "--setup", str(plate), "--position", "0,0,20"]
         rig = calibrate_json([*args, *common, "--out", str(tmp_path / "rig")], capsys, monkeypatch)
-        # every counted measurement, plus the A-scan at the estimate (ascan.nc, not counted)
-        assert server.n_acquisitions == rig["n_measurements"] + 1
+        # every acquisition counted: ascan.nc is the run's final measurement at the estimate
+        assert server.n_acquisitions == rig["n_measurements"]
     assert rig["source"]["kind"] == "instrument"
     assert rig["source"]["address"] == f"{host}:{port}"
     assert rig["truth_deg"] is None and rig["error_deg"] is None
@@ -271,7 +271,7 @@ def test_instrument_plots_the_path_without_a_map(plate, tmp_path, capsys, monkey
         code, out, err = run_main(["calibrate", *args], capsys, monkeypatch)
     assert code in (0, 3), err  # converged, or an estimate at the end of the budget
     assert "a rig does not know its optimum" in flat(out)
-    # the rig moved to the estimate and measured it once more: ascan.nc and its plot
+    # the rig's final measurement at the estimate: ascan.nc and its plot
     assert {p.name for p in tmp_path.iterdir()} == {
         "result.json",
         "convergence.png",

