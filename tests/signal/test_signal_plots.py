@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from echocal.plots import save_figure
@@ -18,8 +19,22 @@ def test_plot_pulse_and_ascan_save(tmp_path):
     x = synthesize([1.0, 0.4], [24e-6, 26e-6], p, w, normalize="peak")
     fig2 = plot_ascan(x, w, pulse=p, gate=Gate(start=23e-6, width=4e-6, threshold=0.3))
     labels = [t.get_text() for t in fig2.axes[0].get_legend().get_texts()]
-    assert labels[:3] == ["A-scan", "envelope", "gate"] and labels[3].startswith("τ = 24.0000")
+    assert labels[:2] == ["A-scan", "envelope"] and "gate" in labels
+    assert any(label.startswith("τ = 24.0000") for label in labels)
+    assert len(fig2.axes) == 2  # the zoom panel on the echo: τ ± 3 pulse durations
+    lo, hi = fig2.axes[1].get_xlim()
+    np.testing.assert_allclose([lo, hi], 24.0 + np.array([-3, 3]) * p.duration * 1e6, rtol=1e-9)
     written = save_figure(fig2, tmp_path / "a.png")
     assert [q.name for q in written] == ["a.png", "a.svg"]
     assert all(q.stat().st_size > 0 for q in written)
     assert sorted(q.name for q in tmp_path.iterdir()) == ["a.png", "a.svg"]  # no temp files
+
+
+def test_a_noise_ascan_is_drawn_at_the_scale_of_the_expected_echo():
+    w = RecordingWindow(fs=100e6, start=20e-6, n_samples=1024)
+    noise = np.random.default_rng(1).normal(0.0, 0.01, w.n_samples)
+    fig = plot_ascan(noise, w, expected_amplitude=0.8, noise_sigma=0.01)
+    assert len(fig.axes) == 1  # no echo: no zoom panel
+    np.testing.assert_allclose(fig.axes[0].get_ylim(), (-0.88, 0.88))
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "noise ±σ (σ = 0.01)" in labels

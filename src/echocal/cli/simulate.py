@@ -138,6 +138,8 @@ def register(app: typer.Typer) -> None:
             pulse=pulse if detected else None,  # no time-of-flight line on pure noise
             gate=user_gate,
             title=f"A-scan at {_label(target)}",
+            noise_sigma=float(virtual.noise_sigma),
+            expected_amplitude=float(np.max(np.abs(virtual.reference_samples))),
         )
         if energy_window is not None:
             label = "pseudo-energy window" + ("" if detected else " (noise: no echo)")

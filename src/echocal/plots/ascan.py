@@ -1,4 +1,5 @@
-"""A-scan figure: raw samples, envelope, gate and the detected echo."""
+"""A-scan figure: raw samples, envelope, noise level, gate and the detected echo, with a zoom
+panel on the echo."""
 
 from __future__ import annotations
 
@@ -12,6 +13,9 @@ from echocal.signal.window import RecordingWindow
 
 __all__ = ["plot_ascan"]
 
+_ZOOM_DURATIONS = 3.0
+"""The zoom panel spans the time of flight ± this many pulse durations."""
+
 
 def plot_ascan(
     samples: ArrayLike,
@@ -20,27 +24,82 @@ def plot_ascan(
     pulse: Pulse | None = None,
     gate: Gate | None = None,
     title: str | None = None,
+    noise_sigma: float | None = None,
+    expected_amplitude: float | None = None,
 ) -> Figure:
-    """One A-scan (shape ``(n_samples,)``) against time [µs]: the raw RF samples, their
-    analytic envelope, the gate (bar at its threshold) and, with ``pulse``, the time of
-    flight of the strongest echo (matched-filter peak)."""
+    """One A-scan (shape ``(n_samples,)``) against time [µs].
+
+    Top panel, the whole recording window: the raw RF samples (solid), their analytic
+    envelope (dashed), the noise level ±σ (dotted), the gate (bar at its threshold) and,
+    with ``pulse``, the time of flight of the strongest echo (matched-filter peak,
+    dash-dotted).  With ``pulse`` and an echo, a bottom panel zooms on it (± 3 pulse
+    durations), so a sub-microsecond echo in a long window is seen cycle by cycle.
+
+    Parameters
+    ----------
+    noise_sigma : [a.u.] the receiver's noise σ; default: estimated from the samples
+        (1.4826 · MAD, robust to the echo).  0 draws no noise level.
+    expected_amplitude : [a.u.] the peak an echo would have (e.g. the reference echo's).
+        When the A-scan holds no echo (``pulse`` None) and its peak is below this, the
+        axes are drawn at ± this scale, so noise is not autoscaled into looking like a
+        signal.
+    """
     x = np.asarray(samples, dtype=np.float64)
     if x.ndim != 1:
         raise ValueError(f"plot_ascan takes one A-scan, shape (n_samples,); got {x.shape}")
     t_us = window.times * 1e6
-    fig = Figure(figsize=(10, 3.6), layout="constrained")
-    ax = fig.subplots()
-    ax.plot(t_us, x, lw=0.8, color="C0", label="A-scan")
-    env = envelope(x)
-    ax.plot(t_us, env, lw=1.2, color="C1", label="envelope")
-    if gate is not None:
-        level = float(gate.level(x[None, :])[0])
-        ax.hlines(level, gate.start * 1e6, gate.end * 1e6, colors="C2", lw=3, label="gate")
+    tof = None
     if pulse is not None and np.any(x):
         tof = float(time_of_flight(x, window, pulse, gate=gate))
-        ax.axvline(tof * 1e6, color="C3", ls="--", lw=1, label=f"τ = {tof * 1e6:.4f} µs")
-    ax.set(xlabel="time [µs]", ylabel="amplitude [a.u.]", title=title or "A-scan")
-    ax.set_xlim(t_us[0], t_us[-1])
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+        tof = tof if np.isfinite(tof) else None
+    zoom = tof is not None and pulse is not None
+    fig = Figure(figsize=(10, 5.8 if zoom else 3.6), layout="constrained")
+    axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
+    sigma = _noise_sigma(x) if noise_sigma is None else float(noise_sigma)
+    env = envelope(x)
+    for k, ax in enumerate(axes):
+        ax.plot(t_us, x, lw=0.8, color="C0", ls="-", label="A-scan")
+        ax.plot(t_us, env, lw=1.2, color="C1", ls="--", label="envelope")
+        if sigma > 0:
+            ax.axhline(sigma, color="0.3", ls=":", lw=1.0, label=f"noise ±σ (σ = {sigma:.3g})")
+            ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
+        if gate is not None:
+            level = float(gate.level(x[None, :])[0])
+            ax.hlines(level, gate.start * 1e6, gate.end * 1e6, colors="C2", lw=3, label="gate")
+        if tof is not None:
+            ax.axvline(tof * 1e6, color="C3", ls="-.", lw=1, label=f"τ = {tof * 1e6:.4f} µs")
+        ax.grid(alpha=0.3)
+        ax.set_ylabel("amplitude [a.u.]")
+        if k == 0:
+            ax.set_xlim(t_us[0], t_us[-1])
+            ax.set_title(title or "A-scan")
+    if zoom:
+        assert tof is not None and pulse is not None
+        half = _ZOOM_DURATIONS * pulse.duration * 1e6
+        lo, hi = max(tof * 1e6 - half, t_us[0]), min(tof * 1e6 + half, t_us[-1])
+        axes[0].axvspan(lo, hi, color="C3", alpha=0.08, label="zoom below")
+        axes[1].set_xlim(lo, hi)
+        axes[1].set_title(f"zoom on the echo (τ ± {half:.2g} µs)", fontsize=10)
+    elif expected_amplitude is not None and pulse is None:
+        scale = float(expected_amplitude)
+        if scale > 0 and np.max(np.abs(x), initial=0.0) < scale:
+            axes[0].set_ylim(-1.1 * scale, 1.1 * scale)
+            axes[0].text(
+                0.01,
+                0.95,
+                f"no echo: drawn at the scale of the expected echo (peak {scale:.3g})",
+                transform=axes[0].transAxes,
+                va="top",
+                fontsize=9,
+            )
+    axes[-1].set_xlabel("time [µs]")
+    axes[0].legend(fontsize=8, loc="upper right")
     return fig
+
+
+def _noise_sigma(x: np.ndarray) -> float:
+    """[a.u.] robust per-sample noise σ (1.4826 · MAD); 0 for a constant trace."""
+    from echocal.measurement.objective import scan_noise_sigma
+
+    sigma, _ = scan_noise_sigma(x)
+    return 0.0 if sigma is None else float(sigma)
