@@ -490,11 +490,20 @@ def plot_ecdf(per_case: dict[str, dict[str, dict[str, Any]]], path: Path) -> Non
     fig, axes = plt.subplots(1, len(per_case), figsize=(6.5 * len(per_case), 4.6), squeeze=False)
     n = np.arange(BUDGET + 1)
     for ax, (case, summary) in zip(axes[0], per_case.items(), strict=True):
-        for m, s in sorted(summary.items()):
+        for i, (m, s) in enumerate(sorted(summary.items())):
             reach = np.array([np.inf if v is None else v for v in s["n_to_0.1"]])
             frac = (reach[None, :] <= n[:, None]).mean(axis=1)
-            style = "-" if m in OURS else "--"
-            ax.step(n, 100 * frac, where="post", ls=style, lw=2 if m == "auto" else 1.2, label=m)
+            # every series its own colour and line style, for colour-blind readers too:
+            # 20 colours (tab20, dark shades first), 4 styles cycling
+            ax.step(
+                n,
+                100 * frac,
+                where="post",
+                color=plt.get_cmap("tab20")((2 * i) % 20 + (2 * i) // 20),
+                ls=("-", "--", ":", "-.")[i % 4],
+                lw=2.2 if m == "auto" else 1.3,
+                label=m if m in OURS else f"{m} (peer)",
+            )
         ax.set_title(f"{case}: all cells pooled")
         ax.set_xlabel("measurements")
         ax.set_ylabel("runs within 0.1° (and staying) [%]")
