@@ -12,6 +12,7 @@ or over no map at all.  They only read results.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -23,6 +24,18 @@ from echocal.evaluation import CostMap
 __all__ = ["CostMap", "convergence_figure", "measured_convergence_figure", "path_figure"]
 
 FloatArray = NDArray[np.float64]
+
+
+_LINE_STYLES = ("-", "--", ":", "-.")
+"""Line styles cycled with the colours, so series differ without colour too."""
+
+
+def _integer_ticks(*axes: Any) -> None:
+    """Whole-number ticks on the x axis (iterations and measurement counts)."""
+    from matplotlib.ticker import MaxNLocator
+
+    for ax in axes:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
 def convergence_figure(
@@ -44,15 +57,17 @@ def convergence_figure(
     """
     fig = Figure(figsize=(11, 4.2), constrained_layout=True)
     by_iter, by_meas = fig.subplots(1, 2, sharey=True)
-    for label, result in runs.items():
+    for i, (label, result) in enumerate(runs.items()):
         values = np.asarray(iterate_values[label], dtype=float)
         iterations = np.arange(len(values))
-        line = by_iter.plot(iterations, values, marker=".", ms=4, label=label)[0]
+        style = _LINE_STYLES[i % len(_LINE_STYLES)]  # colour and style: colour-blind safe
+        line = by_iter.plot(iterations, values, marker=".", ms=4, ls=style, label=label)[0]
         by_meas.plot(
             result.iteration_measurements[: len(values)],
             values,
             marker=".",
             ms=4,
+            ls=style,
             color=line.get_color(),
             label=f"{label} ({result.n_measurements} meas.)",
         )
@@ -62,6 +77,7 @@ def convergence_figure(
         ax.grid(alpha=0.3)
     by_iter.set_xlabel("iteration")
     by_meas.set_xlabel("measurements used")
+    _integer_ticks(by_iter, by_meas)
     by_iter.set_ylabel(ylabel)
     by_meas.legend(fontsize=8, loc="lower right")
     if title:
@@ -142,6 +158,7 @@ def measured_convergence_figure(
     settling.legend(fontsize=8, loc="upper right")
     for ax in (measured, settling):
         ax.grid(alpha=0.3)
+    _integer_ticks(measured, settling)
     if title:
         fig.suptitle(title)
     return fig
