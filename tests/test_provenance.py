@@ -49,7 +49,7 @@ def folder(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def first(folder) -> dict:
     done = echocal([*CALIBRATE, "--seed", "5", "--out", "first"], folder)
-    assert done.returncode in (0, 1), done.stderr
+    assert done.returncode in (0, 1, 3), done.stderr  # 3: budget ran out (no convergence claim)
     return json.loads((folder / "first" / "result.json").read_text())
 
 
@@ -86,7 +86,7 @@ def test_result_json_records_its_origin(folder, first):
 
 def test_calibrate_from_result_json_gives_the_same_numbers(folder, first):
     done = echocal(["calibrate", "--from", "first/result.json", "--out", "again"], folder)
-    assert done.returncode in (0, 1), done.stderr
+    assert done.returncode in (0, 1, 3), done.stderr  # 3: budget ran out (no convergence claim)
     again = json.loads((folder / "again" / "result.json").read_text())
     for key in ("x", "points", "values", "iterates", "status", "n_measurements", "options"):
         assert again[key] == first[key], key
