@@ -339,7 +339,8 @@ def recording_dataset(
     Parameters
     ----------
     samples : shape ``(n_positions, n_azimuth, n_coelevation, n_repeats, n_samples)``.
-    fs : [Hz]; start_time : [s].
+    fs : [Hz] sampling rate.
+    start_time : [s] time of the first sample.
     source_info : JSON-ready description of the source (attribute ``source_info``).
 
     Write it with :func:`save_recording`.
