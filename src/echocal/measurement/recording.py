@@ -334,16 +334,21 @@ def recording_dataset(
     start_time: float,
     source_info: Mapping[str, Any],
 ) -> Any:
-    """Build the replay ``xarray.Dataset`` (schema ``replay/2``, see docs/netcdf-schema.md).
+    """Build the replay ``xarray.Dataset`` (schema ``replay/2``, see docs/netcdf-schema.md);
+    write it with :func:`save_recording`.
 
     Parameters
     ----------
-    samples : shape ``(n_positions, n_azimuth, n_coelevation, n_repeats, n_samples)``.
-    fs : [Hz] sampling rate.
-    start_time : [s] time of the first sample.
-    source_info : JSON-ready description of the source (attribute ``source_info``).
-
-    Write it with :func:`save_recording`.
+    samples : numpy.ndarray
+        Shape ``(n_positions, n_azimuth, n_coelevation, n_repeats, n_samples)``.
+    grid : RecordingGrid
+        The poses recorded.
+    fs : float
+        [Hz] sampling rate.
+    start_time : float
+        [s] time of the first sample.
+    source_info : Mapping
+        JSON-ready description of the source (attribute ``source_info``).
     """
     import xarray as xr
 
