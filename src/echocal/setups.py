@@ -83,6 +83,7 @@ from echocal.specimen import (
     builtin_specimen,
     specimen_names,
 )
+from echocal.specimen.interior import MAX_BACK_WALL_ECHOES, Flaw, Interior
 from echocal.transducer import Transducer, directivity_names, make_directivity
 from echocal.units import (
     parse_quantity,
@@ -260,6 +261,17 @@ _SHAPE_FIELDS = {
 }
 
 
+class FlawConfig(_Model):
+    """A reflector inside the part (see :mod:`echocal.specimen.interior`)."""
+
+    name: str
+    kind: Literal["side-drilled-hole", "flat-bottom-hole", "pore"]
+    position: Point
+    diameter: Size
+    length: Size | None = None
+    axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
+
+
 class SpecimenConfig(_Model):
     """Exactly one of: a built-in name, a list of shapes, or a mesh file (+ scale)."""
 
@@ -272,6 +284,13 @@ class SpecimenConfig(_Model):
     name: str | None = None
     material: MaterialSpec | None = None
     """The part's material; None: a perfect reflector (the thesis)."""
+    thickness: Size | None = None
+    """A plate's thickness below its front face (needs a solid material and the wave model);
+    None: no interior (a half-space)."""
+    back_wall_echoes: Annotated[int, NotBool] = Field(default=3, ge=0, le=MAX_BACK_WALL_ECHOES)
+    """How many back-wall echoes (the back wall and its multiples) are simulated."""
+    flaws: list[FlawConfig] | None = None
+    """Reflectors inside the part (need ``thickness``)."""
 
 
 class DirectivityConfig(_Model):
@@ -643,6 +662,8 @@ def _build_parts(
         lambda: _wrap("noise", lambda: ReceiverSettings(**config.noise.model_dump())),
     )
     run("echo", lambda: _check_echo(config.echo))
+    if "specimen" not in invalid and config.specimen.thickness is not None:
+        run("interior", lambda: _build_interior(config, parts))
     run("positioner", lambda: _build_limits(config.positioner))
     if "pulse" in parts and "window" in parts:
         for check in (check_sample_count, lambda p, w: check_window(w, p)):
@@ -663,6 +684,52 @@ def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
     except EchocalError as exc:
         message = str(exc)
         return None, [message if message.startswith(field + ".") else f"{field}: {message}"]
+
+
+def _build_interior(
+    config: SetupConfig, parts: dict[str, Any]
+) -> tuple[Interior | None, list[str]]:
+    """The plate's thickness and flaws, checked against the front face and the models."""
+    spec = config.specimen
+    material = parts.get("material")
+    if spec.material is not None and material is None:
+        return None, []  # the material's own problem is reported
+    if material is None or material.is_fluid:
+        return None, [
+            "specimen.thickness: an interior needs a solid specimen.material "
+            "(e.g. material = \"steel\")"
+        ]
+    if config.echo.reflection != "wave":
+        return None, [
+            "specimen.thickness: echoes from inside the part need the wave model; "
+            'set [echo] reflection = "wave"'
+        ]
+    specimen = parts.get("specimen")
+    if specimen is None:
+        return None, []
+    if len(specimen) != 1 or not isinstance(specimen[0], FinitePlane):
+        return None, [
+            "specimen.thickness: an interior needs a plate: one plane shape as the front face "
+            "(e.g. builtin = \"flat-plate\"); curved walls are not modelled"
+        ]
+    try:
+        flaws = tuple(
+            Flaw(
+                name=f.name,
+                kind=f.kind,
+                position=np.asarray(f.position),
+                diameter=f.diameter,
+                length=f.length,
+                axis=np.asarray(f.axis),
+            )
+            for f in spec.flaws or ()
+        )
+        assert spec.thickness is not None  # only called with a thickness
+        interior = Interior(spec.thickness, spec.back_wall_echoes, flaws)
+        interior.check_inside(specimen[0])
+    except EchocalError as exc:
+        return None, [str(exc)]
+    return interior, []
 
 
 def _check_echo(config: EchoConfig) -> tuple[EchoConfig | None, list[str]]:
@@ -730,6 +797,7 @@ def _assemble(config: SetupConfig, parts: dict[str, Any], seed: int | None) -> V
             sound_speed=parts["medium"].longitudinal_speed,
             medium=parts["medium"],
             material=parts.get("material"),
+            interior=parts.get("interior"),
             reflection=config.echo.reflection,
             synthesis=config.echo.synthesis,
             wave_spacing=config.echo.spacing,

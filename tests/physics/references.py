@@ -36,6 +36,7 @@ __all__ = [
     "fluid_solid_reflection",
     "gabor_sigma_t",
     "gabor_spectrum",
+    "gated_envelope_peak",
     "jinc",
     "normal_incidence_reflection",
     "oneil_on_axis",
@@ -148,7 +149,16 @@ def rogers_van_buren_loss_db(d, a, f, c: float = C_WATER):
 # 2. Pulse-echo of a piston over a tilted infinite rigid plane
 # ---------------------------------------------------------------------------
 def pulse_echo_plane(
-    a, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float = 0.5, evanescent: bool = True
+    a,
+    f,
+    d,
+    tilt_deg,
+    c: float = C_WATER,
+    *,
+    accuracy: float = 0.5,
+    evanescent: bool = True,
+    reflection=None,
+    extra_phase: float = 0.0,
 ):
     """Exact scalar pulse-echo response V(f) of a piston over a tilted rigid plane.
 
@@ -213,7 +223,19 @@ def pulse_echo_plane(
         d = 10-150 mm).
     evanescent : bool
         Include the evanescent spectrum (its contribution is ~1e-4 or less
-        for d >> lambda).
+        for d >> lambda).  Only with ``reflection=None``.
+    reflection : callable or None
+        A layered reflector instead of the rigid plane: ``reflection(theta_deg)``
+        returns the plane-wave reflection coefficient (complex, exp(-iwt)) at
+        this frequency for incidence angles ``theta_deg`` (any shape) from the
+        plane's normal.  Each plane wave K of the spectrum is reflected as its
+        mirror image times R(theta_K), cos theta_K = K.n/k -- exact for an
+        infinite planar layered reflector (e.g. a fluid-loaded plate:
+        :func:`fluid_loaded_plate_reflection`), propagating waves only.
+    extra_phase : float
+        [rad] how much the phase of ``reflection`` turns over 0-90 deg (e.g.
+        2 h (k_L + k_T) for a plate of thickness h), so that the quadrature
+        resolves it.
 
     Returns
     -------
@@ -247,6 +269,7 @@ def pulse_echo_plane(
     # theta panels of equal (over-estimated) phase, 16 GL nodes per 2 cycles
     th_f = np.linspace(0.0, np.pi / 2, 4001)
     Phi = 2 * kd * (1 - np.cos(th_f)) + (4 * ka + kd * s2a_max) * np.sin(th_f) + 20 * th_f
+    Phi = Phi + extra_phase * np.sin(th_f)
     n_pan = max(4, math.ceil(accuracy * Phi[-1] / (4 * np.pi)))
     edges = np.interp(np.linspace(0, Phi[-1], n_pan + 1), Phi, th_f)
     th, wth = _gauss_legendre_panels(edges, 16)
@@ -268,10 +291,15 @@ def pulse_echo_plane(
         q = np.sqrt(qx * qx + ky * ky)
         phase = d * s2 * kx + 2 * d * ca2 * kz
         integ = jinc(q * a) * np.exp(1j * phase)
+        if reflection is not None:
+            sa = np.sin(al)[:, None, None]
+            ca = np.cos(al)[:, None, None]
+            cos_inc = np.abs(kx * sa + kz * ca) / k
+            integ = integ * reflection(np.degrees(np.arccos(np.clip(cos_inc, 0.0, 1.0))))
         j0 = jinc(ka * np.sin(t_))
         out += np.einsum("tij,i,j->t", integ, w_ * j0, wphi)
 
-    if evanescent:
+    if evanescent and reflection is None:
         vmax = np.arcsinh(20.0 / kd)
         v, wv = _gauss_legendre_panels(np.linspace(0, vmax, 5), 16)
         kap = k * np.cosh(v)[None, :, None]
@@ -613,6 +641,43 @@ def pulse_echo_envelope_peak(
     if squeeze:
         peaks, times = peaks[0], times[0]
     return (peaks, times) if return_time else peaks
+
+
+def gated_envelope_peak(V, freqs, pulse_spectrum, t_lo, t_hi, *, n_t: int = 4001):
+    """Envelope peak of the broadband echo inside the time gate ``[t_lo, t_hi]`` [s].
+
+    Same analytic signal as :func:`pulse_echo_envelope_peak` (one-sided, uniform
+    ``freqs``, period 1/df), evaluated directly on ``n_t`` times of the gate and refined
+    by a bounded search around the best one.  ``V`` is ``(n_f,)`` or ``(n_f, m)``.
+    Returns (peak, time) -- floats or ``(m,)`` arrays.
+    """
+    freqs = np.asarray(freqs, dtype=float)
+    V = np.asarray(V)
+    X = (pulse_spectrum[:, None] if V.ndim == 2 else pulse_spectrum) * V
+    X = X.reshape(freqs.size, -1)
+    df = freqs[1] - freqs[0]
+    t = np.linspace(t_lo, t_hi, n_t)
+    E = np.exp(-2j * np.pi * np.outer(t, freqs))  # (n_t, n_f)
+    A = np.abs(2 * df * E @ X)  # (n_t, m)
+    peaks, times = [], []
+    for j in range(X.shape[1]):
+        m = int(np.argmax(A[:, j]))
+        xj = X[:, j]
+
+        def env(tt, xj=xj):
+            return abs(2 * df * np.sum(xj * np.exp(-2j * np.pi * freqs * tt)))
+
+        lo, hi = t[max(m - 1, 0)], t[min(m + 1, n_t - 1)]
+        res = optimize.minimize_scalar(
+            lambda tt: -env(tt), bounds=(lo, hi), method="bounded",
+            options={"xatol": (hi - lo) * 1e-6},
+        )
+        peaks.append(-res.fun)
+        times.append(res.x)
+    peaks, times = np.array(peaks), np.array(times)
+    if V.ndim == 1:
+        return peaks[0], times[0]
+    return peaks, times
 
 
 def _band(a, d, f0, sigma_t, c, max_tilt_deg, n_sigma=4.5):

@@ -123,6 +123,7 @@ def register(app: typer.Typer) -> None:
             "energy_db": float(energy_db(scan.samples, window, pulse)),
             "peak_amplitude": float(peak_amplitude(scan.samples)),
         }
+        summary["echoes"] = _echoes(virtual, target)
         if user_gate is not None:
             summary["gate_s"] = [user_gate.start, user_gate.width]
         energy_window = _energy_window(scan.samples, window, pulse)
@@ -157,6 +158,13 @@ def register(app: typer.Typer) -> None:
             )
         elif np.isnan(tof):
             output.print(f"[yellow]no echo in the {where}[/]")
+        if len(summary["echoes"]) > 1:
+            output.print("echoes (noiseless)")
+            for echo in summary["echoes"]:
+                output.print(
+                    f"  {echo['label']:<16} {_show(echo['tof_s'] * 1e6, 'µs')}   "
+                    f"amplitude {echo['amplitude']:.4g}"
+                )
         seen = "" if significance is None else f"   (significance g = {significance:.1f})"
         output.print(
             f"time of flight  {_show(tof * 1e6, 'µs')}{seen if detected else ''}\n"
@@ -164,6 +172,18 @@ def register(app: typer.Typer) -> None:
             f"pseudo-energy   {energy:10.4g}\n"
             f"saved           {data_path}, {plots[0]}"
         )
+
+
+def _echoes(virtual: Any, pose: Any) -> list[dict[str, Any]]:
+    """Every labelled echo at ``pose`` (noiseless): label, tof_s and amplitude."""
+    from echocal.wave.interior import echo_list
+
+    if not hasattr(virtual, "labelled_echoes"):  # a replayed or rig source has no labels
+        return []
+    echoes = echo_list(virtual.labelled_echoes(pose), virtual.window)
+    return [
+        {"label": e.label, "tof_s": e.tof_s, "amplitude": e.amplitude} for e in echoes
+    ]
 
 
 def _show(value: float, unit: str) -> str:

@@ -68,7 +68,8 @@ from echocal.signal import (
     noise_sigma_for_snr,
 )
 from echocal.signal.synthesis import _synthesize_unchecked
-from echocal.specimen import Specimen
+from echocal.specimen import FinitePlane, Specimen
+from echocal.specimen.interior import Interior
 from echocal.transducer import Transducer
 from echocal.units import format_frequency
 
@@ -203,6 +204,9 @@ class VirtualSetup(BaseSource):
         ``longitudinal_speed`` is set to ``sound_speed``, the one c₀ of the simulation.
     material : the specimen's material; None: a perfect reflector (the thesis).  The
         thesis's ray models do not use either.
+    interior : the plate's thickness and flaws (:mod:`echocal.specimen.interior`): its
+        back-wall and flaw echoes join the front wall's.  Needs the wave model, a solid
+        ``material`` and a specimen of one plane (the front face).  None: no interior.
     """
 
     specimen: Specimen
@@ -214,6 +218,7 @@ class VirtualSetup(BaseSource):
     sound_speed: float = SOUND_SPEED_WATER
     medium: Material = WATER
     material: Material | None = None
+    interior: Interior | None = None
     reflection: str = "lambertian"
     synthesis: str = "fast"
     wave_spacing: float | None = None
@@ -244,6 +249,8 @@ class VirtualSetup(BaseSource):
             )
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         _check_materials(self.medium, self.material)
+        if self.interior is not None:
+            self._check_interior(self.interior)
         if self.medium.longitudinal_speed != self.sound_speed:
             medium = replace(self.medium, longitudinal_speed=self.sound_speed)
             object.__setattr__(self, "medium", medium)
@@ -256,6 +263,33 @@ class VirtualSetup(BaseSource):
         check_sample_count(self.pulse, self.window)
         self._check_outside(reference[None], what="reference_position")
         _raise_malloc_threshold()
+
+    def _check_interior(self, interior: Interior) -> None:
+        """An interior needs the wave model, a solid material and a plate (one plane)."""
+        if not isinstance(interior, Interior):
+            raise EchocalValueError(
+                f"interior must be an Interior or None; got {type(interior).__name__}"
+            )
+        if self.reflection != WAVE_MODEL:
+            raise EchocalValueError(
+                "specimen.thickness: echoes from inside the part need the wave model; "
+                'set [echo] reflection = "wave"'
+            )
+        if self.material is None or self.material.is_fluid:
+            raise EchocalValueError(
+                "specimen.thickness: an interior needs a solid specimen.material"
+            )
+        if len(self.specimen) != 1 or not isinstance(self.specimen[0], FinitePlane):
+            raise GeometryError(
+                "specimen.thickness: an interior needs a plate: one plane shape as the front "
+                "face; curved walls are not modelled"
+            )
+        interior.check_inside(self.specimen[0])
+
+    @property
+    def thickness(self) -> float | None:
+        """[m] the plate's thickness, or None when the part has no interior."""
+        return None if self.interior is None else self.interior.thickness
 
     def _check_outside(
         self, positions: FloatArray, *, poses: Sequence[Pose] | None = None, what: str = "pose"
@@ -368,7 +402,35 @@ class VirtualSetup(BaseSource):
         medium = self.medium
         return lambda theta: reflection_fluid_solid(theta, medium, material)
 
+    @cached_property
+    def interior_echoes(self):  # -> echocal.wave.interior.InteriorEchoes | None (lazy: numba)
+        """The labelled echo train of a plate with an interior (None without one)."""
+        if self.interior is None:
+            return None
+        from echocal.wave.interior import InteriorEchoes
+
+        assert self.material is not None
+        return InteriorEchoes(
+            model=self.wave_model,
+            front=self.specimen[0],
+            interior=self.interior,
+            medium=self.medium,
+            material=self.material,
+        )
+
+    def labelled_echoes(self, pose: Pose) -> dict[str, FloatArray]:
+        """Each echo's noiseless samples ``(n_samples,)`` at ``pose``, by label:
+        ``front-wall``, ``back-wall``, ``back-wall-2``, …, then the flaws' names.  Without
+        an interior the one echo is the ``front-wall``'s (the whole noiseless A-scan)."""
+        positions, frames = poses_to_arrays([pose])
+        self._check_outside(positions, poses=[pose])
+        if self.interior_echoes is None:
+            return {"front-wall": self._ideal(positions, frames)[0]}
+        return self.interior_echoes.echoes(positions[0], frames[0])
+
     def _ideal_chunk(self, positions: FloatArray, frames: FloatArray) -> FloatArray:
+        if self.interior_echoes is not None:
+            return self.interior_echoes.ascans(positions, frames)
         if self.reflection == WAVE_MODEL:
             return self.wave_model.ascans(_as_shapes(self.specimen), positions, frames)
         # checked float64 pose arrays, model and c₀ validated in __post_init__: no re-checks

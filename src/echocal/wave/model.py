@@ -234,17 +234,62 @@ class WaveEchoModel:
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
     ) -> FloatArray:
         points, unit_m, area = self.surface_samples(shapes, position, frame)
-        m, dt, pad, n_fft = self._grid
-        t0 = self.window.start - pad * dt
-        c = self.sound_speed
-        weights = area / (self.probe.area * c * c)
         reflection = None
         if self.reflection is not None:
             r = np.linalg.norm(points, axis=0)
             cos_theta = np.abs(np.sum(unit_m * points, axis=0)) / np.maximum(r, 1e-300)
             theta = np.degrees(np.arccos(np.clip(cos_theta, 0.0, 1.0)))
             reflection = np.asarray(self.reflection(theta), dtype=np.complex128)
-        kernel = sir.accumulate_two_way
+        spectrum, path_time = self.spectrum(points, unit_m, area, reflection)
+        if self.attenuation is not None and path_time > 0.0:
+            # every contribution arriving at two-way time t has travelled c·t in the medium:
+            # the echo is attenuated over the path c·t of its envelope peak
+            _, dt, pad, n_fft = self._grid
+            echo = scipy.fft.irfft(spectrum, n=n_fft)
+            analytic = scipy.signal.hilbert(echo)
+            t_echo = self.window.start - pad * dt + dt * float(np.argmax(np.abs(analytic)))
+            spectrum *= self.attenuation_factor(self.sound_speed * t_echo)
+        return self.samples(spectrum)
+
+    def attenuation_factor(self, path: float) -> NDArray[np.float64]:
+        """exp(−α(f)·path) of the medium on the grid's frequencies (path [m]); 1 if lossless."""
+        if self.attenuation is None:
+            return np.ones_like(self._frequencies)
+        return np.exp(-np.asarray(self.attenuation(self._frequencies)) * path)
+
+    @property
+    def frequencies(self) -> FloatArray:
+        """[Hz] the frequencies of :meth:`spectrum`'s bins, shape ``(n_fft // 2 + 1,)``."""
+        return self._frequencies
+
+    def spectrum(
+        self,
+        points: FloatArray,
+        unit_m: FloatArray,
+        area: FloatArray,
+        reflection: NDArray[np.complex128] | None = None,
+        delays: FloatArray | None = None,
+    ) -> tuple[NDArray[np.complex128], float]:
+        """The echo spectrum of surface samples, before the medium's attenuation.
+
+        Parameters
+        ----------
+        points : [m] samples in the aperture frame, ``(3, n)``.
+        unit_m : the vectors m of :func:`echocal.wave.sir.accumulate_two_way`, ``(3, n)``.
+        area : [m²] patch areas (× any real factor), ``(n,)``.
+        reflection : complex reflection (× transmission) coefficients, ``(n,)``; None: 1.
+        delays : [s] two-way delays added to the samples' geometric times, ``(n,)``.
+
+        Returns
+        -------
+        The one-sided spectrum on :attr:`frequencies` (pass it to :meth:`samples`) and the
+        weighted mean two-way time [s] of the samples (0 if none contributes).
+        """
+        _, dt, pad, n_fft = self._grid
+        t0 = self.window.start - pad * dt
+        c = self.sound_speed
+        weights = area / (self.probe.area * c * c)
+        delays = np.zeros(weights.shape[0]) if delays is None else delays
         prm = self.probe.parameters
         n_scratch = sir.scratch_bins(c, dt, 2.0 * self.probe.radius)
         scratch = np.zeros((3, 2 * n_scratch))
@@ -254,32 +299,30 @@ class WaveEchoModel:
         ]
         if reflection is not None and np.any(reflection.imag != 0.0):
             parts.append((weights * reflection.imag, -1j))  # e^{−iωt} phase → numpy's
-        path_w = 0.0
+        path_time = 0.0
         for w, factor in parts:
             grid = np.zeros(n_fft)
-            _, sw = kernel(
+            swt, sw = sir.accumulate_two_way(
                 self.probe.kind,
                 prm,
-                points,
-                unit_m,
+                np.ascontiguousarray(points),
+                np.ascontiguousarray(unit_m),
                 np.ascontiguousarray(w),
+                np.ascontiguousarray(delays, dtype=np.float64),
                 c,
                 t0,
                 dt,
                 grid,
                 scratch,
             )
-            if factor == 1.0:
-                path_w = sw
+            if factor == 1.0 and sw > 0.0:
+                path_time = swt / sw
             spectrum += factor * scipy.fft.rfft(grid)
-        spectrum *= self._transfer
-        if self.attenuation is not None and path_w > 0.0:
-            # every contribution arriving at two-way time t has travelled c·t in the medium:
-            # the echo is attenuated over the path c·t of its envelope peak
-            echo = scipy.fft.irfft(spectrum, n=n_fft)
-            analytic = scipy.signal.hilbert(echo)
-            t_echo = t0 + dt * float(np.argmax(np.abs(analytic)))
-            spectrum *= np.exp(-np.asarray(self.attenuation(self._frequencies)) * c * t_echo)
+        return spectrum * self._transfer, path_time
+
+    def samples(self, spectrum: NDArray[np.complex128]) -> FloatArray:
+        """The recording window's samples ``(n_samples,)`` of a :meth:`spectrum`."""
+        m, _, pad, n_fft = self._grid
         x = m * scipy.fft.irfft(spectrum, n=m * n_fft)
         start = pad * m
         return x[start : start + self.window.n_samples]

@@ -263,7 +263,7 @@ def _sample_geometry(kind, prm, x, y, z, mx, my, mz, geo):
 
 
 @_jit
-def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scratch):
+def accumulate_two_way(kind, prm, points, unit_m, weights, delays, c, t0, dt, grid, scratch):
     """Add Σₛ wₛ·(h̄ₛ * h̄_m,ₛ)(t)·Δ of every sample to ``grid`` (two-way times).
 
     Parameters
@@ -273,6 +273,8 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scra
     points : [m] samples in the aperture frame, shape ``(3, n)``.
     unit_m : unit vectors m (the surface normal pointing away from the probe), ``(3, n)``.
     weights : [m²·…] per-sample weights (area × reflection coefficient × normalization), ``(n,)``.
+    delays : [s] per-sample two-way delays added to the geometric times, ``(n,)`` (zeros in
+        the coupling medium; the interior's equivalent-path correction inside a part).
     c : [m/s] sound speed.
     t0 : [s] two-way time of grid point 0; grid point j is at t0 + jΔ.
     dt : [s] grid spacing Δ.
@@ -303,7 +305,8 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scra
             lo, mid, hi = _support_disc(c, geo[0], geo[1], prm[0])
         else:
             lo, mid, hi = _support_bowl(c, prm[1], geo[0], math.acos(geo[1]), tmax)
-        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, t1, dt, h, hm)
+        delay = delays[s]
+        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, t1 - 0.5 * delay, dt, h, hm)
         base = 2 * k0 + 1
         scale = w * dt
         acc = scratch[2]
@@ -319,7 +322,7 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, c, t0, dt, grid, scra
         for j in range(j_lo, j_hi):
             grid[base + j] += acc[j]
         r_centre = math.sqrt(x * x + y * y + z * z)
-        sum_wt += abs(w) * 2.0 * r_centre / c
+        sum_wt += abs(w) * (2.0 * r_centre / c + delay)
         sum_w += abs(w)
     return sum_wt, sum_w
 

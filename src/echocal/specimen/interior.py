@@ -1,0 +1,243 @@
+"""The inside of a solid specimen: its thickness and the reflectors within it.
+
+A plate of a given ``thickness`` below its front face (a :class:`FinitePlane`, the part's
+only shape) has a back wall parallel to the front, at depth T along −n, and may hold
+reflectors (flaws):
+
+=====================  =====================================================================
+kind                   geometry
+=====================  =====================================================================
+``side-drilled-hole``  a cylindrical hole of ``diameter`` and ``length`` along ``axis``
+                       (parallel to the front face), centred at ``position``
+``flat-bottom-hole``   the flat bottom (a disc of ``diameter``) of a hole drilled from the
+                       back wall towards the probe; ``position`` is the disc's centre
+``pore``               a spherical void of ``diameter`` centred at ``position``
+=====================  =====================================================================
+
+Each flaw offers its surface as samples (point, outward normal, area) for the physics
+(:mod:`echocal.wave.interior`).  Everything here is geometry; no physics.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from echocal.errors import GeometryError
+from echocal.specimen.plane import FinitePlane
+
+__all__ = ["FLAW_KINDS", "Flaw", "Interior", "SurfaceSamples"]
+
+FloatArray = NDArray[np.float64]
+
+FLAW_KINDS = ("side-drilled-hole", "flat-bottom-hole", "pore")
+"""Reflector kinds a specimen's interior can hold."""
+
+MAX_BACK_WALL_ECHOES = 20
+"""The largest back-wall multiple order a setup may ask for."""
+
+
+@dataclass(frozen=True)
+class SurfaceSamples:
+    """A reflector's surface as samples, world frame.
+
+    Attributes
+    ----------
+    points : [m] sample positions, shape ``(3, n)``.
+    normals : outward unit normals of the reflector (out of the void, into the solid),
+        shape ``(3, n)``.
+    areas : [m²] patch areas, shape ``(n,)``.
+    """
+
+    points: FloatArray
+    normals: FloatArray
+    areas: FloatArray
+
+
+def _unit(name: str, value: ArrayLike) -> FloatArray:
+    v = np.asarray(value, dtype=np.float64).reshape(3)
+    norm = float(np.linalg.norm(v))
+    if not math.isfinite(norm) or norm == 0.0:
+        raise GeometryError(f"{name}: must be a non-zero direction; got {v.tolist()}")
+    return v / norm
+
+
+def _perpendicular_basis(axis: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Two unit vectors completing ``axis`` to a right-handed orthonormal frame."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(axis, helper)
+    u /= np.linalg.norm(u)
+    return u, np.cross(axis, u)
+
+
+@dataclass(frozen=True)
+class Flaw:
+    """One reflector inside the part.
+
+    Parameters
+    ----------
+    name : label of its echo (``simulate --json``'s ``echoes``, gates).
+    kind : one of :data:`FLAW_KINDS`.
+    position : [m] centre, shape ``(3,)`` (see the module's table).
+    diameter : [m] hole or pore diameter, > 0.
+    length : [m] a side-drilled hole's length (None for other kinds).
+    axis : a side-drilled hole's axis direction, shape ``(3,)``; the default is y.
+    """
+
+    name: str
+    kind: str
+    position: FloatArray
+    diameter: float
+    length: float | None = None
+    axis: FloatArray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
+
+    def __post_init__(self) -> None:
+        where = f"specimen.flaws.{self.name}"
+        if self.kind not in FLAW_KINDS:
+            raise GeometryError(
+                f"{where}.kind: unknown flaw kind {self.kind!r}; choose one of: "
+                f"{', '.join(FLAW_KINDS)}"
+            )
+        position = np.asarray(self.position, dtype=np.float64).reshape(3)
+        if not np.all(np.isfinite(position)):
+            raise GeometryError(f"{where}.position: must be finite; got {position.tolist()}")
+        object.__setattr__(self, "position", position)
+        if not (math.isfinite(self.diameter) and self.diameter > 0.0):
+            raise GeometryError(f"{where}.diameter: must be > 0; got {self.diameter!r}")
+        if self.kind == "side-drilled-hole":
+            if self.length is None or not (math.isfinite(self.length) and self.length > 0.0):
+                raise GeometryError(
+                    f"{where}.length: a side-drilled hole needs a length > 0; got {self.length!r}"
+                )
+        object.__setattr__(self, "axis", _unit(f"{where}.axis", self.axis))
+
+    @property
+    def radius(self) -> float:
+        """[m] half the diameter."""
+        return 0.5 * self.diameter
+
+    def depth_range(self, front: FinitePlane) -> tuple[float, float]:
+        """[m] the shallowest and deepest point of the flaw below the front face."""
+        depth = float(np.dot(front.center - self.position, front.normal))
+        if self.kind == "flat-bottom-hole":
+            return depth, depth
+        if self.kind == "pore":
+            return depth - self.radius, depth + self.radius
+        assert self.length is not None
+        along = abs(float(np.dot(self.axis, front.normal))) * 0.5 * self.length
+        across = math.sqrt(max(0.0, 1.0 - float(np.dot(self.axis, front.normal)) ** 2))
+        extent = along + across * self.radius
+        return depth - extent, depth + extent
+
+    def surface_samples(self, spacing: float, front_normal: FloatArray) -> SurfaceSamples:
+        """The reflector's surface, about ``spacing`` [m] apart (at least 8 per diameter).
+
+        ``front_normal`` is the front face's unit normal (towards the probe): a flat-bottom
+        hole's disc faces it."""
+        step = min(spacing, self.diameter / 8.0)
+        if self.kind == "pore":
+            return _sphere_samples(self.position, self.radius, step)
+        if self.kind == "flat-bottom-hole":
+            return _disc_samples(self.position, self.radius, front_normal, step)
+        assert self.length is not None
+        return _cylinder_samples(self.position, self.radius, self.length, self.axis, step)
+
+
+def _sphere_samples(centre: FloatArray, radius: float, step: float) -> SurfaceSamples:
+    """Equal-area samples of a sphere (a Fibonacci lattice), outward normals."""
+    n = max(32, math.ceil(4.0 * math.pi * radius**2 / step**2))
+    k = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * k / n
+    phi = math.pi * (1.0 + math.sqrt(5.0)) * k
+    rho = np.sqrt(1.0 - z * z)
+    normals = np.stack([rho * np.cos(phi), rho * np.sin(phi), z])
+    areas = np.full(n, 4.0 * math.pi * radius**2 / n)
+    return SurfaceSamples(centre[:, None] + radius * normals, normals, areas)
+
+
+def _disc_samples(
+    centre: FloatArray, radius: float, normal: FloatArray, step: float
+) -> SurfaceSamples:
+    """A disc facing ``normal``: a square grid cut to the disc (cell area each)."""
+    u, v = _perpendicular_basis(normal)
+    n_side = max(8, math.ceil(2.0 * radius / step))
+    g = (np.arange(n_side) + 0.5) / n_side * 2.0 * radius - radius
+    gu, gv = np.meshgrid(g, g)
+    keep = np.hypot(gu, gv).ravel() <= radius
+    gu, gv = gu.ravel()[keep], gv.ravel()[keep]
+    points = centre[:, None] + u[:, None] * gu + v[:, None] * gv
+    # the cells' total area is scaled to the disc's exactly
+    areas = np.full(gu.size, math.pi * radius**2 / gu.size)
+    normals = np.repeat(normal[:, None], gu.size, axis=1)
+    return SurfaceSamples(points, normals, areas)
+
+
+def _cylinder_samples(
+    centre: FloatArray, radius: float, length: float, axis: FloatArray, step: float
+) -> SurfaceSamples:
+    """The mantle of a cylinder (no end caps: a side-drilled hole runs through)."""
+    u, v = _perpendicular_basis(axis)
+    n_around = max(16, math.ceil(2.0 * math.pi * radius / step))
+    n_along = max(2, math.ceil(length / step))
+    phi = 2.0 * math.pi * (np.arange(n_around) + 0.5) / n_around
+    s = (np.arange(n_along) + 0.5) / n_along * length - 0.5 * length
+    pp, ss = np.meshgrid(phi, s)
+    normals = u[:, None] * np.cos(pp).ravel() + v[:, None] * np.sin(pp).ravel()
+    points = centre[:, None] + radius * normals + axis[:, None] * ss.ravel()
+    areas = np.full(pp.size, 2.0 * math.pi * radius * length / pp.size)
+    return SurfaceSamples(points, normals, areas)
+
+
+@dataclass(frozen=True)
+class Interior:
+    """A solid part's inside: the plate below its front face.
+
+    Parameters
+    ----------
+    thickness : [m] T, the distance from the front face to the back wall (> 0).
+    back_wall_echoes : how many back-wall echoes to simulate (1 = the back wall only,
+        2 adds its first multiple, …), 0 to 20.
+    flaws : reflectors inside the part.
+    """
+
+    thickness: float
+    back_wall_echoes: int = 3
+    flaws: tuple[Flaw, ...] = ()
+
+    def __post_init__(self) -> None:
+        t = self.thickness
+        if isinstance(t, bool) or not (isinstance(t, int | float) and math.isfinite(t) and t > 0):
+            raise GeometryError(f"specimen.thickness: must be a length > 0; got {t!r}")
+        n = self.back_wall_echoes
+        if isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= MAX_BACK_WALL_ECHOES:
+            raise GeometryError(
+                f"specimen.back_wall_echoes: must be an integer from 0 to "
+                f"{MAX_BACK_WALL_ECHOES}; got {n!r}"
+            )
+        names = [f.name for f in self.flaws]
+        duplicate = next((n for n in names if names.count(n) > 1), None)
+        if duplicate is not None:
+            raise GeometryError(f"specimen.flaws: the name {duplicate!r} is used twice")
+        object.__setattr__(self, "flaws", tuple(self.flaws))
+
+    def check_inside(self, front: FinitePlane) -> None:
+        """Refuse a flaw that is not wholly inside the plate below ``front``."""
+        for flaw in self.flaws:
+            shallow, deep = flaw.depth_range(front)
+            where = f"specimen.flaws.{flaw.name}.position"
+            if shallow <= 0.0 or deep >= self.thickness:
+                raise GeometryError(
+                    f"{where}: the flaw spans depths {1e3 * shallow:g} to {1e3 * deep:g} mm "
+                    f"below the front face; it must lie inside the part (0 to "
+                    f"{1e3 * self.thickness:g} mm): move it or make it smaller"
+                )
+            offset = flaw.position - front.center
+            lateral = (abs(float(offset @ front.x_axis)), abs(float(offset @ front.y_axis)))
+            if lateral[0] > 0.5 * front.width or lateral[1] > 0.5 * front.height:
+                raise GeometryError(
+                    f"{where}: the flaw lies outside the plate's {1e3 * front.width:g} × "
+                    f"{1e3 * front.height:g} mm face; move it under the face"
+                )
