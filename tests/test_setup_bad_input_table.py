@@ -63,6 +63,14 @@ def _model(annotation: object) -> type[BaseModel] | None:
     return None
 
 
+def _is_list(annotation: object) -> bool:
+    """A list (optional or not): an array of tables, checked by its own tests (flaws:
+    tests/specimen/test_specimen_interior.py)."""
+    if typing.get_origin(annotation) is list:
+        return True
+    return any(_is_list(arg) for arg in typing.get_args(annotation))
+
+
 def numeric_fields(model: type[BaseModel] = SetupConfig, prefix: str = "") -> list[tuple]:
     """(table path, field name, kind, length) of every numeric field, recursively."""
     out = []
@@ -76,7 +84,7 @@ def numeric_fields(model: type[BaseModel] = SetupConfig, prefix: str = "") -> li
             out.append((prefix.rstrip("."), name, *kind))
             continue
         sub = _model(annotation)
-        if sub is not None and typing.get_origin(annotation) is not list:
+        if sub is not None and not _is_list(annotation):
             out.extend(numeric_fields(sub, f"{path}."))
     return out
 

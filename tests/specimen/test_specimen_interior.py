@@ -153,3 +153,18 @@ def test_the_side_drilled_hole_setup_shows_its_hole_between_the_walls() -> None:
     assert list(echoes) == ["front-wall", "back-wall", "back-wall-2", "sdh"]
     t = setup.window.start + np.array([np.argmax(np.abs(v)) for v in echoes.values()]) / 100e6
     assert t[0] < t[3] < t[1]  # the hole (9 mm deep) between front and back wall
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("diameter", "true"), ("diameter", "nan"), ("diameter", "1e300"), ("length", "false"),
+     ("position", '[true, 0, 0]'), ("axis", "[0, 0, 0]")],
+)
+def test_a_flaw_field_takes_no_bool_nan_or_huge_value(tmp_path, field, value) -> None:
+    flaw = _flaw(extra='length = "30 mm"\naxis = [0, 1, 0]')
+    lines = [
+        f"{field} = {value}" if line.startswith(f"{field} =") else line
+        for line in flaw.splitlines()
+    ]
+    problems = _problems(tmp_path, PLATE.format(flaws="\n".join(lines), model="wave"))
+    assert any("specimen.flaws" in p and field in p for p in problems), problems
