@@ -65,7 +65,8 @@ autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_typehints_description_target = "documented_params"
 autodoc_preserve_defaults = True
-autodoc_mock_imports = ["embreex", "numba"]
+autodoc_mock_imports = ["embreex"]  # numba is real: a mocked njit would poison the
+# kernels of modules that autosummary imports before the gallery runs them
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
 napoleon_use_rtype = False
