@@ -8,7 +8,7 @@ column of depth z·c_L/c_w, and arrives z·(1/c_L − c_L/c_w²) earlier than th
 would say.  So every reflector inside the part is evaluated with the transducer's exact
 spatial impulse response at its *equivalent point* (same lateral position, depth scaled by
 c_L/c_w), delayed by that correction, in the physical-optics (Kirchhoff) reciprocity
-integral of :mod:`echocal.wave.model`.  In the solid, the normal derivative carries
+integral of :class:`~echocal.wave.WaveEchoModel`.  In the solid, the normal derivative carries
 k_L instead of k_w and the reciprocity integral 1/ρ_s instead of 1/ρ_w; with the pressure
 transmission coefficients this makes the weight of a reflector sample
 

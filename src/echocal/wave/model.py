@@ -275,7 +275,9 @@ class WaveEchoModel:
         Parameters
         ----------
         points : [m] samples in the aperture frame, ``(3, n)``.
-        unit_m : the vectors m of :func:`echocal.wave.sir.accumulate_two_way`, ``(3, n)``.
+        unit_m : the vectors m of the kernel ``echocal.wave.sir.accumulate_two_way`` (the
+            surface normal pointing away from the probe, or its scaled form inside a part),
+            ``(3, n)``.
         area : [m²] patch areas (× any real factor), ``(n,)``.
         reflection : complex reflection (× transmission) coefficients, ``(n,)``; None: 1.
         delays : [s] two-way delays added to the samples' geometric times, ``(n,)``.
