@@ -63,6 +63,10 @@ def _model(annotation: object) -> type[BaseModel] | None:
     return None
 
 
+RENDERED_LISTS = {"specimen.shapes"}
+"""Arrays of tables this table renders (one shape); the others (flaws) have their own tests."""
+
+
 def _is_list(annotation: object) -> bool:
     """A list (optional or not): an array of tables, checked by its own tests (flaws:
     tests/specimen/test_specimen_interior.py)."""
@@ -84,7 +88,7 @@ def numeric_fields(model: type[BaseModel] = SetupConfig, prefix: str = "") -> li
             out.append((prefix.rstrip("."), name, *kind))
             continue
         sub = _model(annotation)
-        if sub is not None and not _is_list(annotation):
+        if sub is not None and (path in RENDERED_LISTS or not _is_list(annotation)):
             out.extend(numeric_fields(sub, f"{path}."))
     return out
 

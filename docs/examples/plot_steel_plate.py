@@ -57,7 +57,7 @@ for tilt in tilts:
     for label in peaks:
         peaks[label].append(np.abs(scipy.signal.hilbert(labelled[label])).max())
 fig, ax = plt.subplots(figsize=(6, 3.5))
-for (label, values), style in zip(peaks.items(), ("-", "--")):
+for (label, values), style in zip(peaks.items(), ("-", "--"), strict=True):
     values = np.asarray(values)
     ax.plot(tilts, 20 * np.log10(values / values[0]), style, marker="o", ms=3, label=label)
 ax.axhline(-6, color="0.6", lw=0.8, ls=":")
