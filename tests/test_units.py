@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from echocal import EchocalValueError
@@ -35,3 +37,16 @@ def test_frequency_and_angle():
 def test_bad_lengths_name_the_field(text):
     with pytest.raises(EchocalValueError, match="transducer.width"):
         parse_length("transducer.width", text)
+
+
+@pytest.mark.parametrize(
+    ("text", "want"),
+    [("infinity", math.inf), ("-Infinity", -math.inf), ("infinity mm", math.inf), ("inf", math.inf)],
+)
+def test_infinity_spelled_out_is_infinite_not_inf_with_unit_inity(text: str, want: float) -> None:
+    assert parse_quantity("positioner.x", text, "length", "mm", allow_infinite=True) == want
+
+
+def test_a_word_that_only_starts_with_inf_is_refused() -> None:
+    with pytest.raises(EchocalValueError, match="positioner.x must be a number"):
+        parse_quantity("positioner.x", "infinite", "length", "mm", allow_infinite=True)

@@ -59,7 +59,7 @@ _SCALES: dict[str, dict[str, float]] = {
     },
 }
 _NUMBER_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\s\d].*)?\s*$")
-_INFINITY = re.compile(r"^\s*([-+]?(?:inf|infinity))\s*([^\s\d].*)?\s*$", re.IGNORECASE)
+_INFINITY = re.compile(r"^\s*([-+]?(?:infinity|inf))\b\s*([^\s\d].*)?\s*$", re.IGNORECASE)
 
 
 def parse_quantity(
