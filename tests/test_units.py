@@ -41,7 +41,12 @@ def test_bad_lengths_name_the_field(text):
 
 @pytest.mark.parametrize(
     ("text", "want"),
-    [("infinity", math.inf), ("-Infinity", -math.inf), ("infinity mm", math.inf), ("inf", math.inf)],
+    [
+        ("infinity", math.inf),
+        ("-Infinity", -math.inf),
+        ("infinity mm", math.inf),
+        ("inf", math.inf),
+    ],
 )
 def test_infinity_spelled_out_is_infinite_not_inf_with_unit_inity(text: str, want: float) -> None:
     assert parse_quantity("positioner.x", text, "length", "mm", allow_infinite=True) == want
