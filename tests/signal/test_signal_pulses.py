@@ -214,3 +214,24 @@ def test_bad_parameters_name_the_field(name, params, field):
 def test_unknown_window_lists_names():
     with pytest.raises(UnknownNameError, match="hann"):
         SincPulse(window="welch-ish")
+
+
+def test_make_pulse_inspects_a_factory_once(monkeypatch) -> None:
+    import inspect
+
+    import echocal.signal.pulses as pulses
+
+    calls = []
+    real = inspect.signature
+    monkeypatch.setattr(inspect, "signature", lambda f: calls.append(f) or real(f))
+
+    def tone(center_frequency: float = 5e6) -> pulses.Pulse:
+        return pulses.make_pulse("gabor", center_frequency=center_frequency)
+
+    pulses.register_pulse("tone-once", tone)
+    try:
+        for _ in range(3):
+            pulses.make_pulse("tone-once", center_frequency=4e6)
+    finally:
+        pulses._PULSES.pop("tone-once")
+    assert calls.count(tone) == 1

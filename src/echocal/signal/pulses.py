@@ -12,6 +12,7 @@ Registry: :func:`make_pulse` ``(name, **params)`` and :func:`pulse_names`.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 import warnings
@@ -769,7 +770,13 @@ def pulse_options(name: str) -> tuple[str, ...] | None:
 
     ``pulse_options("gabor")`` is ``("alpha", "bandwidth", "center_frequency", "phase")``.
     """
-    factory = lookup("pulse", name, _PULSES)
+    return _factory_options(lookup("pulse", name, _PULSES))
+
+
+@functools.cache
+def _factory_options(factory: Callable[..., Pulse]) -> tuple[str, ...] | None:
+    """:func:`pulse_options` of one factory, inspected once (make_pulse checks every call's
+    keywords against it; a re-registered name is a new factory, inspected anew)."""
     try:
         signature = inspect.signature(factory)
     except (TypeError, ValueError):  # a builtin or C callable: cannot tell
