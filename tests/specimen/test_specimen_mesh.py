@@ -221,3 +221,19 @@ def test_bad_mesh_input(vertices, faces, error, match):
 def test_unknown_engine_lists_choices():
     with pytest.raises(UnknownNameError, match="auto, embree, numpy"):
         TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], engine="optix")
+
+
+def test_containment_of_many_points_matches_the_sphere_it_meshes(monkeypatch):
+    """Ray parity, vectorized over (point, face) pairs in chunks (a small chunk forces many),
+    against |p| < r for points clear of the faceted surface."""
+    import echocal.specimen.mesh as mesh_module
+
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.01)
+    mesh = TriangleMesh.from_trimesh(sphere)
+    rng = np.random.default_rng(4)
+    points = rng.uniform(-0.012, 0.012, size=(300, 3))
+    r = np.linalg.norm(points, axis=1)
+    points = points[(r < 0.0095) | (r > 0.0102)]  # the facets lie within 0.5 % of r
+    monkeypatch.setattr(mesh_module, "_PAIR_CHUNK", 997)
+    got = mesh._contains(points)
+    np.testing.assert_array_equal(got, np.linalg.norm(points, axis=1) < 0.01)

@@ -231,17 +231,19 @@ class TriangleMesh(Shape):
             return out
         direction = np.array([0.5773, 0.5771, 0.5776])
         direction /= np.linalg.norm(direction)
-        all_faces = np.arange(self.n_faces)
         unique, inverse = np.unique(points[candidates], axis=0, return_inverse=True)
-        odd = np.zeros(len(unique), dtype=bool)
-        for j, point in enumerate(unique):  # a batch of poses often shares one position
-            crossings = 0
-            for start in range(0, self.n_faces, _PAIR_CHUNK):
-                face = all_faces[start : start + _PAIR_CHUNK]
-                o = np.broadcast_to(point[:, None], (3, len(face)))
-                d = np.broadcast_to(direction[:, None], (3, len(face)))
-                crossings += int(np.count_nonzero(self._moller_trumbore(o, d, face) < np.inf))
-            odd[j] = crossings % 2 == 1
+        # every (point, face) pair, in chunks of at most _PAIR_CHUNK: one vectorized
+        # Möller–Trumbore per chunk, crossings counted per point
+        n_pairs = len(unique) * self.n_faces
+        crossings = np.zeros(len(unique), dtype=np.int64)
+        for start in range(0, n_pairs, _PAIR_CHUNK):
+            pair = np.arange(start, min(start + _PAIR_CHUNK, n_pairs))
+            point, face = np.divmod(pair, self.n_faces)
+            o = np.ascontiguousarray(unique[point].T)
+            d = np.broadcast_to(direction[:, None], o.shape)
+            hit = self._moller_trumbore(o, d, face) < np.inf
+            crossings += np.bincount(point[hit], minlength=len(unique))
+        odd = crossings % 2 == 1
         out[candidates] = odd[inverse.reshape(-1)]
         return out
 
