@@ -223,11 +223,14 @@ def test_unknown_engine_lists_choices():
         TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], engine="optix")
 
 
-def test_containment_of_many_points_matches_the_sphere_it_meshes(monkeypatch):
-    """Ray parity, vectorized over (point, face) pairs in chunks (a small chunk forces many),
-    against |p| < r for points clear of the faceted surface."""
+@pytest.mark.parametrize("use_numba", [True, False], ids=["numba", "numpy"])
+def test_containment_of_many_points_matches_the_sphere_it_meshes(monkeypatch, use_numba):
+    """Ray parity — the compiled loop, or numpy over (point, face) pairs in chunks (a small
+    chunk forces many) — against |p| < r for points clear of the faceted surface."""
+    import echocal._numba
     import echocal.specimen.mesh as mesh_module
 
+    monkeypatch.setattr(echocal._numba, "USE_NUMBA", use_numba)
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.01)
     mesh = TriangleMesh.from_trimesh(sphere)
     rng = np.random.default_rng(4)

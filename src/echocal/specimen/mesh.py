@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from echocal._numba import compiled
 from echocal._validate import finite_array, one_of
 from echocal.errors import DataFileError, GeometryError
 from echocal.specimen.base import (
@@ -232,17 +233,27 @@ class TriangleMesh(Shape):
         direction = np.array([0.5773, 0.5771, 0.5776])
         direction /= np.linalg.norm(direction)
         unique, inverse = np.unique(points[candidates], axis=0, return_inverse=True)
-        # every (point, face) pair, in chunks of at most _PAIR_CHUNK: one vectorized
-        # Möller–Trumbore per chunk, crossings counted per point
-        n_pairs = len(unique) * self.n_faces
-        crossings = np.zeros(len(unique), dtype=np.int64)
-        for start in range(0, n_pairs, _PAIR_CHUNK):
-            pair = np.arange(start, min(start + _PAIR_CHUNK, n_pairs))
-            point, face = np.divmod(pair, self.n_faces)
-            o = np.ascontiguousarray(unique[point].T)
-            d = np.broadcast_to(direction[:, None], o.shape)
-            hit = self._moller_trumbore(o, d, face) < np.inf
-            crossings += np.bincount(point[hit], minlength=len(unique))
+        kernel = compiled(_crossing_counts)
+        if kernel is not None:
+            crossings = kernel(
+                np.ascontiguousarray(unique),
+                self._v0,
+                self._e1,
+                self._e2,
+                self._det_tol,
+                direction,
+                self._eps,
+            )
+        else:  # numpy: every (point, face) pair, in chunks of at most _PAIR_CHUNK
+            n_pairs = len(unique) * self.n_faces
+            crossings = np.zeros(len(unique), dtype=np.int64)
+            for start in range(0, n_pairs, _PAIR_CHUNK):
+                pair = np.arange(start, min(start + _PAIR_CHUNK, n_pairs))
+                point, face = np.divmod(pair, self.n_faces)
+                o = np.ascontiguousarray(unique[point].T)
+                d = np.broadcast_to(direction[:, None], o.shape)
+                hit = self._moller_trumbore(o, d, face) < np.inf
+                crossings += np.bincount(point[hit], minlength=len(unique))
         odd = crossings % 2 == 1
         out[candidates] = odd[inverse.reshape(-1)]
         return out
@@ -434,3 +445,33 @@ def _check_binary_stl(path: Path) -> None:
             f"mesh file {path} is truncated: its header announces {count} "
             f"triangles ({expected} bytes) but it holds {size} bytes; copy or export it again"
         )
+
+
+def _crossing_counts(points, v0, e1, e2, det_tol, direction, eps):  # pragma: no cover - numba
+    """How many faces a ray from each point along ``direction`` crosses, ``(n_points,)``.
+
+    The loop form of :meth:`TriangleMesh._moller_trumbore` (same tolerances), compiled by
+    numba: points ``(n, 3)`` [m]; the faces' first vertex and edges ``(3, F)``."""
+    n = points.shape[0]
+    counts = np.zeros(n, dtype=np.int64)
+    dx, dy, dz = direction[0], direction[1], direction[2]
+    for f in range(v0.shape[1]):
+        e1x, e1y, e1z = e1[0, f], e1[1, f], e1[2, f]
+        e2x, e2y, e2z = e2[0, f], e2[1, f], e2[2, f]
+        px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+        det = e1x * px + e1y * py + e1z * pz
+        if abs(det) <= det_tol[f]:
+            continue
+        inv = 1.0 / det
+        for i in range(n):
+            sx, sy, sz = points[i, 0] - v0[0, f], points[i, 1] - v0[1, f], points[i, 2] - v0[2, f]
+            u = (sx * px + sy * py + sz * pz) * inv
+            if u < 0.0 or u > 1.0:
+                continue
+            qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+            v = (dx * qx + dy * qy + dz * qz) * inv
+            if v < 0.0 or u + v > 1.0:
+                continue
+            if (e2x * qx + e2y * qy + e2z * qz) * inv > eps:
+                counts[i] += 1
+    return counts
