@@ -71,3 +71,25 @@ def test_noiseless_and_extreme_values(detector):
 def test_bad_construction_names_the_field(fs, n, field):
     with pytest.raises(EchocalValueError, match=field):
         EchoDetector(PULSE, fs, n)
+
+
+def test_simulate_and_the_objective_share_one_calibrated_detector(tmp_path, monkeypatch):
+    """`echocal simulate` used to calibrate its own detector (1,024 noise A-scans) on every
+    run; now every caller in a process shares one per (pulse, fs, length)."""
+    from typer.testing import CliRunner
+
+    from echocal.cli import app
+    from echocal.signal import detection
+
+    detection.shared_detector.cache_clear()
+    built = []
+    real = detection.EchoDetector.__post_init__
+    monkeypatch.setattr(
+        detection.EchoDetector, "__post_init__", lambda self: built.append(1) or real(self)
+    )
+    for k in range(2):
+        result = CliRunner().invoke(
+            app, ["simulate", "--setup", "thesis", "--out", str(tmp_path / f"run{k}")]
+        )
+        assert result.exit_code == 0, result.output
+    assert len(built) == 1

@@ -197,14 +197,14 @@ def _significance(samples: np.ndarray, virtual: Any, gate: Any) -> float | None:
     With a gate the detector's false-alarm law is still that of the whole window, which
     overstates the chance that noise alone made the peak: g is then conservative.
     """
-    from echocal.signal.detection import EchoDetector
+    from echocal.signal.detection import shared_detector
     from echocal.signal.processing import matched_envelope
 
     sigma = float(virtual.noise_sigma)
     if sigma <= 0.0:
         return None
     window = virtual.window
-    detector = EchoDetector(virtual.pulse, window.fs, window.n_samples)
+    detector = shared_detector(virtual.pulse, window.fs, window.n_samples)
     env = matched_envelope(samples, virtual.pulse, window.fs)
     if gate is not None:
         env = np.where(gate.mask(window), env, 0.0)

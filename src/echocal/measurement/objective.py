@@ -11,7 +11,6 @@ Counting, logging, budget, bounds and repeats are the base class's.
 from __future__ import annotations
 
 import warnings
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,16 +22,10 @@ from echocal.errors import EchocalValueError
 from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
-from echocal.signal.detection import EchoDetector
+from echocal.signal.detection import shared_detector as _detector
 from echocal.signal.processing import pseudo_energy_with_peak
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
-
-
-@lru_cache(maxsize=8)
-def _detector(pulse: Pulse, fs: float, n_samples: int) -> EchoDetector:
-    """One calibrated detector per (pulse, sampling rate, A-scan length), shared."""
-    return EchoDetector(pulse, fs, n_samples)
 
 
 def scan_noise_sigma(samples: np.ndarray) -> tuple[float | None, bool]:

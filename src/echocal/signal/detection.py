@@ -27,6 +27,7 @@ noise mean) 2.0° (``benchmarks/detection_range.py``).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,7 +39,7 @@ from echocal.errors import EchocalValueError
 from echocal.signal.processing import _samples, matched_envelope
 from echocal.signal.pulses import Pulse
 
-__all__ = ["EchoDetector"]
+__all__ = ["EchoDetector", "shared_detector"]
 
 _F64 = NDArray[np.float64]
 _CALIBRATION_SCANS = 1024  # N_eff from the median to ≈ 2 %: mean significance of noise ≈ 0
@@ -136,3 +137,11 @@ class EchoDetector:
         per-sample noise standard deviation.  ≈ N(0, 1) for pure noise; large for an echo.
         """
         return self.significance_of_peak(self.peak(samples), sigma)
+
+
+@functools.lru_cache(maxsize=8)
+def shared_detector(pulse: Pulse, fs: float, n_samples: int) -> EchoDetector:
+    """The calibrated :class:`EchoDetector` of (pulse, sampling rate [Hz], A-scan length),
+    built once per process and shared by every caller (its calibration costs 1,024 noise
+    A-scans)."""
+    return EchoDetector(pulse, fs, n_samples)
