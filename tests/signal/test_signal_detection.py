@@ -89,7 +89,8 @@ def test_simulate_and_the_objective_share_one_calibrated_detector(tmp_path, monk
     )
     for k in range(2):
         result = CliRunner().invoke(
-            app, ["simulate", "--setup", "thesis", "--out", str(tmp_path / f"run{k}")]
+            app,
+            ["simulate", "--setup", "thesis", "--pose", "0,0,20", "--out", str(tmp_path / f"r{k}")],
         )
         assert result.exit_code == 0, result.output
     assert len(built) == 1
