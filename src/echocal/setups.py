@@ -419,11 +419,19 @@ class _FileProblem(str):
     :class:`~echocal.errors.DataFileError` when it is the only kind of problem."""
 
 
-def _problem(field: str, exc: Exception, options: tuple[str, ...] = ()) -> str:
-    """``field: message`` of an error; an option named first moves into the field path:
-    ``pulse`` + ``"phase must be finite"`` → ``pulse.phase: must be finite``."""
+def _problem(field: str, exc: Exception | str, options: tuple[str, ...] = ()) -> str:
+    """``field: message`` of an error (or a message), the one form of every setup problem.
+
+    A message that already names the field keeps its path, with a colon after it
+    (``"pulse.fs must be finite"`` → ``"pulse.fs: must be finite"``); an option named first
+    moves into the path (``pulse`` + ``"phase must be finite"`` → ``pulse.phase: must be
+    finite``).  A missing data file stays a file problem (:class:`DataFileError`)."""
     message = str(exc)
     kind = _FileProblem if isinstance(exc, DataFileError) else str
+    if message.startswith(field + " "):
+        return kind(f"{field}: {message[len(field) + 1 :]}")
+    if message.startswith((field + ".", field + ":")):
+        return kind(message)
     for option in options:
         for sep in (": ", " "):
             if message.startswith(option + sep):
@@ -457,7 +465,7 @@ def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dic
             else:
                 params[key] = _parse_any(field, value) if isinstance(value, str) else value
         except EchocalError as exc:
-            problems.append(_colon(field, str(exc)))
+            problems.append(_problem(field, exc))
     if "bandwidth" in extra and (options is None or "bandwidth" in options):
         value = extra["bandwidth"]
         fc = params.get("center_frequency", DEFAULT_CENTER_FREQUENCY)
@@ -475,15 +483,8 @@ def _pulse_params(name: str, extra: dict[str, Any], base_dir: Path) -> tuple[dic
                 )
             params["bandwidth"] = bandwidth
         except EchocalError as exc:
-            problems.append(_colon("pulse.bandwidth", str(exc)))
+            problems.append(_problem("pulse.bandwidth", exc))
     return params, problems
-
-
-def _colon(field: str, message: str) -> str:
-    """``"pulse.fs must be finite"`` → ``"pulse.fs: must be finite"`` (field path, colon)."""
-    if message.startswith(field + " "):
-        return f"{field}: {message[len(field) + 1 :]}"
-    return message if message.startswith(field) else f"{field}: {message}"
 
 
 def _parse_any(field: str, text: str) -> Any:
@@ -682,8 +683,7 @@ def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
     try:
         return build(), []
     except EchocalError as exc:
-        message = str(exc)
-        return None, [message if message.startswith(field + ".") else f"{field}: {message}"]
+        return None, [_problem(field, exc)]
 
 
 def _build_interior(
@@ -728,7 +728,7 @@ def _build_interior(
         interior = Interior(spec.thickness, spec.back_wall_echoes, flaws)
         interior.check_inside(specimen[0])
     except EchocalError as exc:
-        return None, [str(exc)]
+        return None, [_problem("specimen", exc)]
     return interior, []
 
 
