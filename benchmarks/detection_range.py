@@ -106,11 +106,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--band", default="5,20", help="start distance band [deg]")
     ap.add_argument("--budget", type=int, default=60)
     ap.add_argument("--refine", type=int, default=12, help="measurements to refine [meas.]")
+    ap.add_argument("--max-angle", type=float, default=4.0, help="largest misalignment [deg]")
     ap.add_argument("--out-md", type=Path, default=None)
     args = ap.parse_args(argv)
     draws = 40 if args.quick else args.draws
     band = tuple(float(v) for v in args.band.split(","))
-    angles = np.round(np.arange(0.0, 4.01, 0.25), 2)
+    angles = np.round(np.arange(0.0, args.max_angle + 0.01, 0.25), 2)
     t0 = time.perf_counter()
     rows, curves_md = [], []
     for snr in (float(v) for v in args.snr.split(",")):
@@ -121,12 +122,17 @@ def main(argv: list[str] | None = None) -> int:
         curves_md += [f"### {snr:g} dB", "", markdown_table(["θ [deg]", *curves], curve_rows), ""]
         for name, prob in curves.items():
             r90, r50 = radius(angles, prob, 0.9), radius(angles, prob, 0.5)
+
+            def shown(r: float, level: float, prob=prob) -> str:
+                # never below the level on the grid: r is at least the grid's end
+                return f"≥ {r:.2f}" if np.all(prob >= level) else f"{r:.2f}"
+
             rows.append(
                 [
                     f"{snr:g}",
                     name,
-                    f"{r90:.2f}",
-                    f"{r50:.2f}",
+                    shown(r90, 0.9),
+                    shown(r50, 0.5),
                     f"{cover(band, r90):.0f}",
                     f"{100 * ceiling(args.budget, args.refine, r50, band):.0f} %",
                 ]
