@@ -22,11 +22,16 @@ from echocal.specimen import Cylinder, Specimen, Sphere
 MM = 1e-3
 
 
-STEP = 0.2
-"""[deg] The precision these tests hold the maximum to.  The issue asks for 0.05°; the
-sampling of a curved surface, which moves with the probe, ripples the flat top of the lobe
-by about 1e-4 of the peak, which moves the maximum of a 3 mm probe (half-width 2.8°) by up
-to 0.06–0.1° (measured); on a plane the sampling is shift-invariant and the lobe smooth."""
+STEP = 0.05
+"""[deg] The precision these tests hold the maximum to (the issue's 0.05°).  It needs the
+finer sampling of curved surfaces (1.35 λ; at 2.7 λ the sampling, which moves with the
+probe, rippled the lobe's top by 1e-4–4e-2 and moved the maximum by 0.06–0.4°)."""
+
+FLAT = 2e-3
+"""Across a cylinder's axis the lobe can be flat-topped: within ±0.2° of the normal no echo
+exceeds the normal's by more than this fraction (measured: up to 1.3e-3 above it, 12.7 mm
+over the rod and 6.35 mm in the bore; the 3 mm probe's falls off) — below any
+measurement's noise, so no echo can place the maximum finer there."""
 
 
 def _wave_setup(width: float, specimen: Specimen | None = None):
@@ -41,6 +46,22 @@ def _tilts(n: np.ndarray) -> tuple[float, float]:
     """Gimbal tilts [deg] of the orientation normal n = (sinβ cosα, −sinα, cosβ cosα)."""
     n = n / np.linalg.norm(n)
     return math.degrees(math.asin(-n[1])), math.degrees(math.atan2(n[0], n[2]))
+
+
+def _check_cylinder(setup, position, tilts) -> None:
+    """Along the axis (tilt a) the maximum is at the normal within STEP.  Across it
+    (tilt b) the cylinder is mirror-symmetric about the plane through its axis and the
+    probe, so the echo is even in b — stationary at the normal — and nowhere within ±0.2°
+    more than FLAT above the normal's."""
+    a0, b0 = tilts
+    along = setup.metric_values(position, a0 + np.array([0.0, STEP, -STEP]), np.full(3, b0),
+                                parameterization="tilt")  # fmt: skip
+    assert np.all(along[0] >= along[1:]), along
+    across = setup.metric_values(position, np.full(5, a0),
+                                 b0 + np.array([0.0, STEP, -STEP, 0.2, -0.2]),
+                                 parameterization="tilt")  # fmt: skip
+    np.testing.assert_allclose(across[1::2], across[2::2], rtol=1e-9)  # even in b
+    assert np.all(across[1:] / across[0] <= 1.0 + FLAT), across / across[0]
 
 
 def _is_local_max(setup, position, tilts, step=STEP) -> tuple[bool, np.ndarray]:
@@ -77,20 +98,7 @@ def test_echo_over_a_sphere_peaks_at_its_normal(width_mm, position_mm) -> None:
     assert ok, values
 
 
-@pytest.mark.parametrize(
-    "width_mm",
-    [
-        pytest.param(
-            3.0,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="known: the 3 mm probe's echo over the 20 mm rod rises ~4 % from the "
-                "normal to 0.3° off it (sampling of the rod's flanks; open in issue 13)",
-            ),
-        ),
-        12.7,
-    ],
-)
+@pytest.mark.parametrize("width_mm", [3.0, 12.7])
 def test_echo_over_a_cylinder_peaks_at_its_normal(width_mm) -> None:
     rod = Cylinder(
         center=(0.0, 0.0, -20 * MM), radius=20 * MM, length=100 * MM, azimuth=90.0,
@@ -99,30 +107,15 @@ def test_echo_over_a_cylinder_peaks_at_its_normal(width_mm) -> None:
     setup = _wave_setup(width_mm * MM, Specimen([rod], name="cylinder"))
     position = np.array([5.0, 3.0, 24.0]) * MM
     radial = position - np.array([0.0, position[1], -20 * MM])
-    ok, values = _is_local_max(setup, position, _tilts(radial))
-    assert ok, values
+    _check_cylinder(setup, position, _tilts(radial))
 
 
-@pytest.mark.parametrize(
-    "width_mm",
-    [
-        3.0,
-        pytest.param(
-            6.35,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="known: in the concave bore the 6.35 mm probe's echo is not converged "
-                "in the fan's half-angle (1.6 and 2.5 λ/(2a) disagree); open in issue 13",
-            ),
-        ),
-    ],
-)
+@pytest.mark.parametrize("width_mm", [3.0, 6.35])
 def test_echo_in_a_bore_peaks_at_its_normal(width_mm) -> None:
     setup = _wave_setup(width_mm * MM, BORE)
     position = np.array([4.0, 2.0, 8.0]) * MM
     radial = np.array([position[0], 0.0, position[2]])  # the beam goes down through the axis
-    ok, values = _is_local_max(setup, position, _tilts(radial))
-    assert ok, values
+    _check_cylinder(setup, position, _tilts(radial))
 
 
 def test_true_optimum_in_a_bore_is_global() -> None:
@@ -136,15 +129,17 @@ def test_true_optimum_in_a_bore_is_global() -> None:
 
 
 @pytest.mark.slow
-def test_wave_true_optimum_over_a_sphere_is_its_normal_within_0_1_deg() -> None:
-    setup = _wave_setup(3 * MM)
+@pytest.mark.parametrize("width_mm", [3.0, 6.35, 12.7])
+def test_wave_true_optimum_over_a_sphere_is_its_normal_within_0_05_deg(width_mm) -> None:
+    setup = _wave_setup(width_mm * MM)
     position = np.array([4.0, 2.0, 22.0]) * MM
     az, coel = setup.true_optimum(position)
     a, b = convert_angles(az, coel, "azimuth-coelevation", "tilt")
     found = tilt_normal(np.array([a]), np.array([b])).reshape(3)
     want = position - np.asarray(setup.specimen[0].center)
     want /= np.linalg.norm(want)
-    assert math.degrees(math.acos(min(1.0, float(found @ want)))) < 0.1  # measured 0.058°
+    # measured 0.000°, 0.008°, 0.002° (0.058° for 3 mm at the planes' 2.7 λ sampling)
+    assert math.degrees(math.acos(min(1.0, float(found @ want)))) < 0.05
 
 
 def test_sphere_centre_attribute_is_what_the_tests_assume() -> None:
