@@ -125,7 +125,7 @@ def scaling(repeats: int) -> dict[str, object]:
     for spacing in (0.4e-3, 0.6e-3, 0.8e-3, 1.2e-3):
         setup = dataclasses.replace(base, wave_spacing=spacing)
         model = setup.wave_model
-        from echocal.raytrace import _as_shapes
+        from echocal.specimen.casting import _as_shapes
 
         samples = int(
             np.count_nonzero(

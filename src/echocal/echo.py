@@ -54,9 +54,9 @@ from echocal._numba import compiled
 from echocal._validate import finite_array, lookup, positive_float
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import EchocalValueError
-from echocal.raytrace import Hits, _as_shapes, _cast_soa, _hit_points
 from echocal.specimen import Shape, Specimen
 from echocal.specimen.base import GRAZING_COS, KERNEL_PARAMS, KERNEL_PLANE, KERNEL_SPHERE
+from echocal.specimen.casting import Hits, _as_shapes, _cast_soa, _hit_points
 from echocal.transducer import Transducer
 
 __all__ = [

@@ -58,7 +58,6 @@ from echocal.geometry import (
 from echocal.materials import WATER, Material
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
-from echocal.raytrace import _as_shapes, cast
 from echocal.signal import (
     SYNTHESIS_METHODS,
     Pulse,
@@ -69,6 +68,7 @@ from echocal.signal import (
 )
 from echocal.signal.synthesis import _synthesize_unchecked
 from echocal.specimen import FinitePlane, Specimen
+from echocal.specimen.casting import _as_shapes, cast
 from echocal.specimen.interior import Interior
 from echocal.transducer import Transducer
 from echocal.units import format_frequency

@@ -3,18 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_array
-from echocal.errors import EchocalValueError
 from echocal.geometry import normal_to_orientation
 from echocal.specimen.base import FloatArray, Shape, _check_name
-
-if TYPE_CHECKING:
-    from echocal.raytrace import Hits
+from echocal.specimen.casting import Hits, _as_shapes, cast
 
 __all__ = ["Specimen"]
 
@@ -35,14 +31,7 @@ class Specimen:
     def __init__(
         self, shapes: Shape | Iterable[Shape], *, name: str = "specimen", description: str = ""
     ) -> None:
-        items = (shapes,) if isinstance(shapes, Shape) else tuple(shapes)
-        for i, s in enumerate(items):
-            if not isinstance(s, Shape):
-                raise EchocalValueError(
-                    f"Specimen.shapes[{i}] must be a Shape (FinitePlane, Sphere, Cylinder, "
-                    f"TriangleMesh, ...); got {type(s).__name__}"
-                )
-        self._shapes: tuple[Shape, ...] = items
+        self._shapes: tuple[Shape, ...] = _as_shapes(shapes)
         self._name = _check_name("Specimen", name)
         self._description = str(description)
 
@@ -103,8 +92,6 @@ class Specimen:
 
     def cast(self, origins: ArrayLike, directions: ArrayLike) -> Hits:
         """Closest hits of rays ``(..., N, 3)``; see :func:`echocal.raytrace.cast`."""
-        from echocal.raytrace import cast
-
         return cast(self, origins, directions)
 
     # ---------------------------------------------------------- ground truth
@@ -115,8 +102,6 @@ class Specimen:
         :class:`~echocal.raytrace.Hits` has that shape (``point`` and ``normal``
         gain a last axis of 3).  Normals face up (towards the ray).
         """
-        from echocal.raytrace import cast
-
         xa = finite_array("x", x)
         ya = finite_array("y", y)
         xa, ya = np.broadcast_arrays(xa, ya)

@@ -47,10 +47,10 @@ import scipy.fft
 import scipy.signal
 from numpy.typing import NDArray
 
-from echocal.raytrace import _cast_soa
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.base import Shape
+from echocal.specimen.casting import _cast_soa
 from echocal.wave import sir
 from echocal.wave.probe import PistonProbe
 
