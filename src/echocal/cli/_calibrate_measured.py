@@ -15,14 +15,7 @@ from typing import Any
 import numpy as np
 from rich.markup import escape
 
-from echocal.cli._common import console, output, parse_pair
-from echocal.cli._replay_grid import (
-    RecordingMap,
-    grid_centre,
-    replay_position,
-    tilt_bounds_in_recording,
-)
-from echocal.cli.calibrate import (
+from echocal.cli._calibrate_common import (
     _check_source_options,
     _parse_position,
     _report,
@@ -32,6 +25,13 @@ from echocal.cli.calibrate import (
     prepare_out,
     save_final_ascan,
     save_pngs,
+)
+from echocal.cli._common import console, output, parse_pair
+from echocal.cli._replay_grid import (
+    RecordingMap,
+    grid_centre,
+    replay_position,
+    tilt_bounds_in_recording,
 )
 from echocal.measurement.base import BaseSource
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from echocal.cli.calibrate import _parse_position
+from echocal.cli._calibrate_common import _parse_position
 
 
 def replay_position(recording: Any, position: str | None) -> tuple[int, Any]:

@@ -181,9 +181,7 @@ def _echoes(virtual: Any, pose: Any) -> list[dict[str, Any]]:
     if not hasattr(virtual, "labelled_echoes"):  # a replayed or rig source has no labels
         return []
     echoes = echo_list(virtual.labelled_echoes(pose), virtual.window)
-    return [
-        {"label": e.label, "tof_s": e.tof_s, "amplitude": e.amplitude} for e in echoes
-    ]
+    return [{"label": e.label, "tof_s": e.tof_s, "amplitude": e.amplitude} for e in echoes]
 
 
 def _show(value: float, unit: str) -> str:
