@@ -71,6 +71,7 @@ from echocal.measurement.virtual import (
     check_sample_count,
 )
 from echocal.signal import Pulse, RecordingWindow, make_pulse, pulse_names
+from echocal.signal.gates import INTERFACE_THRESHOLD, TimeGate, check_gate, gates_by_name
 from echocal.signal.noise import SNR_DB_RANGE
 from echocal.signal.pulses import parse_bandwidth, plausible_bandwidth, pulse_options
 from echocal.signal.window import check_window
@@ -272,6 +273,34 @@ class FlawConfig(_Model):
     axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
 
 
+class GateConfig(_Model):
+    """A named gate (``[[gates]]``): absolute (``start``) or triggered by the interface echo
+    (``trigger = "interface"`` and ``delay``); see :mod:`echocal.signal.gates`."""
+
+    name: str = Field(min_length=1)
+    width: Time
+    start: Time | None = None
+    trigger: Literal["interface"] | None = None
+    delay: Time | None = None
+    threshold: Annotated[float, NotBool] = Field(
+        default=INTERFACE_THRESHOLD, gt=0, le=1, allow_inf_nan=False
+    )
+
+    @pydantic.model_validator(mode="after")
+    def _one_kind(self) -> GateConfig:
+        if self.trigger is None and (self.start is None or self.delay is not None):
+            raise ValueError(
+                "an absolute gate takes start and width; a gate that follows the front wall "
+                'takes trigger = "interface", delay and width'
+            )
+        if self.trigger is not None and (self.delay is None or self.start is not None):
+            raise ValueError(
+                'a gate with trigger = "interface" takes delay (after the front-wall '
+                "echo) and width, not start"
+            )
+        return self
+
+
 class SpecimenConfig(_Model):
     """Exactly one of: a built-in name, a list of shapes, or a mesh file (+ scale)."""
 
@@ -397,6 +426,8 @@ class SetupConfig(_Model):
     noise: NoiseConfig = NoiseConfig()
     echo: EchoConfig = EchoConfig()
     positioner: PositionerConfig = PositionerConfig()
+    gates: list[GateConfig] = []
+    """Named measurement gates (``--gate NAME``), besides front-wall and back-wall."""
 
 
 # ---------------------------------------------------------------- building
@@ -676,7 +707,34 @@ def _build_parts(
                 break
     if "specimen" in parts and "positioner" in parts:
         problems.extend(_reference_problems(parts["specimen"], config.positioner))
+    run("gates", lambda: _build_gates(config.gates, parts.get("window")))
     return parts, problems
+
+
+def _build_gates(
+    gates: list[GateConfig], window: RecordingWindow | None
+) -> tuple[tuple[TimeGate, ...] | None, list[str]]:
+    """The setup's named gates: names unique and not built-in, absolute ones inside the
+    recording window (when it is valid)."""
+    built: list[TimeGate] = []
+    problems: list[str] = []
+    for i, g in enumerate(gates):
+        where = f"gates.{i}"
+        try:
+            gate = TimeGate(
+                name=g.name, width=g.width, start=g.start, delay=g.delay, threshold=g.threshold
+            )
+            if window is not None:
+                check_gate(gate, window, field=f"{where} ({g.name})")
+        except EchocalError as exc:
+            problems.append(_problem(where, exc))
+            continue
+        built.append(gate)
+    try:
+        gates_by_name(built)
+    except EchocalError as exc:
+        problems.append(str(exc))
+    return (None, problems) if problems else (tuple(built), [])
 
 
 def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
@@ -802,6 +860,7 @@ def _assemble(config: SetupConfig, parts: dict[str, Any], seed: int | None) -> V
             synthesis=config.echo.synthesis,
             wave_spacing=config.echo.spacing,
             limits=parts["positioner"],
+            gates=parts.get("gates", ()),
             rng=seed if seed is not None else config.seed,
             name=config.name,
         )

@@ -91,9 +91,11 @@ class _Run:
         source: dict[str, Any],
         position: Any,
         seed: int | None,
+        gate: Any = None,
     ) -> dict[str, Any] | None:
         """The provenance record of ``result`` (None without an ``opened`` record): the setup
-        and its digest, the source, position [m], seed, method with every option."""
+        and its digest, the source, position [m], seed, the gate the metric was computed in
+        (none: the whole recording), method with every option."""
         if opened is None:
             return None
         from echocal.provenance import setup_digest
@@ -103,6 +105,7 @@ class _Run:
             source=source,
             position_m=[float(v) for v in position],
             seed=seed,
+            gate=None if gate is None else gate.describe(),
             method={
                 "name": result.method,
                 "options": result.options,
@@ -360,12 +363,16 @@ def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dic
     counted = scan is not None
     if scan is None:
         scan = objective.source.measure(objective.pose(*result.x))
-    value = ascan_metric(scan, objective.metric, objective.pulse, objective.window_length)
+    gate = getattr(objective, "gate", None)
+    value = ascan_metric(
+        scan, objective.metric, objective.pulse, objective.window_length, gate=gate
+    )
     summary = {
         "estimate_deg": [float(v) for v in result.x],
         "names": list(result.names),
         "parameterization": result.parameterization,
         "metric": objective.metric,
+        "gate": None if gate is None else gate.describe(),
         "value": float(value),
         "counted": counted,
         "note": "the run's final measurement at the estimate (in n_measurements)"
@@ -389,6 +396,7 @@ def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dic
             scan.samples,
             window,
             pulse=objective.pulse,
+            gates=() if gate is None else (gate,),
             title=f"A-scan at the estimate ({result.names[0]} {a:.3f}°, "
             f"{result.names[1]} {b:.3f}°)",
         )

@@ -27,6 +27,7 @@ from echocal.cli._calibrate_common import (
     save_pngs,
 )
 from echocal.cli._common import console, output, parse_pair
+from echocal.cli._gate_option import gate_for_source
 from echocal.cli._replay_grid import (
     RecordingMap,
     grid_centre,
@@ -104,6 +105,7 @@ def _calibrate_measured(
     rig: Path | None = None,
     token: str | None = None,
     provenance: Any = None,
+    gate: str | None = None,
 ) -> None:
     """Calibrate on a recording or a rig: the same objective and call, no truth known."""
     from echocal._validate import one_of
@@ -118,7 +120,12 @@ def _calibrate_measured(
     )
     start = parse_pair(x0, "--x0") if x0 is not None else None
     seed = 0 if seed is None else seed
-    common: dict[str, Any] = {"parameterization": parameterization, "start": start, "seed": seed}
+    common: dict[str, Any] = {
+        "parameterization": parameterization,
+        "start": start,
+        "seed": seed,
+        "gate": gate,
+    }
     if instrument is not None or rig is not None:
         done = _on_instrument(
             run,
@@ -193,6 +200,7 @@ def _on_instrument(
     rig: Path | None = None,
     token: str | None = None,
     provenance: Any = None,
+    gate: str | None = None,
 ) -> _Measured:
     """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT`` or
     ``--rig FILE``."""
@@ -206,6 +214,7 @@ def _on_instrument(
     where = _parse_position(require_position(position, option))
     setup = rig_setup(setup, rig, option)
     pulse = _setup_pulse(setup)
+    chosen = gate_for_source(gate, pulse=pulse, setup=setup)
     wait: dict[str, Any] = {}
     if timeout is not None:
         wait["timeout"] = _check_timeout(timeout)
@@ -217,7 +226,9 @@ def _on_instrument(
     with connect() as hardware:
         _check_reachable(hardware.limits, where)
         tally = _Tally(hardware)
-        objective = SourceObjective(tally, where, pulse=pulse, parameterization=parameterization)
+        objective = SourceObjective(
+            tally, where, pulse=pulse, parameterization=parameterization, gate=chosen
+        )
         tally.logged = lambda: objective.n_measurements
         where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
         source = {
@@ -253,6 +264,7 @@ def _on_instrument(
             source={**source, "identification": hardware.description},
             position=where,
             seed=seed,
+            gate=chosen,
         )
         figures = _save_measured(result, out, None, plots, objective, record)
         return _Measured(
@@ -261,7 +273,7 @@ def _on_instrument(
             pulse=pulse,
             pulse_from=f"--setup {setup}",
             source=source,
-            extra={},
+            extra={"gate": None if chosen is None else chosen.describe()},
             figures=figures,
         )
 
@@ -279,11 +291,13 @@ def _on_replay(
     out: Path,
     plots: bool,
     provenance: Any = None,
+    gate: str | None = None,
 ) -> _Measured:
     """Open the recording, check the options against it, calibrate, save: ``--replay FILE``."""
     from echocal._validate import one_of
     from echocal.measurement.objective import SourceObjective
     from echocal.measurement.replay import MODES, ReplaySource
+    from echocal.signal.window import RecordingWindow
 
     if replay_mode is not None:
         one_of("--replay-mode", replay_mode, MODES)
@@ -291,6 +305,10 @@ def _on_replay(
     with ReplaySource.open(replay, rng=seed, **mode) as recording:
         index, where = replay_position(recording, position)
         pulse, pulse_from = _replay_pulse(recording, setup)
+        window = RecordingWindow(
+            fs=recording.fs, start=recording.start_time, n_samples=recording.n_samples
+        )
+        chosen = gate_for_source(gate, pulse=pulse, setup=setup, window=window)
         if start is None:
             start = grid_centre(recording, parameterization)
         bounds = (
@@ -299,10 +317,15 @@ def _on_replay(
             else None  # the recorded grid's extent: every pose in it is recorded
         )
         objective = SourceObjective(
-            recording, where, pulse=pulse, parameterization=parameterization, bounds=bounds
+            recording,
+            where,
+            pulse=pulse,
+            parameterization=parameterization,
+            bounds=bounds,
+            gate=chosen,
         )
         result = run(objective, start, seed)
-        maps = RecordingMap(recording, index, pulse, objective.metric, parameterization)
+        maps = RecordingMap(recording, index, pulse, objective.metric, parameterization, chosen)
         from echocal.provenance import file_digest
 
         record = run.provenance(
@@ -318,6 +341,7 @@ def _on_replay(
             },
             position=where,
             seed=seed,
+            gate=chosen,
         )
         best = None if maps.best is None else [float(v) for v in maps.best]
         return _Measured(
@@ -331,7 +355,10 @@ def _on_replay(
                 "mode": recording.mode,
                 "description": recording.description,
             },
-            extra={"recording_best_deg": best},
+            extra={
+                "recording_best_deg": best,
+                "gate": None if chosen is None else chosen.describe(),
+            },
             figures=_save_measured(result, out, maps, plots, objective, record),
         )
 

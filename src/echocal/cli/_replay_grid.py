@@ -158,7 +158,13 @@ class RecordingMap:
     its best grid pose, its value at given orientations, and the path plot's map."""
 
     def __init__(
-        self, recording: Any, index: int, pulse: Any, metric: str, parameterization: str
+        self,
+        recording: Any,
+        index: int,
+        pulse: Any,
+        metric: str,
+        parameterization: str,
+        gate: Any = None,
     ) -> None:
         from functools import partial
 
@@ -167,7 +173,8 @@ class RecordingMap:
 
         self.recording, self.parameterization = recording, parameterization
         self.position = recording.positions[index]
-        self.metric = partial(ascan_metric, metric=metric, pulse=pulse)  # one object: cached
+        # one object: cached; inside the calibration's gate (None: the whole recording)
+        self.metric = partial(ascan_metric, metric=metric, pulse=pulse, gate=gate)
         self.values = recording.metric_grid(self.metric, index)  # (n_azimuth, n_coelevation)
         finite = np.isfinite(self.values)
         self.peak = float(np.max(self.values[finite])) if finite.any() else float("nan")

@@ -30,6 +30,7 @@ from echocal.cli._calibrate_common import (
 from echocal.cli._common import (
     parse_pair,
 )
+from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.io import refuse_existing_output
@@ -118,6 +119,7 @@ def register(app: typer.Typer) -> None:
         ] = None,
         snr: Annotated[str | None, typer.Option(help=SNR_HELP)] = None,
         specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = None,
+        gate: Annotated[str | None, typer.Option(help=GATE_HELP)] = None,
         budget: Annotated[int | None, typer.Option(help="Maximum number of measurements.")] = None,
         max_iter: Annotated[int | None, typer.Option(help="Maximum iterations.")] = None,
         settle: Annotated[
@@ -242,6 +244,7 @@ def register(app: typer.Typer) -> None:
                 json_output=json_output,
                 rig=rig,
                 provenance=provenance,
+                gate=gate,
             )
             return
         _check_source_options(replay, replay_mode, instrument, timeout)
@@ -260,6 +263,7 @@ def register(app: typer.Typer) -> None:
             plots=plots,
             json_output=json_output,
             provenance=provenance,
+            gate=gate,
         )
 
 
@@ -277,6 +281,7 @@ def _calibrate_simulated(
     plots: bool,
     json_output: bool,
     provenance: Any = None,
+    gate: str | None = None,
 ) -> None:
     """Calibrate on a simulated setup and judge the estimate against its true optimum."""
     from echocal.evaluation import evaluate_run
@@ -284,7 +289,8 @@ def _calibrate_simulated(
 
     virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
     where = _parse_position(position) if position else virtual.reference_position
-    objective = SourceObjective(virtual, where, parameterization=parameterization)
+    chosen = gate_for_setup(gate, virtual)  # refused here, before any measurement
+    objective = SourceObjective(virtual, where, parameterization=parameterization, gate=chosen)
     # the effective seed: --seed, else the setup file's, else 0
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)
     evaluation = evaluate_run(virtual, where, result)
@@ -298,6 +304,7 @@ def _calibrate_simulated(
             source={"kind": "simulator", "specimen": specimen, "snr_db": snr},
             position=where,
             seed=virtual.rng if isinstance(virtual.rng, int) else None,
+            gate=chosen,
         ),
     )
     figures = _save_plots(virtual, where, evaluation, out) if plots else {}
@@ -310,6 +317,7 @@ def _calibrate_simulated(
         "position_m": [float(v) for v in np.asarray(where, dtype=np.float64)],
         "method": result.method,
         "parameterization": parameterization,
+        "gate": None if chosen is None else chosen.describe(),
         "names": list(result.names),
         "success": result.success,
         "estimate_deg": [float(v) for v in result.x] if found else None,

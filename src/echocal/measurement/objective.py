@@ -23,6 +23,7 @@ from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import shared_detector as _detector
+from echocal.signal.gates import TimeGate, gated_metric
 from echocal.signal.processing import pseudo_energy_with_peak
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
@@ -70,16 +71,18 @@ def default_bounds(source: MeasurementSource, parameterization: str) -> np.ndarr
 
 
 def ascan_metric(
-    scan: AScan, metric: str, pulse: Pulse, window_length: float | None = None
+    scan: AScan,
+    metric: str,
+    pulse: Pulse,
+    window_length: float | None = None,
+    gate: TimeGate | None = None,
 ) -> float:
-    """One metric value of one A-scan; NaN for an A-scan with non-finite samples."""
+    """One metric value of one A-scan (inside ``gate`` if given); NaN for an A-scan with
+    non-finite samples."""
     if not scan.is_finite:
         return float("nan")
     window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
-    fn = get_metric(metric)
-    if window_length is not None and metric != "peak-amplitude":
-        return float(fn(scan.samples, window, pulse, window_length))
-    return float(fn(scan.samples, window, pulse))
+    return float(gated_metric(metric, scan.samples, window, pulse, gate, window_length))
 
 
 class SourceObjective(Objective):
@@ -96,6 +99,9 @@ class SourceObjective(Objective):
     parameterization : ``"azimuth-coelevation"`` or ``"tilt"``.
     bounds : [deg] (2, 2) angle bounds; default from the source's limits.
     window_length : [s] pseudo-energy window; default tied to the pulse duration.
+    gate : compute the metric inside this gate (:class:`~echocal.signal.gates.TimeGate`,
+        e.g. ``resolve_gate("back-wall", ...)``); None: the whole recording.  An absolute
+        gate outside the first A-scan's window is refused.
     budget, out_of_bounds, repeats : see :class:`~echocal.calibrate.Objective`.
     """
 
@@ -109,6 +115,7 @@ class SourceObjective(Objective):
         parameterization: str = "azimuth-coelevation",
         bounds: ArrayLike | None = None,
         window_length: float | None = None,
+        gate: TimeGate | None = None,
         budget: int | None = None,
         out_of_bounds: str = "clip",
         repeats: int = 1,
@@ -126,18 +133,23 @@ class SourceObjective(Objective):
             out_of_bounds=out_of_bounds,
             repeats=repeats,
             parameterization=parameterization,
-            description=f"{metric} of {source.description}",
+            description=f"{metric} of {source.description}"
+            + ("" if gate is None else f" in gate {gate.name}"),
         )
         self.source = source
         self.position = finite_array("position", position, shape_tail=(3,)).reshape(3)
         self.metric = metric
         self.pulse = pulse
         self.window_length = window_length
+        if gate is not None and not isinstance(gate, TimeGate):
+            raise EchocalValueError(f"gate must be a TimeGate or None; got {gate!r}")
+        self.gate = gate
         self._last_scan: AScan | None = None
         self._scan_sigmas: list[float] = []  # robust per-sample noise σ of each A-scan
         self._noise_cache: tuple[float, tuple[float, float]] | None = None
         self._peaks = np.zeros(0)  # matched-envelope peak of each A-scan of the last batch
         self._warned_coarse = False
+        self._gate_window: RecordingWindow | None = None
 
     @property
     def last_scan(self) -> AScan | None:
@@ -162,15 +174,28 @@ class SourceObjective(Objective):
 
     def _metric_and_peak(self, scan: AScan) -> tuple[float, float]:
         """The metric of one finite A-scan and its matched-filter envelope peak [a.u.]
-        (one matched filter for both when the metric is the pseudo-energy)."""
+        (one matched filter for both when the metric is the pseudo-energy), both inside
+        the gate when there is one."""
+        window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
+        samples = scan.samples
+        if self.gate is not None:
+            self._check_gate_window(window)
+            samples = self.gate.apply(samples, window)
         if self.metric == "pseudo-energy":
-            window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
-            energy, peak = pseudo_energy_with_peak(
-                scan.samples, window, self.pulse, self.window_length
-            )
+            energy, peak = pseudo_energy_with_peak(samples, window, self.pulse, self.window_length)
             return float(energy), float(peak)
-        value = ascan_metric(scan, self.metric, self.pulse, self.window_length)
-        return value, float(_detector(self.pulse, scan.fs, scan.n_samples).peak(scan.samples))
+        value = float(gated_metric(self.metric, samples, window, self.pulse, None, self.window_length))
+        return value, float(_detector(self.pulse, scan.fs, scan.n_samples).peak(samples))
+
+    def _check_gate_window(self, window: RecordingWindow) -> None:
+        """Refuse an absolute gate outside the source's recording window (checked on the
+        first A-scan: a replay's or a rig's window is known only from its A-scans)."""
+        if self._gate_window != window:
+            from echocal.signal.gates import check_gate
+
+            assert self.gate is not None
+            check_gate(self.gate, window, field="gate")
+            self._gate_window = window
 
     def _note_noise(self, samples: np.ndarray) -> None:
         """Record the A-scan's noise σ; warn once if its noise is below the ADC step."""
@@ -220,8 +245,9 @@ class SourceObjective(Objective):
         scan = self._last_scan
         noise = np.random.default_rng(12345).standard_normal((64, scan.n_samples)) * sigma
         window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
-        fn = get_metric(self.metric)
-        values = np.asarray(fn(noise, window, self.pulse), dtype=np.float64)
+        if self.gate is not None:  # pure noise in a gate as wide, where the last one was
+            noise = np.where(self.gate.masks(scan.samples, window), noise, 0.0)
+        values = gated_metric(self.metric, noise, window, self.pulse)
         estimate = (float(np.mean(values)), float(np.std(values)))
         self._noise_cache = (sigma, estimate)
         return estimate

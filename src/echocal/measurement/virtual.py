@@ -66,6 +66,7 @@ from echocal.signal import (
     get_metric,
     noise_sigma_for_snr,
 )
+from echocal.signal.gates import TimeGate, gates_by_name
 from echocal.signal.synthesis import _synthesize_unchecked
 from echocal.specimen import FinitePlane, Specimen
 from echocal.specimen.casting import _as_shapes, cast
@@ -207,6 +208,8 @@ class VirtualSetup(BaseSource):
     interior : the plate's thickness and flaws (:mod:`echocal.specimen.interior`): its
         back-wall and flaw echoes join the front wall's.  Needs the wave model, a solid
         ``material`` and a specimen of one plane (the front face).  None: no interior.
+    gates : the setup's own named gates (:class:`~echocal.signal.gates.TimeGate`), which
+        ``--gate NAME`` selects beside ``front-wall`` and ``back-wall``.
     """
 
     specimen: Specimen
@@ -223,6 +226,7 @@ class VirtualSetup(BaseSource):
     synthesis: str = "fast"
     wave_spacing: float | None = None
     limits: PositionerLimits = field(default_factory=PositionerLimits)
+    gates: tuple[TimeGate, ...] = ()
     rng: RngLike = None
     name: str = "virtual setup"
     # set by __post_init__, never by the caller
@@ -249,6 +253,7 @@ class VirtualSetup(BaseSource):
             )
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         _check_materials(self.medium, self.material)
+        object.__setattr__(self, "gates", tuple(gates_by_name(self.gates).values()))
         if self.interior is not None:
             self._check_interior(self.interior)
         if self.medium.longitudinal_speed != self.sound_speed:

@@ -3,10 +3,13 @@ panel on the echo."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
+from echocal.signal.gates import TimeGate
 from echocal.signal.processing import Gate, envelope, time_of_flight
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
@@ -23,6 +26,7 @@ def plot_ascan(
     *,
     pulse: Pulse | None = None,
     gate: Gate | None = None,
+    gates: Sequence[TimeGate] = (),
     title: str | None = None,
     noise_sigma: float | None = None,
     expected_amplitude: float | None = None,
@@ -37,6 +41,10 @@ def plot_ascan(
 
     Parameters
     ----------
+    gate : a detection gate (bar at its threshold; the time of flight is taken inside it).
+    gates : measurement gates (:class:`~echocal.signal.gates.TimeGate`), each shaded over
+        its span on this A-scan (a triggered gate where the front wall put it, its
+        interface trigger marked); the time of flight is taken inside the first.
     noise_sigma : [a.u.] the receiver's noise σ; default: estimated from the samples
         (1.4826 · MAD, robust to the echo).  0 draws no noise level.
     expected_amplitude : [a.u.] the peak an echo would have (e.g. the reference echo's).
@@ -50,8 +58,9 @@ def plot_ascan(
     t_us = window.times * 1e6
     tof = None
     if pulse is not None and np.any(x):
-        tof = float(time_of_flight(x, window, pulse, gate=gate))
-        tof = tof if np.isfinite(tof) else None
+        gated = gates[0].apply(x, window) if gates and gate is None else x
+        tof = float(time_of_flight(gated, window, pulse, gate=gate)) if np.any(gated) else None
+        tof = tof if tof is not None and np.isfinite(tof) else None
     zoom = tof is not None and pulse is not None
     fig = Figure(figsize=(10, 5.8 if zoom else 3.6), layout="constrained")
     axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
@@ -66,6 +75,7 @@ def plot_ascan(
         if gate is not None:
             level = float(gate.level(x[None, :])[0])
             ax.hlines(level, gate.start * 1e6, gate.end * 1e6, colors="C2", lw=3, label="gate")
+        _draw_gates(ax, gates, x, window)
         if tof is not None:
             ax.axvline(tof * 1e6, color="C3", ls="-.", lw=1, label=f"τ = {tof * 1e6:.4f} µs")
         ax.grid(alpha=0.3)
@@ -95,6 +105,22 @@ def plot_ascan(
     axes[-1].set_xlabel("time [µs]")
     axes[0].legend(fontsize=8, loc="upper right")
     return fig
+
+
+def _draw_gates(ax, gates: Sequence[TimeGate], x: np.ndarray, window: RecordingWindow) -> None:
+    """Shade each gate's span on the A-scan ``x`` and mark a triggered gate's interface
+    trigger (the front-wall crossing) with a triangle on the time axis."""
+    from echocal.signal.gates import interface_trigger
+
+    for i, g in enumerate(gates):
+        colour = f"C{(4 + i) % 10}"
+        lo, hi = (float(v) for v in g.spans(x, window))
+        if not np.isfinite(lo):
+            continue
+        ax.axvspan(lo * 1e6, hi * 1e6, color=colour, alpha=0.18, label=f"gate {g.label()}")
+        if g.triggered:
+            t = float(interface_trigger(x[None, :], window, g.threshold)[0])
+            ax.plot([t * 1e6], [0.0], marker="^", ms=7, color=colour, ls="none")
 
 
 def _noise_sigma(x: np.ndarray) -> float:

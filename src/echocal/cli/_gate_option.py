@@ -1,0 +1,76 @@
+"""The ``--gate`` option shared by calibrate, scan, record, sweep, lobe and simulate."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from echocal.signal.gates import TimeGate
+
+__all__ = ["GATE_HELP", "gate_for_setup", "gate_for_source"]
+
+GATE_HELP = (
+    "Compute the metric inside a gate, as a flaw detector does: front-wall (around the "
+    "first strong echo), back-wall (2T/c_L after the front wall, following it when the "
+    "water path changes; needs a plate thickness), a gate NAME of the setup file "
+    "([[gates]]) or START,WIDTH (µs unless a unit is given, e.g. 30us,2us).  Default: "
+    "the whole recording.  See docs/gates.md."
+)
+
+
+def gate_for_setup(text: str | None, virtual: Any, *, field: str = "--gate") -> TimeGate | None:
+    """The gate ``text`` names on a simulated setup, checked before anything is measured:
+    inside the recording window and seeing an echo at the reference pose (noiseless)."""
+    if text is None:
+        return None
+    from echocal.signal.gates import check_gate, resolve_gate
+
+    gate = resolve_gate(
+        text,
+        pulse=virtual.pulse,
+        thickness=getattr(virtual, "thickness", None),
+        material=getattr(virtual, "material", None),
+        defined=getattr(virtual, "gates", ()),
+        field=field,
+    )
+    check_gate(
+        gate,
+        virtual.window,
+        virtual.reference_samples,
+        noise_sigma=float(virtual.noise_sigma),
+        field=field,
+    )
+    return gate
+
+
+def gate_for_source(
+    text: str | None,
+    *,
+    pulse: Any,
+    setup: Any = None,
+    window: Any = None,
+    field: str = "--gate",
+) -> TimeGate | None:
+    """The gate ``text`` names on a recording or a rig: the built-in and the ``setup``'s own
+    gates (a :class:`~echocal.measurement.VirtualSetup`, its name or file, or None), an absolute one checked
+    against ``window`` when the source's recording window is known (a rig's is checked on
+    its first A-scan)."""
+    if text is None:
+        return None
+    from echocal.signal.gates import check_gate, resolve_gate
+
+    if isinstance(setup, str):
+        from echocal.setups import load_setup
+
+        setup = load_setup(setup)
+    gate = resolve_gate(
+        text,
+        pulse=pulse,
+        thickness=getattr(setup, "thickness", None),
+        material=getattr(setup, "material", None),
+        defined=getattr(setup, "gates", ()),
+        field=field,
+    )
+    if window is not None:
+        check_gate(gate, window, field=field)
+    return gate
