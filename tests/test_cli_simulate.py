@@ -64,7 +64,7 @@ def test_same_seed_same_ascan(tmp_path):
         (["--pose", "0,0,20", "--setup", "nowhere"], "unknown setup"),
         (["--pose", "0,0,20", "--format", "xlsx"], "--format must be csv or nc"),
         (["--pose", "0,0,20MHz"], "not a length unit"),
-        (["--pose", "0,0,20", "--gate", "500,1"], "holds no sample of the recording window"),
+        (["--pose", "0,0,20", "--gate", "500,1"], "outside the recording window"),
     ],
 )
 def test_bad_input_is_named(tmp_path, args, message):

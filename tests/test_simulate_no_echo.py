@@ -76,7 +76,7 @@ def test_no_gate_key_or_legend_without_a_gate(tmp_path, monkeypatch):
     gated = summary_of(tmp_path / "b", *base, "--gate", "20,15")
     assert gated["gate_s"] == pytest.approx([20e-6, 15e-6])
     labels = [t.get_text() for t in figures[-1].axes[0].get_legend().get_texts()]
-    assert "gate" in labels
+    assert any(label.startswith("gate 20us,15us") for label in labels)
 
 
 def test_a_gate_without_the_echo_detects_nothing(tmp_path):

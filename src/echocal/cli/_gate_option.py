@@ -18,9 +18,12 @@ GATE_HELP = (
 )
 
 
-def gate_for_setup(text: str | None, virtual: Any, *, field: str = "--gate") -> TimeGate | None:
+def gate_for_setup(
+    text: str | None, virtual: Any, *, field: str = "--gate", sees_echo: bool = True
+) -> TimeGate | None:
     """The gate ``text`` names on a simulated setup, checked before anything is measured:
-    inside the recording window and seeing an echo at the reference pose (noiseless)."""
+    inside the recording window and (``sees_echo``) seeing an echo at the reference pose,
+    noiseless.  ``simulate`` looks at one A-scan and may gate pure noise."""
     if text is None:
         return None
     from echocal.signal.gates import check_gate, resolve_gate
@@ -33,13 +36,17 @@ def gate_for_setup(text: str | None, virtual: Any, *, field: str = "--gate") -> 
         defined=getattr(virtual, "gates", ()),
         field=field,
     )
-    check_gate(
-        gate,
-        virtual.window,
-        virtual.reference_samples,
-        noise_sigma=float(virtual.noise_sigma),
-        field=field,
-    )
+    if gate.triggered or sees_echo:  # a triggered gate's place needs the reference echo
+        check_gate(
+            gate,
+            virtual.window,
+            virtual.reference_samples,
+            noise_sigma=float(virtual.noise_sigma) if sees_echo else 0.0,
+            field=field,
+            sees_echo=sees_echo,
+        )
+    else:
+        check_gate(gate, virtual.window, field=field)
     return gate
 
 
@@ -51,10 +58,10 @@ def gate_for_source(
     window: Any = None,
     field: str = "--gate",
 ) -> TimeGate | None:
-    """The gate ``text`` names on a recording or a rig: the built-in and the ``setup``'s own
-    gates (a :class:`~echocal.measurement.VirtualSetup`, its name or file, or None), an absolute one checked
-    against ``window`` when the source's recording window is known (a rig's is checked on
-    its first A-scan)."""
+    """The gate ``text`` names on a recording or a rig: the built-in gates and those of
+    ``setup`` (a :class:`~echocal.measurement.VirtualSetup`, its name or file, or None); an
+    absolute one is checked against ``window`` when the source's recording window is known
+    (a rig's is checked on its first A-scan)."""
     if text is None:
         return None
     from echocal.signal.gates import check_gate, resolve_gate

@@ -10,6 +10,7 @@ import numpy as np
 import typer
 
 from echocal.cli._common import output, parse_pose, write_json
+from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.constants import ECHO_THRESHOLD
 from echocal.io import (
@@ -19,7 +20,6 @@ from echocal.io import (
     refuse_existing_output,
 )
 from echocal.locking import hold_output_lock
-from echocal.units import parse_quantity
 
 SIMULATE_FILES = ("ascan.csv", "ascan.nc", "ascan.png", "ascan.svg")
 """What ``echocal simulate`` writes in --out (removed first with --overwrite)."""
@@ -49,10 +49,8 @@ def register(app: typer.Typer) -> None:
         gate: Annotated[
             str | None,
             typer.Option(
-                help="START,WIDTH of the gate (µs unless a unit is given): the echo is "
-                "looked for, and its time of flight taken, inside it; default: no gate (the "
-                "whole recording window; the plot shades the pseudo-energy window around "
-                "the strongest echo)."
+                help=GATE_HELP + "  Here the echo is also looked for, and its time of "
+                "flight taken, inside the gate; a gate may hold only noise (no echo detected)."
             ),
         ] = None,
         out: Annotated[Path, typer.Option(help="Folder for the A-scan file and plot.")] = Path(
@@ -79,13 +77,8 @@ def register(app: typer.Typer) -> None:
         null in the JSON output ("detected": false).
         """
         from echocal.plots import plot_ascan, save_figure
-        from echocal.signal import (
-            distance,
-            energy_db,
-            peak_amplitude,
-            pseudo_energy,
-            time_of_flight,
-        )
+        from echocal.signal import distance
+        from echocal.signal.gates import gated_metric
 
         if fmt not in ("csv", "nc"):
             raise typer.BadParameter(f"--format must be csv or nc; got {fmt!r}")
@@ -94,15 +87,15 @@ def register(app: typer.Typer) -> None:
         target = parse_pose(pose)
         scan = virtual.measure(target)
         window, pulse = virtual.window, virtual.pulse
-        user_gate = _parse_gate(gate, window) if gate else None
+        user_gate = gate_for_setup(gate, virtual, sees_echo=False)
         # as on a flaw detector, a gate restricts the time of flight to the echo inside it
-        peak_tof = float(time_of_flight(scan.samples, window, pulse, gate=user_gate))
+        peak_tof = _gated_tof(scan.samples, window, pulse, user_gate)
         significance = _significance(scan.samples, virtual, user_gate)
         detected = bool(np.isfinite(peak_tof)) and (
             significance is None or significance > ECHO_THRESHOLD
         )
         tof = peak_tof if detected else float("nan")
-        energy = float(pseudo_energy(scan.samples, window, pulse))
+        energy = float(gated_metric("pseudo-energy", scan.samples, window, pulse, user_gate))
         summary: dict[str, Any] = {
             "setup": virtual.name,
             "seed": virtual.rng if isinstance(virtual.rng, int) else None,
@@ -120,12 +113,16 @@ def register(app: typer.Typer) -> None:
             "tof_s": tof,
             "distance_m": float(distance(tof, virtual.sound_speed)),
             "pseudo_energy": energy,
-            "energy_db": float(energy_db(scan.samples, window, pulse)),
-            "peak_amplitude": float(peak_amplitude(scan.samples)),
+            "energy_db": float(gated_metric("energy-db", scan.samples, window, pulse, user_gate)),
+            "peak_amplitude": float(
+                gated_metric("peak-amplitude", scan.samples, window, pulse, user_gate)
+            ),
         }
         summary["echoes"] = _echoes(virtual, target)
         if user_gate is not None:
-            summary["gate_s"] = [user_gate.start, user_gate.width]
+            start = float(user_gate.starts(scan.samples, window))
+            summary["gate_s"] = [start, user_gate.width]  # where it was on this A-scan
+            summary["gate"] = user_gate.describe()
         energy_window = _energy_window(scan.samples, window, pulse)
         if energy_window is not None:
             summary["energy_window_s"] = list(energy_window)
@@ -137,7 +134,7 @@ def register(app: typer.Typer) -> None:
             scan.samples,
             window,
             pulse=pulse if detected else None,  # no time-of-flight line on pure noise
-            gate=user_gate,
+            gates=() if user_gate is None else (user_gate,),
             title=f"A-scan at {_label(target)}",
             noise_sigma=float(virtual.noise_sigma),
             expected_amplitude=float(np.max(np.abs(virtual.reference_samples))),
@@ -205,7 +202,7 @@ def _significance(samples: np.ndarray, virtual: Any, gate: Any) -> float | None:
     detector = shared_detector(virtual.pulse, window.fs, window.n_samples)
     env = matched_envelope(samples, virtual.pulse, window.fs)
     if gate is not None:
-        env = np.where(gate.mask(window), env, 0.0)
+        env = np.where(gate.masks(samples, window), env, 0.0)
     return float(detector.significance_of_peak(float(np.max(env)), sigma))
 
 
@@ -235,24 +232,17 @@ def _label(pose: Any) -> str:
     )
 
 
-def _parse_gate(text: str, window: Any) -> Any:
-    from echocal.errors import EchocalValueError
-    from echocal.signal import Gate
+def _gated_tof(samples: np.ndarray, window: Any, pulse: Any, gate: Any) -> float:
+    """[s] time of flight of the strongest echo, inside ``gate`` (where it is on this
+    A-scan) if given: the matched-envelope peak of the whole trace, masked."""
+    from echocal.signal import Gate, time_of_flight
 
-    parts = [p.strip() for p in text.split(",")]
-    if len(parts) != 2:
-        raise typer.BadParameter(f"--gate takes START,WIDTH (µs unless a unit); got {text!r}")
-    start, width = (
-        parse_quantity(f"--gate {n}", v, "time", "us")
-        for n, v in zip(("start", "width"), parts, strict=True)
-    )
-    chosen = Gate(start=start, width=width)
-    if not chosen.mask(window).any():
-        raise EchocalValueError(
-            f"--gate [{start * 1e6:g}, {chosen.end * 1e6:g}] µs holds no sample of the "
-            f"recording window [{window.start * 1e6:g}, {window.end * 1e6:g}] µs"
-        )
-    return chosen
+    if gate is None:
+        return float(time_of_flight(samples, window, pulse))
+    start = float(gate.starts(samples, window))
+    if not np.isfinite(start):
+        return float("nan")
+    return float(time_of_flight(samples, window, pulse, gate=Gate(start=start, width=gate.width)))
 
 
 def _save_ascan(path: Path, scan: Any, summary: dict[str, Any]) -> None:

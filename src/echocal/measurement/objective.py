@@ -184,7 +184,9 @@ class SourceObjective(Objective):
         if self.metric == "pseudo-energy":
             energy, peak = pseudo_energy_with_peak(samples, window, self.pulse, self.window_length)
             return float(energy), float(peak)
-        value = float(gated_metric(self.metric, samples, window, self.pulse, None, self.window_length))
+        value = float(
+            gated_metric(self.metric, samples, window, self.pulse, None, self.window_length)
+        )
         return value, float(_detector(self.pulse, scan.fs, scan.n_samples).peak(samples))
 
     def _check_gate_window(self, window: RecordingWindow) -> None:

@@ -96,6 +96,11 @@ class TimeGate:
         where = f"gate {self.name}"
         if not isinstance(self.name, str) or not self.name.strip():
             raise EchocalValueError(f"gate name must be a non-empty text; got {self.name!r}")
+        for key in ("width", "start", "delay", "threshold"):
+            if isinstance(getattr(self, key), bool):
+                raise EchocalValueError(
+                    f"{where}: {key} must be a number, not the boolean {getattr(self, key)}"
+                )
         width = finite_float(f"{where}: width", self.width)
         if width <= 0:
             raise EchocalValueError(f"{where}: width must be > 0 s; got {width:g}")
@@ -254,7 +259,11 @@ def resolve_gate(
     text = text.strip()
     if "," not in text:
         return named_gate(
-            text, pulse=pulse, thickness=thickness, material=material, defined=defined,
+            text,
+            pulse=pulse,
+            thickness=thickness,
+            material=material,
+            defined=defined,
             field=field,
         )
     parts = [p.strip() for p in text.split(",")]
@@ -276,14 +285,18 @@ def check_gate(
     *,
     noise_sigma: float = 0.0,
     field: str = "--gate",
+    sees_echo: bool = True,
 ) -> None:
     """Refuse a gate outside the recording ``window`` or, given the noiseless
     ``reference`` A-scan (the echo at the optimum, ``(n_samples,)``), one that never sees
-    an echo there (the gated reference below −60 dB of its peak or below ``noise_sigma``).
+    an echo there (the gated reference below −60 dB of its peak or below ``noise_sigma``;
+    skipped when not ``sees_echo``).
     """
     us = 1e6
     span = f"[{window.start * us:.4g}, {window.end * us:.4g}] µs"
-    if gate.start is not None and (gate.start < window.start or gate.start + gate.width > window.end):
+    if gate.start is not None and (
+        gate.start < window.start or gate.start + gate.width > window.end
+    ):
         raise EchocalValueError(
             f"{field} {gate.name}: [{gate.start * us:.4g}, {(gate.start + gate.width) * us:.4g}]"
             f" µs is outside the recording window {span}; give a gate inside it"
@@ -303,6 +316,8 @@ def check_gate(
             f"{hi * us:.4g}] µs, outside the recording window {span}; move the gate or "
             "lengthen the window"
         )
+    if not sees_echo:
+        return
     peak = float(np.max(np.abs(x))) if x.size else 0.0
     inside = float(np.max(np.abs(gate.apply(x, window))))
     if peak <= 0.0 or inside < max(_SEES_ECHO * peak, float(noise_sigma)):
