@@ -24,6 +24,7 @@ from echocal.errors import EchocalValueError, GeometryError
 from echocal.geometry import tilt_frame, tilt_normal
 from echocal.measurement.virtual import VirtualSetup
 from echocal.raytrace import cast
+from echocal.signal.gates import TimeGate, gated_metric
 from echocal.signal.processing import peak_amplitude
 from echocal.signal.window import RecordingWindow
 
@@ -67,6 +68,7 @@ class EchoLobe:
     minus6db_deg : [deg] half-width where the envelope peak falls to one half (mean of
         both sides; NaN if the curve never falls that far within the range).
     ka : k·a of the probe at the pulse's centre frequency.
+    gate : the gate the envelope peak was taken in (:meth:`TimeGate.describe`), or None.
     """
 
     setup: str
@@ -79,6 +81,7 @@ class EchoLobe:
     peak_amplitude: float
     minus6db_deg: float
     ka: float
+    gate: dict[str, object] | None = None
 
     @property
     def relative_db(self) -> FloatArray:
@@ -97,6 +100,7 @@ class EchoLobe:
             "minus6db_deg": self.minus6db_deg,
             "peak_amplitude": self.peak_amplitude,
             "ka": self.ka,
+            "gate": self.gate,
             "tilt_deg": [float(v) for v in self.tilt_deg],
             "amplitude": [float(v) for v in self.amplitude],
         }
@@ -131,6 +135,7 @@ def echo_lobe(
     *,
     max_tilt: float | None = None,
     n_points: int = 41,
+    gate: TimeGate | None = None,
 ) -> EchoLobe:
     """The echo lobe of ``setup`` at ``position`` [m] (default: its reference position).
 
@@ -138,7 +143,9 @@ def echo_lobe(
     (``VirtualSetup.normal_incidence_directions``), and
     tilts the first gimbal angle α from −``max_tilt`` to +``max_tilt`` [deg] (default:
     three far-field −6 dB half-widths of the probe) in ``n_points`` steps.  The recording
-    window keeps the setup's sampling rate and is moved to hold the echo.
+    window keeps the setup's sampling rate and is moved to hold the echo; with a ``gate``
+    (:mod:`echocal.signal.gates`, e.g. the back wall) it is the setup's own window, and
+    the envelope peak is taken inside the gate.
     """
     if position is None:
         position = setup.reference_position
@@ -155,11 +162,15 @@ def echo_lobe(
         raise EchocalValueError(f"max_tilt must be at most 60 deg; got {max_tilt:g}")
     optimum = _best_normal_incidence(setup, pos)
     distance = _distance_along(setup, pos, optimum)
-    placed = dataclasses.replace(setup, window=_window_around(setup, distance))
+    placed = (
+        dataclasses.replace(setup, window=_window_around(setup, distance))
+        if gate is None
+        else setup  # the gate is placed on the setup's own time axis
+    )
     tilts = np.linspace(-max_tilt, max_tilt, n_points)
     frames = tilt_frame(optimum[0] + tilts, np.full(n_points, optimum[1]))
     scans = placed.ideal_samples(np.broadcast_to(pos, (n_points, 3)), frames)
-    amplitude = np.asarray(peak_amplitude(scans), dtype=np.float64)
+    amplitude = gated_metric("peak-amplitude", scans, placed.window, setup.pulse, gate)
     peak = float(amplitude[n_points // 2]) if n_points % 2 else float(np.max(amplitude))
     if not peak > 0.0:
         raise GeometryError(
@@ -176,6 +187,7 @@ def echo_lobe(
         peak_amplitude=peak,
         minus6db_deg=_half_width(tilts, amplitude, peak),
         ka=ka,
+        gate=None if gate is None else gate.describe(),
     )
 
 

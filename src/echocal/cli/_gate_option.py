@@ -21,33 +21,12 @@ GATE_HELP = (
 def gate_for_setup(
     text: str | None, virtual: Any, *, field: str = "--gate", sees_echo: bool = True
 ) -> TimeGate | None:
-    """The gate ``text`` names on a simulated setup, checked before anything is measured:
-    inside the recording window and (``sees_echo``) seeing an echo at the reference pose,
-    noiseless.  ``simulate`` looks at one A-scan and may gate pure noise."""
+    """:func:`echocal.signal.gates.setup_gate` of ``text`` (None without a gate)."""
     if text is None:
         return None
-    from echocal.signal.gates import check_gate, resolve_gate
+    from echocal.signal.gates import setup_gate
 
-    gate = resolve_gate(
-        text,
-        pulse=virtual.pulse,
-        thickness=getattr(virtual, "thickness", None),
-        material=getattr(virtual, "material", None),
-        defined=getattr(virtual, "gates", ()),
-        field=field,
-    )
-    if gate.triggered or sees_echo:  # a triggered gate's place needs the reference echo
-        check_gate(
-            gate,
-            virtual.window,
-            virtual.reference_samples,
-            noise_sigma=float(virtual.noise_sigma) if sees_echo else 0.0,
-            field=field,
-            sees_echo=sees_echo,
-        )
-    else:
-        check_gate(gate, virtual.window, field=field)
-    return gate
+    return setup_gate(text, virtual, field=field, sees_echo=sees_echo)
 
 
 def gate_for_source(

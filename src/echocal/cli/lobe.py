@@ -10,6 +10,7 @@ import numpy as np
 import typer
 
 from echocal.cli._common import output, write_json
+from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._setup_option import SETUP_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.echo import echo_model_names
 from echocal.errors import EchocalValueError
@@ -48,6 +49,13 @@ def register(app: typer.Typer) -> None:
             typer.Option(help="Largest tilt [deg] either side; default: 3 far-field −6 dB widths."),
         ] = None,
         points: Annotated[int, typer.Option(help="Tilts computed (odd: one at the optimum).")] = 41,
+        gate: Annotated[
+            str | None,
+            typer.Option(
+                help=GATE_HELP + "  The envelope peak is then taken inside it, on the "
+                "setup's own recording window."
+            ),
+        ] = None,
         out: Annotated[Path | None, typer.Option(help="Folder for lobe.json and lobe.png.")] = None,
         json_output: Annotated[
             bool, typer.Option("--json", help="Print the result as one JSON object.")
@@ -69,7 +77,8 @@ def register(app: typer.Typer) -> None:
                 )
             virtual = dataclasses.replace(virtual, reflection=model)
         where = None if position is None else _position(position)
-        result = echo_lobe(virtual, where, max_tilt=max_tilt, n_points=points)
+        chosen = gate_for_setup(gate, virtual)
+        result = echo_lobe(virtual, where, max_tilt=max_tilt, n_points=points, gate=chosen)
         data = result.to_dict()
         if out is not None:
             from echocal.plots import save_figure
@@ -91,5 +100,7 @@ def register(app: typer.Typer) -> None:
         shown = "beyond the range" if not np.isfinite(width) else f"{width:.3f} deg"
         output.print(f"  -6 dB half-width: {shown}")
         output.print(f"  peak amplitude at the optimum: {result.peak_amplitude:.4g}")
+        if chosen is not None:
+            output.print(f"  inside gate {chosen.label()}")
         if out is not None:
             output.print(f"  wrote {out / 'lobe.json'} and {out / 'lobe.png'}")

@@ -13,6 +13,7 @@ from typing import Any
 import typer
 
 from echocal.cli._common import check_out_file
+from echocal.cli._gate_option import GATE_HELP, gate_for_setup, gate_for_source
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP
 
@@ -103,6 +104,12 @@ def register(app: typer.Typer) -> None:
             None, "--seed", help="Seed of the receiver noise (default: the setup's)."
         ),
         snr: str | None = typer.Option(None, "--snr", help=SNR_HELP),
+        gate: str | None = typer.Option(
+            None,
+            "--gate",
+            help=GATE_HELP + "  The A-scans are recorded whole; the gate is stored with "
+            "them and the summary gives each position's best grid pose inside it.",
+        ),
         batch_size: int = typer.Option(
             16,
             "--batch-size",
@@ -131,7 +138,10 @@ def register(app: typer.Typer) -> None:
         from echocal.rigs import load_rig_config
         from echocal.setups import load_setup_config
 
-        opened = start("record", {"setup": setup, "azimuth": azimuth, "coelevation": coelevation})
+        opened = start(
+            "record",
+            {"setup": setup, "azimuth": azimuth, "coelevation": coelevation, "gate": gate},
+        )
         check_out_file(out, suffix=".nc", what="a NetCDF replay file")
         az = parse_axis(azimuth, "--azimuth")
         coel = parse_axis(coelevation, "--coelevation")
@@ -164,10 +174,12 @@ def register(app: typer.Typer) -> None:
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
         if rig is not None:
+            chosen = gate_for_source(gate, pulse=_setup_pulse(setup), setup=setup)
             source: Any = open_rig(rig)
         else:
             assert setup is not None
             source = resolve_setup(setup, snr=snr, seed=seed)
+            chosen = gate_for_setup(gate, source)  # refused before anything is measured
         with source:
             _record(
                 source,
@@ -185,7 +197,18 @@ def register(app: typer.Typer) -> None:
                 batch_size=batch_size,
                 as_json=as_json,
                 opened=opened,
+                gate=chosen,
             )
+
+
+def _setup_pulse(setup: str | None) -> Any:
+    """The pulse of ``setup`` (a gate's size needs it), or a refusal naming the fix."""
+    from echocal.errors import EchocalValueError
+    from echocal.setups import load_setup
+
+    if setup is None:
+        raise EchocalValueError("--gate needs the pulse: give --setup (the rig's setup)")
+    return load_setup(setup).pulse
 
 
 def _record(
@@ -205,9 +228,10 @@ def _record(
     batch_size: int,
     as_json: bool,
     opened: Any = None,
+    gate: Any = None,
 ) -> None:
     """Record ``grid`` with ``source`` (a simulated setup or a rig) into ``out``: resume,
-    interruption and report."""
+    interruption and report (with ``gate``, each position's best grid pose inside it)."""
     from echocal.cli._common import write_json
     from echocal.errors import DataFileError, EchocalError
     from echocal.measurement.recording import (
@@ -250,7 +274,7 @@ def _record(
             provenance=(
                 None
                 if opened is None
-                else _origin(opened, source, grid, repeats, setup, seed, snr, rig)
+                else _origin(opened, source, grid, repeats, setup, seed, snr, rig, gate)
             ),
         )
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP
@@ -270,6 +294,7 @@ def _record(
         raise
     n_p, n_a, n_c = grid.shape
     n_time = _n_time(path)
+    best = None if gate is None else _best_in_gate(path, gate, setup)
     if as_json:
         write_json(
             {
@@ -284,6 +309,7 @@ def _record(
                 },
                 "resumed_after": done,
                 "source": source.description,
+                **({} if gate is None else {"gate": gate.describe(), "best_in_gate": best}),
             }
         )
     _say(
@@ -291,9 +317,42 @@ def _record(
         f"co-elevations x {repeats} repeat(s)) of {source.description} to {path}"
         + (f" (resumed after {done})" if done else "")
     )
+    for i, b in enumerate(best or []):
+        _say(
+            f"position {i}: best grid pose in gate {gate.name}: azimuth "
+            f"{b['azimuth_deg']:g}°, co-elevation {b['coelevation_deg']:g}° "
+            f"(pseudo-energy {b['value']:.4g})"
+            if b["azimuth_deg"] is not None
+            else f"position {i}: no finite value in gate {gate.name}"
+        )
 
 
-def _origin(opened, source, grid, repeats: int, setup, seed, snr, rig) -> dict:
+def _best_in_gate(path: Path, gate: Any, setup: str | None) -> list[dict[str, Any]]:
+    """Each recorded position's best grid pose and its repeat-averaged pseudo-energy inside
+    ``gate`` (read back from the replay file: what a calibration on it would see)."""
+    from echocal.cli._calibrate_measured import _replay_pulse
+    from echocal.cli._replay_grid import RecordingMap
+    from echocal.measurement.replay import ReplaySource
+
+    out = []
+    with ReplaySource.open(path) as recording:
+        pulse, _ = _replay_pulse(recording, setup)
+        for index in range(len(recording.positions)):
+            maps = RecordingMap(
+                recording, index, pulse, "pseudo-energy", "azimuth-coelevation", gate
+            )
+            found = maps.best is not None
+            out.append(
+                {
+                    "azimuth_deg": float(maps.best[0]) if found else None,
+                    "coelevation_deg": float(maps.best[1]) if found else None,
+                    "value": maps.peak if found else None,
+                }
+            )
+    return out
+
+
+def _origin(opened, source, grid, repeats: int, setup, seed, snr, rig, gate=None) -> dict:
     """The recording's provenance record (:mod:`echocal.provenance`), end time set when the
     file is written."""
     from echocal.provenance import setup_digest
@@ -307,6 +366,7 @@ def _origin(opened, source, grid, repeats: int, setup, seed, snr, rig) -> dict:
         setup=None if setup is None else setup_digest(setup),
         source=origin,
         seed=seed,
+        gate=None if gate is None else gate.describe(),
         method={"name": "record", "grid": grid.to_dict(), "repeats": repeats},
     )
 

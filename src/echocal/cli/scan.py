@@ -12,6 +12,7 @@ from typing import Any
 
 import typer
 
+from echocal.cli._gate_option import GATE_HELP, gate_for_setup, gate_for_source
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP
 
@@ -85,6 +86,12 @@ def register(app: typer.Typer) -> None:
             False, "--cold", help="Also run a cold-start scan (no warm starts) to compare."
         ),
         snr: str | None = typer.Option(None, "--snr", help=SNR_HELP),
+        gate: str | None = typer.Option(
+            None,
+            "--gate",
+            help=GATE_HELP + "  Each point's orientation is calibrated inside it; the "
+            "height is the strongest echo's time of flight.",
+        ),
         seed: int | None = typer.Option(
             None,
             "--seed",
@@ -115,7 +122,9 @@ def register(app: typer.Typer) -> None:
         from echocal.scanning import ScanGrid, check_scan
         from echocal.units import parse_length
 
-        opened = start("scan", {"setup": setup, "grid": grid, "z": z, "method": method})
+        opened = start(
+            "scan", {"setup": setup, "grid": grid, "z": z, "method": method, "gate": gate}
+        )
         gx, gy = parse_grid(grid)
         scan_grid = ScanGrid.regular(x=gx, y=gy, z=parse_length("--z", z))
         if rig is not None:
@@ -128,6 +137,11 @@ def register(app: typer.Typer) -> None:
         base = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
         # one effective seed for the noise and the calibration: --seed, else the setup's
         effective = seed if seed is not None else _seed_of(base)
+        chosen = (
+            gate_for_source(gate, pulse=base.pulse, setup=base)
+            if rig is not None
+            else gate_for_setup(gate, base)
+        )
         with ExitStack() as stack:
             if rig is not None:  # the setup gives only the pulse and the sound speed
                 source: Any = stack.enter_context(open_rig(rig))
@@ -145,6 +159,7 @@ def register(app: typer.Typer) -> None:
                     else {"kind": "simulator", "specimen": specimen, "snr_db": snr}
                 ),
                 seed=effective,
+                gate=None if chosen is None else chosen.describe(),
                 method={"name": method, "budget_per_point": budget_per_point, "z_m": scan_grid.z},
             )
             check_scan(
@@ -161,6 +176,7 @@ def register(app: typer.Typer) -> None:
                 "progress": progress,
                 "metadata": metadata,
                 "overwrite": overwrite,
+                "gate": chosen,
                 **extra,
             }
             _scan(

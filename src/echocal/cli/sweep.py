@@ -10,6 +10,7 @@ import typer
 from rich.markup import escape
 
 from echocal.cli._common import console, output, write_json
+from echocal.cli._gate_option import GATE_HELP
 
 _SWEEP_HELP = "Sweep TOML file, or a built-in sweep name (see `echocal sweep list`)."
 
@@ -37,6 +38,10 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option(help="Delete the results of ANOTHER sweep found in --out.")
         ] = False,
         progress: Annotated[bool, typer.Option(help="Show a progress bar with ETA.")] = True,
+        gate: Annotated[
+            str | None,
+            typer.Option(help=GATE_HELP + "  Replaces the sweep file's own gate."),
+        ] = None,
         json_output: Annotated[
             bool, typer.Option("--json", help="Print the summary as one JSON object.")
         ] = False,
@@ -59,6 +64,7 @@ def register(app: typer.Typer) -> None:
             workers=workers,
             progress=progress and not json_output,
             overwrite=overwrite,
+            gate=gate,
         )
         skipped = results.n_cases - results.n_new
         if json_output:

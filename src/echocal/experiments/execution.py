@@ -128,6 +128,7 @@ def run_sweep(
     progress: bool = True,
     overwrite: bool = False,
     callback: Callable[[dict[str, Any]], None] | None = None,
+    gate: str | None = None,
 ) -> SweepResults:
     """Run every unfinished case of a sweep into ``out_dir``; return its results.
 
@@ -144,6 +145,8 @@ def run_sweep(
     progress : show a progress bar with an ETA (on stderr).
     overwrite : delete the results of another sweep found in ``out_dir``.
     callback : called with each finished run's row after it is stored.
+    gate : compute every run's metric in this gate (``--gate`` syntax), replacing the
+        sweep's own ``gate``; part of the sweep's identity (resuming needs the same).
     """
     # everything is checked (the sweep, its runs, the workers, the scheduler) before the
     # results folder is touched: a refused call leaves no output behind
@@ -152,6 +155,8 @@ def run_sweep(
     if scheduler is not None:
         _check_scheduler(scheduler)
     spec = load_sweep(spec_or_path)
+    if gate is not None:  # checked again, with the gate, before anything is written
+        spec = load_sweep(spec.model_copy(update={"gate": gate}))
     cases = expand(spec)
     client = None if scheduler is None else _connect(scheduler)
     with contextlib.ExitStack() as stack:

@@ -143,7 +143,21 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
         try:
             truth_setup = _truth_setup(case.setup)
             virtual = setup_with_overrides(case.setup, snr_db=case.snr_db, seed=noise_seed)
-            objective = SourceObjective(virtual, position, parameterization=case.parameterization)
+            gate = None
+            if case.gate is not None:  # checked with the sweep; resolved for this setup
+                from echocal.signal.gates import resolve_gate
+
+                gate = resolve_gate(
+                    case.gate,
+                    pulse=virtual.pulse,
+                    thickness=virtual.thickness,
+                    material=virtual.material,
+                    defined=virtual.gates,
+                    field="gate",
+                )
+            objective = SourceObjective(
+                virtual, position, parameterization=case.parameterization, gate=gate
+            )
             if case.x0_kind == "offset":
                 truth = np.array(
                     truth_setup.true_optimum(position, parameterization=case.parameterization)

@@ -154,6 +154,9 @@ class SweepSpec(_Model):
     snr_db: SnrList = None
     x0: X0Spec = X0Spec(points=[(0.0, 0.0)])
     methods: list[MethodSpec] = Field(default_factory=list)
+    gate: str | None = None
+    """The gate every run's metric is computed in (``--gate`` syntax, docs/gates.md):
+    front-wall, back-wall, a gate of the setup or START,WIDTH; None: the whole recording."""
 
     @property
     def seed_list(self) -> list[int]:
@@ -193,6 +196,7 @@ class RunCase:
     x0: tuple[float, float]
     x0_index: int
     seed: int
+    gate: str | None = None
 
     @property
     def params_json(self) -> str:
@@ -529,6 +533,14 @@ def run_problems(
         return problems
     virtual = setups[0]
     position = np.asarray(spec.position, dtype=np.float64)
+    gate = None
+    if spec.gate is not None:
+        from echocal.signal.gates import setup_gate
+
+        try:
+            gate = setup_gate(spec.gate, virtual, field="gate")
+        except EchocalError as exc:
+            problems.append(str(exc))
     limits = virtual.limits
     outside = [
         f"{name}={value * 1e3:g} mm outside [{low * 1e3:g}, {high * 1e3:g}] mm"
@@ -550,7 +562,7 @@ def run_problems(
             raise _Reached
 
     def objective() -> SourceObjective:
-        return DryRun(virtual, position, parameterization=spec.parameterization)
+        return DryRun(virtual, position, parameterization=spec.parameterization, gate=gate)
 
     bounds = objective().bounds
     starts = []
@@ -751,6 +763,7 @@ def expand(spec: SweepSpec) -> list[RunCase]:
             x0=x0,
             x0_index=index,
             seed=seed,
+            gate=spec.gate,
         )
         for method in spec.methods
         for params in _grid(method.options)

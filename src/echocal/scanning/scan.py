@@ -76,6 +76,7 @@ from echocal.scanning.store import (
     settings_digest,
 )
 from echocal.signal import Pulse, RecordingWindow, matched_envelope, time_of_flight
+from echocal.signal.gates import TimeGate
 from echocal.specimen import Specimen
 
 __all__ = ["CONVERGED_STATUSES", "check_scan", "echo_snr", "scan_surface"]
@@ -215,6 +216,7 @@ class _Context:
     sound_speed: float
     options: dict[str, Any] = field(default_factory=dict)
     min_attempt: int = 1
+    gate: TimeGate | None = None
     """The fewest measurements an attempt at a point needs (one iteration + time of flight)."""
 
 
@@ -252,7 +254,7 @@ def _measure_point(
     }
     t0 = time.perf_counter()
     objective = SourceObjective(
-        ctx.source, position, parameterization=ctx.parameterization, pulse=ctx.pulse
+        ctx.source, position, parameterization=ctx.parameterization, pulse=ctx.pulse, gate=ctx.gate
     )
     try:
         x0 = np.clip(start, objective.bounds[:, 0], objective.bounds[:, 1])
@@ -461,6 +463,7 @@ def scan_surface(
     start: str = "centre",
     overwrite: bool = False,
     log: Callable[[str], None] | None = None,
+    gate: TimeGate | None = None,
 ) -> SurfaceScan:
     """Scan ``grid`` with ``source``: surface normal and distance at every point.
 
@@ -504,6 +507,9 @@ def scan_surface(
         it that is refused); a finished scan with the same settings is returned as
         stored (nothing measured) unless ``overwrite``.
     log : called with one line of news (resuming, already finished).
+    gate : calibrate each point's orientation on the metric inside this gate
+        (:mod:`echocal.signal.gates`, e.g. the back wall); the time of flight, and so the
+        height, stays the strongest echo's (the front wall on a plate).
 
     Notes
     -----
@@ -540,6 +546,7 @@ def scan_surface(
         sound_speed=positive_float("sound_speed", SOUND_SPEED_WATER if c0 is None else c0),
         options=dict(method_options or {}),
         min_attempt=min_attempt,
+        gate=gate,
     )
     gen = as_generator(rng)
     order = grid.order(start)
@@ -564,6 +571,7 @@ def scan_surface(
             "method_options": ctx.options,
             # an integer seed defines the scan: resuming with another one is refused
             "seed": int(rng) if isinstance(rng, int | np.integer) else None,
+            **({} if gate is None else {"gate": gate.describe()}),
         },
     )
     store = None

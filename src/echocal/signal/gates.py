@@ -46,6 +46,7 @@ __all__ = [
     "interface_trigger",
     "named_gate",
     "resolve_gate",
+    "setup_gate",
 ]
 
 _F64 = NDArray[np.float64]
@@ -326,6 +327,34 @@ def check_gate(
             f"the gate [{lo * us:.4g}, {hi * us:.4g}] µs holds {inside / peak if peak else 0:.2g}"
             " of the peak); put it on an echo (see `echocal simulate --json` for the echoes)"
         )
+
+
+def setup_gate(text: str, setup: Any, *, field: str = "--gate", sees_echo: bool = True) -> TimeGate:
+    """The gate ``text`` names on a simulated ``setup`` (a
+    :class:`~echocal.measurement.VirtualSetup`: its pulse, plate and own gates), checked
+    before anything is measured: inside the recording window and (``sees_echo``) seeing an
+    echo in the noiseless reference A-scan above the receiver's noise σ.  A look at one
+    A-scan (``echocal simulate``) may gate pure noise: ``sees_echo=False``."""
+    gate = resolve_gate(
+        text,
+        pulse=setup.pulse,
+        thickness=getattr(setup, "thickness", None),
+        material=getattr(setup, "material", None),
+        defined=getattr(setup, "gates", ()),
+        field=field,
+    )
+    if not (gate.triggered or sees_echo):
+        check_gate(gate, setup.window, field=field)
+        return gate
+    check_gate(  # a triggered gate's place needs the reference echo
+        gate,
+        setup.window,
+        setup.reference_samples,
+        noise_sigma=float(setup.noise_sigma) if sees_echo else 0.0,
+        field=field,
+        sees_echo=sees_echo,
+    )
+    return gate
 
 
 def gates_by_name(gates: Iterable[TimeGate]) -> Mapping[str, TimeGate]:
