@@ -43,5 +43,6 @@ for water_path in (0.050, 0.060):
     starts = [float(g.starts(scan.samples, setup.window)) * 1e6 for g in gates]
     print(
         f"{water_path * 1e3:g} mm: gates start at {starts[0]:.2f} and {starts[1]:.2f} µs; "
-        f"back wall in its gate {float(back):.4f} at 30 dB SNR (noiseless, alone: {float(alone):.4f})"
+        f"back wall in its gate {float(back):.4f} at 30 dB SNR "
+        f"(noiseless, alone: {float(alone):.4f})"
     )
