@@ -12,13 +12,13 @@ the A-scan, so the metric inside the gate *is* the metric of the gated trace.
 
 Named gates (:func:`resolve_gate`):
 
-``front-wall``  interface-triggered, around the first strong echo: from ¾ of a pulse
-                duration d before the trigger, 2 d wide (the pseudo-energy window's span);
-                narrowed to 2T/c_L on a plate thinner than that, so the back wall stays out.
-``back-wall``   the front-wall gate moved 2T/c_L later (T the plate's thickness, c_L its
-                material's longitudinal speed): centred on the back-wall echo.
-NAME            a gate defined in the setup file (``[[gates]]``).
-START,WIDTH     an absolute gate, µs unless a unit is given (``30us,2us``).
+- ``front-wall``: interface-triggered, around the first strong echo: from ¾ of a pulse
+  duration d before the trigger, 2 d wide (the pseudo-energy window's span); narrowed to
+  2T/c_L on a plate thinner than that, so the back wall stays out.
+- ``back-wall``: the front-wall gate moved 2T/c_L later (T the plate's thickness, c_L its
+  material's longitudinal speed): centred on the back-wall echo.
+- ``NAME``: a gate defined in the setup file (``[[gates]]``).
+- ``START,WIDTH``: an absolute gate, µs unless a unit is given (``30us,2us``).
 """
 
 from __future__ import annotations
