@@ -17,7 +17,10 @@ import functools
 from collections.abc import Callable
 from typing import ParamSpec, TypeVar
 
-from threadpoolctl import threadpool_limits
+try:
+    from threadpoolctl import threadpool_limits
+except ImportError:  # pragma: no cover - a dependency; an install that predates it
+    threadpool_limits = None
 
 __all__ = ["one_blas_thread"]
 
@@ -27,6 +30,9 @@ _R = TypeVar("_R")
 
 def one_blas_thread(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Run ``func`` with the BLAS thread pools (numpy's and scipy's) limited to one thread."""
+
+    if threadpool_limits is None:  # pragma: no cover - reinstall echocal to get it
+        return func
 
     @functools.wraps(func)
     def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from threadpoolctl import threadpool_info
 
 import echocal.calibrate.model_based as model_based
 from echocal import SourceObjective
 from echocal.calibrate import FunctionObjective, calibrate
 from echocal.cli._setup_option import resolve_setup
+
+threadpoolctl = pytest.importorskip("threadpoolctl")  # a dependency (pyproject.toml)
 
 
 def _run(snr: str = "20", seed: int = 3, method: str = "auto"):
@@ -68,13 +69,15 @@ def test_the_model_fit_does_not_depend_on_memory_alignment(monkeypatch):
 
 
 @pytest.mark.skipif(
-    not any(i.get("user_api") == "blas" for i in threadpool_info()), reason="no BLAS pool seen"
+    not any(i.get("user_api") == "blas" for i in threadpoolctl.threadpool_info()),
+    reason="no BLAS pool seen",
 )
 def test_calibrate_runs_with_one_blas_thread():
     seen = []
 
     def probe(state):
-        seen.append({i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"})
+        pools = threadpoolctl.threadpool_info()
+        seen.append({i["num_threads"] for i in pools if i["user_api"] == "blas"})
 
     objective = FunctionObjective(lambda p: np.exp(-np.sum(p * p, axis=1)), noise_sigma=0.0)
     calibrate(objective, "model-based", x0=(0.5, 0.5), max_iter=2, callback=probe, rng=0)
