@@ -304,7 +304,7 @@ class WaveEchoModel:
         delays = np.zeros(weights.shape[0]) if delays is None else delays
         prm = self.probe.parameters
         n_scratch = sir.scratch_bins(c, dt, 2.0 * self.probe.radius)
-        scratch = np.zeros((3, 2 * n_scratch))
+        scratch = np.zeros((5, 2 * n_scratch))
         spectrum = np.zeros(n_fft // 2 + 1, dtype=np.complex128)
         parts: list[tuple[FloatArray, complex]] = [
             (weights if reflection is None else weights * reflection.real, 1.0)

@@ -156,6 +156,7 @@ class PistonProbe:
         n_bins = sir.scratch_bins(sound_speed, dt, 2.0 * self.radius)
         h = np.zeros(n_bins)
         hm = np.zeros(n_bins)
+        work = np.zeros((2, n_bins))
         geo = np.zeros(5)
         out = np.zeros(pts.shape[0], dtype=np.complex128)
         tmax = math.acos(prm[2]) if self.curvature is not None else 0.0
@@ -168,7 +169,9 @@ class PistonProbe:
                 lo, mid, hi = sir._support_bowl(
                     sound_speed, prm[1], geo[0], math.acos(geo[1]), tmax
                 )
-            k0, n = sir._bin_sir(self.kind, prm, geo, sound_speed, lo, mid, hi, 0.0, dt, h, hm)
+            k0, n = sir._bin_sir(
+                self.kind, prm, geo, sound_speed, lo, mid, hi, 0.0, dt, h, hm, work
+            )
             t = (k0 + np.arange(n) + 0.5) * dt
             spectrum = np.sum(h[:n] * np.exp(2j * math.pi * frequency * t)) * dt
             out[i] = -1j * k * spectrum / np.sinc(frequency * dt) ** 3

@@ -84,7 +84,7 @@ def _arc_disc(t, c, r, z, a, mx_r, mz):
     cw = (s2 + r * r - a * a) / (2.0 * r * s)
     cw = min(1.0, max(-1.0, cw))
     om = math.acos(cw)
-    mean_r = s * math.sin(om) / om if om > 0.0 else s
+    mean_r = s * math.sqrt(1.0 - cw * cw) / om if om > 0.0 else s  # s·sinΩ/Ω
     return om, mz * z + mx_r * mean_r
 
 
@@ -116,17 +116,24 @@ def _arc_bowl(t, c, rf, d, cos_beta, sin_beta, cos_tmax, m_e, m_e1):
 
 
 @_jit
+def _values(kind, prm, geo, c, t):
+    """(h [m/s], h_m [m/s]) of one sample (geometry ``geo``) at time t [s]."""
+    if kind == DISC:
+        om, mdot = _arc_disc(t, c, geo[0], geo[1], prm[0], geo[2], geo[3])
+        hv = c * om / math.pi
+    else:
+        om, mdot = _arc_bowl(t, c, prm[1], geo[0], geo[1], geo[2], prm[2], geo[3], geo[4])
+        hv = c * prm[1] / geo[0] * om / math.pi
+    return hv, hv * mdot / (c * t)
+
+
+@_jit
 def _add_node(kind, prm, geo, c, t, weight, k, b_lo, dt, h, hm):
     """Add one quadrature node at time t [s] with weight [s] to the B-spline coefficients
     k, k+1, k+2 of h and h_m (bin k starts at ``b_lo``)."""
-    if kind == DISC:
-        om, mdot = _arc_disc(t, c, geo[0], geo[1], prm[0], geo[2], geo[3])
-        j_f = 1.0
-    else:
-        om, mdot = _arc_bowl(t, c, prm[1], geo[0], geo[1], geo[2], prm[2], geo[3], geo[4])
-        j_f = prm[1] / geo[0]
-    hv = weight / dt * c * j_f * om / math.pi
-    hmv = hv * mdot / (c * t)
+    hv, hmv = _values(kind, prm, geo, c, t)
+    hv *= weight / dt
+    hmv *= weight / dt
     u = (t - b_lo) / dt
     w_prev = 0.5 * (1.0 - u) * (1.0 - u)
     w_next = 0.5 * u * u
@@ -170,8 +177,12 @@ def _add_piece(kind, prm, geo, c, lo, hi, singular_lo, singular_hi, k, b_lo, dt,
             _add_node(kind, prm, geo, c, t, _GL_W[j] * span, k, b_lo, dt, h, hm)
 
 
+_EXACT_BINS = 3
+"""Bins this close to a breakpoint of the closed form are integrated by quadrature."""
+
+
 @_jit
-def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
+def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm, work):
     """Quadratic B-spline coefficients of h [m/s] and h_m [m/s] on a grid of spacing ``dt``.
 
     Coefficient k is (1/Δ)∫ h(t) N(t/Δ − k) dt with N the uniform quadratic B-spline
@@ -179,17 +190,34 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
     sinc³(fΔ), so the aliases of the (not band-limited) SIR fall off as sinc³ and the
     projection itself is undone exactly in the frequency domain.  ``geo`` holds the
     sample's geometry (see :func:`_sample_geometry`); the support is [t_lo, t_hi] with
-    one internal breakpoint t_mid.  Each smooth piece of each bin is integrated by
-    :func:`_add_piece`.  Writes coefficients k0 − 1 … k0 + K to ``h[0 : K + 2]`` and
-    ``hm[0 : K + 2]`` and returns (k0 − 1, K + 2)."""
+    one internal breakpoint t_mid.  Two rules, one per kind of coefficient:
+
+    * within :data:`_EXACT_BINS` bins of a breakpoint, every smooth piece of every bin is
+      integrated by :func:`_add_piece` (Gauss–Legendre, √-substitution at a breakpoint);
+    * elsewhere h is smooth over the B-spline's support and its moments give
+      (1/Δ)∫ h N = h(tₖ) + Δ²h″(tₖ)/8 + O(Δ⁴h⁗), tₖ the bin centre: the coefficient is
+      h(tₖ) + (h(tₖ₊₁) − 2h(tₖ) + h(tₖ₋₁))/8, in error by 0.004·Δ⁴|h⁗|, with one
+      evaluation of the closed form per bin.  Next to a √-type breakpoint that error is
+      0.003·d⁻⁴ of h at d bins from it (10⁻⁵ at the first such bin, d = 4).
+
+    ``work`` is scratch ``(2, ≥ K)``.  Writes coefficients k0 − 1 … k0 + K to
+    ``h[0 : K + 2]`` and ``hm[0 : K + 2]`` and returns (k0 − 1, K + 2)."""
     k0 = int(math.floor((t_lo - t0) / dt))  # noqa: RUF046 (numba)
     k1 = int(math.floor((t_hi - t0) / dt))  # noqa: RUF046 (numba)
     n = min(k1 - k0 + 1, h.shape[0] - 2)
+    i_mid = min(n - 1, max(0, int(math.floor((t_mid - t0) / dt)) - k0))  # noqa: RUF046
     for i in range(n + 2):
         h[i] = 0.0
         hm[i] = 0.0
+    vh = work[0]
+    vhm = work[1]
     for k in range(n):
+        d = min(k, n - 1 - k, abs(k - i_mid))  # bins to the nearest breakpoint
         b_lo = t0 + (k0 + k) * dt
+        if d >= 2:  # a centre value that a smooth coefficient needs
+            vh[k], vhm[k] = _values(kind, prm, geo, c, b_lo + 0.5 * dt)
+        if d > _EXACT_BINS:
+            continue
         b_hi = b_lo + dt
         for piece in range(2):
             p_lo = t_lo if piece == 0 else t_mid
@@ -199,6 +227,12 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm):
             if hi <= lo:
                 continue
             _add_piece(kind, prm, geo, c, lo, hi, lo == p_lo, hi == p_hi, k, b_lo, dt, h, hm)
+    # coefficient j is centred on bin j − 1: smooth when no breakpoint lies in bins j − 3 … j + 1
+    for j in range(4, n - 2):
+        if abs(j - 1 - i_mid) < _EXACT_BINS:
+            continue
+        h[j] = vh[j - 1] + 0.125 * (vh[j] - 2.0 * vh[j - 1] + vh[j - 2])
+        hm[j] = vhm[j - 1] + 0.125 * (vhm[j] - 2.0 * vhm[j - 1] + vhm[j - 2])
     return k0 - 1, n + 2
 
 
@@ -279,7 +313,7 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, delays, c, t0, dt, gr
     t0 : [s] two-way time of grid point 0; grid point j is at t0 + jΔ.
     dt : [s] grid spacing Δ.
     grid : float64 ``(n_grid,)``, accumulated in place.
-    scratch : float64 ``(3, 2·n_scratch)`` work space (one sample's SIR and correlation).
+    scratch : float64 ``(5, 2·n_scratch)`` work space (one sample's SIR and correlation).
 
     Returns
     -------
@@ -306,7 +340,7 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, delays, c, t0, dt, gr
         else:
             lo, mid, hi = _support_bowl(c, prm[1], geo[0], math.acos(geo[1]), tmax)
         delay = delays[s]
-        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, t1 - 0.5 * delay, dt, h, hm)
+        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, t1 - 0.5 * delay, dt, h, hm, scratch[3:5])
         base = 2 * k0 + 1
         scale = w * dt
         acc = scratch[2]
