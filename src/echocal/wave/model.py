@@ -53,6 +53,7 @@ from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
 from echocal.wave import sir
 from echocal.wave.probe import PistonProbe
+from echocal.wave.threads import two_way_grid
 
 __all__ = ["WaveEchoModel"]
 
@@ -304,7 +305,6 @@ class WaveEchoModel:
         delays = np.zeros(weights.shape[0]) if delays is None else delays
         prm = self.probe.parameters
         n_scratch = sir.scratch_bins(c, dt, 2.0 * self.probe.radius)
-        scratch = np.zeros((5, 2 * n_scratch))
         spectrum = np.zeros(n_fft // 2 + 1, dtype=np.complex128)
         parts: list[tuple[FloatArray, complex]] = [
             (weights if reflection is None else weights * reflection.real, 1.0)
@@ -313,19 +313,8 @@ class WaveEchoModel:
             parts.append((weights * reflection.imag, -1j))  # e^{−iωt} phase → numpy's
         path_time = 0.0
         for w, factor in parts:
-            grid = np.zeros(n_fft)
-            swt, sw = sir.accumulate_two_way(
-                self.probe.kind,
-                prm,
-                np.ascontiguousarray(points),
-                np.ascontiguousarray(unit_m),
-                np.ascontiguousarray(w),
-                np.ascontiguousarray(delays, dtype=np.float64),
-                c,
-                t0,
-                dt,
-                grid,
-                scratch,
+            grid, swt, sw = two_way_grid(
+                self.probe.kind, prm, points, unit_m, w, delays, c, t0, dt, n_fft, n_scratch
             )
             if factor == 1.0 and sw > 0.0:
                 path_time = swt / sw

@@ -1,0 +1,92 @@
+"""The two-way SIR correlation of many surface samples, split over the machine's cores.
+
+:func:`echocal.wave.sir.accumulate_two_way` releases the GIL (numba ``nogil``), so
+interleaved shares of the samples run on a few threads at once, each into its own grid;
+the grids are summed in a fixed order, so the result does not depend on the thread timing.
+Small jobs (fewer than :data:`MIN_SAMPLES_PER_THREAD` samples a thread) run in the calling
+thread: a thread's start costs about 20 µs, one sample 5–10 µs.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from functools import cache
+
+import numpy as np
+from numpy.typing import NDArray
+
+from echocal.wave import sir
+
+__all__ = ["MAX_THREADS", "MIN_SAMPLES_PER_THREAD", "two_way_grid"]
+
+FloatArray = NDArray[np.float64]
+
+MAX_THREADS = 4
+"""At most this many threads share one A-scan (fewer on a machine with fewer cores)."""
+MIN_SAMPLES_PER_THREAD = 128
+"""A thread is worth starting for at least this many surface samples."""
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - macOS, Windows
+        return os.cpu_count() or 1
+
+
+@cache
+def _pool(workers: int) -> ThreadPoolExecutor:
+    return ThreadPoolExecutor(max_workers=workers, thread_name_prefix="echocal-wave")
+
+
+def two_way_grid(
+    kind: int,
+    prm: FloatArray,
+    points: FloatArray,
+    unit_m: FloatArray,
+    weights: FloatArray,
+    delays: FloatArray,
+    c: float,
+    t0: float,
+    dt: float,
+    n_grid: int,
+    n_scratch: int,
+) -> tuple[FloatArray, float, float]:
+    """Σₛ wₛ·(h̄ₛ * h̄_m,ₛ) on a grid of ``n_grid`` points (the arguments and the two sums
+    returned after the grid are those of :func:`echocal.wave.sir.accumulate_two_way`;
+    ``n_scratch`` from :func:`echocal.wave.sir.scratch_bins`).
+
+    Returns
+    -------
+    grid : ``(n_grid,)``; Σₛ |wₛ|·(two-way time of s) [s·weight]; Σₛ |wₛ|.
+    """
+    active = np.flatnonzero(weights)
+    n_threads = max(1, min(MAX_THREADS, _cores(), active.size // MIN_SAMPLES_PER_THREAD))
+
+    def run(share: NDArray[np.intp]) -> tuple[FloatArray, float, float]:
+        grid = np.zeros(n_grid)
+        scratch = np.zeros((5, 2 * n_scratch))
+        swt, sw = sir.accumulate_two_way(
+            kind,
+            prm,
+            np.ascontiguousarray(points[:, share]),
+            np.ascontiguousarray(unit_m[:, share]),
+            np.ascontiguousarray(weights[share]),
+            np.ascontiguousarray(delays[share], dtype=np.float64),
+            c,
+            t0,
+            dt,
+            grid,
+            scratch,
+        )
+        return grid, float(swt), float(sw)
+
+    shares = [active[i::n_threads] for i in range(n_threads)]
+    if n_threads == 1:
+        return run(shares[0])
+    results = list(_pool(n_threads).map(run, shares))
+    grid = results[0][0]
+    for other, _, _ in results[1:]:
+        grid += other
+    return grid, sum(r[1] for r in results), sum(r[2] for r in results)
