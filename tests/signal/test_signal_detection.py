@@ -94,3 +94,18 @@ def test_simulate_and_the_objective_share_one_calibrated_detector(tmp_path, monk
         )
         assert result.exit_code == 0, result.output
     assert len(built) == 1
+
+
+@pytest.mark.parametrize("sigma", [0.01, 0.3])
+def test_threshold_amplitude_is_the_echo_detected_at_that_significance(detector, sigma):
+    # an independent round trip: a clean echo placed off-centre, scaled so its analytic
+    # envelope peaks at the threshold amplitude, must score g = 4.5 (to 0.01) through
+    # significance(); the level scales with sigma (to 1e-9 relative)
+    level = detector.threshold_amplitude(sigma, 4.5)
+    from scipy.signal import hilbert
+
+    unit = _echo(1.0, at=7.3e-6)
+    echo = unit * level / np.max(np.abs(hilbert(unit)))
+    assert float(detector.significance(echo, sigma)) == pytest.approx(4.5, abs=0.01)
+    assert detector.threshold_amplitude(2 * sigma, 4.5) == pytest.approx(2 * level, rel=1e-9)
+    assert detector.threshold_amplitude(0.0, 4.5) == 0.0

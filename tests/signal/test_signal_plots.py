@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from matplotlib.figure import Figure
 
 from echocal.plots import save_figure
@@ -38,3 +39,21 @@ def test_a_noise_ascan_is_drawn_at_the_scale_of_the_expected_echo():
     np.testing.assert_allclose(fig.axes[0].get_ylim(), (-0.88, 0.88))
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert "noise ±σ (σ = 0.01)" in labels
+
+
+def test_the_ascan_draws_the_detectors_threshold():
+    from echocal.signal.detection import EchoDetector
+
+    p = GaborPulse()
+    w = RecordingWindow(fs=100e6, start=20e-6, n_samples=1024)
+    rng = np.random.default_rng(3)
+    x = synthesize([1.0], [24e-6], p, w, normalize="peak") + rng.normal(0.0, 0.02, w.n_samples)
+    fig = plot_ascan(x, w, pulse=p, noise_sigma=0.02)
+    want = EchoDetector(p, w.fs, w.n_samples).threshold_amplitude(0.02, 4.5)
+    for ax in fig.axes:  # both panels: the whole window and the zoom
+        lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("detection threshold")]
+        assert len(lines) == 1
+        assert lines[0].get_ydata()[0] == pytest.approx(want, rel=1e-9)
+        assert 0.02 < want < 1.0  # above the noise σ, below the echo
+    fig = plot_ascan(x, w, pulse=p, noise_sigma=0.0)  # no noise level: no threshold
+    assert not [ln for ln in fig.axes[0].get_lines() if "threshold" in str(ln.get_label())]

@@ -397,11 +397,36 @@ def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dic
             window,
             pulse=objective.pulse,
             gates=() if gate is None else (gate,),
+            gate=_energy_gate(
+                scan.samples, window, objective, None if gate is None else gate.apply
+            ),
             title=f"A-scan at the estimate ({result.names[0]} {a:.3f}°, "
             f"{result.names[1]} {b:.3f}°)",
         )
         files["ascan_plot"] = save_pngs({"ascan": fig}, out)["ascan"]
     return files
+
+
+def _energy_gate(samples: Any, window: Any, objective: Any, gated: Any = None) -> Any:
+    """The pseudo-energy's window (the gate its metric sums over: centred on the matched
+    filter's peak — inside the measurement gate, ``gated(samples, window)``, when there is
+    one — ``window_length`` or 2 pulse durations wide), its bar drawn at the detector's
+    threshold (:data:`~echocal.constants.ECHO_THRESHOLD` σ) over the noise σ."""
+    from echocal.constants import ECHO_THRESHOLD
+    from echocal.measurement.objective import scan_noise_sigma
+    from echocal.signal.detection import shared_detector
+    from echocal.signal.processing import Gate, time_of_flight
+
+    pulse = objective.pulse
+    width = objective.window_length or 2.0 * pulse.duration
+    inside = samples if gated is None else gated(samples, window)
+    tof = float(time_of_flight(inside, window, pulse))
+    sigma, _ = scan_noise_sigma(samples)
+    level = 0.0
+    if sigma:
+        detector = shared_detector(pulse, float(window.fs), int(window.n_samples))
+        level = detector.threshold_amplitude(sigma, ECHO_THRESHOLD)
+    return Gate(start=tof - width / 2, width=width, threshold=level, absolute=True)
 
 
 def save_pngs(figures: dict[str, Any], out: Path) -> dict[str, str]:

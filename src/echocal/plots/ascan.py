@@ -1,5 +1,5 @@
-"""A-scan figure: raw samples, envelope, noise level, gate and the detected echo, with a zoom
-panel on the echo."""
+"""A-scan figure: raw samples, envelope, noise level, detection threshold, gate and the
+detected echo, with a zoom panel on the echo."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
+from echocal.constants import ECHO_THRESHOLD
 from echocal.signal.gates import TimeGate
 from echocal.signal.processing import Gate, envelope, time_of_flight
 from echocal.signal.pulses import Pulse
@@ -30,11 +31,15 @@ def plot_ascan(
     title: str | None = None,
     noise_sigma: float | None = None,
     expected_amplitude: float | None = None,
+    significance: float = ECHO_THRESHOLD,
 ) -> Figure:
     """One A-scan (shape ``(n_samples,)``) against time [µs].
 
     Top panel, the whole recording window: the raw RF samples (solid), their analytic
-    envelope (dashed), the noise level ±σ (dotted), the gate (bar at its threshold) and,
+    envelope (dashed), the noise level ±σ (dotted), with ``pulse`` the detection threshold
+    (long dashes: the envelope peak of an echo the matched-filter detector sees at
+    ``significance`` σ, :meth:`~echocal.signal.detection.EchoDetector.threshold_amplitude`),
+    the gate (bar at its threshold) and,
     with ``pulse``, the time of flight of the strongest echo (matched-filter peak,
     dash-dotted).  With ``pulse`` and an echo, a bottom panel zooms on it (± 3 pulse
     durations), so a sub-microsecond echo in a long window is seen cycle by cycle.
@@ -51,6 +56,7 @@ def plot_ascan(
         When the A-scan holds no echo (``pulse`` None) and its peak is below this, the
         axes are drawn at ± this scale, so noise is not autoscaled into looking like a
         signal.
+    significance : [σ] the detector's threshold g drawn (default: calibrate's, 4.5).
     """
     x = np.asarray(samples, dtype=np.float64)
     if x.ndim != 1:
@@ -66,12 +72,16 @@ def plot_ascan(
     axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
     sigma = _noise_sigma(x) if noise_sigma is None else float(noise_sigma)
     env = envelope(x)
+    detect = _detection_level(pulse, window, sigma, significance)
     for k, ax in enumerate(axes):
         ax.plot(t_us, x, lw=0.8, color="C0", ls="-", label="A-scan")
         ax.plot(t_us, env, lw=1.2, color="C1", ls="--", label="envelope")
         if sigma > 0:
             ax.axhline(sigma, color="0.3", ls=":", lw=1.0, label=f"noise ±σ (σ = {sigma:.3g})")
             ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
+        if detect:
+            label = f"detection threshold {detect:.3g} (g = {significance:g} σ)"
+            ax.axhline(detect, color="C4", ls=(0, (6, 3)), lw=1.2, label=label)
         if gate is not None:
             level = float(gate.level(x[None, :])[0])
             ax.hlines(level, gate.start * 1e6, gate.end * 1e6, colors="C2", lw=3, label="gate")
@@ -129,3 +139,16 @@ def _noise_sigma(x: np.ndarray) -> float:
 
     sigma, _ = scan_noise_sigma(x)
     return 0.0 if sigma is None else float(sigma)
+
+
+def _detection_level(
+    pulse: Pulse | None, window: RecordingWindow, sigma: float, significance: float
+) -> float:
+    """[a.u.] the detector's threshold as an echo envelope peak; 0 (not drawn) without a
+    pulse or a noise level."""
+    if pulse is None or sigma <= 0:
+        return 0.0
+    from echocal.signal.detection import shared_detector
+
+    detector = shared_detector(pulse, float(window.fs), int(window.n_samples))
+    return detector.threshold_amplitude(sigma, significance)

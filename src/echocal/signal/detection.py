@@ -32,11 +32,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import brentq
 from scipy.special import ndtri
 
 from echocal._validate import nonnegative_float, positive_float
 from echocal.errors import EchocalValueError
-from echocal.signal.processing import _samples, matched_envelope
+from echocal.signal.processing import _samples, envelope, matched_envelope
 from echocal.signal.pulses import Pulse
 
 __all__ = ["EchoDetector", "shared_detector"]
@@ -129,6 +130,33 @@ class EchoDetector:
         out = np.where(log_tail < _FAR_TAIL, asymptotic, g)
         out = np.where(np.isposinf(p), np.inf, out)
         return np.asarray(np.where(np.isnan(p), np.nan, out), dtype=np.float64)
+
+    def threshold_amplitude(self, sigma: float, significance: float) -> float:
+        """[a.u.] envelope peak of a clean echo of this pulse whose matched-filter peak has
+        ``significance`` g against white noise of per-sample σ ``sigma`` [a.u.].
+
+        The detector's threshold drawn on an A-scan's amplitude axis: an echo whose envelope
+        rises above it is detected at g (noise alone aside).  Inverts
+        :meth:`significance_of_peak` (monotonic in the peak) and divides by the matched
+        filter's gain for this pulse (matched-envelope peak per envelope peak of the echo,
+        measured on the pulse sampled at ``fs`` in the middle of the window).  0 for σ = 0.
+        """
+        sigma = nonnegative_float("sigma", sigma)
+        if sigma == 0.0:
+            return 0.0
+        unit = sigma * self.noise_gain
+
+        def excess(t: float) -> float:
+            return float(self.significance_of_peak(t * unit, sigma)) - significance
+
+        hi = 4.0
+        while excess(hi) < 0.0:
+            hi *= 2.0
+        t_level = float(brentq(excess, 1.0, hi, xtol=1e-9)) if excess(1.0) < 0.0 else 1.0
+        t = (np.arange(self.n_samples) - self.n_samples / 2) / self.fs
+        echo = self.pulse.waveform(t)
+        gain = float(matched_envelope(echo, self.pulse, self.fs).max() / envelope(echo).max())
+        return t_level * unit / gain
 
     def significance(self, samples: ArrayLike, sigma: float) -> _F64:
         """Gaussian-equivalent significance of each A-scan's strongest echo, shape ``(...,)``.
