@@ -24,9 +24,7 @@ FAULTS = ("drop", "delay", "garble", "truncate")
 class FaultProxy:
     """Forward TCP connections to ``upstream``, injecting one fault (see module docstring)."""
 
-    def __init__(
-        self, upstream: tuple[str, int], fault: str, at: int, delay: float = 1.0
-    ) -> None:
+    def __init__(self, upstream: tuple[str, int], fault: str, at: int, delay: float = 1.0) -> None:
         assert fault in FAULTS, fault
         self.upstream, self.fault, self.at, self.delay = upstream, fault, at, delay
         self.lines = 0  # reply lines seen (all connections)

@@ -259,8 +259,10 @@ def test_a_damaged_partial_chunk_is_one_line_on_resume(record_reference):
     np.save(chunk, np.zeros((3, 7)))  # a chunk of the wrong shape
     code, _, err = run(args, folder)
     assert code == 2 and err.count("error:") == 1 and "Traceback" not in err
-    assert chunk.name in err and "(3, 7)" in err and f"delete {sidecar.name}" in err.replace(
-        str(folder) + "/", ""
+    assert (
+        chunk.name in err
+        and "(3, 7)" in err
+        and f"delete {sidecar.name}" in err.replace(str(folder) + "/", "")
     )
 
 

@@ -91,8 +91,13 @@ def test_calibrate_from_result_json_gives_the_same_numbers(folder, first):
     for key in ("x", "points", "values", "iterates", "status", "n_measurements", "options"):
         assert again[key] == first[key], key
     assert again["provenance"]["parameters"] == first["provenance"]["parameters"]
-    assert again["provenance"]["argv"][1:] == ["calibrate", "--from", "first/result.json",
-                                               "--out", "again"]
+    assert again["provenance"]["argv"][1:] == [
+        "calibrate",
+        "--from",
+        "first/result.json",
+        "--out",
+        "again",
+    ]
 
 
 def test_from_refuses_other_options_a_changed_setup_and_no_provenance(

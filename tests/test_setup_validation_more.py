@@ -174,9 +174,7 @@ ROUND_TRIP_EXTRAS = {
     + '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, "30 mm", "-30 mm"]\nradius = "5 mm"\n',
     "long-focus-adc": TINY.replace(
         'pinhole_distance = "50 mm"', 'pinhole_distance = "3 m"'
-    ).replace(
-        "[window]", "[noise]\nadc_bits = 12\nfull_scale = 2\n[window]"
-    ),
+    ).replace("[window]", "[noise]\nadc_bits = 12\nfull_scale = 2\n[window]"),
 }
 
 

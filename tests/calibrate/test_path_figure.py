@@ -33,6 +33,25 @@ def test_db_map_is_relative_to_the_peak_and_clipped_at_the_floor(run_and_map):
     assert fig.axes[1].get_ylabel() == "metric / max [dB]"
 
 
+def test_every_path_map_is_in_db_by_default(run_and_map):
+    # the scenarios and the demo call path_figure without db_floor: the same dB map
+    result, cmap = run_and_map
+    fig = path_figure(cmap, {"model-based": result}, truth=OPT)
+    shown = np.asarray(fig.axes[0].collections[0].get_array())
+    peak = float(np.max(cmap.values))
+    want = 10.0 * np.log10(np.clip(cmap.values.T / peak, 1e-4, None))  # -40 dB floor
+    np.testing.assert_allclose(shown.reshape(want.shape), want, atol=1e-9)
+    assert fig.axes[1].get_ylabel() == "metric / max [dB]"
+
+
+def test_relative_db_keeps_uncovered_poses_blank():
+    from echocal.plots.calibration import relative_db
+
+    out = relative_db([[np.nan, 0.0], [1.0, 0.1]], -30.0)
+    np.testing.assert_allclose(out, [[np.nan, -30.0], [0.0, -10.0]], atol=1e-12)
+    np.testing.assert_allclose(relative_db([0.0, np.nan]), [-40.0, np.nan])
+
+
 def test_measured_poses_are_drawn_when_asked(run_and_map):
     result, cmap = run_and_map
     plain = path_figure(cmap, {"m": result})

@@ -627,7 +627,6 @@ def _save_measured(
             truth=maps.best,
             truth_label="the recording's best grid pose",
             title=f"{label}: path over the recording's metric map (measured poses in grey)",
-            db_floor=-40.0,
             show_measurements=True,
         )
     return {**final, **save_pngs({"convergence": conv, "path": path}, out)}

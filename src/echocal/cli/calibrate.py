@@ -366,7 +366,6 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         x0=result.iterates[0],
         truth=evaluation.truth,
         title=f"{label}: path over the cost map (every measured pose in grey)",
-        db_floor=-40.0,
         show_measurements=True,
     )
     return save_pngs({"convergence": conv, "path": path}, out)

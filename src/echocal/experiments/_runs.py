@@ -95,9 +95,7 @@ class Bench:
     parameterization : ``"azimuth-coelevation"`` (the thesis's) or ``"tilt"``.
     """
 
-    def __init__(
-        self, setup: VirtualSetup, position: ArrayLike, parameterization: str
-    ) -> None:
+    def __init__(self, setup: VirtualSetup, position: ArrayLike, parameterization: str) -> None:
         self.setup = setup
         self.position = np.asarray(position, dtype=np.float64)
         self.parameterization = parameterization

@@ -117,6 +117,7 @@ class _LineReader:
     def close(self) -> None:
         self._file.close()
 
+
 MAX_TIMEOUT = 600.0
 """[s] the longest wait allowed for one reply (a move included): a larger timeout would
 leave a dead rig unnoticed for hours."""

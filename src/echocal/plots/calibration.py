@@ -21,7 +21,14 @@ from numpy.typing import ArrayLike, NDArray
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
 
-__all__ = ["CostMap", "convergence_figure", "measured_convergence_figure", "path_figure"]
+__all__ = [
+    "MAP_DB_FLOOR",
+    "CostMap",
+    "convergence_figure",
+    "measured_convergence_figure",
+    "path_figure",
+    "relative_db",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -164,6 +171,31 @@ def measured_convergence_figure(
     return fig
 
 
+MAP_DB_FLOOR = -40.0
+"""[dB] the floor every metric map is drawn down to (relative to its maximum)."""
+
+
+def relative_db(values: ArrayLike, floor: float = MAP_DB_FLOOR) -> NDArray[np.float64]:
+    """10·log10(values / max) [dB], clipped at ``floor`` [dB, < 0]; shape of ``values``.
+
+    The one way echocal draws a metric map (path figures of ``calibrate``, scenarios and
+    the demo): a narrow main lobe and its side lobes stay visible on a map many lobe
+    widths wide.  NaN stays NaN (orientations the map does not cover); a map without a
+    positive value is all at the floor.
+    """
+    if not floor < 0.0:
+        from echocal.errors import EchocalValueError
+
+        raise EchocalValueError(f"db_floor must be a negative level in dB; got {floor}")
+    v = np.asarray(values, dtype=np.float64)
+    peak = float(np.nanmax(v)) if np.any(np.isfinite(v)) else 0.0
+    if not peak > 0.0:
+        return np.where(np.isnan(v), np.nan, floor)
+    with np.errstate(invalid="ignore"):
+        ratio = np.clip(v / peak, 10.0 ** (floor / 10.0), None)
+    return np.asarray(10.0 * np.log10(ratio), dtype=np.float64)
+
+
 def path_figure(
     cost_map: CostMap | None,
     runs: Mapping[str, CalibrationResult],
@@ -172,36 +204,29 @@ def path_figure(
     truth: ArrayLike | None = None,
     truth_label: str = "true solution",
     title: str | None = None,
-    db_floor: float | None = None,
+    db_floor: float = MAP_DB_FLOOR,
     show_measurements: bool = False,
 ) -> Figure:
     """Paths of the iterates over the cost-function heat map, x0 and truth marked.
 
-    ``db_floor`` [dB, < 0]: draw the map as 10·log10(value / max), clipped at this floor —
-    a narrow main lobe and its side lobes stay visible on a map many lobe widths wide
-    (default: the linear metric, as in the thesis's figures).  ``show_measurements``: also
-    mark every measured pose (an acquisition's search pattern, finite-difference stencils).
-    NaN in the map (orientations it does not cover) is left blank.  ``cost_map=None``
-    draws the paths alone (a rig: no map is known), framed to every point drawn.
-    ``truth_label`` names the ``truth`` marker (e.g. a recording's best grid pose).
+    The map is drawn in dB relative to its maximum, clipped at ``db_floor`` [dB, < 0]
+    (:func:`relative_db`).  ``show_measurements``: also mark every measured pose (an
+    acquisition's search pattern, finite-difference stencils).  NaN in the map
+    (orientations it does not cover) is left blank.  ``cost_map=None`` draws the paths
+    alone (a rig: no map is known), framed to every point drawn.  ``truth_label`` names
+    the ``truth`` marker (e.g. a recording's best grid pose).
     """
-    if db_floor is not None and not db_floor < 0.0:
-        from echocal.errors import EchocalValueError
-
-        raise EchocalValueError(f"db_floor must be a negative level in dB; got {db_floor}")
     fig = Figure(figsize=(6.8, 5.6), constrained_layout=True)
     ax = fig.add_subplot()
     on_map = cost_map is not None
     if cost_map is not None:
-        values, label = cost_map.values.T, "metric"
-        if db_floor is not None:
-            peak = float(np.nanmax(values))
-            ratio = np.clip(values / peak, 10.0 ** (db_floor / 10.0), None) if peak > 0 else values
-            values, label = 10.0 * np.log10(ratio), "metric / max [dB]"
+        values = relative_db(cost_map.values.T, db_floor)
         mesh = ax.pcolormesh(
             cost_map.a, cost_map.b, np.ma.masked_invalid(values), shading="auto", cmap="viridis"
         )
-        fig.colorbar(mesh, ax=ax, label=label)
+        fig.colorbar(mesh, ax=ax, label="metric / max [dB]")
+    else:
+        relative_db([1.0], db_floor)  # the same check of db_floor with or without a map
     # light marks on the dark map, dark ones on a white background
     dots, mark = ("0.85", "w") if on_map else ("0.6", "k")
     drawn = []

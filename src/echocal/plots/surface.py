@@ -54,9 +54,7 @@ def _image(
 ) -> None:
     """``values`` shape (n_y, n_x) as an image in mm with a colour bar ``label``; the points
     not found marked ×, unless ``mark_missing`` is False."""
-    im = ax.imshow(
-        np.ma.masked_invalid(values), origin="lower", extent=_extent(scan), **kw
-    )
+    im = ax.imshow(np.ma.masked_invalid(values), origin="lower", extent=_extent(scan), **kw)
     missing = ~scan.found
     if mark_missing and np.any(missing):
         xx, yy = np.meshgrid(scan.dataset["x"].values * _MM, scan.dataset["y"].values * _MM)
