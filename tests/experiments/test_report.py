@@ -38,13 +38,15 @@ def test_report_is_one_self_contained_page(folders, tmp_path):
         assert title in page
     # scenario-1: 2 figures, table-6: 2 groups x 2 figures, sweep: 3 figures
     assert page.count("data:image/png;base64,") == 2 + 4 + 3
-    assert "success_rate" in page and "expected_measurements_to_success" in page
+    assert "<th>success rate</th>" in page and "expected measurements to success" in page
+    assert not re.search(r"<th>[^<]*_[^<]*</th>", page)  # human headers, no snake_case
+    assert ">None<" not in page
     assert page.count('class="agree"') + page.count('class="disagree"') == 1 + 2
 
 
 def test_non_result_folder_is_refused(tmp_path):
     (tmp_path / "junk").mkdir()
-    with pytest.raises(DataFileError, match="neither a scenario result"):
+    with pytest.raises(DataFileError, match="holds no result echocal can report"):
         write_report([tmp_path / "junk"], tmp_path / "r.html")
     with pytest.raises(DataFileError, match="not found"):
         write_report([tmp_path / "missing"], tmp_path / "r.html")

@@ -95,12 +95,15 @@ def register(app: typer.Typer) -> None:
     @app.command("report")
     def report_command(
         results: Annotated[
-            list[Path], typer.Argument(help="Scenario and/or sweep result folders.")
+            list[Path],
+            typer.Argument(
+                help="Result folders: of calibrate --out, scan --out, scenario run or sweep run."
+            ),
         ],
         out: Annotated[Path, typer.Option(help="The HTML page to write.")] = Path("report.html"),
         overwrite: Annotated[bool, typer.Option(help="Replace an existing page.")] = False,
     ) -> None:
-        """Write one self-contained HTML report of scenario and sweep results."""
+        """Write one self-contained HTML report of calibration, scan, scenario and sweep results."""
         from echocal.cli._common import check_out_file
         from echocal.errors import DataFileError
         from echocal.experiments.report import write_report

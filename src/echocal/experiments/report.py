@@ -1,9 +1,12 @@
-"""One self-contained HTML page from scenario and sweep result folders.
+"""One self-contained HTML page from calibration, scan, scenario and sweep result folders.
 
-:func:`write_report` recognizes each folder by its files — a scenario folder by its
-``findings.json`` (:func:`echocal.experiments.scenarios.run_scenario`), a sweep
-folder by its ``sweep.json`` (read with
-:func:`echocal.experiments.execution.load_results`) — and writes one HTML file
+:func:`write_report` recognizes each folder by its files — a calibration folder by its
+``result.json`` (``echocal calibrate --out``: the A-scan at the estimate, the path over
+the map, convergence and provenance), a scan folder by its ``scan.nc`` (``echocal scan
+--out``: the maps and the 3-D view), a scenario folder by its ``findings.json``
+(:func:`echocal.experiments.scenarios.run_scenario`), a sweep folder by its
+``sweep.json`` (read with :func:`echocal.experiments.execution.load_results`) — and
+writes one HTML file
 with every figure embedded as a base64 PNG: no external assets, so the page can
 be mailed or archived as is.  Written atomically.
 
@@ -14,9 +17,7 @@ Example::
 
 from __future__ import annotations
 
-import base64
 import html
-import io
 import json
 import math
 import time
@@ -25,31 +26,27 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-from matplotlib.figure import Figure
 
 from echocal.errors import DataFileError, EchocalError
 from echocal.experiments._output import FINDINGS_FILE
+from echocal.experiments._report_html import CSS, fig_png, fmt, png, table
+from echocal.experiments._report_results import (
+    CALIBRATION_FILE,
+    SCAN_FILE,
+    calibration_section,
+    is_calibration,
+    scan_section,
+)
 from echocal.io import atomic_write_text
 
 __all__ = ["folder_kind", "write_report"]
 
 _SWEEP_FILE = "sweep.json"
 
-_CSS = """
-body{font-family:system-ui,sans-serif;max-width:1150px;margin:2em auto;padding:0 1em;color:#222}
-h1{border-bottom:2px solid #446}h2{border-bottom:1px solid #aab;margin-top:2.2em}
-table{border-collapse:collapse;font-size:12px;margin:0.6em 0}
-td,th{border:1px solid #ccd;padding:3px 6px;text-align:right}th{background:#eef}
-td:first-child,td:nth-child(2){text-align:left}
-.agree{color:#fff;background:#2a7;padding:1px 6px;border-radius:3px;font-weight:bold}
-.disagree{color:#fff;background:#c43;padding:1px 6px;border-radius:3px;font-weight:bold}
-.finding{margin:0.7em 0;padding:0.4em 0.8em;border-left:4px solid #aab;background:#f7f7fb}
-.small{font-size:12px;color:#555}img{max-width:100%;margin:0.5em 0;border:1px solid #eee}
-"""
-
 
 def folder_kind(folder: str | Path) -> str:
-    """``"scenario"`` or ``"sweep"``; DataFileError for a folder that is neither."""
+    """``"scenario"``, ``"sweep"``, ``"calibration"`` or ``"scan"``; DataFileError for a
+    folder that is none of them."""
     path = Path(folder)
     if not path.is_dir():
         raise DataFileError(f"results folder not found: {str(path)!r}")
@@ -57,36 +54,15 @@ def folder_kind(folder: str | Path) -> str:
         return "scenario"
     if (path / _SWEEP_FILE).is_file():
         return "sweep"
+    if is_calibration(path):
+        return "calibration"
+    if (path / SCAN_FILE).is_file():
+        return "scan"
     raise DataFileError(
-        f"{str(path)!r} is neither a scenario result (no {FINDINGS_FILE}; see `echocal "
-        f"scenario run`) nor a sweep result (no {_SWEEP_FILE}; see `echocal sweep run`)"
+        f"{str(path)!r} holds no result echocal can report: pass a folder of `echocal "
+        f"calibrate --out` ({CALIBRATION_FILE}), `echocal scan --out` ({SCAN_FILE}), "
+        f"`echocal scenario run` ({FINDINGS_FILE}) or `echocal sweep run` ({_SWEEP_FILE})"
     )
-
-
-def _png(path: Path) -> str:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f'<img alt="{html.escape(path.stem)}" src="data:image/png;base64,{data}">'
-
-
-def _fig_png(fig: Figure) -> str:
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
-    data = base64.b64encode(buffer.getvalue()).decode("ascii")
-    return f'<img alt="figure" src="data:image/png;base64,{data}">'
-
-
-def _fmt(value: Any) -> str:
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "–"
-        if math.isinf(value):
-            return "never" if value > 0 else "-inf"
-        return f"{value:.3g}"
-    return str(value)
-
-
-def _table(frame: pd.DataFrame) -> str:
-    return frame.to_html(index=False, na_rep="–", formatters=dict.fromkeys(frame.columns, _fmt))
 
 
 def _finding_html(f: dict[str, Any]) -> str:
@@ -148,10 +124,10 @@ def _scenario_section(folder: Path, anchor: str) -> tuple[str, str]:
             continue
         frame = pd.read_parquet(path)
         shown = [c for c in _SCENARIO_COLUMNS if c in frame] if name == "summary" else None
-        parts += [f"<h3>{html.escape(name)}</h3>", _table(frame[shown] if shown else frame)]
+        parts += [f"<h3>{html.escape(name)}</h3>", table(frame[shown] if shown else frame)]
     for label, files in meta["files"]["figures"].items():
-        png = [folder / f for f in files if f.endswith(".png")]
-        parts += [f"<h3>{html.escape(label)}</h3>"] + [_png(p) for p in png if p.is_file()]
+        pngs = [folder / f for f in files if f.endswith(".png")]
+        parts += [f"<h3>{html.escape(label)}</h3>"] + [png(p) for p in pngs if p.is_file()]
     agree = sum(bool(f["agrees"]) for f in meta["findings"])
     return "\n".join(parts), f"{title} — {agree}/{len(meta['findings'])} findings agree"
 
@@ -193,41 +169,50 @@ def _sweep_section(folder: Path, anchor: str) -> tuple[str, str]:
     tolerance = float(runs["tolerance"].iloc[0]) if "tolerance" in runs else math.nan
     parts += [
         f"<h3>summary (tolerance {tolerance:g}°)</h3>",
-        _table(summary[shown]),
+        table(summary[shown]),
         "<h3>success rate vs SNR</h3>",
-        _fig_png(success_rate_figure(summary)),
+        fig_png(success_rate_figure(summary)),
         "<h3>measurements to tolerance</h3>",
-        _fig_png(measurements_figure(runs)),
+        fig_png(measurements_figure(runs)),
         "<h3>success vs measurements</h3>",
-        _fig_png(success_ecdf_figure(runs)),
+        fig_png(success_ecdf_figure(runs)),
     ]
     best = summary.sort_values("expected_measurements_to_success").iloc[0]
     return "\n".join(parts), (
         f"{title} — {done}; cheapest expected measurements to success: {best['label']} "
-        f"at {_fmt(best['snr_db'])} dB ({_fmt(float(best['expected_measurements_to_success']))})"
+        f"at {fmt(best['snr_db'])} dB ({fmt(float(best['expected_measurements_to_success']))})"
     )
+
+
+_SECTIONS = {
+    "scenario": _scenario_section,
+    "sweep": _sweep_section,
+    "calibration": calibration_section,
+    "scan": scan_section,
+}
 
 
 def write_report(
     results_dirs: Sequence[str | Path], out_html: str | Path, *, title: str = "echocal report"
 ) -> Path:
-    """Write one self-contained HTML page for scenario and sweep result folders.
+    """Write one self-contained HTML page for result folders.
 
-    results_dirs : folders written by ``run_scenario`` or ``run_sweep`` (each recognized
-    by its files; DataFileError for any other folder, before anything is written).
+    results_dirs : folders written by ``echocal calibrate --out``, ``echocal scan --out``,
+    ``run_scenario`` or ``run_sweep`` (each recognized by its files, one section each;
+    DataFileError for any other folder, before anything is written).
     out_html : the page to write (atomically).  Returns its path.
     """
     folders = [Path(d) for d in results_dirs]
     if not folders:
-        raise DataFileError("no results folders given; pass scenario or sweep result folders")
+        raise DataFileError(
+            "no results folders given; pass calibration, scan, scenario or sweep folders"
+        )
     kinds = [folder_kind(f) for f in folders]
     sections, toc = [], []
     for k, (folder, kind) in enumerate(zip(folders, kinds, strict=True)):
         anchor = f"s{k}"
         try:
-            body, line = (_scenario_section if kind == "scenario" else _sweep_section)(
-                folder, anchor
-            )
+            body, line = _SECTIONS[kind](folder, anchor)
         except (KeyError, ValueError, OSError) as exc:
             if isinstance(exc, EchocalError):
                 raise
@@ -239,7 +224,7 @@ def write_report(
     stamp = time.strftime("%Y-%m-%d %H:%M")
     page = (
         "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
-        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>"
+        f"<title>{html.escape(title)}</title><style>{CSS}</style></head><body>"
         f"<h1>{html.escape(title)}</h1><p class='small'>generated {stamp} by echocal</p>"
         f"<ul>{''.join(toc)}</ul>" + "\n".join(sections) + "</body></html>\n"
     )
