@@ -1,7 +1,7 @@
 """HTML pieces of the report: the page's style, embedded figures and readable tables.
 
-Tables fit the page (fixed layout, wrapping cells, a horizontal scroll container for a
-table with many columns), carry human headers instead of column names, write "never"
+Tables fit the page (cells wrap at spaces, an overlong word where it must; a horizontal scroll
+container for a table with many columns), carry human headers instead of column names, write "never"
 for a milestone a run did not reach (never Python's ``None``), and show fractions as
 percentages, formatted as the figures' percent axes are.
 """
@@ -25,10 +25,10 @@ CSS = """
 body{font-family:system-ui,sans-serif;max-width:1150px;margin:2em auto;padding:0 1em;color:#222}
 h1{border-bottom:2px solid #446}h2{border-bottom:1px solid #aab;margin-top:2.2em}
 .table-wrap{max-width:100%;overflow-x:auto;margin:0.6em 0}
-table{border-collapse:collapse;font-size:12px;width:100%;table-layout:fixed}
-td,th{border:1px solid #ccd;padding:3px 6px;text-align:right;overflow-wrap:anywhere;
-vertical-align:top}
-th{background:#eef;font-weight:600}
+table{border-collapse:collapse;font-size:12px;width:100%}
+td,th{border:1px solid #ccd;padding:3px 6px;text-align:right;vertical-align:top}
+td{overflow-wrap:break-word}th{background:#eef;font-weight:600;overflow-wrap:normal}
+table.facts{table-layout:fixed}
 td:first-child,td:nth-child(2){text-align:left}
 table.facts td{text-align:left}table.facts td:first-child{width:14em;font-weight:600}
 .agree{color:#fff;background:#2a7;padding:1px 6px;border-radius:3px;font-weight:bold}
@@ -53,7 +53,7 @@ _HEADERS = {
     "measurements_to_0.1deg": "measurements to 0.1°",
     "iterations_to_90pct": "iterations to 90 % of the optimum",
     "measurements_to_90pct": "measurements to 90 % of the optimum",
-    "final_metric_rel": "final metric (of the optimum)",
+    "final_metric_rel": "final metric / optimum",
     "success_rate": "success rate",
     "median_measurements_to_tol": "median measurements to tolerance",
     "p90_measurements_to_tol": "90th percentile measurements to tolerance",
@@ -61,7 +61,9 @@ _HEADERS = {
     "rebound_deg": "largest rebound [°]",
 }
 _UNITS = {"deg": "[°]", "db": "[dB]", "mm": "[mm]", "m": "[m]", "s": "[s]", "hz": "[Hz]"}
-_PERCENT = re.compile(r"(_rate|_rel|_fraction|^fraction_.*)$")
+_PERCENT = re.compile(r"(_rate|_fraction)$")
+"""Fractions the figures draw in percent (success rates); a ratio such as
+``final_metric_rel`` stays a ratio, as on the convergence figures' axes."""
 _MILESTONE = re.compile(r"_to_")
 _MISSING_WORD = {"preset": "default", "group": ""}
 """What a missing value means in these columns (a sweep row without a preset ran the
@@ -93,7 +95,7 @@ def percent(fraction: float) -> str:
 def fmt(value: Any, column: str = "") -> str:
     """One table cell: "never" for a milestone not reached (missing or +inf in a
     ``*_to_*`` column, or +inf anywhere), "–" for another missing value, fractions
-    (``*_rate``, ``*_rel``) as percentages, floats to 3 significant digits."""
+    (``*_rate``, ``*_fraction``) as percentages, floats to 3 significant digits."""
     milestone = bool(_MILESTONE.search(column))
     if _missing(value):
         return NEVER if milestone else _MISSING_WORD.get(column, "–")
@@ -122,7 +124,7 @@ def table(frame: pd.DataFrame) -> str:
         for row in cells.itertuples(index=False, name=None)
     )
     wide = len(frame.columns) > 12  # past a dozen columns: scroll rather than squeeze
-    style = ' style="table-layout:auto;width:auto"' if wide else ""
+    style = ' style="width:auto"' if wide else ""
     return (
         f'<div class="table-wrap"><table{style}><thead><tr>{head}</tr></thead>'
         f"<tbody>{rows}</tbody></table></div>"

@@ -23,6 +23,9 @@ from matplotlib.figure import Figure
 __all__ = ["measurements_figure", "success_ecdf_figure", "success_rate_figure"]
 
 _NOISELESS = "noiseless"
+_STYLES = ("-", "--", ":", "-.")
+_MARKERS = ("o", "s", "^", "D", "v", "P")
+"""Line styles and markers cycled with the colours: series differ without colour too."""
 
 
 def _labels(frame: pd.DataFrame) -> list[str]:
@@ -66,7 +69,10 @@ def success_rate_figure(summary: pd.DataFrame, *, title: str | None = None) -> F
         ax.plot(
             np.asarray(xs)[order],
             100 * sub["success_rate"].to_numpy(dtype=float)[order],
-            marker="o",
+            marker=_MARKERS[k % len(_MARKERS)],
+            mfc="none",  # open markers: configurations on the same point stay visible
+            ms=10 - 1.5 * (k % 4),
+            ls=_STYLES[k % len(_STYLES)],
             color=f"C{k % 10}",
             label=label,
         )
@@ -137,7 +143,7 @@ def success_ecdf_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
     ax = fig.add_subplot()
     labels = _label_column(runs)
     snrs = sorted({float(s) for s in runs["snr_db"]}, key=lambda s: (math.isnan(s), -s))
-    styles = ("-", "--", ":", "-.")
+    styles = _STYLES
     top = float(np.nanmax(runs["n_measurements"].to_numpy(dtype=float))) if len(runs) else 1.0
     for k, label in enumerate(_labels(runs)):
         for j, snr in enumerate(snrs):
