@@ -14,11 +14,12 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from numpy.typing import NDArray
 
 from echocal.plots import save_figure
-from echocal.plots.scene import _EDGE, _FACE, _equal_axes, _shape_polygons
+from echocal.plots.scene import _EDGE, _FACE, _grid_quads
 from echocal.scanning.dataset import SurfaceScan
 from echocal.specimen import Specimen
 
@@ -131,34 +132,92 @@ def measurements_figure(scan: SurfaceScan) -> Figure:
 
 
 def surface_3d_figure(scan: SurfaceScan, specimen: Specimen | None = None) -> Figure:
-    """Reconstructed surface points and normals over the specimen (if given), in 3D."""
+    """Reconstructed surface points and normals over the specimen (if given), in 3D [mm].
+
+    The axes frame the scanned raster (x, y) and the heights from the lowest surface
+    point to the probe, at equal scale on all three axes (a box of those proportions),
+    and the specimen is drawn only inside that box (its surface sampled by vertical rays
+    over the raster), so nothing spills over the tick labels.  Normals are arrows about
+    one grid step long; points not found are marked × at their probe position.
+    """
     ds = scan.dataset
-    fig = Figure(figsize=(7, 6), layout="constrained")
-    ax = fig.add_subplot(projection="3d")
+    fig = Figure(figsize=(7.5, 6.2), layout="constrained")
+    ax = fig.add_subplot(projection="3d", computed_zorder=False)
     pts = scan.surface_points() * _MM
+    probe = (
+        np.stack([*np.meshgrid(ds["x"].values, ds["y"].values), ds["probe_z"].values], axis=-1)
+        * _MM
+    )  # (n_y, n_x, 3)
+    left, right, bottom, top = _extent(scan)
+    heights = np.concatenate([pts[:, 2], probe[..., 2].ravel()])
+    heights = heights[np.isfinite(heights)]
+    z_lo, z_hi = float(heights.min()), float(heights.max())
+    step = min(right - left, top - bottom) / max(2, max(probe.shape[:2]))
     if specimen is not None:
-        polys = [p * _MM for s in specimen for p in _shape_polygons(s)]
-        ax.add_collection3d(Poly3DCollection(polys, facecolor=_FACE, edgecolor=_EDGE, lw=0.2))
-    normals = np.stack([ds[f"normal_{a}"].values for a in "xyz"], axis=-1)[scan.found]
-    if len(pts):
-        ax.scatter(*pts.T, color="tab:red", s=8, depthshade=False, label="measured points")
-        length = (
-            0.5
-            * max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 1.0)
-            / max(1.0, np.sqrt(len(pts)))
+        surface = _specimen_surface(specimen, (left, right, bottom, top), z_hi)
+        inside = surface[..., 2] >= z_lo - 2 * step
+        if np.any(inside):
+            z_lo = min(z_lo, float(surface[..., 2][inside].min()))
+        polys = [q for q in _grid_quads(surface) if np.all(np.isfinite(q))]
+        polys = [q for q in polys if q[:, 2].min() >= z_lo]
+        ax.add_collection3d(
+            Poly3DCollection(polys, facecolor=_FACE, edgecolor=_EDGE, lw=0.15, zorder=1)
         )
-        ax.quiver(*pts.T, *(normals * length).T, color="tab:orange", lw=0.8)
-    probe = np.stack(
-        [*np.meshgrid(ds["x"].values, ds["y"].values), ds["probe_z"].values], axis=-1
-    ).reshape(-1, 3)
-    ax.scatter(*(probe * _MM).T, color="0.5", s=3, marker=".", label="probe positions")
-    ax.legend(loc="upper left")
+    z_lo -= 0.5 * step
+    z_hi += 0.5 * step
+    found = scan.found
+    probe_pts = probe.reshape(-1, 3)
+    ax.scatter(
+        *probe_pts[found.ravel()].T, color="0.5", s=3, marker=".", zorder=2, label="probe positions"
+    )
+    if len(pts):
+        normals = np.stack([ds[f"normal_{a}"].values for a in "xyz"], axis=-1)[found]
+        ax.scatter(
+            *pts.T, color="tab:red", s=10, depthshade=False, zorder=3, label="measured points"
+        )
+        ax.quiver(
+            *pts.T, *(normals * 1.2 * step).T, color="k", lw=1.3, arrow_length_ratio=0.3, zorder=4
+        )
+        ax.plot([], [], color="k", lw=1.3, label="measured normals")
+    if np.any(~found):
+        ax.scatter(
+            *probe_pts[~found.ravel()].T,
+            color="tab:purple",
+            marker="x",
+            s=30,
+            zorder=5,
+            label=f"missing ({int(np.sum(~found))}, at the probe)",
+        )
+    ax.set_xlim(left, right)
+    ax.set_ylim(bottom, top)
+    ax.set_zlim(z_lo, z_hi)
+    ranges = (right - left, top - bottom, z_hi - z_lo)
+    ax.set_box_aspect(ranges, zoom=0.85)
+    for axis, size in zip((ax.xaxis, ax.yaxis, ax.zaxis), ranges, strict=True):
+        # ticks in proportion to the axis's length: a narrow raster keeps legible labels
+        axis.set_major_locator(MaxNLocator(nbins=max(2, round(6 * size / max(ranges)))))
+    ax.legend(loc="upper left", fontsize=8)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")
-    _equal_axes(ax, np.vstack([pts, probe * _MM]) if len(pts) else probe * _MM)
-    ax.set_title("reconstructed surface points over the specimen")
+    over = " over the specimen" if specimen is not None else ""
+    ax.set_title(f"reconstructed surface points and normals{over}")
     return fig
+
+
+def _specimen_surface(
+    specimen: Specimen, extent: tuple[float, float, float, float], above: float, n: int = 41
+) -> NDArray[np.float64]:
+    """[mm] the specimen's upper surface over ``extent`` (mm), shape (n, n, 3): where a
+    vertical ray from ``above`` [mm] first hits it; NaN where it misses."""
+    from echocal.specimen.casting import cast
+
+    left, right, bottom, top = extent
+    xx, yy = np.meshgrid(np.linspace(left, right, n), np.linspace(bottom, top, n))
+    origins = np.stack([xx, yy, np.full_like(xx, above + 1.0)], axis=-1).reshape(-1, 3) / _MM
+    hits = cast(specimen, origins, np.array([0.0, 0.0, -1.0]))
+    points = np.where(hits.hit[:, None], hits.point, np.nan) * _MM
+    return points.reshape(n, n, 3)
 
 
 def save_surface_figures(

@@ -1,0 +1,59 @@
+"""The scan's 3-D view stays inside its axes, draws visible normals and marks missing points."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from echocal.plots.surface import surface_3d_figure
+from echocal.scanning import ScanGrid, scan_surface
+from echocal.setups import load_setup
+from echocal.specimen import builtin_specimen
+
+MM = 1e-3
+
+
+@pytest.fixture(scope="module")
+def rod_end():
+    # the rod ends at y = 50 mm: the last row of points is missing
+    specimen = builtin_specimen("cylinder")
+    setup = dataclasses.replace(load_setup("scan-5mhz", seed=2), specimen=specimen, rng=2)
+    grid = ScanGrid.regular(x=(-2 * MM, 2 * MM, 2 * MM), y=(40 * MM, 70 * MM, 15 * MM), z=25 * MM)
+    scan = scan_surface(setup, grid, rng=2, progress=False)
+    assert int(np.sum(~scan.found)) >= 1
+    return scan, specimen
+
+
+def test_the_specimen_is_drawn_inside_the_axes_box(rod_end):
+    scan, specimen = rod_end
+    ax = surface_3d_figure(scan, specimen).axes[0]
+    (x0, x1), (y0, y1), (z0, z1) = ax.get_xlim(), ax.get_ylim(), ax.get_zlim()
+    # the box is the raster, half a step beyond its outer points, in mm
+    assert (x0, x1) == pytest.approx((-3.0, 3.0)) and (y0, y1) == pytest.approx((32.5, 77.5))
+    polys = [c for c in ax.collections if isinstance(c, Poly3DCollection)]
+    assert polys
+    verts = np.asarray(polys[0]._faces).reshape(-1, 3)  # the 3-D quads [mm]
+    eps = 1e-9
+    assert np.all((verts[:, 0] >= x0 - eps) & (verts[:, 0] <= x1 + eps))
+    assert np.all((verts[:, 1] >= y0 - eps) & (verts[:, 1] <= y1 + eps))
+    assert np.all((verts[:, 2] >= z0 - eps) & (verts[:, 2] <= z1 + eps))
+    # equal scale: the box's proportions are the data ranges'
+    aspect = np.asarray(ax.get_box_aspect())
+    ranges = np.array([x1 - x0, y1 - y0, z1 - z0])
+    np.testing.assert_allclose(aspect / aspect[0], ranges / ranges[0], rtol=1e-6)
+
+
+def test_normals_are_visible_and_missing_points_marked(rod_end):
+    scan, specimen = rod_end
+    ax = surface_3d_figure(scan, specimen).axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert f"missing ({int(np.sum(~scan.found))}, at the probe)" in labels
+    assert "measured normals" in labels
+    # each normal arrow is about a grid step long (2 mm here): visible at this scale
+    quiver = [c for c in ax.collections if type(c).__name__ == "Line3DCollection"][-1]
+    shafts = np.asarray(quiver._segments3d)[: int(np.sum(scan.found))]  # 3-D segments
+    lengths = np.linalg.norm(shafts[:, 1] - shafts[:, 0], axis=-1)
+    assert np.all(lengths > 1.0)
