@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
 from typer.testing import CliRunner
 
 from echocal.cli import app
@@ -31,8 +32,35 @@ def test_scene_figure_draws_every_pose_and_the_specimen():
         setup.specimen, setup.transducer, [Pose(0.01, 0, 0.022, 165, 6), Pose(0, 0, 0.02)]
     )
     ax = fig.axes[0]
-    assert len(ax.get_legend().get_texts()) == 2
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert len(labels) == 4  # two poses, the beam axis and the surface normal
+    assert "beam axis" in labels and "surface normal at the beam's hit" in labels
     assert len(ax.collections) >= 3  # specimen polygons + one ray bundle per pose
+
+
+def test_scene_draws_the_beam_axis_to_the_part_and_the_normal_there():
+    import numpy as np
+
+    from echocal.specimen import FinitePlane, Specimen
+
+    # a flat plane at z = 0: the beam axis of a probe at 20 mm tilted 10° meets it at
+    # 20 mm · tan 10° from below the probe, and the normal there is +z, 20/cos 10° long
+    setup = load_setup("thesis")
+    plane = Specimen([FinitePlane(center=(0, 0, 0), width=0.2, height=0.2)])
+    pose = Pose(0.0, 0.0, 0.02, 0.0, 10.0)
+    ax = scene_figure(plane, setup.transducer, [pose]).axes[0]
+    axis = next(ln for ln in ax.get_lines() if ln.get_label() == "beam axis")
+    xs, ys, zs = axis.get_data_3d()
+    hit = np.array([xs[1], ys[1], zs[1]])
+    np.testing.assert_allclose(np.hypot(hit[0], hit[1]), 20 * np.tan(np.radians(10)), rtol=1e-9)
+    assert hit[2] == pytest.approx(0.0, abs=1e-9)
+    quiver = [c for c in ax.collections if type(c).__name__ == "Line3DCollection"][-1]
+    shaft = np.asarray(quiver._segments3d)[0]
+    shaft = shaft[np.argsort(shaft[:, 2])]  # foot on the part, then the tip
+    np.testing.assert_allclose(shaft[0], hit, atol=1e-9)
+    np.testing.assert_allclose(
+        shaft[1] - shaft[0], [0, 0, 20 / np.cos(np.radians(10))], rtol=1e-9, atol=1e-9
+    )
 
 
 def test_bad_pose_is_a_one_line_error_not_a_traceback():

@@ -6,6 +6,7 @@ Only reads data; returns a matplotlib Figure.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -22,6 +23,7 @@ __all__ = ["scene_figure"]
 _MM = 1e3  # plot in millimetres
 _FACE = (0.62, 0.68, 0.75, 0.45)
 _EDGE = (0.25, 0.3, 0.38, 0.9)
+_NORMAL = "magenta"  # the surface normal: apart from the pose colours, the part and the axis
 
 
 def _shape_polygons(shape: object, resolution: int = 32) -> list[NDArray[np.float64]]:
@@ -82,10 +84,12 @@ def scene_figure(
     """Specimen, transducer(s) at ``poses`` and up to ``n_rays`` rays per pose with their hits.
 
     Rays that hit are drawn from the pixel to the hit point, coloured by their
-    echo amplitude a·β; misses are drawn short and grey.  Axes in millimetres.
+    echo amplitude a·β; misses are drawn short and grey.  Each pose's beam axis is drawn
+    (black, dashed) to where it meets the part, with the part's surface normal there
+    (magenta arrow): the angle between them is what a calibration removes.  Axes in millimetres.
     """
     fig = Figure(figsize=(8, 6.5), constrained_layout=True)
-    ax = fig.add_subplot(projection="3d")
+    ax = fig.add_subplot(projection="3d", computed_zorder=False)  # part, rays, then axes
     polygons = [p for shape in specimen for p in _shape_polygons(shape)]
     if polygons:
         ax.add_collection3d(
@@ -115,7 +119,7 @@ def scene_figure(
             Line3DCollection(segments, colors=[(*_rgb(color), s) for s in shade], linewidths=0.7)
         )
         ax.scatter(*(hit_point[hit] * _MM).T, s=4, color=color)
-        extent += [outline, end]
+        extent += [outline, end, *_beam_and_normal(ax, specimen, pose, first=k == 0)]
     points = np.concatenate(extent) * _MM
     _equal_axes(ax, points)
     ax.set_xlabel("x [mm]")
@@ -124,6 +128,42 @@ def scene_figure(
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title or f"{specimen.name}: probe and {len(pick)} of {transducer.n_rays} rays")
     return fig
+
+
+def _beam_and_normal(
+    ax: Any, specimen: Specimen, pose: Pose, *, first: bool
+) -> list[NDArray[np.float64]]:
+    """Draw the beam axis (black, dashed) from the probe to where it meets the part and the part's
+    surface normal there (a magenta arrow as long as the water path); a beam that misses is
+    drawn as long as the probe's height.  Returns the points drawn [m], for framing."""
+    from echocal.specimen.casting import cast
+
+    start, beam = pose.position, pose.beam_direction
+    hits = cast(specimen, start[None, :], beam[None, :])
+    hit = bool(hits.hit[0])
+    end = hits.point[0] if hit else start + max(abs(pose.z), 1e-3) * beam
+    ax.plot(
+        *(np.stack([start, end]) * _MM).T,
+        color="k",
+        ls=(0, (4, 2)),
+        lw=1.8,
+        zorder=7,  # over the normal: where they coincide, the dashes show both
+        label="beam axis" if first else None,
+    )
+    if not hit:
+        return [end[None, :]]
+    tip = end + float(hits.distance[0]) * hits.normal[0]
+    ax.quiver(
+        *(end * _MM),
+        *((tip - end) * _MM),
+        color=_NORMAL,
+        lw=2.0,
+        arrow_length_ratio=0.15,
+        zorder=6,
+    )
+    if first:
+        ax.plot([], [], color=_NORMAL, lw=2.0, label="surface normal at the beam's hit")
+    return [end[None, :], tip[None, :]]
 
 
 def _pose_label(pose: Pose) -> str:
