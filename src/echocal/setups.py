@@ -755,7 +755,7 @@ def _build_interior(
     if material is None or material.is_fluid:
         return None, [
             "specimen.thickness: an interior needs a solid specimen.material "
-            "(e.g. material = \"steel\")"
+            '(e.g. material = "steel")'
         ]
     if config.echo.reflection != "wave":
         return None, [
@@ -768,7 +768,7 @@ def _build_interior(
     if len(specimen) != 1 or not isinstance(specimen[0], FinitePlane):
         return None, [
             "specimen.thickness: an interior needs a plate: one plane shape as the front face "
-            "(e.g. builtin = \"flat-plate\"); curved walls are not modelled"
+            '(e.g. builtin = "flat-plate"); curved walls are not modelled'
         ]
     try:
         flaws = tuple(

@@ -669,7 +669,9 @@ def gated_envelope_peak(V, freqs, pulse_spectrum, t_lo, t_hi, *, n_t: int = 4001
 
         lo, hi = t[max(m - 1, 0)], t[min(m + 1, n_t - 1)]
         res = optimize.minimize_scalar(
-            lambda tt: -env(tt), bounds=(lo, hi), method="bounded",
+            lambda tt: -env(tt),
+            bounds=(lo, hi),
+            method="bounded",
             options={"xatol": (hi - lo) * 1e-6},
         )
         peaks.append(-res.fun)

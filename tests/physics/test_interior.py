@@ -153,10 +153,20 @@ def test_back_wall_echo_agrees_with_the_exact_angular_spectrum_of_an_elastic_pla
     tilts = np.array([0.0, 0.5, 1.0])
     got = np.array(
         [
-            np.abs(scipy.signal.hilbert(_echoes(
-                radius=a, d=d, thickness=h, orders=1, bandwidth=30, tilt=t, steel=steel,
-                n_samples=2048,
-            )[0]["back-wall"])).max()
+            np.abs(
+                scipy.signal.hilbert(
+                    _echoes(
+                        radius=a,
+                        d=d,
+                        thickness=h,
+                        orders=1,
+                        bandwidth=30,
+                        tilt=t,
+                        steel=steel,
+                        n_samples=2048,
+                    )[0]["back-wall"]
+                )
+            ).max()
             for t in tilts
         ]
     )
@@ -167,17 +177,31 @@ def test_back_wall_echo_agrees_with_the_exact_angular_spectrum_of_an_elastic_pla
 
     def plate(f: float):
         return lambda theta: ref.fluid_loaded_plate_reflection(
-            f, theta, h, 1000.0, C, steel.density, C_L * (1 - 1j * eta),
+            f,
+            theta,
+            h,
+            1000.0,
+            C,
+            steel.density,
+            C_L * (1 - 1j * eta),
             steel.shear_speed * (1 - 1j * eta),
         )
 
-    v = np.array([
-        ref.pulse_echo_plane(
-            a, f, d, tilts, C, reflection=plate(f), accuracy=0.4,
-            extra_phase=2 * h * 2 * np.pi * f * (1 / C_L + 1 / steel.shear_speed),
-        )
-        for f in freqs
-    ])
+    v = np.array(
+        [
+            ref.pulse_echo_plane(
+                a,
+                f,
+                d,
+                tilts,
+                C,
+                reflection=plate(f),
+                accuracy=0.4,
+                extra_phase=2 * h * 2 * np.pi * f * (1 / C_L + 1 / steel.shear_speed),
+            )
+            for f in freqs
+        ]
+    )
     plane = ref.pulse_echo_envelope_peak(np.exp(2j * np.pi * freqs * 2 * d / C), freqs, spectrum)
     t_back = 2 * d / C + 2 * h / C_L
     want, _ = ref.gated_envelope_peak(v, freqs, spectrum, t_back - 1e-6, t_back + 1e-6)

@@ -57,3 +57,25 @@ def test_the_ascan_draws_the_detectors_threshold():
         assert 0.02 < want < 1.0  # above the noise σ, below the echo
     fig = plot_ascan(x, w, pulse=p, noise_sigma=0.0)  # no noise level: no threshold
     assert not [ln for ln in fig.axes[0].get_lines() if "threshold" in str(ln.get_label())]
+
+
+def test_the_scenarios_overlay_draws_noise_threshold_and_distinct_styles():
+    from echocal.experiments._ascan import ascan_overlay_figure
+    from echocal.signal.detection import EchoDetector
+
+    p = GaborPulse()
+    w = RecordingWindow(fs=100e6, start=20e-6, n_samples=1024)
+    rng = np.random.default_rng(4)
+    rows = np.stack([synthesize([1.0], [t], p, w, normalize="peak") for t in (24e-6, 26e-6)])
+    rows += rng.normal(0.0, 0.02, rows.shape)
+    fig = ascan_overlay_figure(w.times, rows, ["a", "b"], [24e-6, 26e-6], title="t", pulse=p)
+    full = fig.axes[0]
+    labels = [t.get_text() for t in full.get_legend().get_texts()]
+    assert labels[:2] == ["a", "b"] and any(s.startswith("noise ±σ") for s in labels)
+    threshold = next(ln for ln in full.get_lines() if ln.get_label().startswith("detection"))
+    sigma = float(labels[2].split("σ = ")[1].rstrip(")"))
+    assert sigma == pytest.approx(0.02, rel=0.1)  # the MAD estimate of the noise drawn
+    want = EchoDetector(p, w.fs, w.n_samples).threshold_amplitude(sigma, 4.5)
+    assert threshold.get_ydata()[0] == pytest.approx(want, rel=1e-2)
+    traces = [ln for ln in full.get_lines() if ln.get_label() in ("a", "b")]
+    assert traces[0].get_linestyle() != traces[1].get_linestyle()  # not by colour alone

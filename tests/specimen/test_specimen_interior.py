@@ -69,13 +69,22 @@ def test_a_plate_with_flaws_loads(tmp_path: Path) -> None:
     [
         (lambda t: t.replace('"20 mm"', '"-5 mm"'), "specimen.thickness", "greater than 0"),
         (lambda t: t.replace('"20 mm"', "true"), "specimen.thickness", "number"),
-        (lambda t: t.replace('reflection = "wave"', 'reflection = "lambertian"'),
-         "specimen.thickness", "wave"),
+        (
+            lambda t: t.replace('reflection = "wave"', 'reflection = "lambertian"'),
+            "specimen.thickness",
+            "wave",
+        ),
         (lambda t: t.replace('material = "steel"\n', ""), "specimen.thickness", "material"),
-        (lambda t: t.replace('material = "steel"', 'material = "water"'),
-         "specimen.thickness", "solid"),
-        (lambda t: t.replace('builtin = "flat-plate"', 'builtin = "sphere"'),
-         "specimen.thickness", "plate"),
+        (
+            lambda t: t.replace('material = "steel"', 'material = "water"'),
+            "specimen.thickness",
+            "solid",
+        ),
+        (
+            lambda t: t.replace('builtin = "flat-plate"', 'builtin = "sphere"'),
+            "specimen.thickness",
+            "plate",
+        ),
     ],
     ids=["negative", "bool", "ray-model", "no-material", "fluid", "curved"],
 )
@@ -95,8 +104,15 @@ def test_an_impossible_interior_is_refused_naming_the_field(tmp_path, edit, fiel
         (_flaw(diameter="0 mm"), "specimen.flaws", "diameter"),
         (_flaw() + _flaw(), "specimen.flaws", "twice"),
     ],
-    ids=["below-back-wall", "through-front", "beside", "unknown-kind", "sdh-no-length",
-         "zero-diameter", "duplicate-name"],
+    ids=[
+        "below-back-wall",
+        "through-front",
+        "beside",
+        "unknown-kind",
+        "sdh-no-length",
+        "zero-diameter",
+        "duplicate-name",
+    ],
 )
 def test_a_bad_flaw_is_refused_naming_the_field(tmp_path, flaw, field, fix) -> None:
     problems = _problems(tmp_path, PLATE.format(flaws=flaw, model="wave"))
@@ -133,8 +149,16 @@ def test_flaw_surface_samples_cover_their_area() -> None:
 def test_simulate_lists_every_echo_of_the_steel_plate(tmp_path: Path) -> None:
     result = CliRunner().invoke(
         app,
-        ["simulate", "--setup", "immersion-steel-plate", "--pose", "0,0,50", "--json",
-         "--out", str(tmp_path / "out")],
+        [
+            "simulate",
+            "--setup",
+            "immersion-steel-plate",
+            "--pose",
+            "0,0,50",
+            "--json",
+            "--out",
+            str(tmp_path / "out"),
+        ],
     )
     assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout)
@@ -157,8 +181,14 @@ def test_the_side_drilled_hole_setup_shows_its_hole_between_the_walls() -> None:
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("diameter", "true"), ("diameter", "nan"), ("diameter", "1e300"), ("length", "false"),
-     ("position", '[true, 0, 0]'), ("axis", "[0, 0, 0]")],
+    [
+        ("diameter", "true"),
+        ("diameter", "nan"),
+        ("diameter", "1e300"),
+        ("length", "false"),
+        ("position", "[true, 0, 0]"),
+        ("axis", "[0, 0, 0]"),
+    ],
 )
 def test_a_flaw_field_takes_no_bool_nan_or_huge_value(tmp_path, field, value) -> None:
     flaw = _flaw(extra='length = "30 mm"\naxis = [0, 1, 0]')

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from echocal.experiments._findings import Finding
 from echocal.geometry import Pose, orientation_normal
 from echocal.measurement.virtual import VirtualSetup
-from echocal.signal import get_metric
+from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.processing import envelope, time_of_flight
 from echocal.specimen.builtins import THESIS_BLOCK_FACETS
 
@@ -49,18 +49,53 @@ def ascan_overlay_figure(
     expected_tof: Sequence[float],
     *,
     title: str,
+    pulse: Pulse | None = None,
 ) -> Figure:
     """A-scans ``samples`` (n_points, n_samples) against ``times`` [s], overlaid, with their
-    envelopes and the expected times of flight [s] as dashed lines (thesis Figs. 8, 10)."""
+    envelopes and the expected times of flight [s] as dashed lines (thesis Figs. 8, 10).
+
+    Each trace has its own colour and line style.  With ``pulse`` the noise level ±σ
+    (1.4826 · MAD of the traces) and the detector's threshold
+    (:data:`~echocal.constants.ECHO_THRESHOLD` σ, as an echo's envelope peak) are drawn.
+    """
+    from echocal.constants import ECHO_THRESHOLD
+    from echocal.plots.ascan import _detection_level, _noise_sigma
+
     fig = Figure(figsize=(10, 4.0), layout="constrained")
     full, zoom = fig.subplots(1, 2, width_ratios=(2, 1))
     t_us = times * 1e6
+    styles = ("-", (0, (5, 1.5)), "-.", (0, (1, 1)))
     for k, (row, label) in enumerate(zip(samples, labels, strict=True)):
-        color = f"C{k}"
+        color, ls = f"C{k}", styles[k % len(styles)]
         for ax in (full, zoom):
-            ax.plot(t_us, row, lw=0.8, color=color, label=label if ax is full else None)
+            ax.plot(t_us, row, lw=0.8, color=color, ls=ls, label=label if ax is full else None)
             ax.plot(t_us, envelope(row), lw=1.0, ls=":", color=color)
             ax.axvline(expected_tof[k] * 1e6, color=color, ls="--", lw=0.8)
+    if pulse is not None:
+        sigma = float(np.median([_noise_sigma(row) for row in samples]))
+        fs = 1.0 / float(times[1] - times[0])
+        window = RecordingWindow(fs=fs, start=float(times[0]), n_samples=len(times))
+        level = _detection_level(pulse, window, sigma, ECHO_THRESHOLD)
+        for ax in (full, zoom):
+            if sigma > 0:
+                ax.axhline(
+                    sigma,
+                    color="0.3",
+                    ls=":",
+                    lw=1.0,
+                    label=f"noise ±σ (σ = {sigma:.3g})" if ax is full else None,
+                )
+                ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
+            if level:
+                ax.axhline(
+                    level,
+                    color="C4",
+                    ls=(0, (6, 3)),
+                    lw=1.2,
+                    label=f"detection threshold {level:.3g} (g = {ECHO_THRESHOLD:g} σ)"
+                    if ax is full
+                    else None,
+                )
     lo = min(expected_tof) * 1e6 - 3.0
     hi = max(expected_tof) * 1e6 + 3.0
     zoom.set_xlim(lo, hi)

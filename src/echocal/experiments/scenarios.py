@@ -242,6 +242,7 @@ def _run_ascans(
         (table["expected_tof_us"] * 1e-6).tolist(),
         title=f"{scenario.name}: A-scans at the optimal orientation of each point (SNR "
         f"{setup.receiver.snr_db:g} dB)",
+        pulse=setup.pulse,
     )
     figures = {"A-scans (Figs. 8/10)": write_figure(overlay, out, "ascans")}
     scene = scene_figure(

@@ -225,7 +225,10 @@ class InteriorEchoes:
         """The ``order``-th back-wall echo: the face's mirror at the equivalent depth."""
         depth = order * self.interior.thickness
         equivalent = FinitePlane(
-            center=self.front.center - self.front.normal * depth * self._ratio
+            center=self.front.center
+            - self.front.normal
+            * depth
+            * self._ratio
             * np.sign(float(self.front.normal @ (position - self.front.center))),
             width=self.front.width,
             height=self.front.height,
@@ -246,9 +249,7 @@ class InteriorEchoes:
     def _flaw_samples(self) -> dict[str, SurfaceSamples]:
         c_l = self.material.longitudinal_speed
         spacing = c_l / self.model.pulse.center_frequency / _SOLID_SAMPLES_PER_WAVELENGTH
-        return {
-            f.name: f.surface_samples(spacing, self.front.normal) for f in self.interior.flaws
-        }
+        return {f.name: f.surface_samples(spacing, self.front.normal) for f in self.interior.flaws}
 
     def _flaw(
         self, flaw: Flaw, position: FloatArray, frame: FloatArray, front: _Front
