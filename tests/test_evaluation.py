@@ -170,3 +170,55 @@ def test_methods_command_lists_the_registry_and_one_methods_defaults():
     assert set(auto["options"]) == set(acquisition["options"])
     bad = CliRunner().invoke(app, ["methods", "magic"])
     assert bad.exit_code != 0 and "magic" in (bad.output + str(bad.exception))
+
+
+def test_cost_map_in_a_gate_is_the_metric_of_the_gated_trace(thesis):
+    from echocal.geometry import tilt_frame
+    from echocal.signal import get_metric
+    from echocal.signal.gates import TimeGate
+
+    window = thesis.window
+    whole = TimeGate(name="whole", start=window.start, width=window.end - window.start)
+    kwargs = {"a_range": (-4.0, 4.0), "b_range": (-4.0, 4.0), "n": 5}
+    plain = cost_map(thesis, POSITION, **kwargs)
+    assert np.array_equal(cost_map(thesis, POSITION, gate=whole, **kwargs).values, plain.values)
+    # a gate on the first half of the echo: the metric of the trace zeroed outside it
+    t0, t1 = thesis.true_optimum(POSITION, parameterization="tilt")
+    samples = thesis.ideal_samples(POSITION[None], tilt_frame(np.array([t0]), np.array([t1])))[0]
+    peak = window.start + np.argmax(np.abs(samples)) / window.fs
+    half = TimeGate(name="half", start=window.start, width=peak - window.start)
+    gated = thesis.metric_values(POSITION, t0, t1, parameterization="tilt", gate=half)
+    by_hand = get_metric("pseudo-energy")(
+        np.where(window.times <= peak, samples, 0.0), window, thesis.pulse
+    )
+    assert float(gated) == pytest.approx(float(by_hand), rel=1e-9)
+    assert (
+        0.0 < float(gated) < float(thesis.metric_values(POSITION, t0, t1, parameterization="tilt"))
+    )
+    # a gate holding no echo: a noiseless map of (Gabor-tail) zeros
+    empty = TimeGate(name="empty", start=window.start, width=2e-7)
+    nothing = cost_map(thesis, POSITION, gate=empty, **kwargs).values
+    assert np.max(nothing) < 1e-12 * np.max(plain.values)
+
+
+def test_map_resolution_follows_the_models_cost():
+    from echocal.evaluation import map_resolution
+
+    assert map_resolution(load_setup("thesis")) == 61  # ray model: < 1 ms per pose
+    assert map_resolution(load_setup("immersion-5mhz-wave")) == 41
+    assert map_resolution(load_setup("immersion-steel-plate")) == 25  # + back-wall echoes
+
+
+def test_gated_truth_of_the_plate_is_normal_incidence_on_the_back_wall():
+    from echocal.signal.gates import resolve_gate
+
+    plate = load_setup("immersion-steel-plate")
+    gate = resolve_gate(
+        "back-wall", pulse=plate.pulse, thickness=plate.thickness, material=plate.material
+    )
+    where = plate.reference_position
+    a, b = plate.true_optimum(where, parameterization="tilt", gate=gate)
+    assert np.hypot(a, b) < 0.01  # a level plate: the back wall is parallel to the front
+    ungated = plate.metric_values(where, 0.0, 0.0, parameterization="tilt")
+    in_gate = plate.metric_values(where, 0.0, 0.0, parameterization="tilt", gate=gate)
+    assert 0.0 < float(in_gate) < 0.1 * float(ungated)  # the back wall is ~20 dB down

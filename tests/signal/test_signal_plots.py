@@ -20,7 +20,7 @@ def test_plot_pulse_and_ascan_save(tmp_path):
     x = synthesize([1.0, 0.4], [24e-6, 26e-6], p, w, normalize="peak")
     fig2 = plot_ascan(x, w, pulse=p, gate=Gate(start=23e-6, width=4e-6, threshold=0.3))
     labels = [t.get_text() for t in fig2.axes[0].get_legend().get_texts()]
-    assert labels[:2] == ["A-scan", "envelope"] and "gate" in labels
+    assert labels[:2] == ["A-scan", "envelope"] and "detection gate" in labels
     assert any(label.startswith("τ = 24.0000") for label in labels)
     assert len(fig2.axes) == 2  # the zoom panel on the echo: τ ± 3 pulse durations
     lo, hi = fig2.axes[1].get_xlim()

@@ -400,6 +400,7 @@ def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dic
             gate=_energy_gate(
                 scan.samples, window, objective, None if gate is None else gate.apply
             ),
+            gate_label="pseudo-energy window",
             title=f"A-scan at the estimate ({result.names[0]} {a:.3f}°, "
             f"{result.names[1]} {b:.3f}°)",
         )

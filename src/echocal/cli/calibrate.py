@@ -293,7 +293,7 @@ def _calibrate_simulated(
     objective = SourceObjective(virtual, where, parameterization=parameterization, gate=chosen)
     # the effective seed: --seed, else the setup file's, else 0
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)
-    evaluation = evaluate_run(virtual, where, result)
+    evaluation = evaluate_run(virtual, where, result, gate=chosen)
     prepare_out(out)
     result.save_json(
         out / "result.json",
@@ -307,7 +307,7 @@ def _calibrate_simulated(
             gate=chosen,
         ),
     )
-    figures = _save_plots(virtual, where, evaluation, out) if plots else {}
+    figures = _save_plots(virtual, where, evaluation, out, chosen) if plots else {}
     figures.update(save_final_ascan(objective, result, out, plots))
     found = found_echo(result)
     summary = {
@@ -337,7 +337,7 @@ def _calibrate_simulated(
     )
 
 
-def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
+def _save_plots(virtual, where, evaluation, out: Path, gate=None) -> dict[str, str]:
     from echocal.evaluation import cost_map
     from echocal.plots.calibration import convergence_figure, path_figure
 
@@ -347,7 +347,8 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         {label: result},
         {label: evaluation.iterate_values / evaluation.optimum_value},
         optimum_value=1.0,
-        title=f"{label}: pseudo-energy of the estimate",
+        title=f"{label}: pseudo-energy of the estimate"
+        + ("" if gate is None else f" in the {gate.name} gate"),
     )
     points = np.vstack([result.iterates, result.points, evaluation.truth[None, :]])
     span = max(3.0, 1.3 * float(np.max(np.abs(points - evaluation.truth))))
@@ -358,7 +359,7 @@ def _save_plots(virtual, where, evaluation, out: Path) -> dict[str, str]:
         parameterization=result.parameterization,
         a_range=(centre[0] - span, centre[0] + span),
         b_range=(centre[1] - span, centre[1] + span),
-        n=61,
+        gate=gate,
     )
     path = path_figure(
         cmap,

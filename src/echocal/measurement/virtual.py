@@ -66,7 +66,7 @@ from echocal.signal import (
     get_metric,
     noise_sigma_for_snr,
 )
-from echocal.signal.gates import TimeGate, gates_by_name
+from echocal.signal.gates import TimeGate, gated_metric, gates_by_name
 from echocal.signal.synthesis import _synthesize_unchecked
 from echocal.specimen import FinitePlane, Specimen
 from echocal.specimen.casting import _as_shapes, cast
@@ -583,13 +583,16 @@ class VirtualSetup(BaseSource):
         metric: str = "pseudo-energy",
         noise: bool = False,
         rng: RngLike = None,
+        gate: TimeGate | None = None,
     ) -> FloatArray:
         """The metric at orientations ``(a, b)`` [deg] (broadcast shapes ``(...)``).
 
         One batched simulation for all orientations — used for cost maps (thesis
         Figs. 12–24 backgrounds) and for the ground truth.  Noiseless by default.
+        ``gate``: the metric inside this gate (:func:`echocal.signal.gates.gated_metric`);
+        None: the whole recording.
         """
-        metric_fn = get_metric(metric)
+        get_metric(metric)  # an unknown name is refused before anything is simulated
         one_of("parameterization", parameterization, PARAMETERIZATIONS)
         a, b = np.broadcast_arrays(finite_array("a", a), finite_array("b", b))
         position = finite_array("position", position, shape_tail=(3,)).reshape(3)
@@ -606,7 +609,7 @@ class VirtualSetup(BaseSource):
             samples = self._ideal(positions[sl], frames[sl])
             if generator is not None:
                 samples = self._receiver._receive_unchecked(samples, generator)
-            out[sl] = metric_fn(samples, self.window, self.pulse)
+            out[sl] = gated_metric(metric, samples, self.window, self.pulse, gate)
         return out.reshape(a.shape)
 
     def true_optimum(
@@ -615,22 +618,26 @@ class VirtualSetup(BaseSource):
         *,
         parameterization: str = "azimuth-coelevation",
         metric: str = "pseudo-energy",
+        gate: TimeGate | None = None,
     ) -> tuple[float, float]:
-        """Orientation (a, b) [deg] of maximum noiseless ``metric`` at ``position`` [m].
+        """Orientation (a, b) [deg] of maximum noiseless ``metric`` at ``position`` [m]
+        (inside ``gate`` when one is given: the truth of a gated calibration).
 
         Found by a dense local search (Nelder–Mead to 1e-5°) started from the
         surface normal below the position — the analytic optimum for a plane.
         Kept apart from :meth:`measure`: an algorithm cannot peek.
         """
         position = finite_array("position", position, shape_tail=(3,)).reshape(3)
-        key = (*position.round(12), metric)
+        key = (*position.round(12), metric, gate)
         if key not in self._truth_cache:
-            self._truth_cache[key] = self._search_optimum(position, metric)
+            self._truth_cache[key] = self._search_optimum(position, metric, gate)
         az, coel = self._truth_cache[key]
         a, b = convert_angles(az, coel, "azimuth-coelevation", parameterization)
         return float(a), float(b)
 
-    def _search_optimum(self, position: FloatArray, metric: str) -> tuple[float, float]:
+    def _search_optimum(
+        self, position: FloatArray, metric: str, gate: TimeGate | None = None
+    ) -> tuple[float, float]:
         # Global: the candidates are the directions of normal incidence on the surface
         # (every local maximum of the echo of a smooth surface lies near one), scored by
         # the metric itself; the best is refined by Nelder–Mead in gimbal tilts (smooth at
@@ -638,11 +645,18 @@ class VirtualSetup(BaseSource):
         candidates = self.normal_incidence_directions(position)
 
         def negative(v: FloatArray) -> float:
-            value = self.metric_values(position, v[0], v[1], parameterization="tilt", metric=metric)
+            value = self.metric_values(
+                position, v[0], v[1], parameterization="tilt", metric=metric, gate=gate
+            )
             return -float(value)
 
         scores = self.metric_values(
-            position, candidates[:, 0], candidates[:, 1], parameterization="tilt", metric=metric
+            position,
+            candidates[:, 0],
+            candidates[:, 1],
+            parameterization="tilt",
+            metric=metric,
+            gate=gate,
         )
         start = candidates[int(np.argmax(scores))]
         best = scipy.optimize.minimize(

@@ -27,6 +27,7 @@ def plot_ascan(
     *,
     pulse: Pulse | None = None,
     gate: Gate | None = None,
+    gate_label: str = "detection gate",
     gates: Sequence[TimeGate] = (),
     title: str | None = None,
     noise_sigma: float | None = None,
@@ -42,11 +43,13 @@ def plot_ascan(
     the gate (bar at its threshold) and,
     with ``pulse``, the time of flight of the strongest echo (matched-filter peak,
     dash-dotted).  With ``pulse`` and an echo, a bottom panel zooms on it (± 3 pulse
-    durations), so a sub-microsecond echo in a long window is seen cycle by cycle.
+    durations) at its own amplitude scale, so a sub-microsecond echo in a long window, and
+    a weak echo beside a strong one, is seen cycle by cycle.
 
     Parameters
     ----------
     gate : a detection gate (bar at its threshold; the time of flight is taken inside it).
+    gate_label : its legend entry (calibrate draws its pseudo-energy window there).
     gates : measurement gates (:class:`~echocal.signal.gates.TimeGate`), each shaded over
         its span on this A-scan (a triggered gate where the front wall put it, its
         interface trigger marked); the time of flight is taken inside the first.
@@ -84,7 +87,7 @@ def plot_ascan(
             ax.axhline(detect, color="C4", ls=(0, (6, 3)), lw=1.2, label=label)
         if gate is not None:
             level = float(gate.level(x[None, :])[0])
-            ax.hlines(level, gate.start * 1e6, gate.end * 1e6, colors="C2", lw=3, label="gate")
+            ax.hlines(level, gate.start * 1e6, gate.end * 1e6, colors="C2", lw=3, label=gate_label)
         _draw_gates(ax, gates, x, window)
         if tof is not None:
             ax.axvline(tof * 1e6, color="C3", ls="-.", lw=1, label=f"τ = {tof * 1e6:.4f} µs")
@@ -99,6 +102,10 @@ def plot_ascan(
         lo, hi = max(tof * 1e6 - half, t_us[0]), min(tof * 1e6 + half, t_us[-1])
         axes[0].axvspan(lo, hi, color="C3", alpha=0.08, label="zoom below")
         axes[1].set_xlim(lo, hi)
+        inside = (t_us >= lo) & (t_us <= hi)  # the zoom's own scale: a weak echo fills it
+        top = max(float(np.max(env[inside], initial=0.0)), 1.5 * detect, 3.0 * sigma)
+        if top > 0:
+            axes[1].set_ylim(-1.15 * top, 1.15 * top)
         axes[1].set_title(f"zoom on the echo (τ ± {half:.2g} µs)", fontsize=10)
     elif expected_amplitude is not None and pulse is None:
         scale = float(expected_amplitude)

@@ -221,8 +221,11 @@ def path_figure(
     on_map = cost_map is not None
     if cost_map is not None:
         values = relative_db(cost_map.values.T, db_floor)
+        # smooth shading between grid points (a coarse wave-model map stays a picture of
+        # the lobe, not a mosaic); flat cells where some are missing
+        shading = "gouraud" if np.all(np.isfinite(values)) else "auto"
         mesh = ax.pcolormesh(
-            cost_map.a, cost_map.b, np.ma.masked_invalid(values), shading="auto", cmap="viridis"
+            cost_map.a, cost_map.b, np.ma.masked_invalid(values), shading=shading, cmap="viridis"
         )
         fig.colorbar(mesh, ax=ax, label="metric / max [dB]")
     else:
