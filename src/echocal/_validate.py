@@ -19,7 +19,9 @@ T = TypeVar("T")
 
 
 def finite_float(name: str, value: Any) -> float:
-    """Return ``value`` as a float, refusing NaN, inf and non-numbers."""
+    """Return ``value`` as a float, refusing NaN, inf, booleans and non-numbers."""
+    if isinstance(value, bool | np.bool_):
+        raise EchocalValueError(f"{name} must be a number, not the boolean {value}")
     try:
         out = float(value)
     except (TypeError, ValueError):

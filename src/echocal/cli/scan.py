@@ -98,6 +98,14 @@ def register(app: typer.Typer) -> None:
             min=0,
             help="Noise and calibration seed (default: the setup file's seed, else 0).",
         ),
+        longitudinal_speed: float | None = typer.Option(
+            None,
+            "--longitudinal-speed",
+            help="The part's longitudinal sound speed c_L [m/s]: also map the wall thickness "
+            "c_L·(t_back − t_front)/2 at every point (back echo: in --gate when it is not the "
+            "front wall, else the strongest after the front wall). Default: the setup's "
+            "part material when the setup gives a plate thickness; otherwise no thickness map.",
+        ),
         overwrite: bool = typer.Option(
             False, "--overwrite", help="Replace a finished scan in --out made with other settings."
         ),
@@ -177,6 +185,7 @@ def register(app: typer.Typer) -> None:
                 "metadata": metadata,
                 "overwrite": overwrite,
                 "gate": chosen,
+                "longitudinal_speed": _thickness_speed(longitudinal_speed, base),
                 **extra,
             }
             _scan(
@@ -188,6 +197,18 @@ def register(app: typer.Typer) -> None:
                 figures=figures,
                 as_json=as_json,
             )
+
+
+def _thickness_speed(given: float | None, setup: Any) -> float | None:
+    """[m/s] c_L for the thickness map: ``--longitudinal-speed``, else the setup part's
+    when it has a thickness (a plate), else None (no map).  Refuses a value ≤ 0 or NaN."""
+    if given is not None:
+        from echocal._validate import positive_float
+
+        return positive_float("--longitudinal-speed", given)
+    if getattr(setup, "thickness", None) is None:
+        return None
+    return getattr(getattr(setup, "material", None), "longitudinal_speed", None)
 
 
 def _scan(
@@ -264,6 +285,17 @@ def _scan(
             f"normal error: median {_fmt(ne['median'], 1, 'deg')}, "
             f"p90 {_fmt(ne['p90'], 1, 'deg')}; |height error|: median "
             f"{_fmt(he['median'], 1e3, 'mm')}, p90 {_fmt(he['p90'], 1e3, 'mm')}"
+        )
+    wall, wall_error = summary.get("thickness_m"), summary.get("thickness_error_abs_m")
+    if wall is not None:
+        lines.append(
+            f"wall thickness: median {_fmt(wall['median'], 1e3, 'mm')}"
+            + (
+                ""
+                if wall_error is None
+                else f"; |thickness error|: median {_fmt(wall_error['median'], 1e3, 'mm', 2)}"
+                f", max {_fmt(wall_error['max'], 1e3, 'mm', 2)}"
+            )
         )
     if cold:
         lines.append(

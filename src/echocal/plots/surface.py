@@ -30,6 +30,7 @@ __all__ = [
     "normal_map_figure",
     "save_surface_figures",
     "surface_3d_figure",
+    "thickness_map_figure",
 ]
 
 _MM = 1e3
@@ -116,6 +117,31 @@ def error_maps_figure(scan: SurfaceScan) -> Figure:
     lim = float(np.nanmax(np.abs(herr))) if np.any(np.isfinite(herr)) else 1.0
     _image(fig, ax2, scan, herr, "height error [mm]", cmap="RdBu_r", vmin=-lim, vmax=lim)
     ax2.set_title("height error (measured − true)")
+    return fig
+
+
+def thickness_map_figure(scan: SurfaceScan) -> Figure:
+    """Wall thickness [mm] per probe position (a scan made with the part's c_L), and its
+    error against the true thickness when the scan has one."""
+    ds = scan.dataset
+    if "thickness" not in ds:
+        from echocal.errors import EchocalValueError
+
+        raise EchocalValueError(
+            "this scan has no thickness map: scan with the part's longitudinal speed "
+            "(--longitudinal-speed, or a setup with a plate thickness and material)"
+        )
+    wall = ds["thickness"].values * _MM
+    if "thickness_error" not in ds:
+        return _map_figure(scan, wall, "thickness [mm]", "wall thickness", cmap="viridis")[0]
+    fig = Figure(figsize=(10, 4.2), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2)
+    _image(fig, ax1, scan, wall, "thickness [mm]", cmap="viridis")
+    ax1.set_title("wall thickness (front-to-back time of flight)")
+    err = ds["thickness_error"].values * _MM
+    lim = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else 1.0
+    _image(fig, ax2, scan, err, "thickness error [mm]", cmap="RdBu_r", vmin=-lim, vmax=lim)
+    ax2.set_title("thickness error (measured − true)")
     return fig
 
 
@@ -237,6 +263,8 @@ def save_surface_figures(
     }
     if "normal_error" in scan.dataset:
         figures["errors"] = error_maps_figure(scan)
+    if "thickness" in scan.dataset:
+        figures["thickness"] = thickness_map_figure(scan)
     written: list[Path] = []
     for name, fig in figures.items():
         written += save_figure(fig, folder / f"{name}.png", formats=formats)

@@ -21,6 +21,8 @@ found              1       status == 0 (int8: 1 or 0)
 warm               1       the point started from its neighbours (int8)
 normal_error       degree  vs the true normal below the measured point (truth)
 height_error       m       measured z − true surface z below the point (with a truth)
+thickness          m       wall thickness c_L·(t_back − t_front)/2 (scans with a c_L)
+thickness_error    m       measured minus true thickness (with a known thickness)
 =================  ======  ===================================================
 
 Summaries (in ``attrs`` and :attr:`SurfaceScan.summary`): points found/missing (by
@@ -86,6 +88,8 @@ _VARIABLES = {
     "warm": ("1", "1 where the point started from its neighbours"),
     "normal_error": ("degree", "angle between the measured and the true normal"),
     "height_error": ("m", "measured minus true surface height"),
+    "thickness": ("m", "wall thickness from the front-to-back time of flight"),
+    "thickness_error": ("m", "measured minus true wall thickness"),
     "x": ("m", "probe position x"),
     "y": ("m", "probe position y"),
 }
@@ -197,8 +201,12 @@ def surface_dataset(
     sound_speed: float,
     truth: Specimen | None = None,
     attrs: dict[str, Any] | None = None,
+    thickness: bool = False,
+    true_thickness: float | None = None,
 ) -> SurfaceScan:
-    """Assemble per-point ``records`` (keyed (iy, ix)) into a :class:`SurfaceScan`."""
+    """Assemble per-point ``records`` (keyed (iy, ix)) into a :class:`SurfaceScan`;
+    with ``thickness`` also the wall-thickness map (and its error against
+    ``true_thickness`` [m] when given)."""
     from echocal.scanning.truth import height_errors, normal_errors
 
     shape = grid.shape
@@ -250,6 +258,12 @@ def surface_dataset(
         "found": (dims, found.astype(np.int8)),
         "warm": (dims, warm.astype(np.int8)),
     }
+    if thickness:
+        wall = np.full(shape, np.nan)
+        for (iy, ix), rec in records.items():
+            if rec["status"] == 0 and rec.get("thickness") is not None:
+                wall[iy, ix] = rec["thickness"]
+        data["thickness"] = (dims, wall)
     n_found = int(found.sum())
     summary: dict[str, Any] = {
         "points": grid.size,
@@ -280,6 +294,13 @@ def surface_dataset(
         summary["normal_error_deg"] = _quantiles(nerr)
         summary["height_error_abs_m"] = _quantiles(np.abs(herr))
         summary["truth"] = truth.name
+    if thickness:
+        summary["thickness_m"] = _quantiles(data["thickness"][1])
+        if true_thickness is not None:
+            terr = data["thickness"][1] - float(true_thickness)
+            data["thickness_error"] = (dims, terr)
+            summary["thickness_error_abs_m"] = _quantiles(np.abs(terr))
+            summary["true_thickness_m"] = float(true_thickness)
     ds = xr.Dataset(data, coords={"x": ("x", np.array(grid.x)), "y": ("y", np.array(grid.y))})
     for name, (unit, long_name) in _VARIABLES.items():
         if name in ds.variables:

@@ -77,6 +77,7 @@ from echocal.scanning.store import (
 )
 from echocal.signal import Pulse, RecordingWindow, matched_envelope, time_of_flight
 from echocal.signal.gates import TimeGate
+from echocal.signal.thickness import wall_thickness
 from echocal.specimen import Specimen
 
 __all__ = ["CONVERGED_STATUSES", "check_scan", "echo_snr", "scan_surface"]
@@ -218,6 +219,8 @@ class _Context:
     min_attempt: int = 1
     gate: TimeGate | None = None
     """The fewest measurements an attempt at a point needs (one iteration + time of flight)."""
+    longitudinal_speed: float | None = None
+    """[m/s] the part's c_L: each found point also gets its wall thickness."""
 
 
 def _measure_point(
@@ -309,6 +312,10 @@ def _measure_point(
             )
             record["snr"] = float(np.mean(snr))
             record["tof"] = float(np.mean(tof))
+            if ctx.longitudinal_speed is not None and np.all(np.isfinite(samples)):
+                back = ctx.gate if ctx.gate is not None and ctx.gate.name != "front-wall" else None
+                thickness = wall_thickness(samples, window, pulse, ctx.longitudinal_speed, back)
+                record["thickness"] = float(np.mean(thickness))
             if not np.isfinite(record["tof"]):
                 record.update(status=STATUS["no-tof"], message="time of flight is NaN")
             elif not record["snr"] >= ctx.min_snr:
@@ -464,6 +471,7 @@ def scan_surface(
     overwrite: bool = False,
     log: Callable[[str], None] | None = None,
     gate: TimeGate | None = None,
+    longitudinal_speed: float | None = None,
 ) -> SurfaceScan:
     """Scan ``grid`` with ``source``: surface normal and distance at every point.
 
@@ -510,6 +518,12 @@ def scan_surface(
     gate : calibrate each point's orientation on the metric inside this gate
         (:mod:`echocal.signal.gates`, e.g. the back wall); the time of flight, and so the
         height, stays the strongest echo's (the front wall on a plate).
+    longitudinal_speed : [m/s] the part's longitudinal speed c_L: each found point also
+        gets its wall thickness c_L·(t_back − t_front)/2 from its time-of-flight A-scans
+        (:func:`echocal.signal.thickness.wall_thickness`; the back echo inside ``gate``
+        when that is not the front-wall gate, else the strongest after the front wall),
+        and the scan a ``thickness`` map (with ``thickness_error`` against the source's
+        own ``thickness`` when it has one, e.g. a simulated plate).
 
     Notes
     -----
@@ -547,6 +561,11 @@ def scan_surface(
         options=dict(method_options or {}),
         min_attempt=min_attempt,
         gate=gate,
+        longitudinal_speed=(
+            None
+            if longitudinal_speed is None
+            else positive_float("longitudinal_speed", longitudinal_speed)
+        ),
     )
     gen = as_generator(rng)
     order = grid.order(start)
@@ -572,6 +591,11 @@ def scan_surface(
             # an integer seed defines the scan: resuming with another one is refused
             "seed": int(rng) if isinstance(rng, int | np.integer) else None,
             **({} if gate is None else {"gate": gate.describe()}),
+            **(
+                {}
+                if ctx.longitudinal_speed is None
+                else {"longitudinal_speed": ctx.longitudinal_speed}
+            ),
         },
     )
     store = None
@@ -686,6 +710,8 @@ def scan_surface(
         sound_speed=ctx.sound_speed,
         truth=truth,
         attrs=attrs,
+        thickness=ctx.longitudinal_speed is not None,
+        true_thickness=getattr(source, "thickness", None),
     )
     if out is not None and store is not None:
         result.save(out)
