@@ -137,11 +137,18 @@ def evaluate_run(
     """Judge ``result`` (measured at ``position`` [m]) against ``setup``'s truth: the
     optimum of ``metric`` inside ``gate`` (the whole recording without one)."""
     param = result.parameterization
-    keywords = {"parameterization": param, "metric": metric, "gate": gate}
-    truth = nearest_equivalent(setup.true_optimum(position, **keywords), result.x, param)
+    truth = nearest_equivalent(
+        setup.true_optimum(position, parameterization=param, metric=metric, gate=gate),
+        result.x,
+        param,
+    )
     iterates = np.asarray(result.iterates, dtype=np.float64)
-    values = setup.metric_values(position, iterates[:, 0], iterates[:, 1], **keywords)
-    optimum = float(setup.metric_values(position, truth[0], truth[1], **keywords))
+
+    def metric_at(a: ArrayLike, b: ArrayLike) -> FloatArray:
+        return setup.metric_values(position, a, b, parameterization=param, metric=metric, gate=gate)
+
+    values = metric_at(iterates[:, 0], iterates[:, 1])
+    optimum = float(metric_at(truth[0], truth[1]))
     return RunEvaluation(
         result=result,
         truth=truth,

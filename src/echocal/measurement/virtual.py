@@ -722,7 +722,7 @@ class VirtualSetup(BaseSource):
         nearest = int(np.argmin(hits.distance))
         return np.array([tx[nearest], ty[nearest]])
 
-    def true_pose(self, position: ArrayLike, **kwargs: str) -> Pose:
+    def true_pose(self, position: ArrayLike, **kwargs: Any) -> Pose:
         """The pose of maximum echo at ``position`` (see :meth:`true_optimum`)."""
         az, coel = self.true_optimum(position, **kwargs)
         return pose_from_angles(position, az, coel, "azimuth-coelevation")

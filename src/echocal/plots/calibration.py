@@ -223,9 +223,12 @@ def path_figure(
         values = relative_db(cost_map.values.T, db_floor)
         # smooth shading between grid points (a coarse wave-model map stays a picture of
         # the lobe, not a mosaic); flat cells where some are missing
-        shading = "gouraud" if np.all(np.isfinite(values)) else "auto"
         mesh = ax.pcolormesh(
-            cost_map.a, cost_map.b, np.ma.masked_invalid(values), shading=shading, cmap="viridis"
+            cost_map.a,
+            cost_map.b,
+            np.ma.masked_invalid(values),
+            shading="gouraud" if np.all(np.isfinite(values)) else "auto",
+            cmap="viridis",
         )
         fig.colorbar(mesh, ax=ax, label="metric / max [dB]")
     else:
