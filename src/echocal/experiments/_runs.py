@@ -24,6 +24,7 @@ from echocal.calibrate import calibrate
 from echocal.evaluation import RunEvaluation, evaluate_run
 from echocal.measurement.objective import SourceObjective
 from echocal.measurement.virtual import VirtualSetup
+from echocal.signal.gates import TimeGate
 
 __all__ = [
     "ENERGY_FRACTION",
@@ -93,12 +94,21 @@ class Bench:
     setup : the simulator (its own noise generator is never used; each run gets a copy).
     position : [m] where the probe stays, shape (3,).
     parameterization : ``"azimuth-coelevation"`` (the thesis's) or ``"tilt"``.
+    gate : calibrate, and judge, on the metric inside this gate
+        (:mod:`echocal.signal.gates`); None: the whole recording.
     """
 
-    def __init__(self, setup: VirtualSetup, position: ArrayLike, parameterization: str) -> None:
+    def __init__(
+        self,
+        setup: VirtualSetup,
+        position: ArrayLike,
+        parameterization: str,
+        gate: TimeGate | None = None,
+    ) -> None:
         self.setup = setup
         self.position = np.asarray(position, dtype=np.float64)
         self.parameterization = parameterization
+        self.gate = gate
 
     def source(self, snr_db: float | None, seed: int) -> VirtualSetup:
         """A copy of the setup with its own noise seed and SNR [dB]."""
@@ -111,13 +121,16 @@ class Bench:
 
         p = self.parameterization
         return nearest_equivalent(
-            self.setup.true_optimum(self.position, parameterization=p), near, p
+            self.setup.true_optimum(self.position, parameterization=p, gate=self.gate), near, p
         )
 
     def run(self, config: RunConfig, seed: int) -> RunRecord:
         """Calibrate once with ``config`` and noise/method seed ``seed``; judge the result."""
         objective = SourceObjective(
-            self.source(config.snr_db, seed), self.position, parameterization=self.parameterization
+            self.source(config.snr_db, seed),
+            self.position,
+            parameterization=self.parameterization,
+            gate=self.gate,
         )
         with warnings.catch_warnings():
             # thesis presets on purpose set options (normalize) some methods do not take
@@ -131,10 +144,14 @@ class Bench:
                 rng=seed,
                 **dict(config.options),
             )
-        evaluation = evaluate_run(self.setup, self.position, result)
+        evaluation = evaluate_run(self.setup, self.position, result, gate=self.gate)
         estimate_value = float(
             self.setup.metric_values(
-                self.position, result.x[0], result.x[1], parameterization=self.parameterization
+                self.position,
+                result.x[0],
+                result.x[1],
+                parameterization=self.parameterization,
+                gate=self.gate,
             )
         )
         row = run_metrics(evaluation, estimate_value)

@@ -1,4 +1,5 @@
-"""The thesis's test scenarios (§12), each by name, reproduced and checked.
+"""The thesis's test scenarios (§12), each by name, reproduced and checked, and
+echocal's own beyond them (``wall-echoes``: :mod:`echocal.experiments.wall_scenario`).
 
 ``scenario-1`` and ``scenario-2`` compare A-scans at two points over the thesis
 block (Figs. 7–10).  ``table-1`` … ``table-7`` rerun the calibration studies of
@@ -57,6 +58,7 @@ from echocal.experiments._scenario_base import (
     get_scenario,
     scenario_names,
 )
+from echocal.experiments.wall_scenario import WALL_SCENARIO
 from echocal.plots.calibration import convergence_figure, path_figure
 from echocal.specimen.builtins import THESIS_MEASUREMENT_POINTS
 
@@ -691,3 +693,5 @@ for _scenario in (
     ),
 ):
     _register(_scenario)
+
+_register(WALL_SCENARIO)  # beyond the thesis: echocal.experiments.wall_scenario
