@@ -291,13 +291,14 @@ def run_wall_echoes(
         + write_table(summary, out, "summary")
         + write_table(lobes, out, "lobes")
     )
+    where = ", ".join(f"{v * 1e3:g}" for v in position)
     shown = ["group", "label", "seeds", "final_error_deg", "n_measurements",
              "measurements_to_0.1deg", "final_metric_rel"]  # fmt: skip
     return _finish(
         scenario,
         out,
         t0=t0,
-        setup=f"{setup.description}; position {tuple(round(v * 1e3, 3) for v in position)} mm; "
+        setup=f"{setup.description}; position ({where}) mm; "
         f"auto from {len(starts)} start(s) at {SNR_DB:g} dB",
         quick=quick,
         seeds=seeds,
