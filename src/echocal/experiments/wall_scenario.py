@@ -291,7 +291,7 @@ def run_wall_echoes(
         + write_table(summary, out, "summary")
         + write_table(lobes, out, "lobes")
     )
-    where = ", ".join(f"{v * 1e3:g}" for v in position)
+    where = ", ".join(f"{1e3 * float(v):g}" for v in np.asarray(position).ravel())
     shown = ["group", "label", "seeds", "final_error_deg", "n_measurements",
              "measurements_to_0.1deg", "final_metric_rel"]  # fmt: skip
     return _finish(
