@@ -110,7 +110,14 @@ PARAM = "tilt"
 CASES: dict[str, dict[str, Any]] = {
     "immersion-5mhz": {"setup": "immersion-5mhz", "position": None, "lobe": "narrow (~1°)"},
     "thesis": {"setup": "thesis", "position": (0.010, 0.0, 0.022), "lobe": "broad (~±8°)"},
+    "immersion-5mhz-wave": {
+        "setup": "immersion-5mhz-wave",
+        "position": None,
+        "lobe": "narrow (~1°), diffraction tails (the wave model)",
+    },
 }
+DEFAULT_CASES = ("immersion-5mhz", "thesis")
+"""The cases of a run without ``--cases`` (the wave-model case costs ~50× more per A-scan)."""
 STARTS: dict[str, tuple[float, float]] = {"near": (1.0, 3.0), "far": (5.0, 20.0)}
 SNRS = (30.0, 20.0, 10.0)
 
@@ -361,6 +368,7 @@ def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
     x0 = start_point(truth, start, seed, objective.bounds)
     t0 = time.perf_counter()
     status = ""
+    acquisition = None
     if method in OURS:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -375,6 +383,7 @@ def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
             )
         est = _estimates_ours(res, x0)
         status = str(res.status)
+        acquisition = res.acquisition_measurements
     else:
         tr = _Tracker(objective)
         try:
@@ -395,6 +404,7 @@ def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
         "method": method,
         "errors": [round(float(e), 6) for e in errors],
         "n_measurements": int(objective.n_measurements),
+        "acquisition_measurements": acquisition,
         "status": status,
         "seconds": time.perf_counter() - t0,
     }
@@ -602,8 +612,10 @@ def report_markdown(
 
 
 # ----------------------------------------------------------------------------- main
-def _plan(mode: str, runs: int | None) -> tuple[list[tuple[str, str, float]], int]:
-    cells = [(c, s, snr) for c in CASES for s in STARTS for snr in SNRS]
+def _plan(
+    mode: str, runs: int | None, cases: tuple[str, ...] = DEFAULT_CASES
+) -> tuple[list[tuple[str, str, float]], int]:
+    cells = [(c, s, snr) for c in cases for s in STARTS for snr in SNRS]
     if mode == "smoke":
         return [("thesis", "near", 30.0)], runs or 2
     if mode == "quick":
@@ -628,9 +640,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--plot", type=Path, default=None)
     args = ap.parse_args(argv)
     mode = "smoke" if args.smoke else "quick" if args.quick else "full"
-    cells, n_runs = _plan(mode, args.runs)
-    if args.cases:
-        cells = [c for c in cells if c[0] in args.cases.split(",")]
+    chosen = tuple(args.cases.split(",")) if args.cases else DEFAULT_CASES
+    unknown_cases = sorted(set(chosen) - set(CASES))
+    if unknown_cases:
+        ap.error(f"unknown case(s) {unknown_cases}; choose from {list(CASES)}")
+    cells, n_runs = _plan(mode, args.runs, chosen)
     if args.snr:
         cells = [c for c in cells if c[2] in [float(s) for s in args.snr.split(",")]]
     if args.starts:

@@ -50,6 +50,8 @@ def echo_times(
 ) -> tuple[_F64, _F64]:
     """[s] (t_front, t_back) of each A-scan, each shape ``(...,)`` (NaN where not found).
 
+    Parameters
+    ----------
     samples : A-scans, shape ``(..., n_samples)``.
     back_gate : where the back-wall echo is looked for; None: anywhere after the
         front-wall gate.
@@ -75,6 +77,8 @@ def wall_thickness(
 ) -> _F64:
     """[m] wall thickness c_L·(t_back − t_front)/2 of each A-scan, shape ``(...,)``.
 
+    Parameters
+    ----------
     longitudinal_speed : [m/s] the part's c_L.
     back_gate : see :func:`echo_times`.
     """
