@@ -25,7 +25,10 @@ there: it reproduces the Rogers–Van Buren diffraction loss on axis and the exa
 **Surface samples.** The ray stage fires a fan of rays from a virtual apex behind the
 face, through a disc of radius a + margin on it, wide enough to hold the diffracted beam
 (its half-angle grows with λ/a) and dense enough that the samples lie about ``spacing``
-apart on the surface.  Closest hits keep visibility.  Each hit carries the area of its
+apart on the surface, and never farther than the two-way Nyquist spacing λ_hi/(4 sin θ) at
+the beam axis's incidence θ (finer, and costlier, at large tilts: 5 ms per A-scan at
+normal incidence, 0.05 s at 10°, 0.2 s at 20° for a 12.7 mm probe at 50 mm).  Closest hits
+keep visibility.  Each hit carries the area of its
 ray tube on the surface, ΔS = dΩ·L²/|cos θ|, and a smooth taper towards the edge of the
 fan so that the cut-off edge does not diffract.
 
@@ -108,12 +111,25 @@ class WaveEchoModel:
     def _wavelength(self) -> float:
         return self.sound_speed / self.pulse.center_frequency
 
-    def _sample_spacing(self, shapes: tuple[Shape, ...]) -> float:
-        """[m] the surface-sample spacing over ``shapes`` (finer unless all are planes)."""
+    def _sample_spacing(self, shapes: tuple[Shape, ...], sin_incidence: float = 0.0) -> float:
+        """[m] the surface-sample spacing over ``shapes`` (finer unless all are planes), and
+        never coarser than the two-way Nyquist spacing λ_hi/(4 sin θ) at the beam axis's
+        incidence θ on the surface: each sample stands for its patch, so the two-way delay
+        may change by at most half a period of the highest frequency between neighbours,
+        or the sum aliases into a spurious echo (at 8–25° tilt it stood at −20 dB where the
+        exact echo is below −49 dB)."""
         if self.spacing is not None:
-            return float(self.spacing)
-        flat = all(shape.kind == "plane" for shape in shapes)
-        return (_SPACING_WAVELENGTHS if flat else _CURVED_SPACING_WAVELENGTHS) * self._wavelength
+            base = float(self.spacing)
+        else:
+            flat = all(shape.kind == "plane" for shape in shapes)
+            base = (_SPACING_WAVELENGTHS if flat else _CURVED_SPACING_WAVELENGTHS) * self._wavelength
+        if sin_incidence <= 0.0:
+            return base
+        return min(base, self._pose_spacing(sin_incidence))
+
+    def _pose_spacing(self, sin_incidence: float) -> float:
+        """[m] the two-way Nyquist spacing at incidence sine ``sin_incidence``."""
+        return self.sound_speed / (4.0 * self.pulse.highest_frequency * sin_incidence)
 
     @cached_property
     def _grid(self) -> tuple[int, float, int, int]:
@@ -177,8 +193,9 @@ class WaveEchoModel:
 
     def _surface_distance(
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
-    ) -> float:
-        """[m] the nearest surface within the beam's cone (9 × 9 probe rays)."""
+    ) -> tuple[float, float]:
+        """[m] the nearest surface within the beam's cone (9 × 9 probe rays), and the sine
+        of the beam axis's angle of incidence on the surface (0 when the axis misses)."""
         a = self.probe.radius
         g = np.linspace(-1.0, 1.0, 9)
         uu, vv = np.meshgrid(g, g)
@@ -186,9 +203,14 @@ class WaveEchoModel:
         local /= np.linalg.norm(local, axis=0)
         origins_l = np.stack([uu.ravel() * a, vv.ravel() * a, np.zeros(81)])
         o, d = self._to_world(origins_l, local, position, frame)
-        t, _, _ = _cast_soa(shapes, o, d)
+        t, normal, _ = _cast_soa(shapes, o, d)
+        axis = 40  # the centre of the 9 × 9 grid: on the beam axis
+        sin_axis = 0.0
+        if np.isfinite(t[axis]):
+            cos_axis = abs(float(np.dot(normal[:, axis], d[:, axis])))
+            sin_axis = math.sqrt(max(0.0, 1.0 - cos_axis * cos_axis))
         t = t[np.isfinite(t)]
-        return float(t.min()) if t.size else 3.0 * a
+        return (float(t.min()) if t.size else 3.0 * a), sin_axis
 
     @staticmethod
     def _to_world(
@@ -211,8 +233,9 @@ class WaveEchoModel:
         unit_m : ``(3, n)`` the surface normal pointing away from the probe.
         area : [m²] ``(n,)`` patch area × taper (0 for a miss).
         """
-        distance = self._surface_distance(shapes, position, frame)
-        origins2, dirs, solid_angle, apex = self._fan(distance, self._sample_spacing(shapes))
+        distance, sin_axis = self._surface_distance(shapes, position, frame)
+        spacing = self._sample_spacing(shapes, sin_axis)
+        origins2, dirs, solid_angle, apex = self._fan(distance, spacing)
         origins = np.vstack([origins2, np.zeros(origins2.shape[1])])
         o, d = self._to_world(origins, dirs, position, frame)
         t, normal, _ = _cast_soa(shapes, o, d)
