@@ -122,7 +122,8 @@ class WaveEchoModel:
             base = float(self.spacing)
         else:
             flat = all(shape.kind == "plane" for shape in shapes)
-            base = (_SPACING_WAVELENGTHS if flat else _CURVED_SPACING_WAVELENGTHS) * self._wavelength
+            wavelengths = _SPACING_WAVELENGTHS if flat else _CURVED_SPACING_WAVELENGTHS
+            base = wavelengths * self._wavelength
         if sin_incidence <= 0.0:
             return base
         return min(base, self._pose_spacing(sin_incidence))
