@@ -55,7 +55,7 @@ C = 1480.0
 
 def ray_vs_wave(repeats: int) -> dict[str, float]:
     """Seconds per noiseless A-scan of immersion-5mhz, both models, near the optimum."""
-    ray = load_setup("immersion-5mhz")
+    ray = load_setup("immersion-5mhz-ray")
     wave = dataclasses.replace(ray, reflection="wave")
     pos = ray.reference_position[None]
     frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
@@ -118,7 +118,7 @@ def wave_vs_rayleigh(accuracy: float, n_freq: int) -> dict[str, float]:
 
 def scaling(repeats: int) -> dict[str, object]:
     """Cost against the number of surface samples (spacing 0.4 … 1.2 mm)."""
-    base = dataclasses.replace(load_setup("immersion-5mhz"), reflection="wave")
+    base = load_setup("immersion-5mhz")
     pos = base.reference_position[None]
     frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
     rows = []
@@ -145,7 +145,7 @@ def lobe_figure(path: Path) -> dict[str, float]:
     from echocal.plots import save_figure
     from echocal.plots.lobe import plot_lobe
 
-    ray = load_setup("immersion-5mhz")
+    ray = load_setup("immersion-5mhz-ray")
     lobes = [echo_lobe(ray), echo_lobe(dataclasses.replace(ray, reflection="wave"))]
     save_figure(
         plot_lobe(lobes, title="immersion-5mhz: echo lobe of the ray and wave models"), path

@@ -12,7 +12,7 @@ same thresholds as the acquisition phase: the pseudo-energy 4.5 σ above its noi
 mean, the matched-filter peak significance g > 4.5) and prints the bound for starts
 uniform in a distance band::
 
-    python benchmarks/detection_range.py                 # immersion-5mhz, 30/20/10 dB
+    python benchmarks/detection_range.py                 # immersion-5mhz-ray, 30/20/10 dB
     python benchmarks/detection_range.py --quick         # fewer noise draws (CI smoke)
     python benchmarks/detection_range.py --out-md docs/benchmarks/detection.md
 """
@@ -99,7 +99,7 @@ def ceiling(budget: int, refine: int, r: float, band: tuple[float, float]) -> fl
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--setup", default="immersion-5mhz")
+    ap.add_argument("--setup", default="immersion-5mhz-ray")
     ap.add_argument("--snr", default="30,20,10", help="comma-separated SNRs [dB]")
     ap.add_argument("--draws", type=int, default=400, help="noise draws per angle")
     ap.add_argument("--quick", action="store_true", help="40 draws per angle")

@@ -25,9 +25,9 @@ def _small_wave_setup():
 
 def test_ray_lobe_is_near_the_deep_near_field_limit() -> None:
     """The thesis ray model follows 2J₁(2ka sinα)/(2ka sinα) (its piston weighting makes
-    it a little narrower still) whatever the distance: 0.450° on immersion-5mhz, as the
+    it a little narrower still) whatever the distance: 0.450° on immersion-5mhz-ray, as the
     issue measured; the exact diffraction value is 0.522° (tests/physics)."""
-    ray = echo_lobe(load_setup("immersion-5mhz"), n_points=41)
+    ray = echo_lobe(load_setup("immersion-5mhz-ray"), n_points=41)
     x = np.linspace(0.0, 1.0, 20001)
     limit = x[np.argmax(near_field_lobe(ray.ka, x) < 0.5)]
     assert ray.minus6db_deg == pytest.approx(0.450, abs=0.005)
@@ -54,7 +54,7 @@ def test_lobe_refuses_bad_arguments() -> None:
 
 def test_cli_lobe_prints_json_and_writes_a_plot(tmp_path: Path, capsys, monkeypatch) -> None:
     code, out, err = run_main(
-        ["lobe", "--setup", "immersion-5mhz", "--points", "11", "--json", "--out", str(tmp_path)],
+        ["lobe", "--setup", "immersion-5mhz-ray", "--points", "11", "--json", "--out", str(tmp_path)],
         capsys,
         monkeypatch,
     )

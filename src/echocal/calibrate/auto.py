@@ -2,12 +2,12 @@
 
 Evidence: ``benchmarks/bench_calibration.py`` (docs/benchmarks/calibration.md), full run
 of 50 seeded runs per cell and method, budget 80, every method through the same
-SourceObjective; realistic setup immersion-5mhz (5 MHz, 12.7 mm probe, tilted plate:
-energy lobe σ ≈ 0.28°, half-energy at 0.33°), tilt parameterization.  "@n" = fraction
+SourceObjective; realistic setup immersion-5mhz-ray (5 MHz, 12.7 mm probe, tilted plate,
+ray model: energy lobe σ ≈ 0.28°, half-energy at 0.33°), tilt parameterization.  "@n" = fraction
 of runs whose estimate is within the tolerance after n measurements:
 
 ==================  ============  ============  ============  ==========================
-immersion-5mhz      near 30 dB    near 20 dB    near 10 dB    far (5-20°) 30 dB
+immersion-5mhz-ray  near 30 dB    near 20 dB    near 10 dB    far (5-20°) 30 dB
                     ≤0.05° @20    ≤0.1° @80     ≤0.1° @60     ≤0.1° @60 / @80
 ==================  ============  ============  ============  ==========================
 auto                100 %         100 %         100 %         24 % / 68 %
