@@ -54,7 +54,16 @@ def test_lobe_refuses_bad_arguments() -> None:
 
 def test_cli_lobe_prints_json_and_writes_a_plot(tmp_path: Path, capsys, monkeypatch) -> None:
     code, out, err = run_main(
-        ["lobe", "--setup", "immersion-5mhz-ray", "--points", "11", "--json", "--out", str(tmp_path)],
+        [
+            "lobe",
+            "--setup",
+            "immersion-5mhz-ray",
+            "--points",
+            "11",
+            "--json",
+            "--out",
+            str(tmp_path),
+        ],
         capsys,
         monkeypatch,
     )
