@@ -19,11 +19,23 @@ from echocal.experiments.scenarios import get_scenario, run_scenario, scenario_n
 NAMES = scenario_names()
 
 
+class _Runs(dict):
+    """Each scenario run once, in quick mode, when a test first asks for it (a test worker
+    runs only the scenarios its tests need)."""
+
+    def __init__(self, root):
+        super().__init__()
+        self.root = root
+
+    def __missing__(self, name):
+        self[name] = run_scenario(name, self.root / name, quick=True)
+        return self[name]
+
+
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
-    """Every scenario once, in quick mode (shared by the tests below)."""
-    root = tmp_path_factory.mktemp("scenarios")
-    return {name: run_scenario(name, root / name, quick=True) for name in NAMES}
+    """The scenarios' quick runs, shared by the tests below."""
+    return _Runs(tmp_path_factory.mktemp("scenarios"))
 
 
 def test_registry_lists_the_thesis_scenarios():
