@@ -173,17 +173,6 @@ def _render(data: dict, prefix: str = "", skip: tuple[str, ...] = ()) -> str:
     return text
 
 
-UNBOUNDED_MATERIAL = pytest.mark.xfail(
-    strict=False,  # some are bounded (longitudinal speed, exponent), most not yet
-    reason="material properties (density, shear speed, attenuation; the materials branch) "
-    "take 1e300: they need plausible upper bounds (reported to the lead)",
-)
-
-
-def _marks(table: str, label: str) -> list:
-    return [UNBOUNDED_MATERIAL] if ".material" in f".{table}" and label == "huge" else []
-
-
 CASES = [
     pytest.param(
         table,
@@ -191,7 +180,6 @@ CASES = [
         length,
         label,
         id=f"{table + '.' if table else ''}{name}={label}",
-        marks=_marks(table, label),
     )
     for table, name, _, length in FIELDS
     for label in VALUES

@@ -31,7 +31,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Fiel
 
 from echocal.errors import EchocalError
 from echocal.materials import Attenuation, Material, material, water
-from echocal.units import parse_quantity, plausible_speed
+from echocal.units import SOUND_SPEED_RANGE, parse_quantity, plausible_speed
 
 __all__ = [
     "LOC_TAGS",
@@ -61,16 +61,33 @@ def _unit(
     return BeforeValidator(parse)
 
 
-Density = Annotated[float, _unit("density", "kg/m3"), Field(gt=0, allow_inf_nan=False)]
-SpeedValue = Annotated[float, _unit("speed", "m/s"), Field(ge=0, allow_inf_nan=False)]
+MAX_DENSITY = 25_000.0
+"""[kg/m³] above every solid (osmium: 22 590 kg/m³)."""
+MAX_ATTENUATION = 1.0e5
+"""[Np/m] at the reference frequency: ~870 dB/mm, beyond any material an echo crosses."""
+MAX_REFERENCE_FREQUENCY = 1.0e9
+"""[Hz] an attenuation's reference frequency (1 GHz, acoustic microscopy's range)."""
+
+Density = Annotated[
+    float, _unit("density", "kg/m3"), Field(gt=0, le=MAX_DENSITY, allow_inf_nan=False)
+]
+SpeedValue = Annotated[
+    float, _unit("speed", "m/s"), Field(ge=0, le=SOUND_SPEED_RANGE[1], allow_inf_nan=False)
+]
 PlausibleSpeed = Annotated[
     float, _unit("speed", "m/s", check=plausible_speed), Field(gt=0, allow_inf_nan=False)
 ]
 """A sound speed [m/s], 100 to 20 000 m/s (a bare 1.48 is refused: did you mean mm/us?)."""
 Temperature = Annotated[float, _unit("", ""), Field(ge=0, le=95, allow_inf_nan=False)]
 """[°C] of liquid water."""
-AlphaValue = Annotated[float, _unit("attenuation", "Np/m"), Field(ge=0, allow_inf_nan=False)]
-FrequencyValue = Annotated[float, _unit("frequency", "Hz"), Field(gt=0, allow_inf_nan=False)]
+AlphaValue = Annotated[
+    float, _unit("attenuation", "Np/m"), Field(ge=0, le=MAX_ATTENUATION, allow_inf_nan=False)
+]
+FrequencyValue = Annotated[
+    float,
+    _unit("frequency", "Hz"),
+    Field(gt=0, le=MAX_REFERENCE_FREQUENCY, allow_inf_nan=False),
+]
 Exponent = Annotated[float, _unit("", ""), Field(ge=0, le=4, allow_inf_nan=False)]
 """A dimensionless power-law exponent (text is not parsed for a unit)."""
 
