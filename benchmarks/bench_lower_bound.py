@@ -85,7 +85,11 @@ def detection_bound(band: tuple[float, float], k: float, success: float = SUCCES
 
 
 def _percentile(values: list[float], q: float) -> float:
-    return float(np.percentile(np.asarray(values, dtype=float), q)) if values else math.nan
+    """The q-th percentile, 'never' (inf) counting as larger than every number."""
+    if not values:
+        return math.nan
+    ordered = np.sort(np.asarray(values, dtype=float))
+    return float(ordered[min(len(ordered) - 1, math.ceil(q / 100 * len(ordered)) - 1)])
 
 
 def _n(v: float) -> str:
