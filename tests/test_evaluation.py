@@ -207,6 +207,10 @@ def test_map_resolution_follows_the_models_cost():
     assert map_resolution(load_setup("thesis")) == 61  # ray model: < 1 ms per pose
     assert map_resolution(load_setup("immersion-5mhz-wave")) == 41
     assert map_resolution(load_setup("immersion-steel-plate")) == 25  # + back-wall echoes
+    # far tilts cost more on the wave model: a wide map is coarser
+    assert map_resolution(load_setup("immersion-5mhz-wave"), half_span=18.0) == 21
+    assert map_resolution(load_setup("immersion-steel-plate"), half_span=18.0) == 15
+    assert map_resolution(load_setup("thesis"), half_span=18.0) == 61
 
 
 def test_gated_truth_of_the_plate_is_normal_incidence_on_the_back_wall():

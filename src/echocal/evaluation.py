@@ -23,6 +23,7 @@ from echocal.measurement.virtual import VirtualSetup
 from echocal.signal.gates import TimeGate
 
 __all__ = [
+    "WIDE_MAP",
     "CostMap",
     "RunEvaluation",
     "angular_error",
@@ -159,14 +160,24 @@ def evaluate_run(
     )
 
 
-def map_resolution(setup: VirtualSetup) -> int:
-    """Grid points per axis of a cost map of ``setup``: 61 on the ray model (< 1 ms per
-    pose), 41 on the wave model (tens of ms) and 25 when the part has an interior (each
-    back-wall echo costs as much again), so that a map takes seconds to a minute, not
-    many minutes.  A map is a picture: bilinear shading hides the coarser grid."""
+WIDE_MAP = 4.0
+"""[deg] a cost map reaching farther than this from its centre is drawn coarser on the wave
+model: its far cells lie at large tilts, where the two-way Nyquist spacing makes a wave
+A-scan 10–100× costlier than at normal incidence."""
+
+
+def map_resolution(setup: VirtualSetup, half_span: float = 0.0) -> int:
+    """Grid points per axis of a cost map of ``setup`` reaching ``half_span`` [deg] from its
+    centre: 61 on the ray model (< 1 ms per pose); on the wave model 41, or 21 beyond
+    :data:`WIDE_MAP`; with an interior (each back-wall echo costs as much again) 25, or 15.
+    A map takes seconds to a minute or two, not many minutes; it is a picture, and smooth
+    shading hides the coarser grid."""
     if getattr(setup, "reflection", None) != "wave":
         return 61
-    return 25 if getattr(setup, "interior", None) is not None else 41
+    wide = half_span > WIDE_MAP
+    if getattr(setup, "interior", None) is not None:
+        return 15 if wide else 25
+    return 21 if wide else 41
 
 
 def cost_map(
@@ -182,7 +193,8 @@ def cost_map(
 ) -> CostMap:
     """Noiseless metric (inside ``gate``, if given) on an ``n × n`` grid of orientations
     [deg] (one batched simulation); ``n`` defaults to :func:`map_resolution`."""
-    n = map_resolution(setup) if n is None else n
+    half_span = 0.5 * max(a_range[1] - a_range[0], b_range[1] - b_range[0])
+    n = map_resolution(setup, half_span) if n is None else n
     a = np.linspace(*a_range, n)
     b = np.linspace(*b_range, n)
     values = setup.metric_values(
