@@ -109,14 +109,27 @@ def error_maps_figure(scan: SurfaceScan) -> Figure:
         from echocal.errors import EchocalValueError
 
         raise EchocalValueError("this scan has no truth: no normal_error / height_error")
+    return _value_and_error_figure(
+        scan,
+        (ds["normal_error"].values, "normal error [deg]", "normal error"),
+        (ds["height_error"].values * _MM, "height error [mm]", "height error (measured − true)"),
+    )
+
+
+def _value_and_error_figure(
+    scan: SurfaceScan, left: tuple[NDArray, str, str], error: tuple[NDArray, str, str]
+) -> Figure:
+    """Two maps side by side: ``left`` = (values, colour-bar label, title) in viridis, and
+    a signed ``error`` (same triple) in a diverging map centred on zero."""
     fig = Figure(figsize=(10, 4.2), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
-    _image(fig, ax1, scan, ds["normal_error"].values, "normal error [deg]", cmap="viridis")
-    ax1.set_title("normal error")
-    herr = ds["height_error"].values * _MM
-    lim = float(np.nanmax(np.abs(herr))) if np.any(np.isfinite(herr)) else 1.0
-    _image(fig, ax2, scan, herr, "height error [mm]", cmap="RdBu_r", vmin=-lim, vmax=lim)
-    ax2.set_title("height error (measured − true)")
+    values, label, title = left
+    _image(fig, ax1, scan, values, label, cmap="viridis")
+    ax1.set_title(title)
+    err, label, title = error
+    lim = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else 1.0
+    _image(fig, ax2, scan, err, label, cmap="RdBu_r", vmin=-lim, vmax=lim)
+    ax2.set_title(title)
     return fig
 
 
@@ -134,15 +147,15 @@ def thickness_map_figure(scan: SurfaceScan) -> Figure:
     wall = ds["thickness"].values * _MM
     if "thickness_error" not in ds:
         return _map_figure(scan, wall, "thickness [mm]", "wall thickness", cmap="viridis")[0]
-    fig = Figure(figsize=(10, 4.2), layout="constrained")
-    ax1, ax2 = fig.subplots(1, 2)
-    _image(fig, ax1, scan, wall, "thickness [mm]", cmap="viridis")
-    ax1.set_title("wall thickness (front-to-back time of flight)")
-    err = ds["thickness_error"].values * _MM
-    lim = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else 1.0
-    _image(fig, ax2, scan, err, "thickness error [mm]", cmap="RdBu_r", vmin=-lim, vmax=lim)
-    ax2.set_title("thickness error (measured − true)")
-    return fig
+    return _value_and_error_figure(
+        scan,
+        (wall, "thickness [mm]", "wall thickness (front-to-back time of flight)"),
+        (
+            ds["thickness_error"].values * _MM,
+            "thickness error [mm]",
+            "thickness error (measured − true)",
+        ),
+    )
 
 
 def measurements_figure(scan: SurfaceScan) -> Figure:
