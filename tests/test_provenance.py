@@ -187,3 +187,84 @@ def test_a_file_without_provenance_is_refused(tmp_path):
     path.write_text("{}")
     with pytest.raises(DataFileError, match="records no provenance"):
         read_provenance(path)
+
+
+SWEEP_TOML = """
+name = "one"
+setup = "tiny.toml"
+position = [0.0, 0.0, 0.016]
+budget = 14
+max_iter = 20
+snr_db = [30]
+[[methods]]
+name = "model-based"
+"""
+
+RECORD = ["record", "--setup", "tiny.toml", "--out", "grid.nc", "--azimuth", "-3:3:3"]
+RECORD += ["--coelevation", "-3:3:3", "--position", "0,0,16", "--no-progress"]
+SCAN = ["scan", "--setup", "tiny.toml", "--grid", "0:0:1,0:0:1", "--z", "16"]
+SCAN += ["--out", "scan", "--no-figures"]
+FILE_KINDS = {
+    "result.json": ([*CALIBRATE, "--seed", "5", "--out", "cal"], "cal/result.json"),
+    "recording": (RECORD, "grid.nc"),
+    "scan.nc": (SCAN, "scan/scan.nc"),
+    "runs.parquet": (
+        ["sweep", "run", "one.toml", "--out", "sweep", "--workers", "1", "--no-progress"],
+        "sweep/runs.parquet",
+    ),
+}
+
+
+@pytest.mark.parametrize("kind", list(FILE_KINDS))
+def test_every_file_kind_carries_the_whole_record(kind, tmp_path, capsys, monkeypatch):
+    """Each item of the issue's provenance list, in each kind of result file."""
+    from echocal.provenance import git_commit, setup_digest
+
+    (tmp_path / "tiny.toml").write_text(tiny_setup_toml())
+    (tmp_path / "one.toml").write_text(SWEEP_TOML)
+    monkeypatch.chdir(tmp_path)
+    args, target = FILE_KINDS[kind]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code in (0, 1, 3), err  # 1/3: no convergence claim; the file is written
+    record = read_provenance(tmp_path / target)
+    assert record["format"] == FORMAT
+    # the command line as typed, where it ran, and when (UTC, start before end)
+    assert record["argv"] == ["echocal", *args] and record["cwd"] == str(tmp_path)
+    assert _utc(record["started"]) <= _utc(record["finished"]) <= dt.datetime.now(dt.UTC)
+    # the setup: its path and the digest of its resolved content, recomputed here
+    setup = setup_digest(str(tmp_path / "tiny.toml"))
+    assert record["setup"] == setup and len(setup["sha256"]) == 64
+    # the source, the seed, the method and its options
+    assert record["source"]["kind"] == "simulator"
+    assert isinstance(record["seed"], int)
+    assert record["method"] and isinstance(record["method"], dict)
+    if kind == "result.json":
+        assert record["seed"] == 5 and record["position_m"] == [0.0, 0.0, 0.016]
+        assert record["method"]["options"]  # every option the method ran with
+    if kind == "recording":
+        assert record["method"]["grid"]["positions"] == [[0.0, 0.0, 0.016]]
+    if kind == "scan.nc":
+        assert record["method"]["name"] == "auto" and record["method"]["budget_per_point"]
+    if kind == "runs.parquet":
+        assert record["position_m"] == [0.0, 0.0, 0.016]
+        assert record["method"]["spec"]["methods"][0]["name"] == "model-based"
+    # echocal's version (and its git commit when run from a checkout) and its dependencies'
+    versions = record["versions"]
+    assert versions["echocal"] == importlib.metadata.version("echocal")
+    for name in ("numpy", "scipy", "xarray", "pandas", "h5py"):
+        assert versions[name] == importlib.metadata.version(name)
+    assert versions.get("echocal_git") == git_commit()
+
+
+def test_the_git_commit_is_the_checkouts_when_there_is_one():
+    import echocal
+    from echocal.provenance import git_commit
+
+    where = Path(echocal.__file__).resolve().parent
+    done = subprocess.run(
+        ["git", "-C", str(where), "rev-parse", "HEAD"], capture_output=True, text=True
+    )
+    if done.returncode != 0:
+        assert git_commit() is None  # installed from a wheel: no commit claimed
+    else:
+        assert git_commit().removesuffix("-dirty") == done.stdout.strip()

@@ -14,7 +14,8 @@ A provenance record is plain JSON-ready data::
                 | {"kind": "instrument", "address": …, "identification": …},
       "position_m": [x, y, z], "seed": 0,
       "method": {"name": "auto", "options": {…every option…}},
-      "versions": {"echocal": …, "python": …, "numpy": …, "scipy": …, …},
+      "versions": {"echocal": …, "echocal_git": "<commit>[-dirty]", "python": …,
+                   "numpy": …, "scipy": …, …},
       "parameters": {…}                            # what a rerun needs (command-specific)
     }
 
@@ -29,11 +30,13 @@ its ``parameters`` after checking the setup's and the recording's digests.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import hashlib
 import importlib.metadata
 import json
 import os
 import platform
+import subprocess
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -47,6 +50,7 @@ __all__ = [
     "FORMAT",
     "Provenance",
     "file_digest",
+    "git_commit",
     "read_provenance",
     "setup_digest",
     "start",
@@ -77,11 +81,40 @@ def now() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
+@functools.cache
+def git_commit() -> str | None:
+    """The git commit of echocal's source when it runs from a git checkout (an editable
+    install), with ``-dirty`` when tracked files differ from it; None otherwise (a wheel,
+    or no git)."""
+    import echocal
+
+    where = Path(echocal.__file__).resolve().parent
+
+    def git(*args: str) -> str | None:
+        try:
+            done = subprocess.run(
+                ["git", "-C", str(where), *args], capture_output=True, text=True, timeout=10
+            )
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return done.stdout.strip() if done.returncode == 0 else None
+
+    commit = git("rev-parse", "HEAD")
+    if not commit:
+        return None
+    changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
+    return f"{commit}-dirty" if changed else commit
+
+
 def versions() -> dict[str, str]:
-    """echocal's, Python's and the main dependencies' versions (installed ones only)."""
+    """echocal's, Python's and the main dependencies' versions (installed ones only), and
+    echocal's git commit (``echocal_git``) when it runs from a checkout."""
     import echocal
 
     out = {"echocal": echocal.__version__, "python": platform.python_version()}
+    commit = git_commit()
+    if commit is not None:
+        out["echocal_git"] = commit
     for name in DEPENDENCIES:
         try:
             out[name] = importlib.metadata.version(name)
