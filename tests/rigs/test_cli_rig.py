@@ -148,6 +148,10 @@ def test_calibrate_on_a_rig_file(emulator, setup_file, tmp_path, capsys, monkeyp
     assert summary["pulse"]["from"] == f"--setup {setup_file.as_posix()}"
     # the plate is flat: the echo is strongest firing straight down (tilt 0, 0)
     assert np.hypot(*summary["estimate_deg"]) < 0.5
+    # the result file names the rig it came from: its file and the identity it reported
+    stored = json.loads((tmp_path / "cal" / "result.json").read_text())["provenance"]
+    assert stored["source"]["kind"] == "rig" and stored["source"]["file"] == str(rig)
+    assert stored["source"]["description"]  # the instruments' identification, as reported
 
 
 @pytest.mark.parametrize(
