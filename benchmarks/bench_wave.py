@@ -48,24 +48,60 @@ from echocal.geometry import tilt_frame  # noqa: E402
 from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
-from echocal.wave import PistonProbe, WaveEchoModel  # noqa: E402
+from echocal.specimen.casting import _as_shapes  # noqa: E402
+from echocal.wave import PistonProbe, WaveEchoModel, threads  # noqa: E402
 
 C = 1480.0
 
 
 def ray_vs_wave(repeats: int) -> dict[str, float]:
-    """Seconds per noiseless A-scan of immersion-5mhz, both models, near the optimum."""
+    """Seconds per noiseless A-scan of immersion-5mhz, both models, near the optimum: the
+    wave model as it runs (its samples split over the cores) and on one thread, and the
+    wave model's stages on one thread (surface samples, SIR correlation + FFT, synthesis)."""
     ray = load_setup("immersion-5mhz-ray")
     wave = dataclasses.replace(ray, reflection="wave")
     pos = ray.reference_position[None]
     frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
     t_ray = measure(lambda: ray.ideal_samples(pos, frames), repeats=20 * repeats, warmup=3)
     t_wave = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+    model, shapes = wave.wave_model, _as_shapes(wave.specimen)
+    points, unit_m, area = model.surface_samples(shapes, pos[0], frames[0])
+    spectrum, _ = model.spectrum(points, unit_m, area)
+    max_threads = threads.MAX_THREADS
+    threads.MAX_THREADS = 1
+    try:
+        t_one = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+        stages = {
+            "surface_samples_s": measure(
+                lambda: model.surface_samples(shapes, pos[0], frames[0]), repeats=repeats
+            ).median,
+            "sir_correlation_fft_s": measure(
+                lambda: model.spectrum(points, unit_m, area), repeats=repeats
+            ).median,
+            "synthesis_s": measure(lambda: model.samples(spectrum), repeats=repeats).median,
+        }
+    finally:
+        threads.MAX_THREADS = max_threads
     return {
         "ray_s": t_ray.median,
         "wave_s": t_wave.median,
         "ratio": t_wave.median / t_ray.median,
+        "wave_one_thread_s": t_one.median,
+        "ratio_one_thread": t_one.median / t_ray.median,
+        "surface_samples": float(np.count_nonzero(area)),
+        **stages,
     }
+
+
+def steel_plate(repeats: int, ray_s: float) -> dict[str, float]:
+    """Seconds per noiseless A-scan of immersion-steel-plate (front wall and three back-wall
+    echoes, the back walls through :mod:`echocal.wave.interior`), and its ratio to the ray
+    model's immersion-5mhz A-scan ``ray_s`` [s] (a plate's interior needs the wave model)."""
+    wave = load_setup("immersion-steel-plate")
+    pos = wave.reference_position[None]
+    frames = tilt_frame(np.array([0.3]), np.array([0.0]))
+    t_wave = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+    return {"wave_s": t_wave.median, "ratio": t_wave.median / ray_s}
 
 
 def _envelope(x: np.ndarray) -> float:
@@ -125,8 +161,6 @@ def scaling(repeats: int) -> dict[str, object]:
     for spacing in (0.4e-3, 0.6e-3, 0.8e-3, 1.2e-3):
         setup = dataclasses.replace(base, wave_spacing=spacing)
         model = setup.wave_model
-        from echocal.specimen.casting import _as_shapes
-
         samples = int(
             np.count_nonzero(
                 model.surface_samples(_as_shapes(setup.specimen), pos[0], frames[0])[2]
@@ -167,6 +201,18 @@ def main() -> None:
     print(
         f"HEADLINE one A-scan, immersion-5mhz: ray {fmt_time(speed['ray_s'])}, wave "
         f"{fmt_time(speed['wave_s'])}: the wave model costs {speed['ratio']:.1f}x the ray model"
+    )
+    print(
+        f"HEADLINE on one thread: wave {fmt_time(speed['wave_one_thread_s'])} "
+        f"({speed['ratio_one_thread']:.1f}x): {speed['surface_samples']:.0f} surface samples "
+        f"{fmt_time(speed['surface_samples_s'])}, SIR correlation + FFT "
+        f"{fmt_time(speed['sir_correlation_fft_s'])}, synthesis {fmt_time(speed['synthesis_s'])}"
+    )
+    plate = steel_plate(repeats, speed["ray_s"])
+    result["steel_plate"] = plate
+    print(
+        f"HEADLINE one A-scan, immersion-steel-plate (front wall + 3 back-wall echoes): "
+        f"wave {fmt_time(plate['wave_s'])}, {plate['ratio']:.1f}x the ray model's A-scan"
     )
     brute = wave_vs_rayleigh(accuracy=0.5 if cheap else 1.0, n_freq=8 if args.smoke else 24)
     result["wave_vs_rayleigh"] = brute
