@@ -222,7 +222,8 @@ class InteriorEchoes:
     def _back_wall(
         self, order: int, position: FloatArray, frame: FloatArray, front: _Front
     ) -> FloatArray:
-        """The ``order``-th back-wall echo: the face's mirror at the equivalent depth."""
+        """The ``order``-th back-wall echo: the face's mirror at the equivalent depth, by
+        the image form when the wall fills the beam (the Kirchhoff sum otherwise)."""
         depth = order * self.interior.thickness
         equivalent = FinitePlane(
             center=self.front.center
@@ -236,12 +237,17 @@ class InteriorEchoes:
             coelevation=self.front.coelevation,
             name="equivalent back wall",
         )
-        points, unit_m, area = self.model.surface_samples((equivalent,), position, frame)
         theta_w, theta_l = self._axis_angles(front)
         r_sw = complex(reflection_solid_fluid(theta_l, self.material, self.medium).longitudinal)
         through = self._through_the_face(theta_w, theta_l) * r_sw ** (2 * order - 1)
+        delay = self._delay_per_depth() * depth
+        plane = self.model.image_plane((equivalent,), position, frame)
+        if plane is not None:  # the wall fills the beam: the exact image form
+            spectrum, _ = self.model.image_spectrum(plane, through, delay)
+            return self._finish(spectrum, front, 2.0 * depth)
+        points, unit_m, area = self.model.surface_samples((equivalent,), position, frame)
         coefficient = np.full(area.shape, through, dtype=np.complex128)
-        delays = np.full(area.shape, self._delay_per_depth() * depth)
+        delays = np.full(area.shape, delay)
         spectrum, _ = self.model.spectrum(points, unit_m, area, coefficient, delays)
         return self._finish(spectrum, front, 2.0 * depth)
 

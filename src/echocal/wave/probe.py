@@ -163,12 +163,7 @@ class PistonProbe:
         for i, (x, y, z) in enumerate(pts):
             if not sir._sample_geometry(self.kind, prm, x, y, z, 0.0, 0.0, 1.0, geo):
                 continue
-            if self.kind == sir.DISC:
-                lo, mid, hi = sir._support_disc(sound_speed, geo[0], geo[1], prm[0])
-            else:
-                lo, mid, hi = sir._support_bowl(
-                    sound_speed, prm[1], geo[0], math.acos(geo[1]), tmax
-                )
+            lo, mid, hi = sir.support(self.kind, prm, geo, sound_speed, tmax)
             k0, n = sir._bin_sir(
                 self.kind, prm, geo, sound_speed, lo, mid, hi, 0.0, dt, h, hm, work
             )
