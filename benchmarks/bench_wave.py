@@ -14,8 +14,9 @@ Measured in one process, as ratios (issue 13):
    its mirror image (tests/physics/references.py, written independently of echocal) for a
    piston over a plane tilted 0.5° at 10 mm, the broadband echo's envelope peak from both
    (their agreement and the speed ratio);
-3. the wave model's cost against its number of surface samples (the slope of a log–log fit:
-   1 is linear), varying the sample spacing;
+3. the wave model's cost against its number of points (the slope of a log–log fit: 1 is
+   linear): the Kirchhoff sum's surface samples (varying their spacing) and the image
+   form's face nodes (varying the number of rings);
 4. the figure of the README's physics section: the lobe of both models beside the piston's
    analytic limits (docs/physics-lobe.png, full runs only).
 """
@@ -49,37 +50,46 @@ from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
 from echocal.specimen.casting import _as_shapes  # noqa: E402
-from echocal.wave import PistonProbe, WaveEchoModel, threads  # noqa: E402
+from echocal.wave import PistonProbe, WaveEchoModel, image, threads  # noqa: E402
 
 C = 1480.0
 
 
 def ray_vs_wave(repeats: int) -> dict[str, float]:
     """Seconds per noiseless A-scan of immersion-5mhz, both models, near the optimum: the
-    wave model as it runs (its samples split over the cores) and on one thread, and the
-    wave model's stages on one thread (surface samples, SIR correlation + FFT, synthesis)."""
+    wave model as it runs (the image form over the plate, its nodes split over the cores
+    when there are many) and on one thread, the image form's stages on one thread (finding
+    the plane, face nodes' SIR + FFT, synthesis), and the Kirchhoff sum over the lit
+    surface (``image_planes=False``, what curved parts use) for comparison."""
     ray = load_setup("immersion-5mhz-ray")
     wave = dataclasses.replace(ray, reflection="wave")
     pos = ray.reference_position[None]
     frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
     t_ray = measure(lambda: ray.ideal_samples(pos, frames), repeats=20 * repeats, warmup=3)
-    t_wave = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+    t_wave = measure(lambda: wave.ideal_samples(pos, frames), repeats=20 * repeats, warmup=1)
     model, shapes = wave.wave_model, _as_shapes(wave.specimen)
-    points, unit_m, area = model.surface_samples(shapes, pos[0], frames[0])
-    spectrum, _ = model.spectrum(points, unit_m, area)
+    kirchhoff = dataclasses.replace(model, image_planes=False)
+    t_kirchhoff = measure(lambda: kirchhoff.ascans(shapes, pos, frames), repeats=repeats, warmup=1)
+    plane = model.image_plane(shapes, pos[0], frames[0])
+    assert plane is not None, "the plate fills the beam"
+    spectrum, _ = model.image_spectrum(plane)
+    _, _, area = kirchhoff.surface_samples(shapes, pos[0], frames[0])
     max_threads = threads.MAX_THREADS
     threads.MAX_THREADS = 1
     try:
-        t_one = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+        t_one = measure(lambda: wave.ideal_samples(pos, frames), repeats=20 * repeats, warmup=1)
         stages = {
-            "surface_samples_s": measure(
-                lambda: model.surface_samples(shapes, pos[0], frames[0]), repeats=repeats
+            "find_plane_s": measure(
+                lambda: model.image_plane(shapes, pos[0], frames[0]), repeats=20 * repeats
             ).median,
-            "sir_correlation_fft_s": measure(
-                lambda: model.spectrum(points, unit_m, area), repeats=repeats
+            "face_sir_fft_s": measure(
+                lambda: model.image_spectrum(plane), repeats=20 * repeats
             ).median,
-            "synthesis_s": measure(lambda: model.samples(spectrum), repeats=repeats).median,
+            "synthesis_s": measure(lambda: model.samples(spectrum), repeats=20 * repeats).median,
         }
+        t_kirchhoff_one = measure(
+            lambda: kirchhoff.ascans(shapes, pos, frames), repeats=repeats, warmup=1
+        )
     finally:
         threads.MAX_THREADS = max_threads
     return {
@@ -88,9 +98,25 @@ def ray_vs_wave(repeats: int) -> dict[str, float]:
         "ratio": t_wave.median / t_ray.median,
         "wave_one_thread_s": t_one.median,
         "ratio_one_thread": t_one.median / t_ray.median,
-        "surface_samples": float(np.count_nonzero(area)),
+        "face_nodes": float(_face_nodes(model, plane)),
         **stages,
+        "kirchhoff_s": t_kirchhoff.median,
+        "kirchhoff_one_thread_s": t_kirchhoff_one.median,
+        "kirchhoff_ratio": t_kirchhoff.median / t_ray.median,
+        "surface_samples": float(np.count_nonzero(area)),
     }
+
+
+def _face_nodes(model: WaveEchoModel, plane: image.ImagePlane) -> int:
+    """The image form's number of face nodes at ``plane``."""
+    spacing = image.node_spacing(
+        model.sound_speed / model.pulse.highest_frequency, plane.sin_incidence, 0.7
+    )
+    distance = float(-(plane.normal @ plane.point))
+    rings = image.ring_count(
+        model.probe, distance, model.sound_speed / model.pulse.highest_frequency, spacing
+    )
+    return int(image.face_samples(model.probe, rings, spacing)[1].size)
 
 
 def steel_plate(repeats: int, ray_s: float) -> dict[str, float]:
@@ -153,25 +179,46 @@ def wave_vs_rayleigh(accuracy: float, n_freq: int) -> dict[str, float]:
 
 
 def scaling(repeats: int) -> dict[str, object]:
-    """Cost against the number of surface samples (spacing 0.4 … 1.2 mm)."""
+    """Cost against the number of points for both forms near the optimum: the Kirchhoff
+    sum's surface samples (spacing 0.4 … 1.2 mm) and the image form's face nodes (forcing
+    8 … 64 rings through :data:`echocal.wave.image.MIN_RINGS`)."""
     base = load_setup("immersion-5mhz")
     pos = base.reference_position[None]
     frames = tilt_frame(np.array([-1.7]), np.array([3.2]))
+    shapes = _as_shapes(base.specimen)
     rows = []
     for spacing in (0.4e-3, 0.6e-3, 0.8e-3, 1.2e-3):
         setup = dataclasses.replace(base, wave_spacing=spacing)
-        model = setup.wave_model
-        samples = int(
-            np.count_nonzero(
-                model.surface_samples(_as_shapes(setup.specimen), pos[0], frames[0])[2]
-            )
-        )
-        t = measure(lambda s=setup: s.ideal_samples(pos, frames), repeats=repeats, warmup=1)
+        model = dataclasses.replace(setup.wave_model, image_planes=False)
+        samples = int(np.count_nonzero(model.surface_samples(shapes, pos[0], frames[0])[2]))
+        t = measure(lambda m=model: m.ascans(shapes, pos, frames), repeats=repeats, warmup=1)
         rows.append((spacing, samples, t.median))
+    model = base.wave_model
+    plane = model.image_plane(shapes, pos[0], frames[0])
+    assert plane is not None
+    image_rows = []
+    min_rings = image.MIN_RINGS
+    try:
+        for rings in (8, 16, 32, 64):
+            image.MIN_RINGS = rings
+            nodes = _face_nodes(model, plane)
+            t = measure(lambda: model.image_spectrum(plane), repeats=5 * repeats, warmup=1)
+            image_rows.append((rings, nodes, t.median))
+    finally:
+        image.MIN_RINGS = min_rings
+    return {
+        "rows": rows,
+        "slope": _slope(rows),
+        "image_rows": image_rows,
+        "image_slope": _slope(image_rows),
+    }
+
+
+def _slope(rows: list[tuple[float, int, float]]) -> float:
+    """The slope of log(seconds) against log(points): 1 is linear."""
     n = np.log([r[1] for r in rows])
     t = np.log([r[2] for r in rows])
-    slope = float(np.polyfit(n, t, 1)[0])
-    return {"rows": rows, "slope": slope}
+    return float(np.polyfit(n, t, 1)[0])
 
 
 def lobe_figure(path: Path) -> dict[str, float]:
@@ -204,9 +251,14 @@ def main() -> None:
     )
     print(
         f"HEADLINE on one thread: wave {fmt_time(speed['wave_one_thread_s'])} "
-        f"({speed['ratio_one_thread']:.1f}x): {speed['surface_samples']:.0f} surface samples "
-        f"{fmt_time(speed['surface_samples_s'])}, SIR correlation + FFT "
-        f"{fmt_time(speed['sir_correlation_fft_s'])}, synthesis {fmt_time(speed['synthesis_s'])}"
+        f"({speed['ratio_one_thread']:.1f}x): find the plane {fmt_time(speed['find_plane_s'])}, "
+        f"{speed['face_nodes']:.0f} face nodes' SIR + FFT {fmt_time(speed['face_sir_fft_s'])}, "
+        f"synthesis {fmt_time(speed['synthesis_s'])}"
+    )
+    print(
+        f"HEADLINE the Kirchhoff sum (curved parts): {fmt_time(speed['kirchhoff_s'])} "
+        f"({speed['kirchhoff_ratio']:.1f}x the ray model; one thread "
+        f"{fmt_time(speed['kirchhoff_one_thread_s'])}), {speed['surface_samples']:.0f} samples"
     )
     plate = steel_plate(repeats, speed["ray_s"])
     result["steel_plate"] = plate
@@ -227,7 +279,12 @@ def main() -> None:
         result["scaling"] = scale
         for spacing, samples, seconds in scale["rows"]:  # type: ignore[union-attr]
             print(f"  spacing {1e3 * spacing:.1f} mm: {samples} samples, {fmt_time(seconds)}")
-        print(f"HEADLINE cost ~ samples^{scale['slope']:.2f} (1 = linear)")
+        for rings, nodes, seconds in scale["image_rows"]:  # type: ignore[union-attr]
+            print(f"  image form, {rings} rings: {nodes} face nodes, {fmt_time(seconds)}")
+        print(
+            f"HEADLINE cost ~ samples^{scale['slope']:.2f} (Kirchhoff), "
+            f"~ nodes^{scale['image_slope']:.2f} (image form) (1 = linear)"
+        )
     if not cheap:
         widths = lobe_figure(ROOT / "docs" / "physics-lobe.png")
         result["minus6db_deg"] = widths

@@ -41,13 +41,28 @@ from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
 from echocal.wave.probe import PistonProbe
 
-__all__ = ["MIN_RINGS", "ImagePlane", "face_samples", "find_plane", "node_spacing", "ring_count"]
+__all__ = [
+    "BOWL_RINGS_PER_ZONE",
+    "MIN_RINGS",
+    "MIN_RINGS_BOWL",
+    "ImagePlane",
+    "face_samples",
+    "find_plane",
+    "node_spacing",
+    "ring_count",
+]
 
 FloatArray = NDArray[np.float64]
 
 MIN_RINGS = 8
 """Radial Gauss–Legendre nodes at least: the edge wave's delay varies across the face even
 at normal incidence."""
+MIN_RINGS_BOWL = 16
+BOWL_RINGS_PER_ZONE = 3.0
+"""A focused bowl's radial nodes: at least :data:`MIN_RINGS_BOWL`, and this many per
+Fresnel zone of :func:`ring_count`.  Against the double Rayleigh integral (3 mm bowl,
+R_f 25 mm, 20 mm water): 8 rings 0.5 % low, 16 rings 0.2 %, 32 rings 0.015 %; a 12.7 mm
+bowl (R_f 40 mm, 10 mm water, 20 zones at 6 MHz) was 24 % off with 8 rings."""
 
 
 @dataclass(frozen=True)
@@ -90,15 +105,27 @@ def node_spacing(
     return nyquist_fraction * shortest_wavelength / (2.0 * sin_2a)
 
 
-def ring_count(radius: float, distance: float, shortest_wavelength: float, spacing: float) -> int:
-    """Radial Gauss–Legendre nodes for a face of ``radius`` [m] over a plane ``distance`` [m]
-    away along the axis: at least :data:`MIN_RINGS`, at least ``radius``/``spacing``
-    (``spacing`` [m] from :func:`node_spacing`), and at least the number of Fresnel zones
-    a²/(λ_hi·2d) the face spans seen from its image (the edge wave's phase runs through
-    one period per zone; the nodes are uniform in ρ², as the zones are)."""
-    zones = radius * radius / (shortest_wavelength * 2.0 * max(distance, shortest_wavelength))
-    along = radius / spacing if math.isfinite(spacing) else 0.0
-    return max(MIN_RINGS, math.ceil(along), math.ceil(zones))
+def ring_count(
+    probe: PistonProbe, distance: float, shortest_wavelength: float, spacing: float
+) -> int:
+    """Radial Gauss–Legendre nodes for the probe's face over a plane ``distance`` [m] away
+    along the axis: at least :data:`MIN_RINGS`, at least a/``spacing`` (``spacing`` [m]
+    from :func:`node_spacing`), and at least the number of Fresnel zones of the edge wave
+    across the face, a²(1/(2d) + 1/R_f)/λ_hi: the path from a node at radius ρ of the image
+    to the probe's rim changes by a²/(4d) (plus a²/(2R_f) for a bowl, whose sag adds to it)
+    from the centre to the rim, and its phase runs through one period per half wavelength
+    of that change; the nodes are uniform in ρ², as the zones are (λ_hi
+    ``shortest_wavelength`` [m]).  A bowl's integrand converges more slowly (its SIR near
+    the focus has sharper breakpoints): :data:`BOWL_RINGS_PER_ZONE` rings per zone, at
+    least :data:`MIN_RINGS_BOWL`."""
+    a = probe.radius
+    d = max(distance, shortest_wavelength)
+    along = a / spacing if math.isfinite(spacing) else 0.0
+    if probe.curvature is None:
+        zones = a * a / (2.0 * d * shortest_wavelength)
+        return max(MIN_RINGS, math.ceil(along), math.ceil(zones))
+    zones = a * a * (1.0 / (2.0 * d) + 1.0 / probe.curvature) / shortest_wavelength
+    return max(MIN_RINGS_BOWL, math.ceil(along), math.ceil(BOWL_RINGS_PER_ZONE * zones))
 
 
 def face_samples(probe: PistonProbe, n_rings: int, spacing: float) -> tuple[FloatArray, FloatArray]:

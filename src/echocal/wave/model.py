@@ -4,6 +4,8 @@ Pipeline per pose (DESIGN.md, "Physics models")::
 
     footprint rays → closest hits = surface samples (point, normal, patch area, visibility)
         → two-way SIR correlation per sample → one time grid → spectrum × pulse → A-scan
+    (over a plane that fills the beam: the probe's mirror image → one-way SIR per face node
+        → one time grid → spectrum × pulse → A-scan)
 
 **Physics.** By reciprocity (Auld 1979; Thompson & Gray's measurement model), the signal
 scattered back to a transducer by a surface S on which the Kirchhoff (physical-optics)
@@ -26,9 +28,14 @@ there: it reproduces the Rogers–Van Buren diffraction loss on axis and the exa
 face, through a disc of radius a + margin on it, wide enough to hold the diffracted beam
 (its half-angle grows with λ/a) and dense enough that the samples lie about ``spacing``
 apart on the surface, and never farther than the two-way Nyquist spacing λ_hi/(4 sin θ) at
-the beam axis's incidence θ (finer, and costlier, at large tilts: 5 ms per A-scan at
-normal incidence, 0.05 s at 10°, 0.2 s at 20° for a 12.7 mm probe at 50 mm).  Closest hits
-keep visibility.  Each hit carries the area of its
+the beam axis's incidence θ (finer, and costlier, at large tilts: 6 ms per A-scan at
+normal incidence, 0.05 s at 10°, 0.18 s at 20° for a 12.7 mm probe at 50 mm).  Closest hits
+keep visibility.
+
+**Planes.** Over a plane that fills the beam, the same physics is evaluated exactly and far
+more cheaply by the image form (:mod:`echocal.wave.image`): the probe's SIR integrated over
+its mirror image, a few hundred face nodes at most near normal incidence (0.8 ms per A-scan
+there).  Each hit carries the area of its
 ray tube on the surface, ΔS = dΩ·L²/|cos θ|, and a smooth taper towards the edge of the
 fan so that the cut-off edge does not diffract.
 
@@ -317,7 +324,7 @@ class WaveEchoModel:
             self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
         )
         distance = float(-(plane.normal @ plane.point)) / max(abs(float(plane.normal[2])), 1e-6)
-        n_rings = image.ring_count(self.probe.radius, distance, self._shortest_wavelength, spacing)
+        n_rings = image.ring_count(self.probe, distance, self._shortest_wavelength, spacing)
         face, weights = image.face_samples(self.probe, n_rings, spacing)
         points = plane.mirror(face)
         if coefficient is not None:

@@ -73,7 +73,7 @@ def two_way_grid(
 
     def kernel(grid: FloatArray, share: NDArray[np.intp]) -> tuple[float, float]:
         scratch = np.zeros((5, 2 * n_scratch))
-        return sir.accumulate_two_way(  # type: ignore[no-any-return]
+        return sir.accumulate_two_way(
             kind,
             prm,
             np.ascontiguousarray(points[:, share]),
@@ -141,7 +141,7 @@ def one_way_grid(
 
     def kernel(grid: FloatArray, share: NDArray[np.intp]) -> tuple[float, float]:
         scratch = np.zeros((4, n_scratch))
-        return sir.accumulate_one_way(  # type: ignore[no-any-return]
+        return sir.accumulate_one_way(
             kind,
             prm,
             np.ascontiguousarray(points[:, share]),
