@@ -218,7 +218,8 @@ FILE_KINDS = {
 @pytest.mark.parametrize("kind", list(FILE_KINDS))
 def test_every_file_kind_carries_the_whole_record(kind, tmp_path, capsys, monkeypatch):
     """Each item of the issue's provenance list, in each kind of result file."""
-    from echocal.provenance import git_commit, setup_digest
+    from echocal.provenance import git_commit
+    from echocal.setup_digest import setup_digest
 
     (tmp_path / "tiny.toml").write_text(tiny_setup_toml())
     (tmp_path / "one.toml").write_text(SWEEP_TOML)

@@ -31,7 +31,7 @@ cos θ₁ cos θ_L cos θ_T so that nothing divides by zero at a critical angle.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,8 +39,24 @@ from numpy.typing import ArrayLike, NDArray
 from echocal._validate import finite_array
 from echocal.errors import EchocalValueError
 
-if TYPE_CHECKING:
-    from echocal.materials import Material
+
+@runtime_checkable
+class Material(Protocol):
+    """What the coefficients need of a medium: :class:`echocal.materials.Material` has it
+    (declared here so that this module, below ``materials`` in the house, imports nothing
+    of it)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def density(self) -> float: ...  # [kg/m³]
+    @property
+    def longitudinal_speed(self) -> float: ...  # [m/s]
+    @property
+    def shear_speed(self) -> float: ...  # [m/s], 0 for a fluid
+    @property
+    def is_fluid(self) -> bool: ...
+
 
 __all__ = [
     "CriticalAngles",
@@ -132,8 +148,6 @@ def _angles(theta_deg: ArrayLike, name: str = "theta_deg") -> FloatArray:
 
 
 def _check(fluid: Material, solid: Material) -> None:
-    from echocal.materials import Material  # runtime import: materials imports us
-
     for role, value in (("fluid", fluid), ("solid", solid)):
         if not isinstance(value, Material):
             raise EchocalValueError(f"{role} must be a Material; got {type(value).__name__}")

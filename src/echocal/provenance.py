@@ -52,7 +52,6 @@ __all__ = [
     "file_digest",
     "git_commit",
     "read_provenance",
-    "setup_digest",
     "start",
     "versions",
 ]
@@ -134,18 +133,6 @@ def file_digest(path: str | os.PathLike[str]) -> str:
     except OSError as exc:
         raise DataFileError(f"cannot read {path}: {exc.strerror or exc}") from None
     return digest.hexdigest()
-
-
-def setup_digest(setup: str) -> dict[str, str]:
-    """``{"name": setup, "sha256": …}``: the digest of the setup's *resolved* content (its
-    validated configuration in SI units, as JSON with sorted keys) — the same for a
-    built-in name and a copy of its file, different as soon as any value differs."""
-    from echocal.setups import load_setup_config
-
-    config, _ = load_setup_config(setup)
-    text = json.dumps(config.model_dump(mode="json"), sort_keys=True)
-    name = str(Path(setup).resolve()) if Path(setup).is_file() else setup
-    return {"name": name, "sha256": hashlib.sha256(text.encode()).hexdigest()}
 
 
 @dataclass

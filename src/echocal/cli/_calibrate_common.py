@@ -98,7 +98,7 @@ class _Run:
         (none: the whole recording), method with every option."""
         if opened is None:
             return None
-        from echocal.provenance import setup_digest
+        from echocal.setup_digest import setup_digest
 
         return opened.finish(
             setup=None if setup is None else setup_digest(setup),

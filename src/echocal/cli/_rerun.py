@@ -37,7 +37,8 @@ def rerun_parameters(path: Path, ctx: Any) -> dict[str, Any]:
     Raises :class:`~echocal.errors.ConfigError` for another command's file, options given
     beside ``--from`` (they would change the run), or a setup or recording that changed.
     """
-    from echocal.provenance import file_digest, read_provenance, setup_digest
+    from echocal.provenance import file_digest, read_provenance
+    from echocal.setup_digest import setup_digest
 
     record = read_provenance(path)
     if record.get("command") != "calibrate":

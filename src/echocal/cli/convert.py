@@ -22,8 +22,8 @@ def register(app: typer.Typer) -> None:
         """Rewrite a replay, scan or A-scan file of an older echocal in the current NetCDF
         schema (CF-1.10, compressed, Fletcher-32 checksums; docs/netcdf-schema.md)."""
         from echocal.cli._common import check_out_file
+        from echocal.conversion import convert
         from echocal.errors import DataFileError
-        from echocal.netcdf import convert
 
         check_out_file(target, suffix=".nc", option="TARGET", what="a NetCDF file")
         if target.exists() and not overwrite:

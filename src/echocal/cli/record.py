@@ -355,7 +355,7 @@ def _best_in_gate(path: Path, gate: Any, setup: str | None) -> list[dict[str, An
 def _origin(opened, source, grid, repeats: int, setup, seed, snr, rig, gate=None) -> dict:
     """The recording's provenance record (:mod:`echocal.provenance`), end time set when the
     file is written."""
-    from echocal.provenance import setup_digest
+    from echocal.setup_digest import setup_digest
 
     origin = (
         {"kind": "rig", "file": str(Path(rig).resolve()), "identification": source.description}

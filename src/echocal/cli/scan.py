@@ -126,8 +126,9 @@ def register(app: typer.Typer) -> None:
         from echocal.cli._rig_option import open_rig, refuse_simulation_options, rig_setup
         from echocal.cli._setup_option import resolve_setup
         from echocal.errors import EchocalValueError
-        from echocal.provenance import setup_digest, start
+        from echocal.provenance import start
         from echocal.scanning import ScanGrid, check_scan
+        from echocal.setup_digest import setup_digest
         from echocal.units import parse_length
 
         opened = start(

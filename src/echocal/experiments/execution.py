@@ -34,7 +34,7 @@ from echocal.experiments.runner import FAILED, run_case
 from echocal.experiments.summary import summarize
 from echocal.experiments.sweep import RunCase, SweepSpec, expand, load_sweep
 from echocal.locking import output_lock
-from echocal.provenance import setup_digest
+from echocal.setup_digest import setup_digest
 
 __all__ = ["DEFAULT_WORKERS", "SweepResults", "load_results", "run_sweep"]
 
