@@ -34,7 +34,7 @@ measurements after which the estimate stays within 0.1° (``>80`` where runs nev
 there), the median measurements the acquisition phase spent before handing over, and the
 ratio of the 99th percentile to the bound::
 
-    python benchmarks/bench_lower_bound.py                       # immersion-5mhz-wave, 30 dB
+    python benchmarks/bench_lower_bound.py                       # immersion-5mhz, 30 dB
     python benchmarks/bench_lower_bound.py --snr 30,10 --runs 100 \\
         --out-md docs/benchmarks/lower-bound.md
     python benchmarks/bench_lower_bound.py --smoke               # seconds (CI)
@@ -98,7 +98,7 @@ def _n(v: float) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--case", default="immersion-5mhz-wave", choices=list(CASES))
+    ap.add_argument("--case", default="immersion-5mhz", choices=list(CASES))
     ap.add_argument("--snr", default="30", help="comma-separated SNRs [dB]")
     ap.add_argument("--start", default="far", choices=list(STARTS))
     ap.add_argument("--runs", type=int, default=100, help="auto runs per SNR")

@@ -50,7 +50,7 @@ def test_lower_bound_smoke_runs_and_reports(tmp_path):
         cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert "HEADLINE immersion-5mhz-wave far 30 dB: bound" in proc.stdout
+    assert "HEADLINE immersion-5mhz far 30 dB: bound" in proc.stdout
     text = out_md.read_text()
     assert text.startswith("# Lower bound on measurements vs `auto`")
     assert "N ≥ 0.99 · A / K" in text and "| 30 |" in text

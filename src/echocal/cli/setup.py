@@ -96,7 +96,7 @@ def resolved_setup(name_or_path: str) -> tuple[dict[str, Any], str]:
 
 
 def _specimen(config: Any, base_dir: Path, resolved_name: str) -> dict[str, Any]:
-    from echocal.setups import _SHAPE_FIELDS
+    from echocal.setups.schema import _SHAPE_FIELDS
 
     spec = config.specimen
     out: dict[str, Any] = {}

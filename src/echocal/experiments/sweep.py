@@ -43,7 +43,9 @@ from typing import Annotated, Any, Literal, NoReturn
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 
 from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownNameError
-from echocal.setups import Angle, Point, _format_errors, builtin_setup_names, load_setup_config
+from echocal.setups import builtin_setup_names, load_setup_config
+from echocal.setups.fields import Angle, Point
+from echocal.setups.schema import _format_errors
 
 __all__ = [
     "MAX_SWEEP_RUNS",

@@ -41,7 +41,8 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from echocal.errors import ConfigError, DataFileError
-from echocal.setups import Time, _format_errors, _Model, _quantity
+from echocal.setups.fields import Time, _quantity
+from echocal.setups.schema import _format_errors, _Model
 from echocal.units import parse_quantity
 
 __all__ = ["RigConfig", "load_rig_config"]
