@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from echocal.errors import InstrumentError
 from echocal.geometry import Pose
-from echocal.measurement import protocol
-from echocal.measurement.limits import PositionerLimits
+from echocal.measurement import PositionerLimits, protocol
+from echocal.measurement.protocol import ProtocolError, decode_limits, encode_limits
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
@@ -112,3 +112,32 @@ def test_bad_limits() -> None:
         protocol.decode_limits("0 1")
     with pytest.raises(InstrumentError, match="low <= high"):
         protocol.decode_limits("1 0 0 1 0 1 0 1 0 1")
+
+
+REPLY = "-1 1 -1 1 0 0.5 {az} -60 60"
+
+
+@pytest.mark.parametrize("az", ["-inf inf", "-inf 90", "0 inf"])
+def test_endless_azimuth_reply_means_a_full_turn(az):
+    limits = decode_limits(REPLY.format(az=az))
+    assert limits.azimuth == (-180.0, 180.0)
+    assert limits.coelevation == (-60.0, 60.0)
+    assert limits.contains(Pose(0.0, 0.0, 0.1, 179.0, 10.0))
+    # finite now, so the midpoint and optimiser bounds stay numbers
+    assert all(math.isfinite(b) for b in limits.azimuth)
+    assert decode_limits(encode_limits(limits)) == limits
+
+
+def test_limits_within_a_turn_are_kept_and_bad_ones_refused():
+    assert PositionerLimits(azimuth=(0.0, 360.0)).azimuth == (0.0, 360.0)
+    assert PositionerLimits(azimuth=(-math.inf, math.inf)).azimuth == (-180.0, 180.0)
+    # finite bounds outside [-360, 360] stay refused (a unit slip, not an endless axis)
+    for bounds in [(300.0, 500.0), (-720.0, 720.0)]:
+        with pytest.raises(ValueError, match="azimuth"):
+            PositionerLimits(azimuth=bounds)
+    with pytest.raises(ValueError, match="azimuth"):
+        PositionerLimits(azimuth=(math.inf, -math.inf))
+    with pytest.raises(ProtocolError, match="coelevation"):
+        decode_limits(REPLY.replace("-60 60", "-inf inf").format(az="-inf inf"))
+    with pytest.raises(ProtocolError, match="coelevation"):
+        decode_limits(REPLY.replace("-60 60", "-100 100").format(az="-180 180"))

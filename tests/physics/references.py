@@ -386,9 +386,7 @@ def _bowl_nodes(a, R, n_u, n_psi):
     return px, py, pz, w2
 
 
-def pulse_echo_bowl_rayleigh(
-    a, R, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float = 1.0
-):
+def pulse_echo_bowl_rayleigh(a, R, f, d, tilt_deg, c: float = C_WATER, *, accuracy: float = 1.0):
     """Brute-force double Rayleigh integral for a spherically focused bowl over a plane.
 
     ``V = (1/(pi a^2)) \\int_B dA_b \\int_B dA_a (-ik) e^{ikR}/(2 pi R)``, ``R = |b - M a|``,

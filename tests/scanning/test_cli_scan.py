@@ -1,26 +1,77 @@
-"""``echocal scan`` refuses whole-run mistakes before writing anything, is reproducible
-without --seed, never replaces a finished scan silently, and says why a point is missing.
-
-Grids are 1-3 points on a side so that the module runs in a few seconds.
-"""
+"""``echocal scan``: a tiny raster end to end — summary, NetCDF, figures, errors."""
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
+import typer
 import xarray as xr
+from typer.testing import CliRunner
 
 import echocal.scanning.scan as scan_module
+from cli_helpers import TINY_PLATE, flat, run_main, tiny_setup_toml
 from cli_helpers import flat as _flat
-from cli_helpers import run_main
+from echocal.cli import app
+from echocal.cli.scan import parse_grid
 from echocal.errors import LimitError
 from echocal.geometry import Pose
 from echocal.scanning import STATUS, ScanGrid, SurfaceScan, check_scan, scan_surface
 from echocal.setups import load_setup
 
+runner = CliRunner()
+
+
+def test_parse_grid_reads_millimetres_unless_a_unit_is_given():
+    (x0, x1, dx), (y0, y1, dy) = parse_grid("-2:2:1,0cm:1cm:5mm")
+    assert (x0, x1, dx) == pytest.approx((-2e-3, 2e-3, 1e-3))
+    assert (y0, y1, dy) == pytest.approx((0.0, 0.01, 0.005))
+    with pytest.raises(typer.BadParameter, match="--grid"):
+        parse_grid("0:1:1")
+
+
+def test_scan_writes_netcdf_figures_and_a_json_summary(tmp_path):
+    out = tmp_path / "run"
+    result = runner.invoke(
+        app,
+        [
+            "scan", "--setup", "scan-5mhz", "--specimen", "cylinder",
+            "--grid", "-2:2:2,0:0:1", "--z", "25", "--seed", "3",
+            "--cold", "--out", str(out), "--no-progress", "--json",
+        ],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    scan = report["scan"]
+    assert scan["points"] == 3 and scan["found"] == 3
+    # the issue's targets on the cylinder at the setup's 30 dB
+    assert scan["normal_error_deg"]["median"] <= 0.1
+    assert scan["height_error_abs_m"]["median"] <= 0.05e-3
+    assert report["cold"]["measurements_total"] > 0
+    assert report["cold_over_warm_measurements"] == pytest.approx(
+        report["cold"]["measurements_total"] / scan["measurements_total"]
+    )
+    saved = SurfaceScan.load(out / "scan.nc")
+    assert saved.summary == scan
+    assert saved.dataset["surface_z"].attrs["units"] == "m"
+    for name in ("height", "normals", "errors", "measurements", "surface-3d"):
+        assert (out / f"{name}.png").stat().st_size > 0
+        assert (out / f"{name}.svg").exists()
+
+
+def test_a_bad_grid_is_a_usage_error(tmp_path):
+    result = runner.invoke(
+        app, ["scan", "--setup", "scan-5mhz", "--grid", "1:2", "--out", str(tmp_path)]
+    )
+    assert result.exit_code == 2
+    assert "--grid" in result.output
+
+
 MM = 1e-3
+
+
 BASE = ["scan", "--setup", "scan-5mhz", "--specimen", "sphere", "--no-figures", "--no-progress"]
 
 
@@ -161,3 +212,49 @@ def test_a_point_stopped_by_the_budget_is_unconverged_not_found():
     assert "measurement budget exhausted" in str(ds["message"].values[0, 0])
     assert np.isnan(ds["tilt_x"].values[0, 0])  # missing, not guessed
     assert scan.summary["missing_by_status"] == {"unconverged": 1}
+
+
+# a sphere whose top is at z = 10 mm: the reference (26 mm) is 16 mm above it; z = 5 mm is inside
+SPHERE = '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
+
+
+def _setup(tmp_path: Path, specimen: str = TINY_PLATE, ref_z: str = "16 mm") -> Path:
+    path = tmp_path / "tiny.toml"
+    path.write_text(tiny_setup_toml(specimen, ref_z, z_min="0 mm"), encoding="utf-8")
+    return path
+
+
+def _scan(setup: Path, out: Path, z: str, *extra: str) -> list[str]:
+    return [
+        "scan", "--setup", str(setup), "--grid", "-1:1:1,-1:1:1", "--z", z, "--out", str(out),
+        "--no-progress", *extra,
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("specimen", "ref_z", "z", "expected"),
+    [
+        (TINY_PLATE, "16 mm", "40", "cannot contain any echo"),
+        (SPHERE, "26 mm", "5", "inside sphere"),
+    ],
+)
+def test_scan_refuses_a_run_where_every_point_fails(
+    tmp_path, capsys, monkeypatch, specimen, ref_z, z, expected
+):
+    setup = _setup(tmp_path, specimen, ref_z)
+    out = tmp_path / "scan"
+    code, _, err = run_main(_scan(setup, out, z), capsys, monkeypatch)
+    assert code == 2 and "Traceback" not in err
+    assert expected in flat(err) and "every grid point would fail (9 of 9)" in flat(err)
+    assert not out.exists()  # nothing written
+
+
+def test_a_scan_that_finds_nothing_prints_no_numpy_warnings(tmp_path, capsys, monkeypatch):
+    setup = _setup(tmp_path)
+    out = tmp_path / "scan"
+    # 9 measurements per point: one auto iteration + 2 time-of-flight A-scans, never converged
+    code, _, err = run_main(_scan(setup, out, "16", "--budget-per-point", "9"), capsys, monkeypatch)
+    assert code == 0, err
+    assert "0 found" in err  # the case of the defect: nothing found, summaries of nothing
+    assert "Mean of empty slice" not in err and "invalid value" not in err
+    assert "warning" not in err.lower()

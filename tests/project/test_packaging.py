@@ -10,7 +10,7 @@ from pathlib import Path
 
 import echocal
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_version_comes_from_the_installed_metadata():

@@ -8,11 +8,11 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 from echocal import MM, SOUND_SPEED_WATER, EchocalValueError, LimitError, Pose
 from echocal.echo import ray_echoes
+from echocal.errors import GeometryError
 from echocal.geometry import angle_between, orientation_frame, orientation_normal, tilt_normal
-from echocal.measurement import PositionerLimits
-from echocal.measurement.virtual import ReceiverSettings, VirtualSetup
+from echocal.measurement import PositionerLimits, ReceiverSettings, VirtualSetup
 from echocal.signal import RecordingWindow, make_pulse, pseudo_energy, time_of_flight
-from echocal.specimen import TILTED_PLATE_ORIENTATION, builtin_specimen
+from echocal.specimen import TILTED_PLATE_ORIENTATION, Cylinder, Specimen, Sphere, builtin_specimen
 from echocal.transducer import Transducer
 
 WINDOW = RecordingWindow(fs=100e6, start=20e-6, n_samples=2048)
@@ -151,3 +151,72 @@ def test_setup_is_frozen_so_its_cached_noise_cannot_go_stale():
     quieter = dataclasses.replace(sim, receiver=ReceiverSettings(snr_db=40.0))
     # 20 dB more SNR = 10x smaller noise amplitude (same reference echo).
     assert quieter.noise_sigma == pytest.approx(sigma / 10.0, rel=1e-9)
+
+
+BORE = 40 * MM
+
+
+# the bore wall is 40 mm below the axis: round trip 2 * 40 mm / c ~ 54 us
+BORE_WINDOW = RecordingWindow(fs=100e6, start=40e-6, n_samples=2048)
+
+
+def pipe() -> Specimen:
+    # horizontal pipe (axis along x): a solid rod of radius 50 mm with a 40 mm bore
+    common = {"center": (0.0, 0.0, 0.0), "length": 0.2, "coelevation": 90.0}
+    outer = Cylinder(radius=50 * MM, surface="outside", name="wall", **common)
+    bore = Cylinder(radius=BORE, surface="inside", name="bore", **common)
+    return Specimen([outer, bore], name="pipe")
+
+
+def virtual(specimen: Specimen, at=(0.0, 0.0, 0.0)) -> VirtualSetup:
+    return VirtualSetup(
+        specimen=specimen,
+        transducer=Transducer(n_h=8, n_v=8),
+        pulse=PULSE,
+        window=BORE_WINDOW,
+        receiver=ReceiverSettings(snr_db=60.0),
+        reference_position=at,
+        rng=3,
+    )
+
+
+def test_probe_in_the_bore_builds_and_hears_the_bore_wall():
+    setup = virtual(pipe())
+    scan = setup.measure(Pose(0.0, 0.0, 0.0, 0.0, 0.0))
+    envelope = np.abs(scan.samples)
+    peak_time = scan.times[int(np.argmax(envelope))]
+    # the echo peak lies within a few pulse periods (5 MHz: 0.2 us) of 2 r / c; the finite
+    # aperture on the curved wall and the pulse shape shift it by well under 1 us
+    assert peak_time == pytest.approx(2 * BORE / SOUND_SPEED_WATER, abs=1e-6)
+    assert envelope.max() > 10 * np.median(envelope)
+
+
+def test_containing_excludes_the_bore_but_not_the_wall():
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 45 * MM], [0.0, 0.0, 60 * MM]])
+    # axis in the bore: medium; between bore and outer wall: material; outside: medium
+    assert pipe().containing(points).tolist() == [-1, 0, -1]
+    with pytest.raises(GeometryError, match="inside cylinder 'wall'"):
+        virtual(pipe(), at=(0.0, 0.0, 45 * MM))
+    # beyond the bore's length the rod is solid again
+    short = Specimen(
+        [
+            Cylinder(center=(0, 0, 0), radius=50 * MM, length=0.2, coelevation=90.0),
+            Cylinder(
+                center=(0, 0, 0), radius=BORE, length=0.05, coelevation=90.0, surface="inside"
+            ),
+        ]
+    )
+    assert short.containing([[0.09, 0.0, 0.0], [0.0, 0.0, 0.0]]).tolist() == [0, -1]
+
+
+@pytest.mark.parametrize(
+    "shape",
+    [
+        Cylinder(center=(0, 0, 0), radius=50 * MM, length=0.2, coelevation=90.0),
+        Sphere(center=(0, 0, 0), radius=50 * MM),
+    ],
+)
+def test_probe_inside_a_plain_solid_is_still_refused(shape):
+    with pytest.raises(GeometryError, match="probe must be outside the part"):
+        virtual(Specimen([shape]))
+    assert Specimen([shape]).containing([[0.0, 0.0, 0.0]]).tolist() == [0]

@@ -64,3 +64,23 @@ def test_an_empty_folder_is_accepted_and_a_file_refused(tmp_path):
     (tmp_path / "file").write_text("x")
     with pytest.raises(DataFileError, match="is not a folder"):
         check_out_dir(tmp_path / "file", overwrite=True)
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"), [("r.txt", "ending in .html"), ("adir", "is a directory")]
+)
+def test_report_out_must_be_an_html_file(tmp_path, capsys, monkeypatch, name, expected):
+    (tmp_path / "adir").mkdir()
+    out = tmp_path / name
+    code, _, err = run_main(["report", str(tmp_path), "--out", str(out)], capsys, monkeypatch)
+    assert code == 2 and expected in flat(err) and "pass --overwrite" not in err
+    assert not (tmp_path / "r.txt").exists()
+
+
+def test_scene_under_a_file_says_not_a_directory(tmp_path, capsys, monkeypatch):
+    blocker = tmp_path / "afile"
+    blocker.write_text("x")
+    out = blocker / "x.png"
+    args = ["scene", "--pose", "0,0,20", "--out", str(out)]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code == 2 and "is not a directory" in flat(err) and "File exists" not in err
