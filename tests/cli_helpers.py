@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -54,3 +55,17 @@ reference_position = ["0 mm", "0 mm", "{ref_z}"]
 z = ["{z_min}", "40 mm"]
 coelevation = [-30, 30]
 """
+
+
+SPHERE_UNDER_REFERENCE = (
+    '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
+)
+"""A sphere whose top is at z = 10 mm: the reference (26 mm) is 16 mm above it; z = 5 mm is
+inside it."""
+
+
+def tiny_setup_file(tmp_path: Path, specimen: str = TINY_PLATE, ref_z: str = "16 mm") -> Path:
+    """:func:`tiny_setup_toml` (positioner z down to 0 mm) written to ``tmp_path/tiny.toml``."""
+    path = tmp_path / "tiny.toml"
+    path.write_text(tiny_setup_toml(specimen, ref_z, z_min="0 mm"), encoding="utf-8")
+    return path

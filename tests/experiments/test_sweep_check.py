@@ -254,24 +254,10 @@ def test_the_builtin_sweeps_pass_the_check(name, capsys, monkeypatch):
     assert code == 0, err
 
 
-SWEEP = {
-    "name": "w",
-    "setup": "thesis",
-    "budget": 12,
-    "max_iter": 3,
-    "seeds": 1,
-    "snr_db": [30],
-    "methods": [{"name": "model-based"}],
-}
-
-
 def test_sweep_check_refuses_a_window_that_cannot_hold_the_echo():
-    from echocal.errors import ConfigError
-    from echocal.experiments import load_sweep
-
     # thesis: z limits [5, 100] mm, window [20, 71.2] us; the echo from 100 mm comes at 135 us
     with pytest.raises(ConfigError) as info:
-        load_sweep({**SWEEP, "position": [0, 0, "100 mm"]})
+        load_sweep({**OK, "position": [0, 0, "100 mm"]})
     (problem,) = [line.strip() for line in str(info.value).splitlines()[1:]]
     assert problem.startswith("position:") and "cannot contain any echo" in problem
-    assert load_sweep({**SWEEP, "position": [0, 0, "22 mm"]}).name == "w"  # a valid one passes
+    assert load_sweep({**OK, "position": [0, 0, "22 mm"]}).name == "ok"  # a valid one passes

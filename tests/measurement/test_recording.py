@@ -10,7 +10,13 @@ import pytest
 import xarray as xr
 from fake_sources import GaussianEchoSource, InterruptingSource
 
-from cli_helpers import TINY_PLATE, flat, run_main, tiny_setup_toml
+from cli_helpers import (
+    SPHERE_UNDER_REFERENCE,
+    flat,
+    run_main,
+    tiny_setup_file,
+    tiny_setup_toml,
+)
 from cli_helpers import flat as _flat
 from echocal.ascan import AScan
 from echocal.errors import DataFileError, EchocalValueError, LimitError
@@ -273,16 +279,6 @@ def test_recording_size_caps_count_and_bytes():
     assert np.prod(grid.shape) == grid.size == 500_000
 
 
-# a sphere whose top is at z = 10 mm: the reference (26 mm) is 16 mm above it; z = 5 mm is inside
-SPHERE = '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
-
-
-def _setup(tmp_path: Path, specimen: str = TINY_PLATE, ref_z: str = "16 mm") -> Path:
-    path = tmp_path / "tiny.toml"
-    path.write_text(tiny_setup_toml(specimen, ref_z, z_min="0 mm"), encoding="utf-8")
-    return path
-
-
 def _record(setup: Path, out: Path, position: str, *extra: str) -> list[str]:
     return [
         "record", "--setup", str(setup), "--out", str(out), "--azimuth", "-1:1:3",
@@ -293,7 +289,7 @@ def _record(setup: Path, out: Path, position: str, *extra: str) -> list[str]:
 def test_record_refuses_a_probe_inside_the_part_and_then_records_the_fix(
     tmp_path, capsys, monkeypatch
 ):
-    setup = _setup(tmp_path, SPHERE, "26 mm")
+    setup = tiny_setup_file(tmp_path, SPHERE_UNDER_REFERENCE, "26 mm")
     out = tmp_path / "sp.nc"
     code, _, err = run_main(_record(setup, out, "0,0,5"), capsys, monkeypatch)
     assert code == 2 and "Traceback" not in err
@@ -305,7 +301,7 @@ def test_record_refuses_a_probe_inside_the_part_and_then_records_the_fix(
 
 
 def test_record_refuses_a_window_that_cannot_hold_the_echo(tmp_path, capsys, monkeypatch):
-    setup = _setup(tmp_path)
+    setup = tiny_setup_file(tmp_path)
     out = tmp_path / "w.nc"
     code, _, err = run_main(_record(setup, out, "0,0,40"), capsys, monkeypatch)
     assert code == 2 and "cannot contain any echo" in flat(err)
@@ -330,7 +326,7 @@ def test_record_keeps_a_grid_whose_steep_poses_alone_miss_the_window(tmp_path, c
 
 
 def test_overwrite_discards_an_incompatible_partial_and_says_so(tmp_path, capsys, monkeypatch):
-    setup = _setup(tmp_path)
+    setup = tiny_setup_file(tmp_path)
     out = tmp_path / "p.nc"
     sidecar = partial_path(out)
     sidecar.mkdir()  # a partial recording of another grid, with nothing saved yet
@@ -348,7 +344,7 @@ def test_overwrite_discards_an_incompatible_partial_and_says_so(tmp_path, capsys
 def test_a_stale_partial_is_refused_in_one_line_without_resuming_news(
     tmp_path, capsys, monkeypatch
 ):
-    setup = _setup(tmp_path)
+    setup = tiny_setup_file(tmp_path)
     out = tmp_path / "s.nc"
     sidecar = partial_path(out)
     sidecar.mkdir()  # another grid's partial recording with 5 A-scans saved
@@ -368,7 +364,7 @@ def test_a_stale_partial_is_refused_in_one_line_without_resuming_news(
     [("x.txt", "ending in .nc"), ("x", "ending in .nc"), ("adir", "is a directory")],
 )
 def test_record_out_must_be_an_nc_file(tmp_path, capsys, monkeypatch, name, expected):
-    setup = _setup(tmp_path)
+    setup = tiny_setup_file(tmp_path)
     (tmp_path / "adir").mkdir()
     out = tmp_path / name
     for extra in ((), ("--overwrite",)):

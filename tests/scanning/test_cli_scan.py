@@ -12,7 +12,13 @@ import xarray as xr
 from typer.testing import CliRunner
 
 import echocal.scanning.scan as scan_module
-from cli_helpers import TINY_PLATE, flat, run_main, tiny_setup_toml
+from cli_helpers import (
+    SPHERE_UNDER_REFERENCE,
+    TINY_PLATE,
+    flat,
+    run_main,
+    tiny_setup_file,
+)
 from cli_helpers import flat as _flat
 from echocal.cli import app
 from echocal.cli.scan import parse_grid
@@ -214,16 +220,6 @@ def test_a_point_stopped_by_the_budget_is_unconverged_not_found():
     assert scan.summary["missing_by_status"] == {"unconverged": 1}
 
 
-# a sphere whose top is at z = 10 mm: the reference (26 mm) is 16 mm above it; z = 5 mm is inside
-SPHERE = '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
-
-
-def _setup(tmp_path: Path, specimen: str = TINY_PLATE, ref_z: str = "16 mm") -> Path:
-    path = tmp_path / "tiny.toml"
-    path.write_text(tiny_setup_toml(specimen, ref_z, z_min="0 mm"), encoding="utf-8")
-    return path
-
-
 def _scan(setup: Path, out: Path, z: str, *extra: str) -> list[str]:
     return [
         "scan", "--setup", str(setup), "--grid", "-1:1:1,-1:1:1", "--z", z, "--out", str(out),
@@ -235,13 +231,13 @@ def _scan(setup: Path, out: Path, z: str, *extra: str) -> list[str]:
     ("specimen", "ref_z", "z", "expected"),
     [
         (TINY_PLATE, "16 mm", "40", "cannot contain any echo"),
-        (SPHERE, "26 mm", "5", "inside sphere"),
+        (SPHERE_UNDER_REFERENCE, "26 mm", "5", "inside sphere"),
     ],
 )
 def test_scan_refuses_a_run_where_every_point_fails(
     tmp_path, capsys, monkeypatch, specimen, ref_z, z, expected
 ):
-    setup = _setup(tmp_path, specimen, ref_z)
+    setup = tiny_setup_file(tmp_path, specimen, ref_z)
     out = tmp_path / "scan"
     code, _, err = run_main(_scan(setup, out, z), capsys, monkeypatch)
     assert code == 2 and "Traceback" not in err
@@ -250,7 +246,7 @@ def test_scan_refuses_a_run_where_every_point_fails(
 
 
 def test_a_scan_that_finds_nothing_prints_no_numpy_warnings(tmp_path, capsys, monkeypatch):
-    setup = _setup(tmp_path)
+    setup = tiny_setup_file(tmp_path)
     out = tmp_path / "scan"
     # 9 measurements per point: one auto iteration + 2 time-of-flight A-scans, never converged
     code, _, err = run_main(_scan(setup, out, "16", "--budget-per-point", "9"), capsys, monkeypatch)
