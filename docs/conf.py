@@ -86,6 +86,7 @@ nitpicky = True
 nitpick_ignore_regex = [
     (r"py:.*", r"(?!echocal\.).*"),
     (r"py:.*", r".*\._\w+"),
+    (r"py:class", r".*\.<locals>\..*"),  # closures (a validator's inner function): not objects
     (r"py:class", r"echocal\.measurement\.hardware\.T"),
     (r"py:.*", r"echocal\.(signal\.detection|measurement\.hardware|calibrate\.model_based)\..*"),
     (r"py:.*", r"echocal\.experiments\.(runner|summary)(\..*)?"),
