@@ -124,7 +124,7 @@ def test_continuous_windows_match_scipy(name):
     n = 33
     z = 2 * np.arange(n) / (n - 1) - 1
     p = SincPulse(center_frequency=5e6, bandwidth=1e6, window=name)  # only its kaiser_beta
-    from echocal.signal.pulses import _WINDOWS
+    from echocal.signal.pulses.analytic import _WINDOWS
 
     spec = ("kaiser", p.kaiser_beta) if name == "kaiser" else name
     np.testing.assert_allclose(
@@ -220,6 +220,7 @@ def test_make_pulse_inspects_a_factory_once(monkeypatch) -> None:
     import inspect
 
     import echocal.signal.pulses as pulses
+    from echocal.signal.pulses import registry
 
     calls = []
     real = inspect.signature
@@ -233,5 +234,5 @@ def test_make_pulse_inspects_a_factory_once(monkeypatch) -> None:
         for _ in range(3):
             pulses.make_pulse("tone-once", center_frequency=4e6)
     finally:
-        pulses._PULSES.pop("tone-once")
+        registry._PULSES.pop("tone-once")
     assert calls.count(tone) == 1
