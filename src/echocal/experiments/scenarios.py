@@ -30,20 +30,18 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from echocal.errors import EchocalValueError
-from echocal.experiments import _findings as fnd
+from echocal.experiments import thesis_studies as studies
 from echocal.experiments._ascan import ascan_overlay_figure, ascan_study
 from echocal.experiments._findings import Finding
 from echocal.experiments._output import check_out_dir, write_figure, write_table
 from echocal.experiments._runs import (
     Bench,
-    RunConfig,
     RunRecord,
     representative,
     runs_frame,
@@ -58,6 +56,13 @@ from echocal.experiments._scenario_base import (
     get_scenario,
     scenario_names,
 )
+from echocal.experiments.thesis_studies import (
+    FULL_SEEDS,
+    PARAMETERIZATION,
+    QUICK_SEEDS,
+    RESCALED_MU,
+    TABLE1_STEP_SIZES,
+)
 from echocal.experiments.wall_scenario import WALL_SCENARIO
 from echocal.plots.calibration import convergence_figure, path_figure
 from echocal.specimen.builtins import THESIS_MEASUREMENT_POINTS
@@ -71,28 +76,6 @@ __all__ = [
     "run_scenario",
     "scenario_names",
 ]
-
-PARAMETERIZATION = "azimuth-coelevation"
-"""The thesis's parameterization: every table scenario runs in it."""
-
-THESIS_MU = 0.05
-"""The thesis's step size μ (Tables 2, 3, 5, 6, 7) on energy normalized to a peak of ~1."""
-
-TABLE1_STEP_SIZES = (0.05, 0.5, 2.0, 5.0, 20.0)
-"""Step sizes μ of ``table-1``: the thesis's 0.05 and multiples ×10, ×40, ×100, ×400.
-
-The thesis does not list its step sizes.  On our setup (energy normalized to ~1,
-angles in degrees, main lobe ±8° at half energy) the gradient is ~0.1 per degree
-near x0, so μ = 0.05 moves the estimate ~0.005° per iteration: it crawls.  The
-multiples span crawling to the largest step that stays stable; μ ≳ 50 jumps out
-of the main lobe (measured: final errors of 14–39°)."""
-
-RESCALED_MU = 5.0
-"""μ of the "rescaled" groups of tables 2 and 3: 100 × the thesis's 0.05, the largest
-``table-1`` value that never diverged in our runs (see :data:`TABLE1_STEP_SIZES`)."""
-
-FULL_SEEDS = 7
-QUICK_SEEDS = 2
 
 
 def run_scenario(
@@ -187,306 +170,6 @@ def _run_ascans(
     return result
 
 
-# ------------------------------------------------------------------ table scenarios
-@dataclass(frozen=True)
-class _Study:
-    """The configurations of a table scenario, its checks per group and its notes."""
-
-    configs: list[RunConfig]
-    checks: dict[str, list[Callable[[pd.DataFrame, str], Finding]]]
-    notes: list[str]
-
-
-def _thesis_bench(seed: int) -> Bench:
-    from echocal.setups import load_setup
-
-    setup = load_setup("thesis", seed=seed)
-    return Bench(setup, setup.reference_position, PARAMETERIZATION)
-
-
-def _fmt(v: float) -> str:
-    return f"{v:g}"
-
-
-def _study_table1(bench: Bench, quick: bool) -> _Study:
-    group = "step sizes"
-    configs = [
-        RunConfig(
-            group=group,
-            label=f"μ = {_fmt(mu)}",
-            method="gradient",
-            parameter="mu",
-            value=mu,
-            preset="thesis-table-1",
-            options={"mu": mu},
-        )
-        for mu in TABLE1_STEP_SIZES
-    ]
-    return _Study(
-        configs,
-        {
-            group: [
-                lambda s, g: fnd.faster_with_order(
-                    s, claim="larger step sizes converge faster", group=g, increasing=True
-                ),
-                lambda s, g: fnd.reaches_truth(
-                    s,
-                    claim="with the largest step size the estimate reaches the true solution "
-                    "within the 30 iterations",
-                    group=g,
-                    tol=0.5,
-                ),
-            ]
-        },
-        [
-            "Step sizes: the thesis's μ = 0.05 and ×10, ×40, ×100, ×400 (the thesis does not "
-            "list its values). μ = 0.05 crawls on our energy/degree scale; μ ≳ 50 leaves the "
-            "main lobe. See TABLE1_STEP_SIZES.",
-            "In (azimuth, co-elevation) the azimuth gradient vanishes at the pole x0 = (0, 0) "
-            "and stays small near the optimum (co-elevation 6°), so the azimuth converges slowly.",
-        ],
-    )
-
-
-def _momentum_groups() -> list[tuple[str, float]]:
-    return [(f"thesis μ = {_fmt(THESIS_MU)}", THESIS_MU), (f"μ = {_fmt(RESCALED_MU)}", RESCALED_MU)]
-
-
-_ETAS = (0.65, 0.7, 0.8, 0.85)
-_MU_NOTE = (
-    f"Two groups: the thesis's μ = {_fmt(THESIS_MU)} (Table 2), which crawls on our scale, and "
-    f"μ = {_fmt(RESCALED_MU)} (RESCALED_MU, the largest stable table-1 step), where the "
-    "momentum dynamics show within 30 iterations."
-)
-
-
-def _study_table2(bench: Bench, quick: bool) -> _Study:
-    configs, checks = [], {}
-    for group, mu in _momentum_groups():
-        for eta in _ETAS:
-            configs.append(
-                RunConfig(
-                    group=group,
-                    label=f"momentum {_fmt(eta)}",
-                    method="momentum",
-                    parameter="momentum",
-                    value=eta,
-                    preset="thesis-table-2",
-                    options={"mu": mu, "momentum": eta},
-                )
-            )
-        checks[group] = [
-            lambda s, g: fnd.faster_but_oscillates(
-                s, claim="larger momentum converges faster but oscillates", group=g
-            )
-        ]
-    return _Study(configs, checks, [_MU_NOTE])
-
-
-def _study_table3(bench: Bench, quick: bool) -> _Study:
-    configs, checks = [], {}
-    for group, mu in _momentum_groups():
-        for method in ("momentum", "nesterov"):
-            for eta in _ETAS:
-                configs.append(
-                    RunConfig(
-                        group=group,
-                        label=f"{method} {_fmt(eta)}",
-                        method=method,
-                        parameter="momentum",
-                        value=eta,
-                        # each method's own preset (both normalize the energy)
-                        preset="thesis-table-3" if method == "nesterov" else "thesis-table-2",
-                        options={"mu": mu, "momentum": eta},
-                    )
-                )
-        checks[group] = [
-            lambda s, g: fnd.less_oscillation(
-                s,
-                claim="Nesterov oscillates less than momentum at high momentum",
-                group=g,
-                high=("0.8", "0.85"),
-            )
-        ]
-    return _Study(configs, checks, [_MU_NOTE, "Momentum runs repeated here as the reference."])
-
-
-def _study_table4(bench: Bench, quick: bool) -> _Study:
-    snrs = (30.0, 10.0) if quick else (30.0, 20.0, 10.0, 0.0)
-    groups = [
-        ("thesis gains (ε = 0.1, c′ = 1)", {}),
-        ("Spall-calibrated ε", {"eps": None}),
-    ]
-    configs, checks = [], {}
-    for group, extra in groups:
-        for snr in snrs:
-            configs.append(
-                RunConfig(
-                    group=group,
-                    label=f"SNR {_fmt(snr)} dB",
-                    method="spsa",
-                    parameter="snr_db",
-                    value=snr,
-                    preset="thesis-table-4",
-                    options=extra,
-                    snr_db=snr,
-                )
-            )
-        checks[group] = [
-            lambda s, g: fnd.stable_but_less_accurate(
-                s, claim="SPSA stays stable at lower SNR but is less accurate", group=g
-            )
-        ]
-    return _Study(
-        configs,
-        checks,
-        [
-            "The receiver's noise σ is fixed by the SNR of the reference echo (DESIGN.md).",
-            "Second group: ε calibrated by Spall's rule (first step ≈ 0.5°), other gains as "
-            "Table 4.",
-        ],
-    )
-
-
-_NEWTON_DISTANCES = (2.0, 4.0, 12.0, 20.0, 30.0)
-_NEAR_MAX = 6.0
-
-
-def _study_table5(bench: Bench, quick: bool) -> _Study:
-    truth = bench.truth()
-    starts = [((0.0, 0.0), "x0 = (0, 0) (thesis)")]
-    for d in _NEWTON_DISTANCES:
-        # along the meridian through the optimum: the angular distance is exactly d
-        starts.append(((float(truth[0]), float(truth[1] + d)), f"{_fmt(d)}° from optimum"))
-    configs, checks = [], {}
-    for group, mu in ((f"thesis μ = {_fmt(THESIS_MU)}", THESIS_MU), ("full step μ = 1", 1.0)):
-        for x0, label in starts:
-            configs.append(
-                RunConfig(
-                    group=group,
-                    label=label,
-                    method="newton",
-                    parameter="x0",
-                    value=f"({x0[0]:.1f}, {x0[1]:.1f})",
-                    preset="thesis-table-5",
-                    options={"mu": mu},
-                    x0=x0,
-                )
-            )
-        checks[group] = [
-            lambda s, g: fnd.diverges_far(
-                s, claim="Newton diverges from far initial guesses", group=g, near_max=_NEAR_MAX
-            )
-        ]
-    return _Study(
-        configs,
-        checks,
-        [
-            f"Initial guesses: the thesis's (0, 0) (6° from the optimum (−15°, −6°) ≡ (165°, 6°)) "
-            f"and points {', '.join(_fmt(d) for d in _NEWTON_DISTANCES)}° away along the "
-            f"optimum's meridian; 'near' means ≤ {_fmt(_NEAR_MAX)}°.",
-            "Our Newton is damped (Levenberg shift where H is not negative definite) and rejects "
-            "downhill steps (DESIGN.md errata), so it stalls rather than run away.",
-        ],
-    )
-
-
-def _study_table6(bench: Bench, quick: bool) -> _Study:
-    configs, checks = [], {}
-    for group, mu in ((f"thesis μ = {_fmt(THESIS_MU)}", THESIS_MU), ("μ = 1", 1.0)):
-        for lam in (0.1, 0.5, 0.8):
-            configs.append(
-                RunConfig(
-                    group=group,
-                    label=f"λ = {_fmt(lam)}",
-                    method="quasi-newton",
-                    parameter="lam",
-                    value=lam,
-                    preset="thesis-table-6",
-                    options={"mu": mu, "lam": lam},
-                )
-            )
-        checks[group] = [
-            lambda s, g: fnd.faster_with_order(
-                s, claim="smaller scaling factors converge faster", group=g, increasing=False
-            )
-        ]
-    return _Study(
-        configs,
-        checks,
-        [
-            "B₀ = λ I approximates the Hessian of −f; the first step is μ ĝ / λ (capped at 2°).",
-            "Second group: μ = 1 (echocal's default full quasi-Newton step).",
-        ],
-    )
-
-
-_THESIS_METHODS = ("gradient", "momentum", "nesterov", "spsa", "newton", "quasi-newton")
-
-
-def _study_table7(bench: Bench, quick: bool) -> _Study:
-    configs, checks = [], {}
-    thesis_group = "thesis presets (Table 7)"
-    for method in _THESIS_METHODS:
-        configs.append(
-            RunConfig(
-                group=thesis_group,
-                label=method,
-                method=method,
-                parameter="method",
-                value=method,
-                preset="thesis-table-7",
-            )
-        )
-    for method in ("model-based", "auto"):
-        configs.append(
-            RunConfig(
-                group=thesis_group,
-                label=f"{method} (beyond the thesis)",
-                method=method,
-                parameter="method",
-                value=method,
-                beyond_thesis=True,
-            )
-        )
-    auto_group = "echocal automatic gains"
-    for method in _THESIS_METHODS:
-        configs.append(
-            RunConfig(
-                group=auto_group,
-                label=f"{method} (auto gains)",
-                method=method,
-                parameter="method",
-                value=method,
-            )
-        )
-
-    def spsa_fewest(gains: str) -> Callable[[pd.DataFrame, str], Finding]:
-        return lambda s, g: fnd.fewest_measurements(
-            s,
-            claim="SPSA needs the fewest measurements among the thesis methods",
-            group=g,
-            method="spsa",
-            gains=gains,
-        )
-
-    checks[thesis_group] = [spsa_fewest("the thesis's gains")]
-    checks[auto_group] = [spsa_fewest("automatic gains")]
-    return _Study(
-        configs,
-        checks,
-        [
-            "Thesis presets: μ = 0.05, momentum 0.7, λ = 0.9, SPSA ε = 0.1, c′ = 1, A = 5 on "
-            "energy normalized to ~1 (calibrate/presets.py).",
-            "'model-based' and 'auto' are echocal's own methods — beyond the thesis.",
-            "Second group: the six thesis methods with echocal's automatic gain calibration "
-            "(no preset): first step ≈ 0.5° whatever the energy unit.",
-            "Measurements per iteration: 4 for the FD gradient methods and quasi-Newton, 2 for "
-            "SPSA, 9 for Newton.",
-        ],
-    )
-
-
 def _map_range(records: Sequence[RunRecord], truth: np.ndarray) -> tuple[tuple, tuple]:
     """Cost-map axes [deg] framing the plotted paths and the truth (within the limits)."""
     pts = np.vstack([r.evaluation.result.iterates for r in records] + [truth[None, :]])
@@ -512,12 +195,12 @@ def _run_table(
     quick: bool,
     seed: int,
     progress: Progress | None,
-    study: Callable[[Bench, bool], _Study],
+    study: Callable[[Bench, bool], studies.Study],
 ) -> ScenarioResult:
     from echocal.evaluation import cost_map
 
     t0 = time.perf_counter()
-    bench = _thesis_bench(seed)
+    bench = studies.thesis_bench(seed)
     spec = study(bench, quick)
     seeds = list(range(seed, seed + (QUICK_SEEDS if quick else FULL_SEEDS)))
     total = len(spec.configs) * len(seeds) + 1
@@ -618,7 +301,7 @@ def _ascans(points: Sequence[int]) -> Callable[..., ScenarioResult]:
     return run
 
 
-def _table(study: Callable[[Bench, bool], _Study]) -> Callable[..., ScenarioResult]:
+def _table(study: Callable[[Bench, bool], studies.Study]) -> Callable[..., ScenarioResult]:
     def run(scenario: Scenario, out: Path, **kw: object) -> ScenarioResult:
         return _run_table(scenario, out, study=study, **kw)  # type: ignore[arg-type]
 
@@ -646,42 +329,42 @@ for _scenario in (
         "gradient ascent: step sizes",
         "§12.2.1.1, Table 1, Figs. 11–12",
         "Finite-difference gradient ascent for several step sizes μ.",
-        _table(_study_table1),
+        _table(studies.table_1),
     ),
     Scenario(
         "table-2",
         "gradient ascent with momentum 0.65–0.85",
         "§12.2.1.2, Table 2, Figs. 13–14",
         "Momentum η ∈ {0.65, 0.7, 0.8, 0.85} at a fixed step size.",
-        _table(_study_table2),
+        _table(studies.table_2),
     ),
     Scenario(
         "table-3",
         "Nesterov accelerated gradient vs momentum",
         "§12.2.1.2, Table 3, Figs. 15–16",
         "Nesterov with the momentum values of Table 2, beside plain momentum.",
-        _table(_study_table3),
+        _table(studies.table_3),
     ),
     Scenario(
         "table-4",
         "SPSA at several SNRs",
         "§12.2.1.3, Table 4, Figs. 17–18",
         "SPSA (ρ = 0.602, γ = 0.101, c′ = 1, A = 5, ε = 0.1) at decreasing SNR.",
-        _table(_study_table4),
+        _table(studies.table_4),
     ),
     Scenario(
         "table-5",
         "Newton from near and far initial guesses",
         "§12.2.1.4, Table 5, Figs. 19–20",
         "Newton's method (9-point FD Hessian) from initial guesses at increasing distance.",
-        _table(_study_table5),
+        _table(studies.table_5),
     ),
     Scenario(
         "table-6",
         "quasi-Newton scaling factors λ",
         "§12.2.1.5, Table 6, Figs. 21–22",
         "BFGS quasi-Newton with B₀ = λ I for λ ∈ {0.1, 0.5, 0.8}.",
-        _table(_study_table6),
+        _table(studies.table_6),
     ),
     Scenario(
         "table-7",
@@ -689,7 +372,7 @@ for _scenario in (
         "§12.2.1.6, Table 7, Figs. 23–24",
         "The six thesis methods under the same scenario (Table 7 presets), plus echocal's "
         "model-based and auto methods (beyond the thesis).",
-        _table(_study_table7),
+        _table(studies.table_7),
     ),
 ):
     _register(_scenario)
