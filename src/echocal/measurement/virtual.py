@@ -26,7 +26,6 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-import scipy.optimize
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
@@ -47,17 +46,14 @@ from echocal.geometry import (
     PARAMETERIZATIONS,
     Pose,
     convert_angles,
-    orientation_frame,
-    orientation_to_tilt,
     pose_from_angles,
     poses_to_arrays,
     tilt_frame,
-    tilt_normal,
-    tilt_to_orientation,
 )
 from echocal.materials import WATER, Material
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
+from echocal.measurement.truth import pose_arrays, search_optimum
 from echocal.signal import (
     SYNTHESIS_METHODS,
     Pulse,
@@ -69,8 +65,9 @@ from echocal.signal import (
 from echocal.signal.gates import TimeGate, gated_metric, gates_by_name
 from echocal.signal.synthesis import _synthesize_unchecked
 from echocal.specimen import FinitePlane, Specimen
-from echocal.specimen.casting import _as_shapes, cast
+from echocal.specimen.casting import _as_shapes
 from echocal.specimen.interior import Interior
+from echocal.specimen.normals import normal_incidence_directions, perpendicular_start
 from echocal.transducer import Transducer
 from echocal.units import format_frequency
 
@@ -597,7 +594,7 @@ class VirtualSetup(BaseSource):
         a, b = np.broadcast_arrays(finite_array("a", a), finite_array("b", b))
         position = finite_array("position", position, shape_tail=(3,)).reshape(3)
         self._check_outside(position[None], what="position")
-        positions, frames = _pose_arrays(position, a.ravel(), b.ravel(), parameterization)
+        positions, frames = pose_arrays(position, a.ravel(), b.ravel(), parameterization)
         generator = None
         if noise:
             generator = self._generator if rng is None else as_generator(rng)
@@ -638,110 +635,26 @@ class VirtualSetup(BaseSource):
     def _search_optimum(
         self, position: FloatArray, metric: str, gate: TimeGate | None = None
     ) -> tuple[float, float]:
-        # Global: the candidates are the directions of normal incidence on the surface
-        # (every local maximum of the echo of a smooth surface lies near one), scored by
-        # the metric itself; the best is refined by Nelder–Mead in gimbal tilts (smooth at
-        # the pole, where most optima lie).
-        candidates = self.normal_incidence_directions(position)
-
-        def negative(v: FloatArray) -> float:
-            value = self.metric_values(
-                position, v[0], v[1], parameterization="tilt", metric=metric, gate=gate
+        def in_tilts(a: FloatArray, b: FloatArray) -> FloatArray:
+            return self.metric_values(
+                position, a, b, parameterization="tilt", metric=metric, gate=gate
             )
-            return -float(value)
 
-        scores = self.metric_values(
-            position,
-            candidates[:, 0],
-            candidates[:, 1],
-            parameterization="tilt",
-            metric=metric,
-            gate=gate,
-        )
-        start = candidates[int(np.argmax(scores))]
-        best = scipy.optimize.minimize(
-            negative,
-            start,
-            method="Nelder-Mead",
-            options={"xatol": 1e-5, "fatol": 0.0, "initial_simplex": _simplex(start, 0.25)},
-        )
-        az, coel = convert_angles(best.x[0], best.x[1], "tilt", "azimuth-coelevation")
+        tx, ty = search_optimum(in_tilts, self.normal_incidence_directions(position))
+        az, coel = convert_angles(tx, ty, "tilt", "azimuth-coelevation")
         return float(az), float(coel)
 
     def normal_incidence_directions(self, position: FloatArray, *, limit: int = 6) -> FloatArray:
-        """Tilts [deg], shape ``(n, 2)`` with n ≤ ``limit``, of the beam from ``position``
-        [m] at normal incidence on the surface: the local maxima of |cos| of the angle of
-        incidence over a 0.5° fan within ±60° of straight down, best first (the nearest
-        surface point within ±60° comes first when nothing is closer than 2° to normal).
-
-        Over a smooth part the echo of a physical probe peaks where the beam meets the
-        surface at normal incidence — also inside a bore or off the axis of a sphere,
-        where the surface straight below would aim the search at a side lobe.
-        """
-        step = 0.5
-        grid = np.arange(-60.0, 60.0 + step / 2, step)
-        tx, ty = np.meshgrid(grid, grid, indexing="ij")
-        directions = -tilt_normal(tx.ravel(), ty.ravel())
-        hits = cast(self.specimen, np.broadcast_to(position, directions.shape), directions)
-        if not np.any(hits.hit):
-            raise GeometryError(
-                f"no surface within 60° of straight down from position "
-                f"({position[0]:g}, {position[1]:g}, {position[2]:g}) m; "
-                "the optimum is undefined there"
-            )
-        cosine = np.where(hits.hit, -np.sum(hits.normal * directions, axis=-1), -1.0)
-        cosine = cosine.reshape(tx.shape)
-        padded = np.pad(cosine, 1, constant_values=-1.0)
-        peak = np.ones_like(cosine, dtype=bool)
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                if dx or dy:
-                    rows = slice(1 + dx, 1 + dx + cosine.shape[0])
-                    shifted = padded[rows, 1 + dy : 1 + dy + cosine.shape[1]]
-                    peak &= cosine >= shifted
-        peak &= cosine > math.cos(math.radians(2.0))
-        order = np.argsort(-cosine[peak])
-        found = np.stack([tx[peak], ty[peak]], axis=1)[order][:limit]
-        nearest = self.perpendicular_start(position)
-        return np.vstack([found, nearest[None]]) if found.size else nearest[None]
+        """Tilts [deg] ``(n, 2)`` of the beam from ``position`` [m] at normal incidence on
+        the surface, best first: :func:`echocal.specimen.normals.normal_incidence_directions`."""
+        return normal_incidence_directions(self.specimen, position, limit=limit)
 
     def perpendicular_start(self, position: FloatArray) -> FloatArray:
-        """Tilts [deg], shape (2,), of the beam from ``position`` [m] towards the nearest
-        surface point within ±60° (1° fan): the distance to a smooth surface is stationary
-        where the ray meets it at normal incidence."""
-        grid = np.arange(-60.0, 60.5, 1.0)
-        tx, ty = (g.ravel() for g in np.meshgrid(grid, grid, indexing="ij"))
-        directions = -tilt_normal(tx, ty)
-        hits = cast(self.specimen, np.broadcast_to(position, directions.shape), directions)
-        if not np.any(hits.hit):
-            raise GeometryError(
-                f"no surface within 60° of straight down from position "
-                f"({position[0]:g}, {position[1]:g}, {position[2]:g}) m; "
-                "the optimum is undefined there"
-            )
-        nearest = int(np.argmin(hits.distance))
-        return np.array([tx[nearest], ty[nearest]])
+        """Tilts [deg] ``(2,)`` of the beam from ``position`` [m] towards the nearest surface
+        point within ±60°: :func:`echocal.specimen.normals.perpendicular_start`."""
+        return perpendicular_start(self.specimen, position)
 
     def true_pose(self, position: ArrayLike, **kwargs: Any) -> Pose:
         """The pose of maximum echo at ``position`` (see :meth:`true_optimum`)."""
         az, coel = self.true_optimum(position, **kwargs)
         return pose_from_angles(position, az, coel, "azimuth-coelevation")
-
-
-def _pose_arrays(
-    position: FloatArray, a: FloatArray, b: FloatArray, parameterization: str
-) -> tuple[FloatArray, FloatArray]:
-    """Positions ``(P, 3)`` and frames ``(P, 3, 3)`` of orientations ``(a, b)`` [deg], ``(P,)``.
-
-    The vectorized equivalent of ``poses_to_arrays([pose_from_angles(...), ...])``: a tilt
-    pose goes through the same (azimuth, co-elevation) round trip as ``Pose.from_tilt``.
-    """
-    positions = np.broadcast_to(position, (a.size, 3))
-    if parameterization == "tilt":
-        azimuth, coelevation = tilt_to_orientation(a, b)
-        return positions, tilt_frame(*orientation_to_tilt(azimuth, coelevation))
-    return positions, orientation_frame(a, b)
-
-
-def _simplex(centre: FloatArray, size: float) -> FloatArray:
-    return centre + np.array([[0.0, 0.0], [size, 0.0], [0.0, size]])
