@@ -28,7 +28,7 @@ import numpy as np
 from _common import markdown_table
 
 from echocal.io import atomic_write_text
-from echocal.measurement.virtual import _pose_arrays
+from echocal.measurement.truth import pose_arrays
 from echocal.setups import load_setup
 from echocal.signal.detection import EchoDetector
 from echocal.signal.processing import pseudo_energy
@@ -49,7 +49,7 @@ def detection_curves(
     dirs = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
     a = truth[0] + angles[:, None] * np.cos(dirs)[None, :]
     b = truth[1] + angles[:, None] * np.sin(dirs)[None, :]
-    positions, frames = _pose_arrays(pos, a.ravel(), b.ravel(), "tilt")
+    positions, frames = pose_arrays(pos, a.ravel(), b.ravel(), "tilt")
     ideal = setup._ideal(positions, frames).reshape(len(angles), len(dirs), -1)
     win, pulse = setup.window, setup.pulse
     sigma = setup.noise_sigma * 10.0 ** ((float(setup.receiver.snr_db) - snr) / 20.0)
