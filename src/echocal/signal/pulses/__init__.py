@@ -9,10 +9,10 @@ and processing stages need (``support``, ``highest_frequency``, ``duration``).
 
 Registry: :func:`make_pulse` ``(name, **params)`` and :func:`pulse_names`.
 
-The package has one module per job: :mod:`~echocal.signal.pulses.base` (the interface),
-:mod:`~echocal.signal.pulses.analytic` (closed-form pulses),
-:mod:`~echocal.signal.pulses.sampled` (measured waveforms) and
-:mod:`~echocal.signal.pulses.registry` (names, options, plausibility).
+The package has one module per job: ``base`` (the interface),
+``analytic`` (closed-form pulses),
+``sampled`` (measured waveforms) and
+``registry`` (names, options, plausibility).
 """
 
 from echocal.signal.pulses.analytic import WINDOW_NAMES, GaborPulse, RickerPulse, SincPulse
