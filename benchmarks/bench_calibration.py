@@ -2,7 +2,8 @@
 
 Run from the repository root::
 
-    python benchmarks/bench_calibration.py            # full run (21 min on 2 cores)
+    python benchmarks/bench_calibration.py            # full run: 50 runs per cell (hours)
+    python benchmarks/bench_calibration.py --runs 10  # the published run (61 min on 2 cores)
     python benchmarks/bench_calibration.py --quick    # 10 runs per cell, 30/10 dB (~3 min)
     python benchmarks/bench_calibration.py --smoke    # 2 runs of one cell (seconds)
     # CI: --quick on one cell
