@@ -109,14 +109,7 @@ def ray_vs_wave(repeats: int) -> dict[str, float]:
 
 def _face_nodes(model: WaveEchoModel, plane: image.ImagePlane) -> int:
     """The image form's number of face nodes at ``plane``."""
-    spacing = image.node_spacing(
-        model.sound_speed / model.pulse.highest_frequency, plane.sin_incidence, 0.7
-    )
-    distance = float(-(plane.normal @ plane.point))
-    rings = image.ring_count(
-        model.probe, distance, model.sound_speed / model.pulse.highest_frequency, spacing
-    )
-    return int(image.face_samples(model.probe, rings, spacing)[1].size)
+    return int(model.image_nodes(plane)[1].size)
 
 
 def steel_plate(repeats: int, ray_s: float) -> dict[str, float]:

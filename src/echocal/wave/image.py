@@ -84,6 +84,11 @@ class ImagePlane:
         cos_a = min(1.0, abs(float(self.normal[2])))
         return math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
 
+    @property
+    def axis_distance(self) -> float:
+        """[m] from the aperture's origin to the plane along the beam axis (+z)."""
+        return float(-(self.normal @ self.point)) / max(abs(float(self.normal[2])), 1e-6)
+
     def mirror(self, points: FloatArray) -> FloatArray:
         """The mirror images ``(3, n)`` [m] of ``points`` ``(3, n)`` [m] across the plane."""
         height = self.normal @ (points - self.point[:, None])  # (n,)

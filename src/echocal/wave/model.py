@@ -299,6 +299,19 @@ class WaveEchoModel:
         )
         return image.find_plane(shapes, o, d, basis, position)
 
+    def image_nodes(self, plane: image.ImagePlane) -> tuple[FloatArray, FloatArray]:
+        """The image form's quadrature over the probe's mirror image across ``plane``:
+        points [m] ``(3, n)`` in the aperture frame and weights [m²] ``(n,)`` (see
+        :func:`echocal.wave.image.face_samples`, :func:`~echocal.wave.image.ring_count`)."""
+        spacing = image.node_spacing(
+            self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
+        )
+        n_rings = image.ring_count(
+            self.probe, plane.axis_distance, self._shortest_wavelength, spacing
+        )
+        face, weights = image.face_samples(self.probe, n_rings, spacing)
+        return plane.mirror(face), weights
+
     def image_spectrum(
         self,
         plane: image.ImagePlane,
@@ -320,13 +333,7 @@ class WaveEchoModel:
         The one-sided spectrum on :attr:`frequencies` and the weighted mean two-way time [s]
         (as :meth:`spectrum`).
         """
-        spacing = image.node_spacing(
-            self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
-        )
-        distance = float(-(plane.normal @ plane.point)) / max(abs(float(plane.normal[2])), 1e-6)
-        n_rings = image.ring_count(self.probe, distance, self._shortest_wavelength, spacing)
-        face, weights = image.face_samples(self.probe, n_rings, spacing)
-        points = plane.mirror(face)
+        points, weights = self.image_nodes(plane)
         if coefficient is not None:
             r = np.full(weights.shape, complex(coefficient), dtype=np.complex128)
         elif self.reflection is not None:
@@ -404,7 +411,9 @@ class WaveEchoModel:
     def _ascan(
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
     ) -> FloatArray:
-        plane = self.image_plane(shapes, position, frame) if self.image_planes else None
+        # only a plane can fill the beam: curved parts skip the two extra ray casts
+        has_plane = self.image_planes and any(shape.kind == "plane" for shape in shapes)
+        plane = self.image_plane(shapes, position, frame) if has_plane else None
         if plane is not None:
             spectrum, path_time = self.image_spectrum(plane)
             if path_time > 0.0:
