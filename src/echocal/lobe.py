@@ -40,15 +40,29 @@ def _jinc(x: FloatArray) -> FloatArray:
     return np.where(np.abs(x) < 1e-8, 1.0, 2.0 * j1(safe) / safe)
 
 
-def far_field_lobe(ka: float, tilt_deg: ArrayLike) -> FloatArray:
-    """Pulse-echo lobe of a flat piston over a plane in the far field: [2J₁(x)/x]²,
-    x = ka·sin(tilt) (amplitude relative to normal incidence)."""
-    return _jinc(ka * np.sin(np.radians(tilt_deg))) ** 2
+def _directivity(x: FloatArray, aperture: str) -> FloatArray:
+    """A flat piston's one-way far-field directivity at x = ka·sinθ: 2J₁(x)/x for a disc
+    (a its radius), sin x / x for a rectangle (a its half-side across the tilt)."""
+    if aperture == "rectangular":
+        return np.sinc(np.asarray(x, dtype=np.float64) / math.pi)
+    return _jinc(x)
 
 
-def near_field_lobe(ka: float, tilt_deg: ArrayLike) -> FloatArray:
-    """Deep-near-field lobe 2J₁(2x)/(2x), x = ka·sin(tilt): the thesis's ray models'."""
-    return _jinc(2.0 * ka * np.sin(np.radians(tilt_deg)))
+FAR_FIELD_MINUS6DB_X = {"circular": 1.616, "rectangular": 1.392}
+"""x = ka·sinα at which the far-field pulse-echo lobe D(x)² falls to one half."""
+
+
+def far_field_lobe(ka: float, tilt_deg: ArrayLike, aperture: str = "circular") -> FloatArray:
+    """Pulse-echo lobe of a flat piston over a plane in the far field: D(x)², x = ka·sin(tilt),
+    D = 2J₁(x)/x for a disc, sin x / x for a rectangle (amplitude relative to normal
+    incidence)."""
+    return _directivity(ka * np.sin(np.radians(tilt_deg)), aperture) ** 2
+
+
+def near_field_lobe(ka: float, tilt_deg: ArrayLike, aperture: str = "circular") -> FloatArray:
+    """Deep-near-field lobe D(2x), x = ka·sin(tilt): the thesis's ray models' (the mean of
+    the reflected wave's phase ramp over the face)."""
+    return _directivity(2.0 * ka * np.sin(np.radians(tilt_deg)), aperture)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -67,7 +81,9 @@ class EchoLobe:
     peak_amplitude : [a.u.] envelope peak at the optimum.
     minus6db_deg : [deg] half-width where the envelope peak falls to one half (mean of
         both sides; NaN if the curve never falls that far within the range).
-    ka : k·a of the probe at the pulse's centre frequency.
+    ka : k·a of the probe at the pulse's centre frequency: a is a disc's radius, or a
+        rectangle's half-height (the first gimbal angle α tilts the beam across it).
+    aperture : ``"circular"`` or ``"rectangular"`` (the analytic limits' shape).
     gate : the gate the envelope peak was taken in (:meth:`TimeGate.describe`), or None.
     """
 
@@ -81,6 +97,7 @@ class EchoLobe:
     peak_amplitude: float
     minus6db_deg: float
     ka: float
+    aperture: str = "circular"
     gate: dict[str, object] | None = None
 
     @property
@@ -100,6 +117,7 @@ class EchoLobe:
             "minus6db_deg": self.minus6db_deg,
             "peak_amplitude": self.peak_amplitude,
             "ka": self.ka,
+            "aperture": self.aperture,
             "gate": self.gate,
             "tilt_deg": [float(v) for v in self.tilt_deg],
             "amplitude": [float(v) for v in self.amplitude],
@@ -152,11 +170,14 @@ def echo_lobe(
     pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
     if isinstance(n_points, bool) or not isinstance(n_points, int) or not 5 <= n_points <= 2001:
         raise EchocalValueError(f"n_points must be an integer in [5, 2001]; got {n_points!r}")
-    radius = 0.5 * setup.transducer.width
-    ka = 2.0 * math.pi * setup.pulse.center_frequency / setup.sound_speed * radius
+    aperture = setup.transducer.aperture
+    # α tilts the beam across the face's y′ side (a rectangle's height)
+    half = 0.5 * (setup.transducer.width if aperture == "circular" else setup.transducer.height)
+    ka = 2.0 * math.pi * setup.pulse.center_frequency / setup.sound_speed * half
     if max_tilt is None:
-        # far-field −6 dB of [2J₁(x)/x]² is at x ≈ 1.616; never below 1° nor beyond 30°
-        max_tilt = min(max(3.0 * math.degrees(math.asin(min(1.616 / ka, 1.0))), 1.0), 30.0)
+        # three far-field −6 dB half-widths; never below 1° nor beyond 30°
+        x6 = FAR_FIELD_MINUS6DB_X[aperture]
+        max_tilt = min(max(3.0 * math.degrees(math.asin(min(x6 / ka, 1.0))), 1.0), 30.0)
     max_tilt = positive_float("max_tilt", max_tilt)
     if max_tilt > 60.0:
         raise EchocalValueError(f"max_tilt must be at most 60 deg; got {max_tilt:g}")
@@ -187,6 +208,7 @@ def echo_lobe(
         peak_amplitude=peak,
         minus6db_deg=_half_width(tilts, amplitude, peak),
         ka=ka,
+        aperture=aperture,
         gate=None if gate is None else gate.describe(),
     )
 

@@ -243,10 +243,14 @@ class VirtualSetup(BaseSource):
             object.__setattr__(
                 self, "wave_spacing", positive_float("echo.spacing", self.wave_spacing)
             )
-        if self.reflection == WAVE_MODEL and self.transducer.aperture != "circular":
+        if (
+            self.reflection == WAVE_MODEL
+            and self.transducer.aperture != "circular"
+            and self.transducer.focus is not None
+        ):
             raise EchocalValueError(
-                "echo.reflection: the wave model needs a circular probe (transducer.aperture = "
-                "'circular'); rectangular probes use the ray models lambertian or specular"
+                "transducer.focus: the wave model's focused probes are circular; set "
+                "transducer.aperture = 'circular', or drop the focus for a flat rectangular probe"
             )
         lookup("synthesis method", self.synthesis, dict.fromkeys(SYNTHESIS_METHODS))
         _check_materials(self.medium, self.material)
@@ -365,19 +369,27 @@ class VirtualSetup(BaseSource):
     @cached_property
     def wave_model(self):  # -> echocal.wave.WaveEchoModel (imported lazily: it loads numba)
         """The diffraction echo model of this setup (``reflection = "wave"``)."""
-        from echocal.wave import PistonProbe, WaveEchoModel, curvature_for_focus
+        from echocal.wave import PistonProbe, RectangularProbe, WaveEchoModel, curvature_for_focus
 
-        radius = 0.5 * self.transducer.width
-        curvature = None
-        if self.transducer.focus is not None:
-            curvature = curvature_for_focus(
-                self.transducer.focus,
-                radius=radius,
-                frequency=self.pulse.center_frequency,
-                sound_speed=self.sound_speed,
+        transducer = self.transducer
+        probe: PistonProbe | RectangularProbe
+        if transducer.aperture == "rectangular":
+            probe = RectangularProbe(
+                half_width=0.5 * transducer.width, half_height=0.5 * transducer.height
             )
+        else:
+            radius = 0.5 * transducer.width
+            curvature = None
+            if transducer.focus is not None:
+                curvature = curvature_for_focus(
+                    transducer.focus,
+                    radius=radius,
+                    frequency=self.pulse.center_frequency,
+                    sound_speed=self.sound_speed,
+                )
+            probe = PistonProbe(radius=radius, curvature=curvature)
         return WaveEchoModel(
-            probe=PistonProbe(radius=radius, curvature=curvature),
+            probe=probe,
             pulse=self.pulse,
             window=self.window,
             sound_speed=self.sound_speed,

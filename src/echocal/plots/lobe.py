@@ -21,9 +21,9 @@ def _db(x: np.ndarray) -> np.ndarray:
 
 def plot_lobe(lobe: EchoLobe | Sequence[EchoLobe], *, title: str | None = None) -> Figure:
     """Envelope peak [dB re its value at the optimum] against tilt [deg] of one or more
-    lobes (distinguished by colour and line style), with the deep-near-field limit
-    2J₁(2ka sinα)/(2ka sinα) and the far-field limit [2J₁(ka sinα)/(ka sinα)]² of the
-    first lobe's probe, and the −6 dB level."""
+    lobes (distinguished by colour and line style), with the deep-near-field limit D(2x)
+    and the far-field limit D(x)² of the first lobe's probe (x = ka sinα; D = 2J₁(x)/x for
+    a disc, sin x / x for a rectangle), and the −6 dB level."""
     lobes = [lobe] if isinstance(lobe, EchoLobe) else list(lobe)
     first = lobes[0]
     fig = Figure(figsize=(7.5, 4.2), layout="constrained")
@@ -34,21 +34,22 @@ def plot_lobe(lobe: EchoLobe | Sequence[EchoLobe], *, title: str | None = None) 
         label = f"{item.model} model, −6 dB half-width {width:.3f}°"
         ax.plot(item.tilt_deg, item.relative_db, styles[i % 4], color=f"C{i}", lw=1.8, label=label)
     tilt = np.linspace(first.tilt_deg.min(), first.tilt_deg.max(), 801)
+    d = "2J₁(x)/x" if first.aperture == "circular" else "sin x / x"
     ax.plot(
         tilt,
-        _db(far_field_lobe(first.ka, tilt)),
+        _db(far_field_lobe(first.ka, tilt, first.aperture)),
         color="0.35",
         lw=1.0,
         ls=(0, (5, 2)),
-        label="far field [2J₁(ka sinα)/(ka sinα)]²",
+        label=f"far field D(x)², D = {d}, x = ka sinα",
     )
     ax.plot(
         tilt,
-        _db(near_field_lobe(first.ka, tilt)),
+        _db(near_field_lobe(first.ka, tilt, first.aperture)),
         color="0.55",
         lw=1.0,
         ls=(0, (1, 1.5)),
-        label="deep near field 2J₁(2ka sinα)/(2ka sinα)",
+        label="deep near field D(2x)",
     )
     ax.axhline(-6.0, color="C3", lw=0.8, ls=(0, (3, 3)))
     ax.text(tilt[-1], -6.0, " −6 dB", va="bottom", ha="right", fontsize=8, color="C3")

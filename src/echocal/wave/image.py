@@ -39,17 +39,23 @@ from numpy.typing import NDArray
 
 from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
-from echocal.wave.probe import PistonProbe
+from echocal.wave import sir
+from echocal.wave.probe import Aperture
 
 __all__ = [
     "BOWL_RINGS_PER_ZONE",
     "MIN_RINGS",
     "MIN_RINGS_BOWL",
+    "MIN_SIDE_NODES",
+    "SIDE_NODES_PER_ZONE",
     "ImagePlane",
+    "face_quadrature",
     "face_samples",
     "find_plane",
     "node_spacing",
+    "rectangle_samples",
     "ring_count",
+    "side_counts",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -63,6 +69,13 @@ BOWL_RINGS_PER_ZONE = 3.0
 Fresnel zone of :func:`ring_count`.  Against the double Rayleigh integral (3 mm bowl,
 R_f 25 mm, 20 mm water): 8 rings 0.5 % low, 16 rings 0.2 %, 32 rings 0.015 %; a 12.7 mm
 bowl (R_f 40 mm, 10 mm water, 20 zones at 6 MHz) was 24 % off with 8 rings."""
+
+MIN_SIDE_NODES = 16
+SIDE_NODES_PER_ZONE = 4.0
+"""A rectangle's Gauss–Legendre nodes per side: at least :data:`MIN_SIDE_NODES`, and this
+many per Fresnel zone of :func:`side_counts`.  Against the double Rayleigh integral (10 mm
+square at 10 mm water, 10 × 6 mm at 20 mm; 4–6 MHz): 2 per zone (at least 8) left 2.6 % and
+6 % of the peak, 4 per zone (at least 16) 0.02–0.06 %, 8 per zone no better."""
 
 
 @dataclass(frozen=True)
@@ -111,7 +124,7 @@ def node_spacing(
 
 
 def ring_count(
-    probe: PistonProbe, distance: float, shortest_wavelength: float, spacing: float
+    probe: Aperture, distance: float, shortest_wavelength: float, spacing: float
 ) -> int:
     """Radial Gauss–Legendre nodes for the probe's face over a plane ``distance`` [m] away
     along the axis: at least :data:`MIN_RINGS`, at least a/``spacing`` (``spacing`` [m]
@@ -133,7 +146,7 @@ def ring_count(
     return max(MIN_RINGS_BOWL, math.ceil(along), math.ceil(BOWL_RINGS_PER_ZONE * zones))
 
 
-def face_samples(probe: PistonProbe, n_rings: int, spacing: float) -> tuple[FloatArray, FloatArray]:
+def face_samples(probe: Aperture, n_rings: int, spacing: float) -> tuple[FloatArray, FloatArray]:
     """Gauss–Legendre product nodes on the probe's face: ``n_rings`` rings, nodes at most
     about ``spacing`` [m] apart along each ring.
 
@@ -179,6 +192,74 @@ def _face_samples(
         columns.append(np.stack([rho_i * np.cos(phi), rho_i * np.sin(phi), np.full(n_phi, z_i)]))
         weights.append(np.full(n_phi, area_i * 2.0 * math.pi / n_phi))
     return np.concatenate(columns, axis=1), np.concatenate(weights)
+
+
+def side_counts(
+    half_width: float,
+    half_height: float,
+    distance: float,
+    shortest_wavelength: float,
+    spacing: float,
+) -> tuple[int, int]:
+    """Gauss–Legendre nodes along a rectangular face's two sides (half-sides [m]) over a
+    plane ``distance`` [m] away: per side at least :data:`MIN_SIDE_NODES`, at least
+    π·a/``spacing`` (the widest gap between n Gauss–Legendre nodes on [−a, a] is about πa/n),
+    and :data:`SIDE_NODES_PER_ZONE` per Fresnel zone of the edge wave, a²/(2dλ_hi) across
+    the half-side (λ_hi ``shortest_wavelength`` [m]): in x, not x², the zones crowd towards
+    the edges, and the rectangle's SIR has a breakpoint per edge and corner."""
+    d = max(distance, shortest_wavelength)
+
+    def count(a: float) -> int:
+        along = math.pi * a / spacing if math.isfinite(spacing) else 0.0
+        zones = a * a / (2.0 * d * shortest_wavelength)
+        return max(MIN_SIDE_NODES, math.ceil(along), math.ceil(SIDE_NODES_PER_ZONE * zones))
+
+    return count(half_width), count(half_height)
+
+
+@functools.lru_cache(maxsize=64)
+def _rectangle_samples(
+    half_width: float, half_height: float, nx: int, ny: int
+) -> tuple[FloatArray, FloatArray]:
+    x, wx = np.polynomial.legendre.leggauss(nx)
+    y, wy = np.polynomial.legendre.leggauss(ny)
+    xx, yy = np.meshgrid(half_width * x, half_height * y, indexing="ij")
+    weights = np.outer(half_width * wx, half_height * wy).ravel()
+    points = np.stack([xx.ravel(), yy.ravel(), np.zeros(xx.size)])
+    return points, weights
+
+
+def rectangle_samples(
+    half_width: float, half_height: float, nx: int, ny: int
+) -> tuple[FloatArray, FloatArray]:
+    """Gauss–Legendre product nodes on the rectangle |x| ≤ ``half_width``, |y| ≤
+    ``half_height`` [m] (``nx`` × ``ny`` nodes, symmetric under x → −x and y → −y; the
+    weights sum to the area).
+
+    Returns
+    -------
+    points : [m] ``(3, nx·ny)`` in the aperture frame (face centre at the origin).
+    weights : [m²] ``(nx·ny,)``.
+    """
+    points, weights = _rectangle_samples(half_width, half_height, nx, ny)
+    return points.copy(), weights.copy()
+
+
+def face_quadrature(
+    probe: Aperture, distance: float, shortest_wavelength: float, spacing: float
+) -> tuple[FloatArray, FloatArray]:
+    """The image form's nodes on the probe's face for a plane ``distance`` [m] away along
+    the axis, nodes at most about ``spacing`` [m] apart (from :func:`node_spacing`):
+    :func:`face_samples` with :func:`ring_count` rings on a disc or a bowl,
+    :func:`rectangle_samples` with :func:`side_counts` on a rectangle.
+
+    Returns points [m] ``(3, n)`` in the aperture frame and weights [m²] ``(n,)``."""
+    if probe.kind == sir.RECT:
+        half_width, half_height = (float(v) for v in probe.parameters[1:3])
+        nx, ny = side_counts(half_width, half_height, distance, shortest_wavelength, spacing)
+        return rectangle_samples(half_width, half_height, nx, ny)
+    n_rings = ring_count(probe, distance, shortest_wavelength, spacing)
+    return face_samples(probe, n_rings, spacing)
 
 
 def find_plane(

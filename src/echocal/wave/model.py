@@ -62,7 +62,7 @@ from echocal.signal.window import RecordingWindow
 from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
 from echocal.wave import image, sir
-from echocal.wave.probe import PistonProbe
+from echocal.wave.probe import Aperture
 from echocal.wave.threads import one_way_grid, two_way_grid
 
 __all__ = ["WaveEchoModel"]
@@ -80,6 +80,11 @@ _CURVED_SPACING_WAVELENGTHS = 1.35
 faster between neighbours there; at 2.7 λ a 3 mm probe's echo over a 20 mm rod rose 2–4 %
 from the normal to 0.4° off it, at 1.35 λ it falls as it should and agrees with 0.68 λ to
 0.3 % (tests/physics/test_wave_optimum.py)."""
+_SPACING_PER_SIZE = 0.5
+"""The default spacing is at most this fraction of the probe's (shorter) half-width: a small
+probe's field varies across its own size, finer than a few wavelengths (a 4 mm probe at
+1 MHz, 2.7 λ = 4 mm: its normal-incidence echo was 2.5× off for a disc, 0.44× for a square;
+at a/2, within 0.1 % of the exact image form)."""
 _SPREAD = 1.6
 """The fan reaches this many Fresnel-zone widths √(λd) beyond the probe's rim."""
 _IMAGE_NYQUIST_FRACTION = 0.7
@@ -96,7 +101,8 @@ class WaveEchoModel:
 
     Parameters
     ----------
-    probe : the piston (flat or focused).
+    probe : the piston: circular (:class:`~echocal.wave.PistonProbe`, flat or focused) or
+        rectangular (:class:`~echocal.wave.RectangularProbe`).
     pulse : the echo waveform w(t) of a perfect plane reflector in the deep near field.
     window : the recording window.
     sound_speed : [m/s] c of the medium.
@@ -104,7 +110,8 @@ class WaveEchoModel:
     reflection : R(θ) (complex, pressure) of the specimen at incidence angles θ [deg], or
         None for a perfect reflector (R = 1).
     spacing : [m] target distance between surface samples at the surface; None: on planes
-        2.7 wavelengths at the pulse's centre frequency (0.8 mm at 5 MHz: measured against
+        2.7 wavelengths at the pulse's centre frequency (at most half the probe's radius or
+        shorter half-side) (0.8 mm at 5 MHz: measured against
         the exact angular spectrum, the tilt lobe stays within 0.5 % of its peak at
         10–150 mm and tilts 0.25–2° for 3 and 12.7 mm probes; 1.0 mm gives up to 1.2 %),
         on curved surfaces half that (see ``_CURVED_SPACING_WAVELENGTHS``).
@@ -113,7 +120,7 @@ class WaveEchoModel:
         False forces the Kirchhoff sum everywhere (for comparisons).
     """
 
-    probe: PistonProbe
+    probe: Aperture
     pulse: Pulse
     window: RecordingWindow
     sound_speed: float
@@ -164,7 +171,7 @@ class WaveEchoModel:
         else:
             flat = all(shape.kind == "plane" for shape in shapes)
             wavelengths = _SPACING_WAVELENGTHS if flat else _CURVED_SPACING_WAVELENGTHS
-            base = wavelengths * self._wavelength
+            base = min(wavelengths * self._wavelength, _SPACING_PER_SIZE * self.probe.spread_radius)
         if sin_incidence <= 0.0:
             return base
         return min(base, self._pose_spacing(sin_incidence))
@@ -213,9 +220,10 @@ class WaveEchoModel:
         a = self.probe.radius
         lam = self._wavelength
         lam_lo = self._longest_wavelength
-        # diffracted beam: half-angle _SPREAD·λ_lo/(2a) past the first null; near the face the
-        # edge waves need a margin of a couple of Fresnel-zone widths
-        tan_spread = min(_SPREAD * lam_lo / (2.0 * a), 1.0)
+        # diffracted beam: half-angle _SPREAD·λ_lo/(2a) past the first null (a the shorter
+        # half-side of a rectangle); near the face the edge waves need a margin of a couple
+        # of Fresnel-zone widths
+        tan_spread = min(_SPREAD * lam_lo / (2.0 * self.probe.spread_radius), 1.0)
         margin = 2.0 * lam + _FRESNEL_MARGIN * math.sqrt(lam_lo * max(distance, lam))
         r0 = a + margin
         return r0, r0 / tan_spread
@@ -302,14 +310,13 @@ class WaveEchoModel:
     def image_nodes(self, plane: image.ImagePlane) -> tuple[FloatArray, FloatArray]:
         """The image form's quadrature over the probe's mirror image across ``plane``:
         points [m] ``(3, n)`` in the aperture frame and weights [m²] ``(n,)`` (see
-        :func:`echocal.wave.image.face_samples`, :func:`~echocal.wave.image.ring_count`)."""
+        :func:`echocal.wave.image.face_quadrature`)."""
         spacing = image.node_spacing(
             self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
         )
-        n_rings = image.ring_count(
+        face, weights = image.face_quadrature(
             self.probe, plane.axis_distance, self._shortest_wavelength, spacing
         )
-        face, weights = image.face_samples(self.probe, n_rings, spacing)
         return plane.mirror(face), weights
 
     def image_spectrum(

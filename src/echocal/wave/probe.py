@@ -1,4 +1,5 @@
-"""The wave model's view of a transducer: a baffled circular piston, flat or focused.
+"""The wave model's view of a transducer: a baffled piston, circular (flat or focused) or
+rectangular (flat).
 
 A flat piston is given by its radius.  A spherically focused piston (a bowl) is given, as
 probe makers quote it, by its **acoustic focal length in water**: the distance from the
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import scipy.optimize
@@ -24,7 +26,14 @@ from echocal._validate import positive_float
 from echocal.errors import EchocalValueError
 from echocal.wave import sir
 
-__all__ = ["PistonProbe", "curvature_for_focus", "oneil_on_axis"]
+__all__ = [
+    "Aperture",
+    "PistonProbe",
+    "RectangularProbe",
+    "curvature_for_focus",
+    "oneil_on_axis",
+    "transmit_field",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -91,6 +100,68 @@ def curvature_for_focus(
         ) from None
 
 
+class Aperture(Protocol):
+    """What the wave model asks of a piston's face (:class:`PistonProbe`,
+    :class:`RectangularProbe`): the SIR kernel's aperture code and parameters, its size and
+    shape."""
+
+    @property
+    def kind(self) -> int: ...
+
+    @property
+    def parameters(self) -> FloatArray: ...
+
+    @property
+    def radius(self) -> float:
+        """[m] radius of the smallest circle about the face centre that holds the face."""
+        ...
+
+    @property
+    def spread_radius(self) -> float:
+        """[m] the half-width that sets the diffracted beam's widest spread λ/(2a)."""
+        ...
+
+    @property
+    def curvature(self) -> float | None: ...
+
+    @property
+    def area(self) -> float: ...
+
+    @property
+    def depth(self) -> float: ...
+
+
+def transmit_field(
+    probe: Aperture, points: ArrayLike, frequency: float, sound_speed: float
+) -> NDArray[np.complex128]:
+    """Normalized transmit pressure p/(ρcv₀) at ``points`` [m] (aperture frame: face centre
+    or bowl apex at the origin, beam along +z; a rectangle's sides along x and y), shape
+    ``(n, 3)`` → ``(n,)``, at one ``frequency`` [Hz], from the Fourier transform of the
+    closed-form SIR:
+    p/(ρcv₀) = −ik·H(ω), H(ω) = ∫ h(t) e^{iωt} dt (time convention e^{−iωt})."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    k = 2.0 * math.pi * frequency / sound_speed
+    dt = 1.0 / (64.0 * frequency)  # bin averages: the box filter is undone below
+    prm = probe.parameters
+    n_bins = sir.scratch_bins(sound_speed, dt, 2.0 * probe.radius)
+    h = np.zeros(n_bins)
+    hm = np.zeros(n_bins)
+    work = np.zeros((2, n_bins))
+    geo = np.zeros(sir.GEOMETRY_SIZE)
+    out = np.zeros(pts.shape[0], dtype=np.complex128)
+    tmax = math.acos(prm[2]) if probe.kind == sir.BOWL else 0.0
+    bps = np.zeros(sir.MAX_BREAKPOINTS)
+    for i, (x, y, z) in enumerate(pts):
+        if not sir._sample_geometry(probe.kind, prm, x, y, z, 0.0, 0.0, 1.0, geo):
+            continue
+        nb = sir.breakpoints(probe.kind, prm, geo, sound_speed, tmax, bps)
+        k0, n = sir._bin_sir(probe.kind, prm, geo, sound_speed, bps, nb, 0.0, dt, h, hm, work)
+        t = (k0 + np.arange(n) + 0.5) * dt
+        spectrum = np.sum(h[:n] * np.exp(2j * math.pi * frequency * t)) * dt
+        out[i] = -1j * k * spectrum / np.sinc(frequency * dt) ** 3
+    return out
+
+
 @dataclass(frozen=True, kw_only=True)
 class PistonProbe:
     """A baffled circular piston: flat, or a spherical bowl.
@@ -142,32 +213,73 @@ class PistonProbe:
             return 0.0
         return self.curvature - math.sqrt(self.curvature**2 - self.radius**2)
 
+
+    @property
+    def spread_radius(self) -> float:
+        """[m] the half-width that sets the diffracted beam's spread λ/(2a): the radius."""
+        return self.radius
+
     def field(
         self, points: ArrayLike, frequency: float, sound_speed: float
     ) -> NDArray[np.complex128]:
-        """Normalized transmit pressure p/(ρcv₀) at ``points`` [m] (aperture frame: face centre
-        or bowl apex at the origin, beam along +z), shape ``(n, 3)`` → ``(n,)``, at one
-        ``frequency`` [Hz], from the Fourier transform of the closed-form SIR:
-        p/(ρcv₀) = −ik·H(ω), H(ω) = ∫ h(t) e^{iωt} dt (time convention e^{−iωt})."""
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        k = 2.0 * math.pi * frequency / sound_speed
-        dt = 1.0 / (64.0 * frequency)  # bin averages: the box filter is undone below
-        prm = self.parameters
-        n_bins = sir.scratch_bins(sound_speed, dt, 2.0 * self.radius)
-        h = np.zeros(n_bins)
-        hm = np.zeros(n_bins)
-        work = np.zeros((2, n_bins))
-        geo = np.zeros(5)
-        out = np.zeros(pts.shape[0], dtype=np.complex128)
-        tmax = math.acos(prm[2]) if self.curvature is not None else 0.0
-        for i, (x, y, z) in enumerate(pts):
-            if not sir._sample_geometry(self.kind, prm, x, y, z, 0.0, 0.0, 1.0, geo):
-                continue
-            lo, mid, hi = sir.support(self.kind, prm, geo, sound_speed, tmax)
-            k0, n = sir._bin_sir(
-                self.kind, prm, geo, sound_speed, lo, mid, hi, 0.0, dt, h, hm, work
-            )
-            t = (k0 + np.arange(n) + 0.5) * dt
-            spectrum = np.sum(h[:n] * np.exp(2j * math.pi * frequency * t)) * dt
-            out[i] = -1j * k * spectrum / np.sinc(frequency * dt) ** 3
-        return out
+        """:func:`transmit_field` of this probe."""
+        return transmit_field(self, points, frequency, sound_speed)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RectangularProbe:
+    """A baffled flat rectangular piston (the thesis's square probe), its sides along the
+    transducer frame's x′ (width) and y′ (height) axes.
+
+    Attributes
+    ----------
+    half_width, half_height : [m] half the sides along x′ and y′.
+    """
+
+    half_width: float
+    half_height: float
+    curvature: None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "half_width", positive_float("transducer.width", self.half_width)
+        )
+        object.__setattr__(
+            self, "half_height", positive_float("transducer.height", self.half_height)
+        )
+
+    @property
+    def kind(self) -> int:
+        """Aperture code of ``echocal.wave.sir``."""
+        return sir.RECT
+
+    @property
+    def parameters(self) -> FloatArray:
+        """``(half-diagonal, half-width, half-height)`` [m] for the SIR kernels."""
+        return np.array([self.radius, self.half_width, self.half_height])
+
+    @property
+    def radius(self) -> float:
+        """[m] the half-diagonal: the radius of the circle that holds the face."""
+        return math.hypot(self.half_width, self.half_height)
+
+    @property
+    def spread_radius(self) -> float:
+        """[m] the shorter half-side: it sets the widest diffraction spread λ/(2a)."""
+        return min(self.half_width, self.half_height)
+
+    @property
+    def area(self) -> float:
+        """[m²] the face's area 4·(half-width)·(half-height) (the echo's normalization)."""
+        return 4.0 * self.half_width * self.half_height
+
+    @property
+    def depth(self) -> float:
+        """[m] 0: the face is flat."""
+        return 0.0
+
+    def field(
+        self, points: ArrayLike, frequency: float, sound_speed: float
+    ) -> NDArray[np.complex128]:
+        """:func:`transmit_field` of this probe."""
+        return transmit_field(self, points, frequency, sound_speed)

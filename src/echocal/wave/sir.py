@@ -6,22 +6,30 @@ p(x, t) = ρ ∂ₜ[v * h](x, t), with the spatial impulse response (Stepanishen
 
     h(x, t) = ∫_A δ(t − |x − a|/c) / (2π|x − a|) dA      [m/s].
 
-For both apertures used here the points of the face at distance ρ = ct from x form one
-circular arc, so h has the closed form
+For a disc and a bowl the points of the face at distance ρ = ct from x form one circular
+arc, so h has the closed form
 
     h(x, t) = c · J · Ω(t)/π,
 
 where Ω ∈ [0, π] is the half-angle of the part of that circle that lies on the face and
 J = 1 for a flat disc, J = R_f/D for a bowl of radius of curvature R_f whose centre (the
-geometric focus) is at distance D from x.  The same arc gives the direction-weighted response
+geometric focus) is at distance D from x.  For a flat rectangle (Lockwood & Willette,
+JASA 53 (1973) 735; San Emeterio & Ullate, JASA 92 (1992) 651) the circle of radius
+σ = √((ct)² − z²) about x's projection on the face crosses the rectangle in up to four
+arcs, and h = c·Θ(t)/(2π) with Θ their total angle: the signed sum of the angles the
+circle spends in the four quadrants {x′ < u, y′ < v} cornered at the rectangle's corners
+(u, v), each the overlap of two arcs in closed form.  The same arc gives the
+direction-weighted response
 
     h_m(x, t) = ∫_A (m·R̂) δ(t − R/c) / (2πR) dA = h(x, t) · m·⟨x − a⟩_arc / (ct),
 
 because every point of the arc is at R = ct; the arc mean ⟨x − a⟩ is closed form too
-(the mean of a unit vector over an arc of half-angle Ω is sinΩ/Ω along its bisector).
+(the mean of a unit vector over an arc of half-angle Ω is sinΩ/Ω along its bisector;
+over a rectangle's arcs, ∫cos φ dφ and ∫sin φ dφ of each arc).
 
 The kernels below project h and h_m onto quadratic B-splines on a uniform time grid of
-spacing Δ (integrals split at the breakpoints of the closed form, 2-point Gauss–Legendre
+spacing Δ (integrals split at the breakpoints of the closed form — three for a disc or a
+bowl, up to ten for a rectangle (its edges and corners) — 2-point Gauss–Legendre
 on each smooth piece) and accumulate the two-way correlation g(t) = (h * h_m)(t) of every
 surface sample into one grid.  The projection is a smoothing filter of transform sinc³(fΔ) per
 factor, undone exactly in the frequency domain by dividing by sinc⁶(fΔ) (see
@@ -78,6 +86,13 @@ DISC = 0
 """Aperture code: flat circular piston (parameters: radius)."""
 BOWL = 1
 """Aperture code: spherically focused bowl (parameters: radius, radius of curvature)."""
+RECT = 2
+"""Aperture code: flat rectangle (parameters: half-diagonal, half-width, half-height)."""
+MAX_BREAKPOINTS = 10
+"""At most this many breakpoints of the closed form per sample: start, end and eight inside
+(a rectangle's four edges and four corners)."""
+GEOMETRY_SIZE = 6
+"""Length of a sample's geometry record (see :func:`_sample_geometry`)."""
 
 
 @_jit_inline
@@ -129,14 +144,67 @@ def _arc_bowl(t, c, rf, d, cos_beta, sin_beta, cos_tmax, m_e, m_e1):
 
 
 @_jit_inline
+def _quadrant(p, q):
+    """(angle [rad], ∫cos φ dφ, ∫sin φ dφ) over the part of the unit circle where
+    cos φ < p and sin φ < q: the overlap of the arcs [α, 2π − α] (α = acos p) and
+    [π/2 + β, 5π/2 − β] (β = acos q), the latter also shifted by −2π."""
+    al = math.acos(min(1.0, max(-1.0, p)))
+    be = math.acos(min(1.0, max(-1.0, q)))
+    ang = 0.0
+    int_cos = 0.0
+    int_sin = 0.0
+    for shift in (0.0, -2.0 * math.pi):
+        lo = max(al, 0.5 * math.pi + be + shift)
+        hi = min(2.0 * math.pi - al, 2.5 * math.pi - be + shift)
+        if hi > lo:
+            ang += hi - lo
+            int_cos += math.sin(hi) - math.sin(lo)
+            int_sin += math.cos(lo) - math.cos(hi)
+    return ang, int_cos, int_sin
+
+
+@_jit_inline
+def _arc_rect(t, c, x, y, z, ax, ay, mx, my, mz):
+    """(Θ [rad], m·∫(x − a) dφ [m·rad]) of the rectangle |x′| ≤ ``ax``, |y′| ≤ ``ay``
+    seen from (x, y, z) at time t: Θ the total angle of the arcs of the circle of radius
+    σ = √((ct)² − z²) about (x, y) on the face, the integral over those arcs."""
+    ct = c * t
+    s2 = ct * ct - z * z
+    if s2 <= 0.0:
+        return 0.0, 0.0
+    s = math.sqrt(s2)
+    theta = 0.0
+    int_cos = 0.0
+    int_sin = 0.0
+    # the rectangle's indicator is Σ ± 1[x′ < u]·1[y′ < v] over its corners (u, v)
+    for corner in range(4):
+        u = ax if corner == 0 or corner == 3 else -ax
+        v = ay if corner == 0 or corner == 2 else -ay
+        sign = 1.0 if corner == 0 or corner == 1 else -1.0
+        ang, ic, is_ = _quadrant((u - x) / s, (v - y) / s)
+        theta += sign * ang
+        int_cos += sign * ic
+        int_sin += sign * is_
+    if theta <= 0.0:
+        return 0.0, 0.0
+    # x − a = (−σ cos φ, −σ sin φ, z) for the point a = (x + σ cos φ, y + σ sin φ, 0)
+    return theta, mz * z * theta - s * (mx * int_cos + my * int_sin)
+
+
+@_jit_inline
 def _values(kind, prm, geo, c, t):
     """(h [m/s], h_m [m/s]) of one sample (geometry ``geo``) at time t [s]."""
     if kind == DISC:
         om, mdot = _arc_disc(t, c, geo[0], geo[1], prm[0], geo[2], geo[3])
         hv = c * om / math.pi
-    else:
+    elif kind == BOWL:
         om, mdot = _arc_bowl(t, c, prm[1], geo[0], geo[1], geo[2], prm[2], geo[3], geo[4])
         hv = c * prm[1] / geo[0] * om / math.pi
+    else:
+        theta, mint = _arc_rect(
+            t, c, geo[0], geo[1], geo[2], prm[1], prm[2], geo[3], geo[4], geo[5]
+        )
+        return c * theta / (2.0 * math.pi), mint / (2.0 * math.pi * t)
     return hv, hv * mdot / (c * t)
 
 
@@ -196,16 +264,26 @@ _INTERPOLATED_BINS = 8
 """From this many bins away from every breakpoint, every other centre value is interpolated."""
 
 
+@_jit_inline
+def _bins_to_breakpoint(k, marks, nb):
+    """Bins from bin ``k`` to the nearest of the ``nb`` breakpoint bins ``marks``."""
+    d = abs(k - marks[0])
+    for i in range(1, nb):
+        d = min(d, abs(k - marks[i]))
+    return d
+
+
 @_jit
-def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm, work):
+def _bin_sir(kind, prm, geo, c, bps, nb, t0, dt, h, hm, work):
     """Quadratic B-spline coefficients of h [m/s] and h_m [m/s] on a grid of spacing ``dt``.
 
     Coefficient k is (1/Δ)∫ h(t) N(t/Δ − k) dt with N the uniform quadratic B-spline
     centred on bin k = [t0 + kΔ, t0 + (k+1)Δ): a smoothing projection whose transform is
     sinc³(fΔ), so the aliases of the (not band-limited) SIR fall off as sinc³ and the
     projection itself is undone exactly in the frequency domain.  ``geo`` holds the
-    sample's geometry (see :func:`_sample_geometry`); the support is [t_lo, t_hi] with
-    one internal breakpoint t_mid.  Two rules, one per kind of coefficient:
+    sample's geometry (see :func:`_sample_geometry`); ``bps[:nb]`` are the breakpoints of
+    the closed form in increasing order (see :func:`breakpoints`): the support is
+    [bps[0], bps[nb − 1]].  Two rules, one per kind of coefficient:
 
     * within :data:`_EXACT_BINS` bins of a breakpoint, every smooth piece of every bin is
       integrated by :func:`_add_piece` (Gauss–Legendre, √-substitution at a breakpoint);
@@ -220,38 +298,44 @@ def _bin_sir(kind, prm, geo, c, t_lo, t_mid, t_hi, t0, dt, h, hm, work):
 
     ``work`` is scratch ``(2, ≥ K)``.  Writes coefficients k0 − 1 … k0 + K to
     ``h[0 : K + 2]`` and ``hm[0 : K + 2]`` and returns (k0 − 1, K + 2)."""
+    t_lo = bps[0]
+    t_hi = bps[nb - 1]
     k0 = int(math.floor((t_lo - t0) / dt))  # noqa: RUF046 (numba)
     k1 = int(math.floor((t_hi - t0) / dt))  # noqa: RUF046 (numba)
     n = min(k1 - k0 + 1, h.shape[0] - 2)
-    i_mid = min(n - 1, max(0, int(math.floor((t_mid - t0) / dt)) - k0))  # noqa: RUF046
+    marks = np.empty(nb, dtype=np.int64)  # the bin of each breakpoint
+    for i in range(nb):
+        bin_i = int(math.floor((bps[i] - t0) / dt)) - k0  # noqa: RUF046
+        marks[i] = min(n - 1, max(0, bin_i))
+    marks[nb - 1] = n - 1
     for i in range(n + 2):
         h[i] = 0.0
         hm[i] = 0.0
     vh = work[0]
     vhm = work[1]
     for k in range(n):
-        d = min(k, n - 1 - k, abs(k - i_mid))  # bins to the nearest breakpoint
+        d = _bins_to_breakpoint(k, marks, nb)
         b_lo = t0 + (k0 + k) * dt
         if d >= _EXACT_BINS - 1 and (d < _INTERPOLATED_BINS or k % 2 == 0):  # in use
             vh[k], vhm[k] = _values(kind, prm, geo, c, b_lo + 0.5 * dt)
         if d > _EXACT_BINS:
             continue
         b_hi = b_lo + dt
-        for piece in range(2):
-            p_lo = t_lo if piece == 0 else t_mid
-            p_hi = t_mid if piece == 0 else t_hi
+        for piece in range(nb - 1):
+            p_lo = bps[piece]
+            p_hi = bps[piece + 1]
             lo = max(b_lo, p_lo)
             hi = min(b_hi, p_hi)
             if hi <= lo:
                 continue
             _add_piece(kind, prm, geo, c, lo, hi, lo == p_lo, hi == p_hi, k, b_lo, dt, h, hm)
     for k in range(_INTERPOLATED_BINS + 1, n - _INTERPOLATED_BINS, 2):  # odd, far inside
-        if abs(k - i_mid) >= _INTERPOLATED_BINS:
+        if _bins_to_breakpoint(k, marks, nb) >= _INTERPOLATED_BINS:
             vh[k] = (9.0 * (vh[k - 1] + vh[k + 1]) - vh[k - 3] - vh[k + 3]) / 16.0
             vhm[k] = (9.0 * (vhm[k - 1] + vhm[k + 1]) - vhm[k - 3] - vhm[k + 3]) / 16.0
     # coefficient j is centred on bin j − 1: smooth when no breakpoint lies within _EXACT_BINS − 1
     for j in range(_EXACT_BINS + 1, n + 1 - _EXACT_BINS):
-        if abs(j - 1 - i_mid) < _EXACT_BINS:
+        if _bins_to_breakpoint(j - 1, marks, nb) < _EXACT_BINS:
             continue
         h[j] = vh[j - 1] + 0.125 * (vh[j] - 2.0 * vh[j - 1] + vh[j - 2])
         hm[j] = vhm[j - 1] + 0.125 * (vhm[j] - 2.0 * vhm[j - 1] + vhm[j - 2])
@@ -280,18 +364,82 @@ def _support_bowl(c, rf, d, beta, tmax):
 
 
 @_jit_inline
-def support(kind, prm, geo, c, tmax):
-    """(t_lo, t_mid, t_hi) [s] of the SIR of a sample whose geometry ``geo`` was filled by
-    :func:`_sample_geometry` (``tmax`` [rad]: the bowl's half-aperture angle θmax)."""
+def _insert_time(bps, nb, c, z2, sigma):
+    """Insert the time √(σ² + z²)/c of the in-plane radius ``sigma`` into the sorted
+    ``bps[:nb]``; return the new count."""
+    t = math.sqrt(sigma * sigma + z2) / c
+    i = nb
+    while i > 0 and bps[i - 1] > t:
+        bps[i] = bps[i - 1]
+        i -= 1
+    bps[i] = t
+    return nb + 1
+
+
+@_jit_inline
+def _breakpoints_rect(c, x, y, z, ax, ay, bps):
+    """Fill ``bps`` with the sorted breakpoints [s] of a rectangle's SIR seen from
+    (x, y, z): the start (the nearest point of the rectangle), the radii σ at which the
+    circle about (x, y) becomes tangent to an edge's line or passes a corner, and the end
+    (the farthest corner); return their count."""
+    gx = max(0.0, -ax - x, x - ax)
+    gy = max(0.0, -ay - y, y - ay)
+    s_lo = math.sqrt(gx * gx + gy * gy)
+    fx = abs(x) + ax
+    fy = abs(y) + ay
+    s_hi = math.sqrt(fx * fx + fy * fy)
+    z2 = z * z
+    bps[0] = math.sqrt(s_lo * s_lo + z2) / c
+    nb = 1
+    for i in range(4):
+        side = ax if i < 2 else ay
+        along = x if i < 2 else y
+        edge = abs(along - side) if i % 2 == 0 else abs(along + side)
+        if s_lo < edge < s_hi:
+            nb = _insert_time(bps, nb, c, z2, edge)
+    for i in range(4):
+        u = ax if i == 0 or i == 3 else -ax
+        v = ay if i == 0 or i == 2 else -ay
+        corner = math.sqrt((u - x) ** 2 + (v - y) ** 2)
+        if s_lo < corner < s_hi:
+            nb = _insert_time(bps, nb, c, z2, corner)
+    bps[nb] = math.sqrt(s_hi * s_hi + z2) / c
+    return nb + 1
+
+
+@_jit_inline
+def breakpoints(kind, prm, geo, c, tmax, bps):
+    """Fill ``bps`` (length ≥ :data:`MAX_BREAKPOINTS`) with the breakpoints [s] of the SIR
+    of a sample whose geometry ``geo`` was filled by :func:`_sample_geometry`, in
+    increasing order, and return their count: the support is [bps[0], bps[count − 1]]
+    (``tmax`` [rad]: a bowl's half-aperture angle θmax)."""
+    if kind == RECT:
+        return _breakpoints_rect(c, geo[0], geo[1], geo[2], prm[1], prm[2], bps)
     if kind == DISC:
-        return _support_disc(c, geo[0], geo[1], prm[0])
-    return _support_bowl(c, prm[1], geo[0], math.acos(geo[1]), tmax)
+        lo, mid, hi = _support_disc(c, geo[0], geo[1], prm[0])
+    else:
+        lo, mid, hi = _support_bowl(c, prm[1], geo[0], math.acos(geo[1]), tmax)
+    bps[0] = lo
+    bps[1] = mid
+    bps[2] = hi
+    return 3
 
 
 @_jit_inline
 def _sample_geometry(kind, prm, x, y, z, mx, my, mz, geo):
-    """Fill ``geo`` for a sample at (x, y, z) [m] (aperture frame: face centre or bowl apex
-    at the origin, beam along +z) with unit vector m; return False if it cannot contribute."""
+    """Fill ``geo`` (length :data:`GEOMETRY_SIZE`) for a sample at (x, y, z) [m] (aperture
+    frame: face centre or bowl apex at the origin, beam along +z; a rectangle's sides along
+    x and y) with unit vector m; return False if it cannot contribute."""
+    if kind == RECT:
+        if z <= 0.0:
+            return False
+        geo[0] = x
+        geo[1] = y
+        geo[2] = z
+        geo[3] = mx
+        geo[4] = my
+        geo[5] = mz
+        return True
     if kind == DISC:
         if z <= 0.0:
             return False
@@ -333,8 +481,9 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, delays, c, t0, dt, gr
 
     Parameters
     ----------
-    kind : :data:`DISC` or :data:`BOWL`.
-    prm : aperture parameters ``(a, R_f, cos θmax)`` [m, m, 1] (R_f, cos θmax unused for a disc).
+    kind : :data:`DISC`, :data:`BOWL` or :data:`RECT`.
+    prm : aperture parameters: ``(a, R_f, cos θmax)`` [m, m, 1] (R_f, cos θmax unused for a
+        disc); a rectangle's ``(half-diagonal, half-width, half-height)`` [m].
     points : [m] samples in the aperture frame, shape ``(3, n)``.
     unit_m : unit vectors m (the surface normal pointing away from the probe), ``(3, n)``.
     weights : [m²·…] per-sample weights (area × reflection coefficient × normalization), ``(n,)``.
@@ -352,7 +501,8 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, delays, c, t0, dt, gr
     """
     n = points.shape[1]
     n_grid = grid.shape[0]
-    geo = np.zeros(5)
+    geo = np.zeros(GEOMETRY_SIZE)
+    bps = np.zeros(MAX_BREAKPOINTS)
     t1 = 0.5 * t0  # one-way bins start at half the two-way origin, so bins p, q → p + q + 1
     tmax = math.acos(prm[2]) if kind == BOWL else 0.0
     h = scratch[0]
@@ -366,9 +516,9 @@ def accumulate_two_way(kind, prm, points, unit_m, weights, delays, c, t0, dt, gr
         x, y, z = points[0, s], points[1, s], points[2, s]
         if not _sample_geometry(kind, prm, x, y, z, unit_m[0, s], unit_m[1, s], unit_m[2, s], geo):
             continue
-        lo, mid, hi = support(kind, prm, geo, c, tmax)
+        nb = breakpoints(kind, prm, geo, c, tmax, bps)
         delay = delays[s]
-        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, t1 - 0.5 * delay, dt, h, hm, scratch[3:5])
+        k0, nk = _bin_sir(kind, prm, geo, c, bps, nb, t1 - 0.5 * delay, dt, h, hm, scratch[3:5])
         base = 2 * k0 + 1
         scale = w * dt
         acc = scratch[2]
@@ -420,7 +570,8 @@ def accumulate_one_way(kind, prm, points, weights, delays, c, t0, dt, grid, scra
     """
     n = points.shape[1]
     n_grid = grid.shape[0]
-    geo = np.zeros(5)
+    geo = np.zeros(GEOMETRY_SIZE)
+    bps = np.zeros(MAX_BREAKPOINTS)
     tmax = math.acos(prm[2]) if kind == BOWL else 0.0
     h = scratch[0]
     hm = scratch[1]
@@ -433,11 +584,11 @@ def accumulate_one_way(kind, prm, points, weights, delays, c, t0, dt, grid, scra
         x, y, z = points[0, s], points[1, s], points[2, s]
         if not _sample_geometry(kind, prm, x, y, z, 0.0, 0.0, 1.0, geo):
             continue
-        lo, mid, hi = support(kind, prm, geo, c, tmax)
+        nb = breakpoints(kind, prm, geo, c, tmax, bps)
         delay = delays[s]
         # bins centred on the grid points: bin k = [t0 − Δ/2 + kΔ, t0 + Δ/2 + kΔ)
         origin = t0 - 0.5 * dt - delay
-        k0, nk = _bin_sir(kind, prm, geo, c, lo, mid, hi, origin, dt, h, hm, scratch[2:4])
+        k0, nk = _bin_sir(kind, prm, geo, c, bps, nb, origin, dt, h, hm, scratch[2:4])
         j_lo = max(0, -k0)
         j_hi = min(nk, n_grid - k0)
         for j in range(j_lo, j_hi):
