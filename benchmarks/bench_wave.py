@@ -14,10 +14,12 @@ Measured in one process, as ratios (issue 13):
    its mirror image (tests/physics/references.py, written independently of echocal) for a
    piston over a plane tilted 0.5° at 10 mm, the broadband echo's envelope peak from both
    (their agreement and the speed ratio);
-3. the wave model's cost against its number of points (the slope of a log–log fit: 1 is
+3. the thesis's 4 mm square probe on the wave model (a rectangle's closed-form SIR) against
+   the ray model of the same setup, over a plate and over the thesis block;
+4. the wave model's cost against its number of points (the slope of a log–log fit: 1 is
    linear): the Kirchhoff sum's surface samples (varying their spacing) and the image
    form's face nodes (varying the number of rings);
-4. the figure of the README's physics section: the lobe of both models beside the piston's
+5. the figure of the README's physics section: the lobe of both models beside the piston's
    analytic limits (docs/physics-lobe.png, full runs only).
 """
 
@@ -45,6 +47,7 @@ sys.path.insert(0, str(ROOT / "tests" / "physics"))
 import references as ref  # noqa: E402
 
 from echocal import load_setup  # noqa: E402
+from echocal.setups import setup_with_overrides  # noqa: E402
 from echocal.geometry import tilt_frame  # noqa: E402
 from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
@@ -121,6 +124,28 @@ def steel_plate(repeats: int, ray_s: float) -> dict[str, float]:
     frames = tilt_frame(np.array([0.3]), np.array([0.0]))
     t_wave = measure(lambda: wave.ideal_samples(pos, frames), repeats=repeats, warmup=1)
     return {"wave_s": t_wave.median, "ratio": t_wave.median / ray_s}
+
+
+def square_probe(repeats: int) -> dict[str, float]:
+    """Seconds per noiseless A-scan of the thesis's 4 mm square probe 20 mm above a level
+    plate, 4° off the normal: the wave model (a rectangle's image form) against the thesis's
+    lambertian ray model of the same setup, and the ray model over the thesis block
+    against the wave model there (facets and edges: the Kirchhoff sum)."""
+    plate = setup_with_overrides("thesis", specimen="flat-plate")
+    pos = np.array([[0.0, 0.0, 0.02]])
+    frames = tilt_frame(np.array([4.0]), np.array([0.0]))
+    out: dict[str, float] = {}
+    for label, ray in (("plate", plate), ("block", load_setup("thesis"))):
+        wave = dataclasses.replace(ray, reflection="wave")
+        where = pos if label == "plate" else ray.reference_position[None]
+        t_ray = measure(lambda r=ray, w=where: r.ideal_samples(w, frames), repeats=20 * repeats)
+        t_wave = measure(
+            lambda s=wave, w=where: s.ideal_samples(w, frames), repeats=5 * repeats, warmup=1
+        )
+        out[f"{label}_ray_s"] = t_ray.median
+        out[f"{label}_wave_s"] = t_wave.median
+        out[f"{label}_ratio"] = t_wave.median / t_ray.median
+    return out
 
 
 def _envelope(x: np.ndarray) -> float:
@@ -258,6 +283,15 @@ def main() -> None:
     print(
         f"HEADLINE one A-scan, immersion-steel-plate (front wall + 3 back-wall echoes): "
         f"wave {fmt_time(plate['wave_s'])}, {plate['ratio']:.1f}x the ray model's A-scan"
+    )
+    square = square_probe(repeats)
+    result["square_probe"] = square
+    print(
+        f"HEADLINE thesis 4 mm square probe, wave vs ray: over a plate "
+        f"{fmt_time(square['plate_wave_s'])} vs {fmt_time(square['plate_ray_s'])} "
+        f"({square['plate_ratio']:.1f}x); over the thesis block "
+        f"{fmt_time(square['block_wave_s'])} vs {fmt_time(square['block_ray_s'])} "
+        f"({square['block_ratio']:.1f}x)"
     )
     brute = wave_vs_rayleigh(accuracy=0.5 if cheap else 1.0, n_freq=8 if args.smoke else 24)
     result["wave_vs_rayleigh"] = brute
