@@ -47,8 +47,8 @@ sys.path.insert(0, str(ROOT / "tests" / "physics"))
 import references as ref  # noqa: E402
 
 from echocal import load_setup  # noqa: E402
-from echocal.setups import setup_with_overrides  # noqa: E402
 from echocal.geometry import tilt_frame  # noqa: E402
+from echocal.setups import setup_with_overrides  # noqa: E402
 from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
