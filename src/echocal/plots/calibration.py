@@ -241,7 +241,7 @@ def path_figure(
     # on a map every path has a thin dark outline, so it shows on the bright lobe as on
     # the dark floor; the markers have dark edges and white faces, visible on both
     dots = "0.85" if on_map else "0.6"
-    halo = [patheffects.withStroke(linewidth=2.6, foreground="0.1", alpha=0.5)] if on_map else []
+    halo = [patheffects.withStroke(linewidth=3.0, foreground="w", alpha=0.7)] if on_map else []
     drawn = []
     for i, (name, result) in enumerate(runs.items()):
         if show_measurements and len(result.points):
