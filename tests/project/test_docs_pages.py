@@ -21,6 +21,7 @@ PAGES = {
     "tutorials/first-calibration.md": None,
     "tutorials/setup-files.md": "my-rig.toml",
     "tutorials/recording-and-replay.md": None,
+    "tutorials/inside-the-specimen.md": None,
 }
 """page -> the file name its TOML block is saved as (None: no file needed)."""
 
