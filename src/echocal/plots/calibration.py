@@ -268,8 +268,8 @@ def path_figure(
         drawn.append(np.asarray(x0, dtype=float)[None, :])
     if truth is not None:
         t = np.asarray(truth, dtype=float)
-        star = {"marker": "*", "color": "r", "mec": "k", "mew": 0.6, "ms": 14, "ls": ""}
-        ax.plot(t[0], t[1], label=truth_label, **star)
+        star: dict[str, Any] = {"marker": "*", "color": "r", "mec": "k", "mew": 0.6, "ms": 14}
+        ax.plot(t[0], t[1], ls="", label=truth_label, **star)
         drawn.append(t[None, :])
     if cost_map is not None:
         ax.set_xlim(cost_map.a[0], cost_map.a[-1])
