@@ -110,3 +110,22 @@ def test_paths_and_convergence_differ_without_colour_and_keep_legends_off_the_da
         lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]
         _distinct_without_colour(lines)
         assert _legend_clear_of(fig, ax)
+
+
+def test_iteration_and_measurement_axes_have_whole_number_ticks(gauss_objective):
+    # a short run: matplotlib alone would tick 0, 0.5, 1, 1.5, ... iterations
+    from echocal.plots.calibration import convergence_figure, measured_convergence_figure
+
+    objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
+    result = calibrate(objective, method="gradient", x0=(1.5, 0.5), max_iter=3, rng=0)
+    values = gaussian(result.iterates)
+    figures = [
+        convergence_figure({"gradient": result}, {"gradient": values}),
+        measured_convergence_figure(result),
+    ]
+    for fig in figures:
+        for ax in fig.axes:
+            ticks = ax.get_xticks()
+            low, high = ax.get_xlim()
+            shown = ticks[(ticks >= low) & (ticks <= high)]
+            assert len(shown) >= 2 and np.all(shown == np.round(shown)), shown
