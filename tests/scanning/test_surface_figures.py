@@ -76,3 +76,17 @@ def test_missing_cells_are_hatched_not_white_and_the_key_is_off_the_map(rod_end)
         legend = ax.get_legend()
         assert [t.get_text() for t in legend.get_texts()] == ["missing"]
         assert not legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))
+
+
+def test_the_report_says_in_words_why_points_are_missing(rod_end, tmp_path):
+    from echocal.experiments._report_results import scan_section
+
+    scan, _ = rod_end
+    folder = tmp_path / "scan"
+    folder.mkdir()
+    scan.save(folder / "scan.nc")
+    page, _ = scan_section(folder, "s0")
+    row = page.split("why points are missing</td><td>")[1].split("</td>")[0]
+    counts = scan.summary["missing_by_status"]
+    assert counts and all(f"{status} ({n} points): " in row for status, n in counts.items())
+    assert "{" not in row and "&quot;" not in row  # not a JSON dump

@@ -169,7 +169,18 @@ def scan_section(folder: Path, anchor: str) -> tuple[str, str]:
     if height:
         rows.append(("|height error| [mm]", _quantiles(height, 1e3)))
     if s.get("missing_messages"):
-        rows.append(("why points are missing", json.dumps(s["missing_messages"])))
+        counts = s.get("missing_by_status") or {}
+        rows.append(
+            (
+                "why points are missing",
+                "; ".join(
+                    f"{status} ({counts[status]} points): {message}"
+                    if status in counts
+                    else f"{status}: {message}"
+                    for status, message in s["missing_messages"].items()
+                ),
+            )
+        )
     parts = [
         f'<h2 id="{anchor}">{html.escape(title)}</h2>',
         f'<p class="small">folder {html.escape(str(folder))}</p>',
