@@ -102,6 +102,7 @@ from echocal.evaluation import angular_error  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
 from echocal.plots import save_figure  # noqa: E402
+from echocal.plots._style import MARKERS  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -512,14 +513,19 @@ def plot_ecdf(per_case: dict[str, dict[str, dict[str, Any]]], path: Path) -> Non
         for i, (m, s) in enumerate(sorted(summary.items())):
             reach = np.array([np.inf if v is None else v for v in s["n_to_0.1"]])
             frac = (reach[None, :] <= n[:, None]).mean(axis=1)
-            # every series its own colour and line style, for colour-blind readers too:
-            # 20 colours (tab20, dark shades first), 4 styles cycling
+            # every series its own colour, line style and marker, for colour-blind readers
+            # too: 20 colours (tab20, dark shades first), 4 styles and 8 markers cycling (no
+            # two of 32 series share a style and a marker); markers staggered along x
             ax.step(
                 n,
                 100 * frac,
                 where="post",
                 color=plt.get_cmap("tab20")((2 * i) % 20 + (2 * i) // 20),
                 ls=("-", "--", ":", "-.")[i % 4],
+                marker=MARKERS[i % len(MARKERS)],
+                ms=4.5,
+                mfc="none",
+                markevery=(i % 10, 10),
                 lw=2.2 if m == "auto" else 1.3,
                 label=m if m in OURS else f"{m} (peer)",
             )

@@ -269,3 +269,10 @@ def test_the_git_commit_is_the_checkouts_when_there_is_one():
         assert git_commit() is None  # installed from a wheel: no commit claimed
     else:
         assert git_commit().removesuffix("-dirty") == done.stdout.strip()
+
+
+def test_python_dash_m_echocal_is_recorded_as_echocal(monkeypatch):
+    from echocal.provenance import start
+
+    monkeypatch.setattr("sys.argv", ["/venv/lib/echocal/__main__.py", "calibrate", "--x0", "1,2"])
+    assert start("calibrate").argv == ["echocal", "calibrate", "--x0", "1,2"]

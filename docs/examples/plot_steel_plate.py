@@ -40,6 +40,8 @@ for echo in echo_list(echoes, setup.window):
         fontsize=8,
     )
 ax.set_xlim(64, 90)
+low, high = ax.get_ylim()
+ax.set_ylim(low, 1.25 * high)  # room for the front wall's label below the title
 ax.set_xlabel("time [µs]")
 ax.set_ylabel("amplitude [a.u.]")
 ax.set_title("20 mm steel plate with a 2 mm side-drilled hole, 50 mm water path")

@@ -179,12 +179,19 @@ def _plain(value: Any) -> Any:
     return f"<{'function' if callable(value) else 'object'} {name}>"
 
 
+def _program() -> str:
+    """The command's name as typed: ``python -m echocal`` runs ``__main__.py``, the same
+    command as ``echocal``."""
+    name = Path(sys.argv[0]).name
+    return "echocal" if name == "__main__.py" else name
+
+
 def start(command: str, parameters: Mapping[str, Any] | None = None) -> Provenance:
     """Open the provenance record of ``command`` now (``parameters``: what a rerun needs)."""
     return Provenance(
         command=command,
         started=now(),
-        argv=[Path(sys.argv[0]).name, *sys.argv[1:]] if sys.argv else [],
+        argv=[_program(), *sys.argv[1:]] if sys.argv else [],
         cwd=os.getcwd(),
         parameters=_plain(json_ready(dict(parameters or {}))),
     )

@@ -65,3 +65,67 @@ def test_db_floor_must_be_negative(run_and_map):
     result, cmap = run_and_map
     with pytest.raises(EchocalValueError, match="db_floor"):
         path_figure(cmap, {"m": result}, db_floor=3.0)
+
+
+def _legend_clear_of(fig, ax) -> bool:
+    """The figure's legends (its own and the axes') do not overlap the data area ``ax``."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    area = ax.get_window_extent(renderer)
+    legends = [*fig.legends, *(a.get_legend() for a in fig.axes if a.get_legend())]
+    assert legends, "the figure has no legend"
+    return not any(lg.get_window_extent(renderer).overlaps(area) for lg in legends)
+
+
+def _distinct_without_colour(lines) -> None:
+    """Every pair of series differs in line style or marker (not by colour alone), and in
+    colour too."""
+    keys = [(str(ln.get_linestyle()), str(ln.get_marker())) for ln in lines]
+    assert len(set(keys)) == len(keys), keys
+    colours = [ln.get_color() for ln in lines]
+    assert len(set(colours)) == len(colours), colours
+
+
+def test_paths_and_convergence_differ_without_colour_and_keep_legends_off_the_data(
+    gauss_objective,
+):
+    from echocal.plots.calibration import convergence_figure
+
+    objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
+    methods = ("gradient", "spsa", "nesterov", "quasi-newton", "newton", "momentum")
+    runs = {m: calibrate(objective, method=m, x0=(1.5, 0.5), budget=40, rng=0) for m in methods}
+    a = b = np.linspace(-5.0, 5.0, 21)
+    grid = np.stack(np.meshgrid(a, b, indexing="ij"), axis=-1).reshape(-1, 2)
+    cmap = CostMap(a=a, b=b, values=gaussian(grid).reshape(21, 21), names=("a", "b"))
+    fig = path_figure(cmap, runs, x0=(1.5, 0.5), truth=OPT)
+    ax = fig.axes[0]
+    _distinct_without_colour([ln for ln in ax.get_lines() if ln.get_label() in runs])
+    assert _legend_clear_of(fig, ax)
+    values = {m: gaussian(r.iterates) for m, r in runs.items()}
+    fig = convergence_figure(runs, values, optimum_value=3.7)
+    for ax in fig.axes:
+        lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]
+        _distinct_without_colour(lines)
+        assert _legend_clear_of(fig, ax)
+
+
+def test_iteration_and_measurement_axes_have_whole_number_ticks(gauss_objective):
+    # a short run: matplotlib alone would tick 0, 0.5, 1, 1.5, ... iterations
+    from echocal.plots.calibration import convergence_figure, measured_convergence_figure
+
+    objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
+    result = calibrate(objective, method="gradient", x0=(1.5, 0.5), max_iter=3, rng=0)
+    values = gaussian(result.iterates)
+    figures = [
+        convergence_figure({"gradient": result}, {"gradient": values}),
+        measured_convergence_figure(result),
+    ]
+    for fig in figures:
+        for ax in fig.axes:
+            ticks = ax.get_xticks()
+            low, high = ax.get_xlim()
+            shown = ticks[(ticks >= low) & (ticks <= high)]
+            assert len(shown) >= 2 and np.all(shown == np.round(shown)), shown

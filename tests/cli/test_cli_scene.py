@@ -103,3 +103,13 @@ def test_error_text_in_brackets_is_printed_verbatim():
     )
     assert result.returncode == 2
     assert "no-[bold]such" in result.stderr
+
+
+def test_scene_draws_a_wave_model_setup(tmp_path):
+    # the default setups use the wave model: its rays are drawn as its ray stage casts them
+    out = tmp_path / "wave.png"
+    result = runner.invoke(
+        app, ["scene", "--setup", "immersion-5mhz", "--pose", "0,0,50,20,4", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert out.is_file() and out.stat().st_size > 0

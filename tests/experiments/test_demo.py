@@ -36,6 +36,11 @@ def test_demo_quick_end_to_end(tmp_path):
     for i, line in enumerate(lines):
         if "does not agree" in line:
             assert lines[i + 1].strip().startswith("why:"), lines[i : i + 2]
+    # the sweep's lines use the report's words and percentages: "never", "40 %"
+    sweep_lines = [line for line in lines if "success" in line and "measurements" in line]
+    assert sweep_lines and not [
+        line for line in sweep_lines if "—" in line or "%" in line.replace(" %", "")
+    ]
     # ... and the last thing printed is where the report is
     assert lines[-1].startswith(f"report: {(out / 'report.html').resolve()}")
     # the sweep summary covers every configuration of quick.toml: 4 methods x 2 SNRs

@@ -78,3 +78,31 @@ def test_ecdf_ends_at_the_success_rate():
     np.testing.assert_allclose(y[-1], 75.0)
     np.testing.assert_allclose(np.asarray(y)[1:4], [25.0, 50.0, 75.0])
     np.testing.assert_allclose(np.asarray(x)[1:4], [10.0, 20.0, 30.0])
+
+
+def test_sweep_figures_tell_configurations_apart_without_colour():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from echocal.plots.sweep import success_ecdf_figure, success_rate_figure
+
+    rows = [
+        {"label": f"m{k}", "snr_db": snr, "success": ok, "measurements_to_tol": 10.0 + k + i,
+         "n_measurements": 40}
+        for k in range(6)
+        for snr in (30.0, 10.0)
+        for i, ok in enumerate((True, True, False))
+    ]  # fmt: skip
+    runs = pd.DataFrame(rows)
+    summary = pd.DataFrame(
+        [{"label": f"m{k}", "snr_db": s, "success_rate": 2 / 3} for k in range(6) for s in (30, 10)]
+    )
+    for fig in (success_rate_figure(summary), success_ecdf_figure(runs)):
+        ax = fig.axes[0]
+        lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("m")]
+        keys = [(str(ln.get_linestyle()), ln.get_marker()) for ln in lines]
+        assert len(set(keys)) == len(keys) == len(lines) > 0  # not by colour alone
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        renderer = canvas.get_renderer()
+        legend = ax.get_legend().get_window_extent(renderer)
+        assert not legend.overlaps(ax.get_window_extent(renderer))  # beside the curves

@@ -61,6 +61,12 @@ def test_cli_report_renders_a_calibration_and_a_scan_folder(folders, tmp_path):
     assert "6 of 6 points found" in page
     text = re.sub(r"base64,[A-Za-z0-9+/=]+", "", page)
     assert "None" not in text and not re.search(r"\bnan\b", text, re.IGNORECASE)
+    # provenance on both pages, read as text: no Python literals (True, [0.0, 0.05])
+    assert "provenance" in scan_part and "scan-5mhz (sha256 " in scan_part
+    assert "budget per point</td><td>80" in scan_part
+    cells = re.findall(r"<td>(.*?)</td>", text)
+    assert not [c for c in cells if re.search(r"\bTrue\b|\bFalse\b|\[-?\d", c)], cells
+    assert "position [mm]</td><td>0, 0, 50<" in cal_part
 
 
 def test_a_scan_folder_without_figures_is_drawn_from_its_netcdf(folders, tmp_path):

@@ -21,6 +21,7 @@ PAGES = {
     "tutorials/first-calibration.md": None,
     "tutorials/setup-files.md": "my-rig.toml",
     "tutorials/recording-and-replay.md": None,
+    "tutorials/inside-the-specimen.md": None,
 }
 """page -> the file name its TOML block is saved as (None: no file needed)."""
 
@@ -43,3 +44,28 @@ def test_page_python_blocks_run(page, tmp_path, monkeypatch):
     namespace: dict = {}
     for block in blocks:
         exec(compile(block, page, "exec"), namespace)
+
+
+def test_the_gallery_scraper_shows_each_figure_once(tmp_path):
+    """echocal's ``Figure`` objects are saved by ``docs/_scraper.py``; pyplot figures are
+    left to sphinx-gallery's matplotlib scraper (both saving them showed each one twice)."""
+    pytest.importorskip("sphinx_gallery")
+    import sys
+
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    sys.path.insert(0, str(DOCS))
+    try:
+        from _scraper import figure_scraper
+    finally:
+        sys.path.remove(str(DOCS))
+    ours, theirs = Figure(), plt.figure()
+    try:
+        paths = iter(tmp_path / f"image_{k}.png" for k in range(5))
+        block_vars = {"example_globals": {"a": ours, "b": theirs}, "image_path_iterator": paths}
+        rst = figure_scraper(None, block_vars, {"src_dir": str(tmp_path)})
+    finally:
+        plt.close(theirs)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["image_0.png"]
+    assert "image_0.png" in rst

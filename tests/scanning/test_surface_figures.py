@@ -57,3 +57,36 @@ def test_normals_are_visible_and_missing_points_marked(rod_end):
     shafts = np.asarray(quiver._segments3d)[: int(np.sum(scan.found))]  # 3-D segments
     lengths = np.linalg.norm(shafts[:, 1] - shafts[:, 0], axis=-1)
     assert np.all(lengths > 1.0)
+
+
+def test_missing_cells_are_hatched_not_white_and_the_key_is_off_the_map(rod_end):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from echocal.plots.surface import error_maps_figure
+
+    scan, _ = rod_end
+    fig = error_maps_figure(scan)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    for ax in fig.axes[:2]:  # the two maps (their colour bars come after them)
+        # white is zero error on the diverging map: a missing cell shows grey hatching
+        hatched = [p for p in ax.patches if p.get_hatch()]
+        assert hatched and hatched[0].get_zorder() < ax.images[0].get_zorder()
+        legend = ax.get_legend()
+        assert [t.get_text() for t in legend.get_texts()] == ["missing"]
+        assert not legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))
+
+
+def test_the_report_says_in_words_why_points_are_missing(rod_end, tmp_path):
+    from echocal.experiments._report_results import scan_section
+
+    scan, _ = rod_end
+    folder = tmp_path / "scan"
+    folder.mkdir()
+    scan.save(folder / "scan.nc")
+    page, _ = scan_section(folder, "s0")
+    row = page.split("why points are missing</td><td>")[1].split("</td>")[0]
+    counts = scan.summary["missing_by_status"]
+    assert counts and all(f"{status} ({n} points): " in row for status, n in counts.items())
+    assert "{" not in row and "&quot;" not in row  # not a JSON dump

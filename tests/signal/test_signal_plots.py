@@ -41,6 +41,29 @@ def test_a_noise_ascan_is_drawn_at_the_scale_of_the_expected_echo():
     assert "noise ±σ (σ = 0.01)" in labels
 
 
+def test_a_no_echo_ascan_draws_the_threshold_the_noise_stays_below_off_the_trace():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from echocal.signal.detection import EchoDetector
+
+    p = GaborPulse()
+    w = RecordingWindow(fs=100e6, start=20e-6, n_samples=1024)
+    noise = np.random.default_rng(1).normal(0.0, 0.01, w.n_samples)
+    fig = plot_ascan(noise, w, pulse=p, echo=False, expected_amplitude=0.8, noise_sigma=0.01)
+    assert len(fig.axes) == 1  # no echo: no zoom panel, no time of flight
+    ax = fig.axes[0]
+    np.testing.assert_allclose(ax.get_ylim(), (-0.88, 0.88))  # the expected echo's scale
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert not [s for s in labels if s.startswith("τ")]
+    threshold = next(ln for ln in ax.get_lines() if ln.get_label().startswith("detection"))
+    want = EchoDetector(p, w.fs, w.n_samples).threshold_amplitude(0.01, 4.5)
+    assert threshold.get_ydata()[0] == pytest.approx(want, rel=1e-9)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    box = ax.get_legend().get_window_extent(canvas.get_renderer())
+    assert not box.overlaps(ax.get_window_extent(canvas.get_renderer()))  # beside the trace
+
+
 def test_the_ascan_draws_the_detectors_threshold():
     from echocal.signal.detection import EchoDetector
 

@@ -133,7 +133,8 @@ def register(app: typer.Typer) -> None:
         fig = plot_ascan(
             scan.samples,
             window,
-            pulse=pulse if detected else None,  # no time-of-flight line on pure noise
+            pulse=pulse,
+            echo=bool(detected),  # pure noise: its threshold, but no time-of-flight line
             gates=() if user_gate is None else (user_gate,),
             title=f"A-scan at {_label(target)}",
             noise_sigma=float(virtual.noise_sigma),
@@ -221,8 +222,10 @@ def _shade(fig: Any, span: tuple[float, float], label: str) -> None:
     """Shade ``span`` [s] (start, width) on the A-scan figure, with a legend entry."""
     ax = fig.axes[0]
     start, width = span
+    from echocal.plots.ascan import _legend
+
     ax.axvspan(start * 1e6, (start + width) * 1e6, color="C2", alpha=0.15, label=label)
-    ax.legend(fontsize=8, loc="upper right")
+    _legend(ax)
 
 
 def _label(pose: Any) -> str:

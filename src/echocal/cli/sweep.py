@@ -181,16 +181,22 @@ def _failure_json(results) -> dict[str, Any] | None:
     return None if common is None else {"message": common[0], "runs": common[1]}
 
 
-def _fmt(value: Any, spec: str = ".3g") -> str:
+def _fmt(value: Any, spec: str = ".3g", *, missing: str = "—") -> str:
+    """A table cell; ``missing`` for no value (a milestone no run reached: "never", the
+    report's word) and "never" for an infinite expected cost too."""
+    from echocal.experiments._report_html import NEVER
+
     if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "—"
+        return missing
     if isinstance(value, float) and math.isinf(value):
-        return "∞"
+        return NEVER
     return format(value, spec)
 
 
 def _print_table(results) -> None:
     from rich.table import Table
+
+    from echocal.experiments._report_html import NEVER, percent
 
     table = results.summary()
     done = len(results.runs)
@@ -222,10 +228,10 @@ def _print_table(results) -> None:
             cells.append(row.x0_kind)
         cells += [
             f"{row.runs}{failed}",
-            f"{100 * row.success_rate:.0f}%",
-            _fmt(row.median_measurements_to_tol, ".1f"),
-            _fmt(row.p90_measurements_to_tol, ".1f"),
-            _fmt(row.expected_measurements_to_success, ".1f"),
+            percent(row.success_rate),  # as the report and the figures' axes write it
+            _fmt(row.median_measurements_to_tol, ".1f", missing=NEVER),
+            _fmt(row.p90_measurements_to_tol, ".1f", missing=NEVER),
+            _fmt(row.expected_measurements_to_success, ".1f", missing=NEVER),
             _fmt(row.median_error_deg, ".2g"),
         ]
         view.add_row(*cells)

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from echocal.errors import DataFileError
-from echocal.experiments._report_html import facts, fig_png, png
+from echocal.experiments._report_html import facts, fig_png, fmt, png
 
 __all__ = ["CALIBRATION_FILE", "SCAN_FILE", "calibration_section", "scan_section"]
 
@@ -89,40 +89,63 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
             else f"<p class='small'>no {name} (the run was made with --no-plots, "
             "or found no echo)</p>"
         )
-    parts += ["<h3>provenance</h3>", _provenance(result.get("provenance"))]
+    parts += [
+        "<h3>provenance</h3>",
+        _provenance(
+            result.get("provenance"), rerun="echocal calibrate --from result.json --out NEW"
+        ),
+    ]
     line = f"{title} — {outcome}; estimate {estimate or 'none'}"
     return "\n".join(parts), line
 
 
-def _provenance(record: dict[str, Any] | None) -> str:
+def _text(value: Any) -> str:
+    """A provenance value as a reader wants it: a list as ``a, b``, yes/no for a flag."""
+    if isinstance(value, list | tuple):
+        return ", ".join(_text(v) for v in value)
+    if isinstance(value, float):
+        return f"{value:g}"
+    return fmt(value)
+
+
+def _provenance(record: dict[str, Any] | None, *, rerun: str | None = None) -> str:
+    """The provenance facts of a calibration or a scan; ``rerun``: how to rerun it."""
     if not record:
         return "<p class='small'>no provenance recorded (a run through the Python API)</p>"
     setup = record.get("setup") or {}
     source = record.get("source") or {}
     method = record.get("method") or {}
     versions = record.get("versions") or {}
+    argv = list(record.get("argv") or [])
+    if argv and argv[0] == "__main__.py":  # `python -m echocal` is the same command
+        argv[0] = "echocal"
     rows: list[tuple[str, Any]] = [
-        ("command line", " ".join(record.get("argv") or [])),
+        ("command line", " ".join(argv)),
         (
             "options given",
             ", ".join(
-                f"{k} {v}" for k, v in (record.get("parameters") or {}).items() if v is not None
+                f"{k} {_text(v)}"
+                for k, v in (record.get("parameters") or {}).items()
+                if v is not None
             ),
         ),
         ("working folder", record.get("cwd")),
         ("started / finished (UTC)", f"{record.get('started')} / {record.get('finished')}"),
         ("setup", f"{setup.get('name')} (sha256 {setup.get('sha256')})"),
-        ("source", ", ".join(f"{k} {v}" for k, v in source.items() if v is not None)),
-        ("position [m]", record.get("position_m")),
-        ("seed", record.get("seed")),
-        ("method", method.get("name")),
-        ("start x0 [°]", method.get("x0")),
-        ("budget", method.get("budget") or "none (until it settles)"),
-        ("versions", ", ".join(f"{k} {v}" for k, v in versions.items())),
+        ("source", ", ".join(f"{k} {_text(v)}" for k, v in source.items() if v is not None)),
     ]
-    return facts(rows) + (
-        "<p class='small'>rerun it: <code>echocal calibrate --from result.json --out NEW</code></p>"
-    )
+    if record.get("position_m") is not None:
+        rows.append(("position [mm]", _text([1e3 * float(v) for v in record["position_m"]])))
+    rows += [("seed", record.get("seed")), ("method", method.get("name"))]
+    if "x0" in method:
+        rows.append(("start x0 [°]", _text(method.get("x0"))))
+    if "budget_per_point" in method:
+        rows.append(("budget per point", method["budget_per_point"]))
+    else:
+        rows.append(("budget", method.get("budget") or "none (until it settles)"))
+    rows.append(("versions", ", ".join(f"{k} {v}" for k, v in versions.items())))
+    hint = f"<p class='small'>rerun it: <code>{html.escape(rerun)}</code></p>" if rerun else ""
+    return facts(rows) + hint
 
 
 def scan_section(folder: Path, anchor: str) -> tuple[str, str]:
@@ -146,7 +169,18 @@ def scan_section(folder: Path, anchor: str) -> tuple[str, str]:
     if height:
         rows.append(("|height error| [mm]", _quantiles(height, 1e3)))
     if s.get("missing_messages"):
-        rows.append(("why points are missing", json.dumps(s["missing_messages"])))
+        counts = s.get("missing_by_status") or {}
+        rows.append(
+            (
+                "why points are missing",
+                "; ".join(
+                    f"{status} ({counts[status]} points): {message}"
+                    if status in counts
+                    else f"{status}: {message}"
+                    for status, message in s["missing_messages"].items()
+                ),
+            )
+        )
     parts = [
         f'<h2 id="{anchor}">{html.escape(title)}</h2>',
         f'<p class="small">folder {html.escape(str(folder))}</p>',
@@ -159,6 +193,10 @@ def scan_section(folder: Path, anchor: str) -> tuple[str, str]:
             parts += [f"<h3>{html.escape(label)}</h3>", png(path)]
         elif name in drawn:
             parts += [f"<h3>{html.escape(label)}</h3>", fig_png(drawn[name]())]
+    record = scan.dataset.attrs.get("provenance")
+    if record:
+        # the same command again resumes or reports a finished scan; --overwrite remeasures
+        parts += ["<h3>provenance</h3>", _provenance(json.loads(record))]
     line = f"{title} — {s['found']} of {s['points']} points found"
     return "\n".join(parts), line
 

@@ -28,6 +28,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from echocal.experiments._output import check_out_dir
+from echocal.experiments._report_html import NEVER, percent
 from echocal.experiments.report import write_report
 from echocal.experiments.scenarios import ScenarioResult, run_scenario
 
@@ -116,7 +117,7 @@ def run_demo(
         console.print(f"[bold]sweep[/] {sweep.spec.name}: {len(sweep.runs)} runs")
         for row in summary.itertuples():
             console.print(
-                f"  {row.label:12s} {row.snr_db:4.0f} dB  success {100 * row.success_rate:3.0f} %"
+                f"  {row.label:12s} {row.snr_db:4.0f} dB  success {percent(row.success_rate):>5s}"
                 f"  to {sweep.spec.tolerance:g}°: median {_count(row.median_measurements_to_tol)}"
                 f", p90 {_count(row.p90_measurements_to_tol)} measurements",
                 highlight=False,
@@ -133,5 +134,6 @@ def run_demo(
 
 
 def _count(value: float) -> str:
-    """A measurement count for the console ('—' when no run reached the tolerance)."""
-    return "—" if value != value else f"{value:.0f}"  # NaN-safe without numpy
+    """A measurement count for the console ("never" when no run reached the tolerance,
+    the report's word)."""
+    return NEVER if value != value else f"{value:.0f}"  # NaN-safe without numpy

@@ -33,6 +33,7 @@ def plot_ascan(
     noise_sigma: float | None = None,
     expected_amplitude: float | None = None,
     significance: float = ECHO_THRESHOLD,
+    echo: bool = True,
 ) -> Figure:
     """One A-scan (shape ``(n_samples,)``) against time [µs].
 
@@ -60,18 +61,23 @@ def plot_ascan(
         axes are drawn at ± this scale, so noise is not autoscaled into looking like a
         signal.
     significance : [σ] the detector's threshold g drawn (default: calibrate's, 4.5).
+    echo : False when the detector found no echo in this A-scan: with ``pulse`` the
+        detection threshold is still drawn (the noise stays below it), but no time of
+        flight and no zoom, and the axes are at the ``expected_amplitude`` scale.
+
+    The legend sits beside the top panel, off the trace.
     """
     x = np.asarray(samples, dtype=np.float64)
     if x.ndim != 1:
         raise ValueError(f"plot_ascan takes one A-scan, shape (n_samples,); got {x.shape}")
     t_us = window.times * 1e6
     tof = None
-    if pulse is not None and np.any(x):
+    if echo and pulse is not None and np.any(x):
         gated = gates[0].apply(x, window) if gates and gate is None else x
         tof = float(time_of_flight(gated, window, pulse, gate=gate)) if np.any(gated) else None
         tof = tof if tof is not None and np.isfinite(tof) else None
     zoom = tof is not None and pulse is not None
-    fig = Figure(figsize=(10, 5.8 if zoom else 3.6), layout="constrained")
+    fig = Figure(figsize=(12, 5.8 if zoom else 3.6), layout="constrained")
     axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
     sigma = _noise_sigma(x) if noise_sigma is None else float(noise_sigma)
     env = envelope(x)
@@ -107,7 +113,7 @@ def plot_ascan(
         if top > 0:
             axes[1].set_ylim(-1.15 * top, 1.15 * top)
         axes[1].set_title(f"zoom on the echo (τ ± {half:.2g} µs)", fontsize=10)
-    elif expected_amplitude is not None and pulse is None:
+    elif expected_amplitude is not None:
         scale = float(expected_amplitude)
         if scale > 0 and np.max(np.abs(x), initial=0.0) < scale:
             axes[0].set_ylim(-1.1 * scale, 1.1 * scale)
@@ -120,8 +126,13 @@ def plot_ascan(
                 fontsize=9,
             )
     axes[-1].set_xlabel("time [µs]")
-    axes[0].legend(fontsize=8, loc="upper right")
+    _legend(axes[0])
     return fig
+
+
+def _legend(ax) -> None:
+    """The A-scan's legend, beside its top panel: never over the trace."""
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
 
 def _draw_gates(ax, gates: Sequence[TimeGate], x: np.ndarray, window: RecordingWindow) -> None:

@@ -15,11 +15,13 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
+from echocal.plots._style import series_style
 
 __all__ = [
     "MAP_DB_FLOOR",
@@ -31,10 +33,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-
-
-_LINE_STYLES = ("-", "--", ":", "-.")
-"""Line styles cycled with the colours, so series differ without colour too."""
 
 
 def _integer_ticks(*axes: Any) -> None:
@@ -62,31 +60,32 @@ def convergence_figure(
         e.g. the noiseless simulated metric at the iterates.
     optimum_value : the metric at the true optimum, drawn as a dashed line.
     """
-    fig = Figure(figsize=(11, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(11, 4.2 + 0.2 * ((len(runs) + 3) // 4)), constrained_layout=True)
     by_iter, by_meas = fig.subplots(1, 2, sharey=True)
     for i, (label, result) in enumerate(runs.items()):
         values = np.asarray(iterate_values[label], dtype=float)
         iterations = np.arange(len(values))
-        style = _LINE_STYLES[i % len(_LINE_STYLES)]  # colour and style: colour-blind safe
-        line = by_iter.plot(iterations, values, marker=".", ms=4, ls=style, label=label)[0]
+        # colour, line style and marker together: series differ for colour-blind readers
+        style = series_style(i) | {"ms": 4, "mfc": "none", "lw": 1.3}
+        style["markevery"] = max(1, len(values) // 15)  # markers stay apart on long runs
+        by_iter.plot(iterations, values, **style)
         by_meas.plot(
             result.iteration_measurements[: len(values)],
             values,
-            marker=".",
-            ms=4,
-            ls=style,
-            color=line.get_color(),
+            **style,
             label=f"{label} ({result.n_measurements} meas.)",
         )
     for ax in (by_iter, by_meas):
         if optimum_value is not None:
-            ax.axhline(optimum_value, color="k", ls="--", lw=0.8, label="true optimum")
+            ax.axhline(optimum_value, color="0.35", ls=(0, (2, 2)), lw=0.8, label="true optimum")
         ax.grid(alpha=0.3)
     by_iter.set_xlabel("iteration")
     by_meas.set_xlabel("measurements used")
     _integer_ticks(by_iter, by_meas)
     by_iter.set_ylabel(ylabel)
-    by_meas.legend(fontsize=8, loc="lower right")
+    # below both panels, never over a curve
+    handles, names = by_meas.get_legend_handles_labels()
+    fig.legend(handles, names, loc="outside lower center", ncols=min(4, len(names)), fontsize=8)
     if title:
         fig.suptitle(title)
     return fig
@@ -196,6 +195,12 @@ def relative_db(values: ArrayLike, floor: float = MAP_DB_FLOOR) -> NDArray[np.fl
     return np.asarray(10.0 * np.log10(ratio), dtype=np.float64)
 
 
+_ESTIMATE: dict[str, Any] = {
+    "marker": "X", "mfc": "w", "mec": "k", "ms": 8, "mew": 1.0, "ls": "", "zorder": 3
+}  # fmt: skip
+"""How a run's final estimate is marked on a path figure."""
+
+
 def path_figure(
     cost_map: CostMap | None,
     runs: Mapping[str, CalibrationResult],
@@ -216,7 +221,7 @@ def path_figure(
     alone (a rig: no map is known), framed to every point drawn.  ``truth_label`` names
     the ``truth`` marker (e.g. a recording's best grid pose).
     """
-    fig = Figure(figsize=(6.8, 5.6), constrained_layout=True)
+    fig = Figure(figsize=(6.8, 5.9 + 0.2 * ((len(runs) + 4) // 3)), constrained_layout=True)
     ax = fig.add_subplot()
     on_map = cost_map is not None
     if cost_map is not None:
@@ -233,25 +238,38 @@ def path_figure(
         fig.colorbar(mesh, ax=ax, label="metric / max [dB]")
     else:
         relative_db([1.0], db_floor)  # the same check of db_floor with or without a map
-    # light marks on the dark map, dark ones on a white background
-    dots, mark = ("0.85", "w") if on_map else ("0.6", "k")
+    # on a map every path has a thin dark outline, so it shows on the bright lobe as on
+    # the dark floor; the markers have dark edges and white faces, visible on both
+    dots = "0.85" if on_map else "0.6"
+    halo = [patheffects.withStroke(linewidth=3.0, foreground="w", alpha=0.7)] if on_map else []
     drawn = []
-    for name, result in runs.items():
+    for i, (name, result) in enumerate(runs.items()):
         if show_measurements and len(result.points):
             ax.plot(*result.points.T, ls="", marker=".", ms=2.5, color=dots, alpha=0.8)
             drawn.append(result.points)
         path = result.iterates
-        ax.plot(path[:, 0], path[:, 1], marker=".", ms=4, lw=1.2, label=name)
-        ax.plot(*result.x, marker="x", color=mark, ms=6)
+        # colour, line style and marker together: paths differ for colour-blind readers
+        style = series_style(i) | {"ms": 4.5, "lw": 1.3, "mec": "0.1", "mew": 0.6}
+        style["markevery"] = max(1, len(path) // 15)
+        if on_map and style["color"] == "#000000":
+            style["color"] = "w"  # black would vanish into the map's dark floor
+        ax.plot(path[:, 0], path[:, 1], label=name, path_effects=halo, **style)
+        ax.plot(*result.x, **_ESTIMATE)
         drawn += [path, np.asarray(result.x, dtype=float)[None, :]]
     if show_measurements:
         ax.plot([], [], ls="", marker=".", color=dots, label="measured poses")
+    if runs:
+        ax.plot([], [], label="final estimate", **_ESTIMATE)
     if x0 is not None:
-        ax.plot(*x0, marker="o", mfc="none", mec=mark, ms=10, mew=1.5, ls="", label="initial guess")
+        ax.plot(
+            *x0, marker="o", mfc="w", mec="k", ms=9, mew=1.2, ls="", zorder=1.9,
+            label="initial guess",
+        )  # fmt: skip
         drawn.append(np.asarray(x0, dtype=float)[None, :])
     if truth is not None:
         t = np.asarray(truth, dtype=float)
-        ax.plot(t[0], t[1], marker="*", color="r", ms=14, ls="", label=truth_label)
+        star: dict[str, Any] = {"marker": "*", "color": "r", "mec": "k", "mew": 0.6, "ms": 14}
+        ax.plot(t[0], t[1], ls="", label=truth_label, **star)
         drawn.append(t[None, :])
     if cost_map is not None:
         ax.set_xlim(cost_map.a[0], cost_map.a[-1])
@@ -269,7 +287,9 @@ def path_figure(
         ax.grid(alpha=0.3)
     ax.set_xlabel(f"{names[0]} [deg]")
     ax.set_ylabel(f"{names[1]} [deg]")
-    ax.legend(fontsize=8, loc="upper right", framealpha=0.6)
+    # below the map, never over a path (a map is light where the paths go)
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(3, len(labels)), fontsize=8)
     if title:
         ax.set_title(title)
     return fig

@@ -26,7 +26,7 @@ def plot_lobe(lobe: EchoLobe | Sequence[EchoLobe], *, title: str | None = None) 
     a disc, sin x / x for a rectangle), and the −6 dB level."""
     lobes = [lobe] if isinstance(lobe, EchoLobe) else list(lobe)
     first = lobes[0]
-    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    fig = Figure(figsize=(10.0, 4.2), layout="constrained")
     ax = fig.subplots()
     styles = ["-", "--", "-.", ":"]
     for i, item in enumerate(lobes):
@@ -60,5 +60,5 @@ def plot_lobe(lobe: EchoLobe | Sequence[EchoLobe], *, title: str | None = None) 
     where = f"{1e3 * first.distance_m:.0f} mm water path, ka = {first.ka:.0f}"
     ax.set_title(title or f"{first.setup}: echo lobe ({where})", fontsize=10)
     ax.grid(True, lw=0.4, alpha=0.5)
-    ax.legend(fontsize=8, loc="lower center")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # off the curves
     return fig

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 from numpy.typing import NDArray
 
-from echocal.echo import ray_echoes
+from echocal.echo import WAVE_MODEL, ray_echoes
 from echocal.geometry import Pose, poses_to_arrays
 from echocal.specimen import Cylinder, FinitePlane, Specimen, Sphere, TriangleMesh
 from echocal.transducer import Transducer
@@ -84,9 +84,10 @@ def scene_figure(
     """Specimen, transducer(s) at ``poses`` and up to ``n_rays`` rays per pose with their hits.
 
     Rays that hit are drawn from the pixel to the hit point, coloured by their
-    echo amplitude a·β; misses are drawn short and grey.  Each pose's beam axis is drawn
-    (black, dashed) to where it meets the part, with the part's surface normal there
-    (magenta arrow): the angle between them is what a calibration removes.  Axes in millimetres.
+    echo amplitude a·β (on a ``wave`` setup, its ray stage's Lambertian amplitude);
+    misses are drawn short and grey.  Each pose's beam axis is drawn (black, dashed) to
+    where it meets the part, with the part's surface normal there (magenta arrow): the
+    angle between them is what a calibration removes.  Axes in millimetres.
     """
     fig = Figure(figsize=(8, 6.5), constrained_layout=True)
     ax = fig.add_subplot(projection="3d", computed_zorder=False)  # part, rays, then axes
@@ -98,7 +99,10 @@ def scene_figure(
             )
         )
     positions, frames = poses_to_arrays(list(poses))
-    echoes = ray_echoes(transducer, specimen, positions, frames, model=reflection)
+    # the wave model finds what the sound reaches with the same rays (its echo transfer
+    # is not per ray): shade them as its ray stage does, Lambertian
+    model = "lambertian" if reflection == WAVE_MODEL else reflection
+    echoes = ray_echoes(transducer, specimen, positions, frames, model=model)
     rays = transducer.rays(positions, frames)
     pick = np.unique(np.linspace(0, transducer.n_rays - 1, min(n_rays, transducer.n_rays)).round())
     pick = pick.astype(int)

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from numpy.typing import NDArray
@@ -55,13 +56,28 @@ def _image(
     **kw,
 ) -> None:
     """``values`` shape (n_y, n_x) as an image in mm with a colour bar ``label``; the points
-    not found marked ×, unless ``mark_missing`` is False."""
-    im = ax.imshow(np.ma.masked_invalid(values), origin="lower", extent=_extent(scan), **kw)
+    not found marked × on grey hatching (not white: white is zero on a diverging map),
+    unless ``mark_missing`` is False, with a legend below the map, off the cells."""
+    extent = _extent(scan)
+    im = ax.imshow(np.ma.masked_invalid(values), origin="lower", extent=extent, **kw)
     missing = ~scan.found
     if mark_missing and np.any(missing):
+        left, right, bottom, top = extent
+        ax.add_patch(  # behind the image: seen only through the blank (missing) cells
+            Rectangle(
+                (left, bottom),
+                right - left,
+                top - bottom,
+                facecolor="0.88",
+                edgecolor="0.55",
+                hatch="///",
+                lw=0,
+                zorder=-1,
+            )
+        )
         xx, yy = np.meshgrid(scan.dataset["x"].values * _MM, scan.dataset["y"].values * _MM)
-        ax.plot(xx[missing], yy[missing], "x", color="0.4", ms=4, label="missing")
-        ax.legend(loc="upper right", fontsize="small")
+        ax.plot(xx[missing], yy[missing], "x", color="k", ms=5, ls="", label="missing")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize="small")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_aspect("equal")
@@ -98,7 +114,8 @@ def normal_map_figure(scan: SurfaceScan) -> Figure:
     xx, yy = np.meshgrid(ds["x"].values * _MM, ds["y"].values * _MM)
     nx, ny = ds["normal_x"].values, ds["normal_y"].values
     if np.isfinite(nx).any():  # no point found: no arrows (quiver would average nothing)
-        ax.quiver(xx, yy, nx, ny, color="white", pivot="mid")
+        # white arrows with a dark edge: seen on the dark and the light end of the map
+        ax.quiver(xx, yy, nx, ny, color="white", edgecolor="0.15", linewidth=0.5, pivot="mid")
     return fig
 
 

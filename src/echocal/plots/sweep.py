@@ -20,12 +20,13 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from echocal.plots._style import COLORS, series_style
+
 __all__ = ["measurements_figure", "success_ecdf_figure", "success_rate_figure"]
 
 _NOISELESS = "noiseless"
 _STYLES = ("-", "--", ":", "-.")
-_MARKERS = ("o", "s", "^", "D", "v", "P")
-"""Line styles and markers cycled with the colours: series differ without colour too."""
+"""ECDF line styles, one per SNR (the configuration has its colour and marker)."""
 
 
 def _labels(frame: pd.DataFrame) -> list[str]:
@@ -58,7 +59,7 @@ def success_rate_figure(summary: pd.DataFrame, *, title: str | None = None) -> F
 
     summary : one row per configuration and SNR with ``snr_db`` and ``success_rate``.
     """
-    fig = Figure(figsize=(6.8, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(8.0, 4.2), constrained_layout=True)
     ax = fig.add_subplot()
     pos, ticks = _snr_positions(summary["snr_db"])
     labels = _label_column(summary)
@@ -69,11 +70,9 @@ def success_rate_figure(summary: pd.DataFrame, *, title: str | None = None) -> F
         ax.plot(
             np.asarray(xs)[order],
             100 * sub["success_rate"].to_numpy(dtype=float)[order],
-            marker=_MARKERS[k % len(_MARKERS)],
+            **series_style(k),  # colour, line style and marker: colour-blind safe
             mfc="none",  # open markers: configurations on the same point stay visible
             ms=10 - 1.5 * (k % 4),
-            ls=_STYLES[k % len(_STYLES)],
-            color=f"C{k % 10}",
             label=label,
         )
     ax.set_xticks(list(pos.values()), ticks)  # ascending: finite SNRs, then noiseless
@@ -81,7 +80,7 @@ def success_rate_figure(summary: pd.DataFrame, *, title: str | None = None) -> F
     ax.set_ylabel("success rate [%]")
     ax.set_ylim(-5, 105)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the lines
     ax.set_title(title or "success rate vs SNR")
     return fig
 
@@ -107,12 +106,16 @@ def measurements_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
             data.append(ok.to_numpy(dtype=float))
             snr_text = _NOISELESS if math.isnan(snr) else f"{snr:g} dB"
             names.append(f"{label}\n{snr_text}")
-            colors.append(f"C{k % 10}")
+            colors.append(COLORS[k % len(COLORS)])
     positions = np.arange(1, len(data) + 1)
     filled = [i for i, d in enumerate(data) if d.size]
     if filled:
         boxes = ax.boxplot(
-            [data[i] for i in filled], positions=positions[filled], widths=0.6, patch_artist=True
+            [data[i] for i in filled],
+            positions=positions[filled],
+            widths=0.6,
+            patch_artist=True,
+            medianprops={"color": "k", "lw": 1.6},  # black: seen on every box's colour
         )
         for patch, i in zip(boxes["boxes"], filled, strict=True):
             patch.set_facecolor(colors[i])
@@ -139,7 +142,7 @@ def measurements_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
 def success_ecdf_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figure:
     """Fraction of all runs within tolerance after m measurements, vs m; one line per
     configuration, line style per SNR.  Each curve ends at that configuration's success rate."""
-    fig = Figure(figsize=(7.2, 4.4), constrained_layout=True)
+    fig = Figure(figsize=(8.6, 4.4), constrained_layout=True)
     ax = fig.add_subplot()
     labels = _label_column(runs)
     snrs = sorted({float(s) for s in runs["snr_db"]}, key=lambda s: (math.isnan(s), -s))
@@ -156,11 +159,16 @@ def success_ecdf_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
             xs = np.concatenate([[0.0], m, [top]])
             ys = np.concatenate([[0.0], np.arange(1, m.size + 1) / len(sub), [m.size / len(sub)]])
             snr_text = _NOISELESS if math.isnan(snr) else f"{snr:g} dB"
+            style = series_style(k)  # the configuration: colour and marker; SNR: style
             ax.step(
                 xs,
                 100 * ys,
                 where="post",
-                color=f"C{k % 10}",
+                color=style["color"],
+                marker=style["marker"],
+                ms=4,
+                mfc="none" if j else style["color"],
+                markevery=slice(1, -1),  # on each run's step, not on the frame's ends
                 ls=styles[j % len(styles)],
                 label=f"{label}, {snr_text}",
             )
@@ -168,6 +176,6 @@ def success_ecdf_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
     ax.set_ylabel("runs within tolerance [%]")
     ax.set_ylim(-3, 103)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the curves
     ax.set_title(title or "success vs measurements (ECDF over all runs)")
     return fig
