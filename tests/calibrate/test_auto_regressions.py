@@ -3,36 +3,49 @@
 As scipy locks its optimizers' function-evaluation counts: a change to ``auto`` may make
 these counts smaller, never larger, without updating this file and the benchmark pages.
 The counts are the measurements after which the estimate stays within 0.1° of the true
-optimum (every later iterate included), measured when the test was written.
+optimum (every later iterate included).
+
+One seed's count is not a stable lock: between two fresh installs of the same pinned
+requirements, seed 5 went from 60 to 72 measurements and seed 3 from 64 to 54 (a last-bit
+difference in a least-squares fit sends the search down another path).  The lock is
+therefore on the median over twelve seeds, which moved by less than that; every run must
+also reach 0.1° within the budget.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from echocal import angle_between, tilt_normal
 from echocal.calibrate import calibrate
 from echocal.measurement import SourceObjective
 from echocal.setups import setup_with_overrides
 
-# seed → measurements to stay within 0.1° (locked: must not grow)
-FAR_START_COUNTS = {3: 64, 5: 60}
+SEEDS = range(12)
+LOCKED_MEDIAN = 58
+"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 56; must not grow)."""
+BUDGET = 80
 
 
-@pytest.mark.parametrize(("seed", "locked"), sorted(FAR_START_COUNTS.items()))
-def test_auto_from_a_far_start_on_the_wave_model(seed: int, locked: int) -> None:
+def _measurements_to_stay_within(seed: int, tolerance: float = 0.1) -> int | None:
     """``immersion-5mhz`` (12.7 mm, 5 MHz, wave model), 30 dB, start (8, −5)° off the true
-    optimum in tilt (9.4°), budget 80."""
+    optimum in tilt (9.4°): the measurements after which every iterate is within
+    ``tolerance`` [deg], or None."""
     setup = setup_with_overrides("immersion-5mhz", snr_db=30.0, seed=seed)
     position = setup.reference_position
     truth = np.array(setup.true_optimum(position, parameterization="tilt"))
     objective = SourceObjective(setup, position, parameterization="tilt")
     x0 = tuple(truth + np.array([8.0, -5.0]))
-    result = calibrate(objective, method="auto", x0=x0, budget=80, rng=seed)
+    result = calibrate(objective, method="auto", x0=x0, budget=BUDGET, rng=seed)
+    assert result.n_measurements == objective.n_measurements <= BUDGET  # every one counted
     errors = [angle_between(tilt_normal(*x), tilt_normal(*truth)) for x in result.iterates]
     counts = list(result.iteration_measurements)
-    reached = next((counts[i] for i in range(len(errors)) if max(errors[i:]) < 0.1), None)
-    assert result.n_measurements == objective.n_measurements <= 80  # every one counted
-    assert reached is not None, f"never stayed within 0.1° (final {errors[-1]:.3f}°)"
-    assert reached <= locked, f"{reached} measurements to 0.1°, locked at {locked}"
+    return next((counts[i] for i in range(len(errors)) if max(errors[i:]) < tolerance), None)
+
+
+def test_auto_from_a_far_start_on_the_wave_model() -> None:
+    reached = {seed: _measurements_to_stay_within(seed) for seed in SEEDS}
+    missed = [seed for seed, n in reached.items() if n is None]
+    assert not missed, f"seeds {missed} never stayed within 0.1° in {BUDGET} measurements"
+    median = float(np.median(list(reached.values())))
+    assert median <= LOCKED_MEDIAN, f"median {median} measurements to 0.1°: {reached}"
