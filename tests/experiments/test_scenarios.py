@@ -179,4 +179,29 @@ def test_wall_echoes_compares_front_and_back_wall_calibration(results):
     assert 0.3 < back < 1.0
     claims = {f.group: f for f in result.findings}
     assert "lobes" in claims and f"{back:.3f}" in claims["lobes"].evidence
+    # the alignment claim counts the runs that ended without a confirmed echo
+    both = next(f for f in result.findings if "aligns" in f.claim)
+    assert "0 of" in both.evidence and both.agrees
     assert (result.out_dir / "ascan.png").stat().st_size > 1000
+
+
+def test_wall_echoes_alignment_claim_fails_when_a_run_ends_without_an_echo():
+    """A median within 0.05° is not enough: one back-wall run that ended 2.9° off without a
+    confirmed echo (status 9, measured once in the full run) makes the claim disagree."""
+    from echocal.experiments.wall_scenario import _findings
+
+    rows = [
+        {"group": f"{gate} gate", "final_error_deg": err, "n_measurements": n, "status": st}
+        for gate, err, n, st in [
+            ("front-wall", 0.002, 24, 7),
+            ("front-wall", 0.003, 25, 7),
+            ("front-wall", 0.004, 23, 7),
+            ("back-wall", 0.010, 30, 7),
+            ("back-wall", 2.938, 68, 9),
+            ("back-wall", 0.012, 34, 7),
+        ]
+    ]
+    widths = {"front-wall": 0.528, "back-wall": 0.593}
+    claim = _findings(pd.DataFrame(), widths, pd.DataFrame(rows))[0]
+    assert not claim.agrees
+    assert "1 of 3 (back wall)" in claim.evidence and "2.9380°" in claim.evidence

@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from echocal.calibrate.result import SUCCESS_STATUSES
 from echocal.experiments._findings import Finding
 from echocal.experiments._output import write_figure, write_table
 from echocal.experiments._runs import (
@@ -143,17 +144,22 @@ def _findings(summary: pd.DataFrame, widths: dict[str, float], runs: pd.DataFram
     errors = {g: float(by_gate[g]["final_error_deg"].median()) for g in GATES}
     worst = {g: float(by_gate[g]["final_error_deg"].max()) for g in GATES}
     counts = {g: float(by_gate[g]["n_measurements"].median()) for g in GATES}
+    failed = {g: int((~by_gate[g]["status"].isin(SUCCESS_STATUSES)).sum()) for g in GATES}
+    n_runs = {g: len(by_gate[g]) for g in GATES}
     front, back = widths["front-wall"], widths["back-wall"]
     return [
         Finding(
             claim="On a level plate, calibrating on the back-wall echo aligns the beam as well "
             "as calibrating on the front wall: both find normal incidence.",
             criterion="median final error < 0.05° in both gates (each judged against the "
-            "optimum of its own gated echo)",
-            agrees=bool(max(errors.values()) < 0.05),
+            "optimum of its own gated echo), and every run ends on a confirmed echo (a "
+            "success status)",
+            agrees=bool(max(errors.values()) < 0.05 and not any(failed.values())),
             evidence=f"median error {errors['front-wall']:.4f}° (front wall) and "
             f"{errors['back-wall']:.4f}° (back wall); worst {worst['front-wall']:.4f}° and "
-            f"{worst['back-wall']:.4f}°",
+            f"{worst['back-wall']:.4f}°; runs without a confirmed echo "
+            f"{failed['front-wall']} of {n_runs['front-wall']} (front wall) and "
+            f"{failed['back-wall']} of {n_runs['back-wall']} (back wall)",
             group="both gates",
         ),
         Finding(
