@@ -241,7 +241,15 @@ def test_record_interrupted_then_resumed(tiny: Path, tmp_path: Path, capsys, mon
 def test_instrument_server_serves_the_setup_and_stops_on_ctrl_c(tiny: Path) -> None:
     command = [sys.executable, "-m", "echocal.cli", "instrument-server"]
     command += ["--setup", str(tiny), "--port", "0", "--seed", "9"]
-    proc = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    # a child inherits an ignored SIGINT (a test runner's worker started in the background
+    # has SIGINT ignored), and Python then installs no Ctrl-C handler: the server never saw
+    # the signal and the test hung.  Ctrl-C as a terminal sends it: the default handling.
+    proc = subprocess.Popen(
+        command,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     try:
         line = proc.stderr.readline()
         match = re.search(r"listening on (\S+):(\d+)", line)
@@ -254,7 +262,7 @@ def test_instrument_server_serves_the_setup_and_stops_on_ctrl_c(tiny: Path) -> N
         np.testing.assert_array_equal(scan.samples, load_setup(tiny, seed=9).measure(pose).samples)
     finally:
         proc.send_signal(signal.SIGINT)
-        _, rest = proc.communicate(timeout=60)  # generous: a loaded CI machine starts slowly
+        _, rest = proc.communicate(timeout=30)
     assert proc.returncode == 0
     assert "stopped" in rest and "Traceback" not in rest
 
