@@ -7,9 +7,10 @@
   errors against the truth when known, and summaries; NetCDF in and out.
 """
 
+from echocal.scanning.checks import check_scan
 from echocal.scanning.dataset import FORMAT, STATUS, SurfaceScan, surface_dataset
 from echocal.scanning.grid import ScanGrid, axis_values
-from echocal.scanning.scan import CONVERGED_STATUSES, check_scan, echo_snr, scan_surface
+from echocal.scanning.scan import CONVERGED_STATUSES, echo_snr, scan_surface
 from echocal.scanning.store import PointStore, partial_path
 
 __all__ = [

@@ -55,20 +55,20 @@ from echocal._rng import RngLike, as_generator
 from echocal._validate import (
     finite_array,
     nonnegative_float,
-    one_of,
     positive_float,
     positive_int,
 )
-from echocal.calibrate import build_optimizer, calibrate, method_names
+from echocal.calibrate import calibrate
 from echocal.calibrate.result import NO_ECHO_STATUSES, SUCCESS_STATUSES
 from echocal.constants import SOUND_SPEED_WATER
-from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
-from echocal.geometry import PARAMETERIZATIONS
+from echocal.errors import DataFileError, EchocalError
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.objective import SourceObjective
 from echocal.provenance import stamped
+from echocal.scanning.checks import check_scan
 from echocal.scanning.dataset import STATUS, SurfaceScan, surface_dataset
 from echocal.scanning.grid import ScanGrid
+from echocal.scanning.neighbours import attempt_score, demote_weak, predict, suspicious_points
 from echocal.scanning.store import (
     PointStore,
     partial_path,
@@ -80,7 +80,7 @@ from echocal.signal.gates import TimeGate
 from echocal.signal.thickness import wall_thickness
 from echocal.specimen import Specimen
 
-__all__ = ["CONVERGED_STATUSES", "check_scan", "echo_snr", "scan_surface"]
+__all__ = ["CONVERGED_STATUSES", "echo_snr", "scan_surface"]
 
 _NOISE_STREAM = 7
 """Entropy word that separates a point's noise stream from its calibration's."""
@@ -108,81 +108,6 @@ def echo_snr(samples: ArrayLike, window: RecordingWindow, pulse: Pulse) -> Float
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(peak > 0, peak / median, np.nan)
     return ratio
-
-
-def _predict(
-    done: Mapping[tuple[int, int], FloatArray],
-    here: FloatArray,
-    xy: Mapping[tuple[int, int], FloatArray],
-    radius: float,
-) -> FloatArray | None:
-    """Warm start [deg] (2,) at ``here`` [m] (2,) from found neighbours within ``radius``:
-    a least-squares plane a + g·(p − centroid) (minimum-norm where the neighbours are
-    collinear or alone), so a steady slope of the normal along a row is extrapolated."""
-    keys = [k for k in done if np.hypot(*(xy[k] - here)) <= radius]
-    if not keys:
-        return None
-    pos = np.array([xy[k] for k in keys])
-    val = np.array([done[k] for k in keys])
-    centre = pos.mean(axis=0)
-    scale = max(radius, 1e-12)
-    design = np.column_stack([np.ones(len(keys)), (pos - centre) / scale])
-    coef, *_ = np.linalg.lstsq(design, val, rcond=1e-6)
-    at = np.concatenate([[1.0], (here - centre) / scale])
-    return at @ coef
-
-
-def _score(rec: Mapping[str, Any]) -> tuple[bool, float]:
-    """Which of two attempts at a point to keep: a found one, then the stronger echo."""
-    snr = rec.get("snr")
-    return rec["status"] == 0, float(snr) if snr is not None and np.isfinite(snr) else -np.inf
-
-
-def _relative_check(rec: dict[str, Any], ctx: _Context, snr_ref: float) -> dict[str, Any]:
-    """Demote a found point whose echo is far weaker than the scan's strong echoes.
-
-    Strong: the scan's 90th-percentile echo ``snr_ref``.
-    """
-    if rec["status"] == 0 and rec["snr"] < ctx.relative_snr * snr_ref:
-        rec = {
-            **rec,
-            "status": STATUS["weak-echo"],
-            "message": f"echo {rec['snr']:.3g} < {ctx.relative_snr:g} x the scan's "
-            f"90th-percentile echo {snr_ref:.3g}: a side lobe or a partial footprint",
-        }
-    return rec
-
-
-def _suspicious(
-    records: Mapping[tuple[int, int], Mapping[str, Any]],
-    found: Mapping[tuple[int, int], FloatArray],
-    xy: FloatArray,
-    radius: float,
-    ctx: _Context,
-) -> tuple[set[tuple[int, int]], float]:
-    """Points worth a second, warm look, and the 90th-percentile echo of the found points.
-
-    * missing after a cold start (no neighbour to start from then);
-    * found with an echo below ``relative_snr`` × the 90th-percentile echo (a side lobe);
-    * found more than ``outlier`` [deg] away from the plane through its trusted
-      neighbours (converged to another peak).
-    """
-    snrs = np.array([records[k]["snr"] for k in found], dtype=np.float64)
-    snrs = snrs[np.isfinite(snrs)]
-    # the reference is the 90th percentile, not the median: where most points locked
-    # onto side lobes (cold starts far from the normal) their median is a side lobe's
-    snr_ref = float(np.percentile(snrs, 90)) if snrs.size else np.inf
-    weak = {k for k in found if not records[k]["snr"] >= ctx.relative_snr * snr_ref}
-    good = {k: v for k, v in found.items() if k not in weak}
-    pos = {k: xy[k] for k in good}
-    outliers = set()
-    for key, est in good.items():
-        others = {k: v for k, v in good.items() if k != key}
-        pred = _predict(others, xy[key], pos, radius)
-        if pred is not None and np.hypot(*(pred - est)) > ctx.outlier:
-            outliers.add(key)
-    cold = {k for k, r in records.items() if r["status"] != 0 and not r.get("warm")}
-    return weak | outliers | cold, snr_ref
 
 
 def _settings(source: MeasurementSource, grid: ScanGrid, options: dict[str, Any]) -> dict[str, Any]:
@@ -325,122 +250,6 @@ def _measure_point(
                 )
     record["wall_time"] = time.perf_counter() - t0
     return record
-
-
-def check_scan(
-    source: MeasurementSource,
-    grid: ScanGrid,
-    *,
-    method: str = "auto",
-    parameterization: str = "tilt",
-    budget_per_point: int = 80,
-    tof_repeats: int = 2,
-    x0: ArrayLike = (0.0, 0.0),
-    pulse: Pulse | None = None,
-    method_options: Mapping[str, Any] | None = None,
-) -> int:
-    """Refuse a scan whose every point would fail, before anything is measured or written.
-
-    Checks the method and parameterization names, the probe heights against the
-    positioner's z limits, that some grid point lies within its x/y limits (a point
-    outside them is a per-point ``source-error``, as at a part's edge), and that
-    ``budget_per_point`` covers one iteration of ``method`` (with ``method_options``)
-    plus the ``tof_repeats`` time-of-flight A-scans.  On a simulator, also that the
-    first measurement (at ``x0``) does not fail at every grid point — the probe inside
-    the specimen, a window that cannot contain the echo.  Raises
-    :class:`~echocal.errors.EchocalValueError` or :class:`~echocal.errors.LimitError`
-    naming the setting and what is allowed.  Returns the fewest measurements one attempt
-    at a point needs (that iteration and the time-of-flight A-scans).
-    """
-    one_of("parameterization", parameterization, PARAMETERIZATIONS)
-    one_of("method", method, method_names())
-    budget = positive_int("budget_per_point", budget_per_point)
-    tof_repeats = positive_int("tof_repeats", tof_repeats)
-    start = finite_array("x0", x0)
-    if start.shape != (2,):
-        raise EchocalValueError(f"x0 must be 2 angles [deg], shape (2,); got shape {start.shape}")
-    limits = source.limits
-    heights = grid.heights()
-    (z_lo, z_hi), (x_lo, x_hi), (y_lo, y_hi) = limits.z, limits.x, limits.y
-    low, high = heights < z_lo, heights > z_hi
-    if np.any(low | high):
-        z = float(heights[low | high][0])
-        raise LimitError(
-            f"probe height z={z * 1e3:g} mm is outside the positioner's z limits "
-            f"[{z_lo * 1e3:g}, {z_hi * 1e3:g}] mm ({np.count_nonzero(low | high)} of "
-            f"{grid.size} points): every such point would fail; choose a stand-off "
-            "within the limits (--z)"
-        )
-    positions = grid.positions().reshape(-1, 3)
-    reach = (
-        (positions[:, 0] >= x_lo)
-        & (positions[:, 0] <= x_hi)
-        & (positions[:, 1] >= y_lo)
-        & (positions[:, 1] <= y_hi)
-    )
-    if not np.any(reach):
-        raise LimitError(
-            f"no grid point lies within the positioner's limits x in [{x_lo * 1e3:g}, "
-            f"{x_hi * 1e3:g}] mm, y in [{y_lo * 1e3:g}, {y_hi * 1e3:g}] mm; move the grid "
-            "(--grid)"
-        )
-    objective = SourceObjective(
-        source, positions[int(np.argmax(reach))], parameterization=parameterization, pulse=pulse
-    )
-    start = np.clip(start, objective.bounds[:, 0], objective.bounds[:, 1])
-    try:
-        opt, _ = build_optimizer(
-            objective,
-            method,
-            start,
-            rng=np.random.default_rng(0),
-            options=dict(method_options or {}),
-        )
-    except EchocalError:
-        raise
-    except Exception as exc:  # a method's own check that is not an echocal error
-        raise EchocalValueError(
-            f"method_options for method {method!r}: {type(exc).__name__}: {exc}"
-        ) from None
-    _check_echo_possible(source, positions[reach], start, parameterization)
-    need = objective.cost(opt.min_budget)
-    if budget < need + tof_repeats:
-        raise EchocalValueError(
-            f"budget_per_point={budget} is too small: method {method!r} needs {need} "
-            f"measurements for one iteration, plus {tof_repeats} time-of-flight A-scans; "
-            f"allowed: budget_per_point >= {need + tof_repeats} (--budget-per-point)"
-        )
-    return need + tof_repeats
-
-
-def _check_echo_possible(
-    source: MeasurementSource, positions: FloatArray, start: FloatArray, parameterization: str
-) -> None:
-    """Refuse a scan whose every point fails its first measurement (simulators only).
-
-    Each point's calibration starts cold at ``start`` [deg] until a neighbour is found, so
-    when the simulation at ``start`` fails at every reachable position [m] ``(N, 3)`` —
-    the probe inside the specimen, a window that cannot contain the echo — no point can
-    be found.  The centre position is checked first; only when it fails are the others.
-    """
-    from echocal.geometry import pose_from_angles
-    from echocal.measurement.recording import simulation_errors
-
-    def error_at(k: int) -> str | None:
-        pose = pose_from_angles(positions[k], float(start[0]), float(start[1]), parameterization)
-        (error,) = simulation_errors(source, [pose])
-        return error
-
-    centre = int(np.argmin(np.sum((positions - positions.mean(axis=0)) ** 2, axis=1)))
-    error = error_at(centre)
-    if error is None or any(error_at(k) is None for k in range(len(positions)) if k != centre):
-        return
-    x, y, z = (1e3 * v for v in positions[centre])
-    raise EchocalValueError(
-        f"every grid point would fail ({len(positions)} of {len(positions)}), e.g. at "
-        f"({x:g}, {y:g}, {z:g}) mm: {error}; choose another stand-off (--z), grid (--grid) "
-        "or setup"
-    )
 
 
 def scan_surface(
@@ -635,7 +444,7 @@ def scan_surface(
                 continue
             guess = None
             if warm_start:
-                guess = _predict(found, xy[key], {k: xy[k] for k in found}, radius)
+                guess = predict(found, xy[key], {k: xy[k] for k in found}, radius)
             guess = ctx.x0 if guess is None else guess
             rec = _measure_point(ctx, positions[key], guess, [int(seeds[i])])
             rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and guess is not ctx.x0))
@@ -648,7 +457,9 @@ def scan_surface(
             if on_point is not None:
                 on_point(len(records), len(order))
         # second look at suspicious points, warm from their trusted neighbours
-        retry, snr_ref = _suspicious(records, found, xy, radius, ctx)
+        retry, snr_ref = suspicious_points(
+            records, found, xy, radius, relative_snr=ctx.relative_snr, outlier=ctx.outlier
+        )
         if not warm_start:  # a cold scan takes no advice from its neighbours
             retry = set()
         # a point already retried (before an interruption) keeps its final record and
@@ -672,7 +483,7 @@ def scan_surface(
             if left < ctx.min_attempt:
                 continue
             others = {k: v for k, v in found.items() if k != key}
-            guess = _predict(others, xy[key], {k: xy[k] for k in others}, radius)
+            guess = predict(others, xy[key], {k: xy[k] for k in others}, radius)
             new = _measure_point(
                 ctx,
                 positions[key],
@@ -681,17 +492,17 @@ def scan_surface(
                 left,
             )
             new["warm"] = True
-            best = new if _score(new) >= _score(old) else old
+            best = new if attempt_score(new) >= attempt_score(old) else old
             rec = {**best, "iy": key[0], "ix": key[1], "order": i, "retried": True}
             rec["n_measurements"] = int(old["n_measurements"]) + int(new["n_measurements"])
-            rec = _relative_check(rec, ctx, snr_ref)
+            rec = demote_weak(rec, ctx.relative_snr, snr_ref)
             records[key] = rec
             if rec["status"] == 0:
                 found[key] = np.array([rec["a"], rec["b"]])
             if store is not None:
                 store.append(rec)
         for key in records:  # a found echo far below the strong ones is not trusted
-            records[key] = _relative_check(records[key], ctx, snr_ref)
+            records[key] = demote_weak(records[key], ctx.relative_snr, snr_ref)
     wall = time.perf_counter() - t_start
     if truth is None:
         truth = getattr(source, "specimen", None)
