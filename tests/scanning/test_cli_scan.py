@@ -254,3 +254,29 @@ def test_a_scan_that_finds_nothing_prints_no_numpy_warnings(tmp_path, capsys, mo
     assert "0 found" in err  # the case of the defect: nothing found, summaries of nothing
     assert "Mean of empty slice" not in err and "invalid value" not in err
     assert "warning" not in err.lower()
+
+
+def test_the_cli_checks_a_scan_once(tmp_path, capsys, monkeypatch):
+    """``echocal scan`` refuses a bad scan before it creates --out, and hands its check's
+    result to scan_surface, which does not check again (with --cold: once, not three
+    times)."""
+    import echocal.scanning as scanning
+
+    calls = []
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return check_scan(*args, **kwargs)
+
+    monkeypatch.setattr(scanning, "check_scan", counting)
+    monkeypatch.setattr(scan_module, "check_scan", counting)
+    out = tmp_path / "out"
+    argv = [*BASE, "--grid", "0:0:1,0:0:1", "--out", str(out), "--seed", "1", "--cold"]
+    assert run_main(argv, capsys, monkeypatch)[0] == 0
+    assert (out / "scan.nc").exists() and len(calls) == 1
+    # the API alone still checks
+    calls.clear()
+    setup = load_setup("scan-5mhz", seed=1)
+    with pytest.raises(LimitError):
+        scan_surface(setup, ScanGrid(x=(0.0,), y=(0.0,), z=1.0), progress=False)
+    assert len(calls) == 1

@@ -171,7 +171,8 @@ def register(app: typer.Typer) -> None:
                 gate=None if chosen is None else chosen.describe(),
                 method={"name": method, "budget_per_point": budget_per_point, "z_m": scan_grid.z},
             )
-            check_scan(
+            # refused before the output folder exists; scan_surface is told, not re-run
+            prechecked = check_scan(
                 source,
                 scan_grid,
                 method=method,
@@ -179,6 +180,7 @@ def register(app: typer.Typer) -> None:
                 pulse=extra.get("pulse"),
             )
             options = {
+                "prechecked": prechecked,
                 "method": method,
                 "budget_per_point": budget_per_point,
                 "rng": effective,

@@ -281,6 +281,7 @@ def scan_surface(
     log: Callable[[str], None] | None = None,
     gate: TimeGate | None = None,
     longitudinal_speed: float | None = None,
+    prechecked: int | None = None,
 ) -> SurfaceScan:
     """Scan ``grid`` with ``source``: surface normal and distance at every point.
 
@@ -334,21 +335,28 @@ def scan_surface(
         and the scan a ``thickness`` map (with ``thickness_error`` against the source's
         own ``thickness`` when it has one, e.g. a simulated plate).
 
+    prechecked : what :func:`check_scan` returned for this source, grid and these same
+        settings, when the caller has already run it (the CLI does, before it creates the
+        output folder); None: the check runs here.
+
     Notes
     -----
     Whole-run mistakes (:func:`check_scan`) are refused before anything is written.
     """
-    min_attempt = check_scan(
-        source,
-        grid,
-        method=method,
-        parameterization=parameterization,
-        budget_per_point=budget_per_point,
-        tof_repeats=tof_repeats,
-        x0=x0,
-        pulse=pulse,
-        method_options=method_options,
-    )
+    min_attempt = prechecked
+    if min_attempt is None:
+        min_attempt = check_scan(
+            source,
+            grid,
+            method=method,
+            parameterization=parameterization,
+            budget_per_point=budget_per_point,
+            tof_repeats=tof_repeats,
+            x0=x0,
+            pulse=pulse,
+            method_options=method_options,
+        )
+    min_attempt = positive_int("prechecked", min_attempt)
     budget = int(budget_per_point)
     tof_repeats = int(tof_repeats)
     x0 = finite_array("x0", x0)
