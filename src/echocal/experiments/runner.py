@@ -23,7 +23,8 @@ import numpy as np
 import pandas as pd
 
 from echocal.errors import EchocalError
-from echocal.experiments.sweep import RunCase, _thawed, offset_start
+from echocal.experiments.sweep import RunCase
+from echocal.experiments.sweep_values import _thawed, offset_start
 
 __all__ = ["HISTORY_COLUMNS", "RUN_COLUMNS", "history_frame", "run_case", "runs_frame"]
 

@@ -32,23 +32,30 @@ from __future__ import annotations
 
 import hashlib
 import importlib.resources
-import itertools
 import json
 import tomllib
-import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
 from pydantic import ValidationError
 
 from echocal.errors import ConfigError, DataFileError, EchocalError, UnknownNameError
+from echocal.experiments.sweep_checks import run_problems
 from echocal.experiments.sweep_schema import (
     MAX_SWEEP_RUNS,
     MethodSpec,
+    SweepSalvage,
     SweepSpec,
     X0Spec,
-    _as_list,
+)
+from echocal.experiments.sweep_values import (
+    _derive_seed,
+    _grid,
+    _num,
+    _plain,
+    _x0_seed,
+    offset_start,
 )
 from echocal.setups import builtin_setup_names, load_setup_config
 from echocal.setups.schema import _format_errors
@@ -142,46 +149,6 @@ class RunCase:
         return _x0_seed(self.sweep_seed, self.x0_index, self.seed)
 
 
-def _x0_seed(sweep_seed: int, x0_index: int, seed: int) -> int:
-    return _derive_seed(sweep_seed, f"x0/{x0_index}/seed={seed}")
-
-
-def offset_start(x0_seed: int, offset: tuple[float, float], truth: Any) -> Any:
-    """[deg] shape (2,): the random start of an ``x0.offset`` run, not clipped — a distance
-    drawn uniformly from ``offset`` [deg] ``(lo, hi)`` in a uniform direction from ``truth``
-    [deg] shape (2,), with the run's ``x0_seed``."""
-    import numpy as np
-
-    rng = np.random.default_rng(x0_seed)
-    distance = rng.uniform(*offset)
-    direction = rng.uniform(0.0, 2.0 * np.pi)
-    return np.asarray(truth, dtype=np.float64) + distance * np.array(
-        [np.cos(direction), np.sin(direction)]
-    )
-
-
-def _derive_seed(base: int, text: str) -> int:
-    digest = hashlib.sha256(f"{base}|{text}".encode()).digest()
-    return int.from_bytes(digest[:8], "little") >> 1  # 63 bits: fits int64 columns
-
-
-def _num(value: float) -> str:
-    return json.dumps(int(value) if float(value).is_integer() else float(value))
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    return value
-
-
-def _frozen(value: Any) -> Any:
-    return tuple(_frozen(v) for v in value) if isinstance(value, list | tuple) else value
-
-
-# ---------------------------------------------------------------- reading and checking
 def builtin_sweep_names() -> tuple[str, ...]:
     """Names of the sweeps shipped with echocal (``echocal/data/sweeps/*.toml``)."""
     folder = importlib.resources.files("echocal") / "data" / "sweeps"
@@ -243,7 +210,7 @@ def load_sweep(
     problems: list[str] = []
     try:
         spec: SweepSpec | None = SweepSpec.model_validate(raw)
-        part = _Partial(index=list(range(len(spec.methods))))  # type: ignore[union-attr]
+        part = SweepSalvage(index=list(range(len(spec.methods))))  # type: ignore[union-attr]
     except ValidationError as exc:
         problems += _format_errors(exc, hint="see docs/sweeps.md")
         spec, part = _salvage(raw, exc)
@@ -265,24 +232,10 @@ def load_sweep(
     return resolved
 
 
-@dataclass
-class _Partial:
-    """What of a sweep could be validated (private): ``index`` maps the kept methods to
-    their entries in the file; ``dropped`` names the fields (``"x0.offset"`` for a
-    sub-field) whose value was invalid and replaced by its default for the later checks."""
-
-    index: list[int]
-    dropped: set[str] = field(default_factory=set)
-
-    def touched(self, name: str) -> bool:
-        """True when ``name`` or one of its sub-fields was dropped."""
-        return any(d == name or d.startswith(name + ".") for d in self.dropped)
-
-
-def _salvage(raw: Any, exc: ValidationError) -> tuple[SweepSpec | None, _Partial]:
+def _salvage(raw: Any, exc: ValidationError) -> tuple[SweepSpec | None, SweepSalvage]:
     """The sweep without its invalid values, so that the checks beyond the schema can report
     their problems in the same error (a bad budget does not hide a misspelt method)."""
-    part = _Partial(index=[])
+    part = SweepSalvage(index=[])
     if not isinstance(raw, dict):
         return None, part
     data = dict(raw)
@@ -319,7 +272,7 @@ def _raise(where: str, problems: list[str]) -> NoReturn:
     raise ConfigError(f"{where}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
 
 
-def _check(spec: SweepSpec, part: _Partial) -> tuple[list[str], set[int]]:
+def _check(spec: SweepSpec, part: SweepSalvage) -> tuple[list[str], set[int]]:
     """Problems pydantic cannot see: methods, options, presets and empty grids.
 
     Returns the problems and the positions (in ``spec.methods``) of the methods with one.
@@ -399,203 +352,6 @@ def _resolve(spec: SweepSpec, base: Path) -> SweepSpec:
     return spec.model_copy(update=update)
 
 
-class _Reached(Exception):
-    """A dry run got as far as its first measurement: the run's configuration is valid."""
-
-
-def run_problems(
-    spec: SweepSpec,
-    *,
-    _part: _Partial | None = None,
-    _skip: set[int] | frozenset[int] = frozenset(),
-) -> list[str]:
-    """Problems that would make runs of a resolved sweep fail, found without measuring.
-
-    Builds the setup at every SNR of the sweep, checks the position against the
-    positioner's limits and every start against the angle bounds (the explicit ones and
-    every seed's random ``x0.offset`` start, drawn as the runs draw it), and runs
-    :func:`~echocal.calibrate.calibrate` for every method and option combination up to
-    (not including) its first measurement, so that what ``calibrate`` refuses before
-    measuring — option values the method rejects, a budget below what one iteration of
-    the method needs — is reported here, one line each with its field path.
-    """
-    import numpy as np
-
-    from echocal.calibrate import calibrate
-    from echocal.measurement.objective import SourceObjective
-    from echocal.setups import setup_with_overrides
-
-    part = _part or _Partial(index=list(range(len(spec.methods))))
-    problems: list[str] = []
-    setups = []
-    for k, snr in enumerate(spec.snr_db or [None]):
-        try:
-            setups.append(setup_with_overrides(spec.setup, snr_db=snr, seed=0))
-        except EchocalError as exc:
-            problems.append(f"snr_db.{k}: the setup at {snr} dB cannot be built: {exc}")
-    if not setups:
-        return problems
-    virtual = setups[0]
-    position = np.asarray(spec.position, dtype=np.float64)
-    gate = None
-    if spec.gate is not None:
-        from echocal.signal.gates import setup_gate
-
-        try:
-            gate = setup_gate(spec.gate, virtual, field="gate")
-        except EchocalError as exc:
-            problems.append(str(exc))
-    limits = virtual.limits
-    outside = [
-        f"{name}={value * 1e3:g} mm outside [{low * 1e3:g}, {high * 1e3:g}] mm"
-        for name, value in zip("xyz", position, strict=True)
-        for low, high in [getattr(limits, name)]
-        if not low <= value <= high
-    ]
-    if outside and not part.touched("position"):
-        problems.append(
-            f"position: outside the positioner limits of setup {spec.setup!r}: "
-            f"{'; '.join(outside)}; choose a reachable position"
-        )
-    if not outside and not part.touched("position"):
-        if (problem := _echo_problem(virtual, position)) is not None:
-            problems.append(f"position: {problem}")
-
-    class DryRun(SourceObjective):
-        def _evaluate(self, points: Any) -> Any:
-            raise _Reached
-
-    def objective() -> SourceObjective:
-        return DryRun(virtual, position, parameterization=spec.parameterization, gate=gate)
-
-    bounds = objective().bounds
-    starts = []
-    if not part.touched("parameterization"):
-        for j, point in enumerate(spec.x0.points):
-            try:
-                starts.append(objective().check_point("x0", point))
-            except EchocalError as exc:
-                problems.append(f"x0.points.{j}: {exc}; choose a start inside the bounds")
-    if spec.x0.offset is not None and not (outside or part.touched("parameterization")):
-        names = objective().names
-        if (problem := _offset_problem(spec, virtual, position, bounds, names)) is not None:
-            problems.append(problem)
-    start = starts[0] if starts else bounds.mean(axis=1)
-    for i, method in enumerate(spec.methods):
-        if i in _skip:
-            continue
-        seen: set[str] = set()
-        for params in _grid(method.options):
-            options = {k: _thawed(v) for k, v in params}
-            label = method.label or method.name
-            if params:
-                label += " " + json.dumps(_plain(options), sort_keys=True)
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    calibrate(
-                        objective(),
-                        method.name,
-                        start,
-                        budget=None if part.touched("budget") else spec.budget,
-                        max_iter=spec.max_iter,
-                        xtol=spec.xtol,
-                        settle=spec.settle,
-                        rng=0,
-                        preset=method.preset,
-                        **options,
-                    )
-            except _Reached:
-                continue
-            except EchocalError as exc:
-                message = str(exc)
-            except Exception as exc:  # a method's own check that is not an echocal error
-                message = f"{type(exc).__name__}: {exc}"
-            if message not in seen:
-                seen.add(message)
-                problems.append(f"methods.{part.index[i]} ({label}): {message}")
-    return problems
-
-
-def _offset_problem(
-    spec: SweepSpec, virtual: Any, position: Any, bounds: Any, names: tuple[str, str]
-) -> str | None:
-    """Why the random starts ``truth + offset`` of ``spec.x0.offset`` cannot all be run
-    (None if every seed's start lies inside the angle ``bounds`` [deg], shape (2, 2)).
-
-    The starts are the runs' own: the same truth and the same draws as
-    :func:`~echocal.experiments.runner.run_case`, one per seed, so a sweep that passes runs
-    exactly what it says (a start outside would be clipped to the nearest bound).
-    """
-    import numpy as np
-
-    lo, hi = spec.x0.offset  # type: ignore[misc]
-    if not 0 <= lo <= hi:
-        return None  # reported by the schema check
-    try:
-        truth = np.array(virtual.true_optimum(position, parameterization=spec.parameterization))
-    except EchocalError:
-        return None  # every run fails there: the position's problem, reported as such
-    index = len(spec.x0.points)  # the offset is the last start entry (see expand)
-    seeds = spec.seed_list
-    drawn = {
-        seed: offset_start(_x0_seed(spec.seed, index, seed), (lo, hi), truth) for seed in seeds
-    }
-    bad = {
-        seed: x0 for seed, x0 in drawn.items() if np.any((x0 < bounds[:, 0]) | (x0 > bounds[:, 1]))
-    }
-    if not bad:
-        return None
-    shown = ", ".join(
-        f"seed {seed} x0=({x0[0]:.2f}, {x0[1]:.2f})" for seed, x0 in list(bad.items())[:3]
-    )
-    more = f" and {len(bad) - 3} more" if len(bad) > 3 else ""
-    margin = float(np.min(np.abs(bounds - truth[:, None])))  # the truth to the nearest bound
-    within = (
-        f"offsets up to {margin:.2f} deg keep every start inside"
-        if np.all((truth >= bounds[:, 0]) & (truth <= bounds[:, 1]))
-        else "the truth itself is outside the bounds"
-    )
-    return (
-        f"x0.offset: [{lo:g}, {hi:g}] deg from the truth ({names[0]}={truth[0]:.2f}, "
-        f"{names[1]}={truth[1]:.2f}) puts {len(bad)} of {len(seeds)} start(s) (x0 = truth + "
-        f"offset, one per seed) outside the bounds {names[0]} in [{bounds[0, 0]:.2f}, "
-        f"{bounds[0, 1]:.2f}], {names[1]} in [{bounds[1, 0]:.2f}, {bounds[1, 1]:.2f}] "
-        f"deg: {shown}{more}; {within}"
-    )
-
-
-def _echo_problem(virtual: Any, position: Any) -> str | None:
-    """Why no run at ``position`` [m] can succeed on ``virtual`` (None if nothing is known).
-
-    Every run computes the true optimum first, a search that starts by simulating the
-    beam towards the nearest surface point (:meth:`VirtualSetup.true_optimum`): a probe
-    inside the specimen, no surface within 60 deg of straight down, or a recording window
-    that cannot contain the echo there fails every run — as ``calibrate`` refuses it.
-    """
-    from echocal.geometry import pose_from_angles
-    from echocal.measurement.recording import simulation_errors
-
-    x, y, z = (1e3 * float(v) for v in position)
-    where = f"({x:g}, {y:g}, {z:g}) mm"
-    try:
-        tilt = virtual.perpendicular_start(position)
-    except EchocalError as exc:
-        return f"every run would fail at {where}: {exc}; choose another position"
-    pose = pose_from_angles(position, float(tilt[0]), float(tilt[1]), "tilt")
-    (error,) = simulation_errors(virtual, [pose])
-    if error is None:
-        return None
-    return (
-        f"every run would fail at {where}: {error}; choose another position or adjust the "
-        "setup (its window or specimen)"
-    )
-
-
-def _thawed(value: Any) -> Any:
-    return [_thawed(v) for v in value] if isinstance(value, tuple) else value
-
-
 def spec_hash(spec: SweepSpec) -> str:
     """SHA-256 of the resolved spec and of the setup file's text (what the results depend on).
 
@@ -615,15 +371,6 @@ def _setup_text(setup: str) -> str:
 
 
 # ---------------------------------------------------------------- expansion
-def _grid(options: dict[str, Any]) -> list[tuple[tuple[str, Any], ...]]:
-    keys = sorted(options)
-    axes = [_as_list(options[k]) for k in keys]
-    return [
-        tuple((k, _frozen(v)) for k, v in zip(keys, combo, strict=True))
-        for combo in itertools.product(*axes)
-    ]
-
-
 def expand(spec: SweepSpec) -> list[RunCase]:
     """Every run of a resolved sweep: methods × grid × SNRs × initial guesses × seeds.
 

@@ -3,13 +3,14 @@ scalar fields (see :mod:`echocal.experiments.sweep` for the file format)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from echocal.setups.fields import Angle, Point
 
-__all__ = ["MAX_SWEEP_RUNS", "MethodSpec", "SweepSpec", "X0Spec"]
+__all__ = ["MAX_SWEEP_RUNS", "MethodSpec", "SweepSalvage", "SweepSpec", "X0Spec"]
 
 _NOISELESS = ("none", "off", "inf")
 
@@ -114,3 +115,17 @@ class SweepSpec(_Model):
     def seed_list(self) -> list[int]:
         """The seeds of the sweep (``seeds = N`` means 0..N-1)."""
         return list(range(self.seeds)) if isinstance(self.seeds, int) else list(self.seeds)
+
+
+@dataclass
+class SweepSalvage:
+    """What of a sweep file could be validated: ``index`` maps the kept methods to
+    their entries in the file; ``dropped`` names the fields (``"x0.offset"`` for a
+    sub-field) whose value was invalid and replaced by its default for the later checks."""
+
+    index: list[int]
+    dropped: set[str] = field(default_factory=set)
+
+    def touched(self, name: str) -> bool:
+        """True when ``name`` or one of its sub-fields was dropped."""
+        return any(d == name or d.startswith(name + ".") for d in self.dropped)
