@@ -330,7 +330,7 @@ def _record(
 def _best_in_gate(path: Path, gate: Any, setup: str | None) -> list[dict[str, Any]]:
     """Each recorded position's best grid pose and its repeat-averaged pseudo-energy inside
     ``gate`` (read back from the replay file: what a calibration on it would see)."""
-    from echocal.cli._calibrate_measured import _replay_pulse
+    from echocal.cli._measured_pulse import _replay_pulse
     from echocal.cli._replay_grid import RecordingMap
     from echocal.measurement.replay import ReplaySource
 
