@@ -14,6 +14,12 @@ from hypothesis import settings
 sys.path.insert(0, str(Path(__file__).parent))  # tests/cli_helpers.py, from any folder
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
+# the detector calibrations the suite makes are cached in its own folder, not the user's
+# (subprocesses of CLI tests inherit it)
+if "ECHOCAL_CACHE_DIR" not in os.environ:
+    import tempfile
+
+    os.environ["ECHOCAL_CACHE_DIR"] = tempfile.mkdtemp(prefix="echocal-test-cache-")
 
 settings.register_profile("echocal", derandomize=True, max_examples=60, deadline=None)
 settings.load_profile("echocal")

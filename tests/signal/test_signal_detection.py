@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
 from echocal.errors import EchocalValueError
 from echocal.signal import RecordingWindow, make_pulse
 from echocal.signal.detection import EchoDetector
+from echocal.signal.pulses import GaborPulse
 
 PULSE = make_pulse("gabor", center_frequency=5e6, bandwidth=60)
 WINDOW = RecordingWindow(fs=100e6, start=0.0, n_samples=2048)
@@ -109,3 +112,37 @@ def test_threshold_amplitude_is_the_echo_detected_at_that_significance(detector,
     assert float(detector.significance(echo, sigma)) == pytest.approx(4.5, abs=0.01)
     assert detector.threshold_amplitude(2 * sigma, 4.5) == pytest.approx(2 * level, rel=1e-9)
     assert detector.threshold_amplitude(0.0, 4.5) == 0.0
+
+
+def test_a_detectors_calibration_is_kept_on_disk(tmp_path, monkeypatch):
+    """The second detector of the same pulse, rate and length — in a new process as in
+    this one — reads its two numbers from the cache instead of filtering 1,024 noise
+    A-scans; a damaged cache file is a miss, and is rewritten."""
+    import echocal.signal.detection as detection
+    from echocal.signal import detector_cache
+
+    monkeypatch.setenv(detector_cache.CACHE_ENV, str(tmp_path))
+    calls = []
+    original = detection.matched_envelope
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(detection, "matched_envelope", counting)
+    pulse = GaborPulse(center_frequency=5e6, bandwidth=60)
+    first = detection.EchoDetector(pulse, 100e6, 512)
+    assert len(calls) == 8  # 1,024 scans in chunks of 128
+    (cached,) = tmp_path.glob("detector-*.json")
+    calls.clear()
+    second = detection.EchoDetector(pulse, 100e6, 512)
+    assert calls == []
+    assert (second.noise_gain, second.n_cells) == (first.noise_gain, first.n_cells)
+    other = detection.EchoDetector(pulse, 100e6, 1024)  # another length: another key
+    assert len(calls) == 8 and len(list(tmp_path.glob("detector-*.json"))) == 2
+    calls.clear()
+    cached.write_text("{not json", encoding="utf-8")
+    third = detection.EchoDetector(pulse, 100e6, 512)
+    assert len(calls) == 8 and third.noise_gain == first.noise_gain
+    assert json.loads(cached.read_text(encoding="utf-8"))["n_cells"] == first.n_cells
+    assert other.n_cells != first.n_cells

@@ -37,6 +37,7 @@ from scipy.special import ndtri
 
 from echocal._validate import nonnegative_float, positive_float
 from echocal.errors import EchocalValueError
+from echocal.signal import detector_cache
 from echocal.signal.processing import _samples, envelope, matched_envelope
 from echocal.signal.pulses import Pulse
 
@@ -49,6 +50,14 @@ _CALIBRATION_SEED = 20261122
 _FAR_TAIL = -650.0  # ln P below which the tail probability leaves double precision
 _FLOOR = -8.2  # ≈ Φ⁻¹ of 1e-16: the least significant value
 _MIN_SAMPLES = 16
+_CALIBRATION_CONSTANTS = {
+    "scans": _CALIBRATION_SCANS,
+    "chunk": _CALIBRATION_CHUNK,
+    "seed": _CALIBRATION_SEED,
+    "method": "rayleigh-power+rice-median/1",
+}
+"""What a calibration's numbers depend on besides the pulse, fs and length: the on-disk
+cache's key (:mod:`echocal.signal.detector_cache`)."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +87,12 @@ class EchoDetector:
         n = self.n_samples
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < _MIN_SAMPLES:
             raise EchocalValueError(f"n_samples must be an integer >= {_MIN_SAMPLES}; got {n!r}")
+        key = detector_cache.cache_key(self.pulse, self.fs, int(n), _CALIBRATION_CONSTANTS)
+        cached = detector_cache.load(key)
+        if cached is not None:  # the same seeded calibration, kept from an earlier process
+            object.__setattr__(self, "noise_gain", cached[0])
+            object.__setattr__(self, "n_cells", cached[1])
+            return
         rng = np.random.default_rng(_CALIBRATION_SEED)
         power, peaks = 0.0, []
         for _ in range(_CALIBRATION_SCANS // _CALIBRATION_CHUNK):
@@ -92,6 +107,7 @@ class EchoDetector:
         cells = float(np.log(2.0) * np.exp(0.5 * median**2) / median)
         object.__setattr__(self, "noise_gain", gain)
         object.__setattr__(self, "n_cells", cells)
+        detector_cache.store(key, gain, cells)
 
     def peak(self, samples: ArrayLike) -> _F64:
         """[a.u.] maximum of the matched-filter envelope of each A-scan, shape ``(...,)``.
@@ -171,5 +187,5 @@ class EchoDetector:
 def shared_detector(pulse: Pulse, fs: float, n_samples: int) -> EchoDetector:
     """The calibrated :class:`EchoDetector` of (pulse, sampling rate [Hz], A-scan length),
     built once per process and shared by every caller (its calibration costs 1,024 noise
-    A-scans)."""
+    A-scans, and is kept on disk between processes: :mod:`echocal.signal.detector_cache`)."""
     return EchoDetector(pulse, fs, n_samples)
