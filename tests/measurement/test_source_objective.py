@@ -133,3 +133,34 @@ def test_scan_noise_sigma_from_gaussian_and_from_coarsely_quantized_noise():
     # a noiseless float trace (zeros and an echo) is not "quantized"; a constant says nothing
     assert scan_noise_sigma(echo)[1] is False
     assert scan_noise_sigma(np.zeros(64)) == (None, False)
+
+
+def test_energy_in_db_takes_one_matched_filter_per_ascan(sim, monkeypatch):
+    """The dB metric is the pseudo-energy's, so the envelope peak the detector needs comes
+    from the same matched filter: the detector's own filter is not run again."""
+    import echocal.signal.detection as detection
+    from echocal.signal import energy_db
+
+    calls = []
+    original = detection.EchoDetector.peak
+
+    def counting(self, samples):
+        calls.append(1)
+        return original(self, samples)
+
+    monkeypatch.setattr(detection.EchoDetector, "peak", counting)
+    poses = np.array([[30.0, 4.0], [0.0, 0.0]])
+    in_db = SourceObjective(sim, POSITION, metric="energy-db")
+    values = in_db(poses)
+    assert calls == []  # both numbers from one matched filter
+    expected = energy_db(
+        sim.simulate([Pose(*POSITION, 30.0, 4.0), Pose(*POSITION, 0.0, 0.0)], noise=False),
+        sim.window,
+        sim.pulse,
+    )
+    np.testing.assert_allclose(values, expected, rtol=1e-12)
+    plain = SourceObjective(sim, POSITION)
+    plain(poses)
+    np.testing.assert_allclose(in_db._peaks, plain._peaks, rtol=1e-12)
+    SourceObjective(sim, POSITION, metric="peak-amplitude")(poses)
+    assert len(calls) == 2  # the envelope's peak is not the matched filter's: one each

@@ -24,7 +24,7 @@ from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import shared_detector as _detector
 from echocal.signal.gates import TimeGate, gated_metric
-from echocal.signal.processing import pseudo_energy_with_peak
+from echocal.signal.processing import energy_to_db, pseudo_energy_with_peak
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
 
@@ -174,20 +174,19 @@ class SourceObjective(Objective):
 
     def _metric_and_peak(self, scan: AScan) -> tuple[float, float]:
         """The metric of one finite A-scan and its matched-filter envelope peak [a.u.]
-        (one matched filter for both when the metric is the pseudo-energy), both inside
+        (one matched filter for both when the metric is the pseudo-energy or its dB), both inside
         the gate when there is one."""
         window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
         samples = scan.samples
         if self.gate is not None:
             self._check_gate_window(window)
             samples = self.gate.apply(samples, window)
-        if self.metric == "pseudo-energy":
+        if self.metric in ("pseudo-energy", "energy-db"):
             energy, peak = pseudo_energy_with_peak(samples, window, self.pulse, self.window_length)
-            return float(energy), float(peak)
-        value = float(
-            gated_metric(self.metric, samples, window, self.pulse, None, self.window_length)
-        )
-        return value, float(_detector(self.pulse, scan.fs, scan.n_samples).peak(samples))
+            in_db = self.metric == "energy-db"
+            return float(energy_to_db(energy) if in_db else energy), float(peak)
+        metric = gated_metric(self.metric, samples, window, self.pulse, None, self.window_length)
+        return float(metric), float(_detector(self.pulse, scan.fs, scan.n_samples).peak(samples))
 
     def _check_gate_window(self, window: RecordingWindow) -> None:
         """Refuse an absolute gate outside the source's recording window (checked on the

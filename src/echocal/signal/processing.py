@@ -390,9 +390,14 @@ def energy_db(
     reference: float = 1.0,
 ) -> _F64:
     """[dB] 10·log₁₀(pseudo-energy / ``reference``), shape ``(...,)``; −inf for silence."""
-    e = pseudo_energy(samples, window, pulse, window_length)
+    return energy_to_db(pseudo_energy(samples, window, pulse, window_length), reference)
+
+
+def energy_to_db(energy: ArrayLike, reference: float = 1.0) -> _F64:
+    """[dB] 10·log₁₀(``energy`` / ``reference``), shape of ``energy``; −inf for silence:
+    :func:`energy_db` of a pseudo-energy already computed."""
     with np.errstate(divide="ignore"):
-        return 10.0 * np.log10(e / float(reference))
+        return 10.0 * np.log10(np.asarray(energy, dtype=np.float64) / float(reference))
 
 
 _METRICS: dict[str, Metric] = {}
