@@ -17,9 +17,13 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 # the detector calibrations the suite makes are cached in its own folder, not the user's
 # (subprocesses of CLI tests inherit it)
 if "ECHOCAL_CACHE_DIR" not in os.environ:
+    import atexit
+    import shutil
     import tempfile
 
-    os.environ["ECHOCAL_CACHE_DIR"] = tempfile.mkdtemp(prefix="echocal-test-cache-")
+    _CACHE = tempfile.mkdtemp(prefix="echocal-test-cache-")
+    os.environ["ECHOCAL_CACHE_DIR"] = _CACHE
+    atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)  # by the process that made it
 
 settings.register_profile("echocal", derandomize=True, max_examples=60, deadline=None)
 settings.load_profile("echocal")
