@@ -22,6 +22,7 @@ computed once.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
@@ -254,6 +255,14 @@ class Transducer:
     def local_pixels(self) -> FloatArray:
         """[m] local pixel-centre coordinates L (x', y'), shape ``(2, n_rays)`` (eq. 12)."""
         return self._local  # type: ignore[attr-defined]
+
+    @property
+    def face_radius(self) -> float:
+        """[m] the face's largest radius: half the larger diameter of a disc or ellipse, half
+        the diagonal of a rectangle."""
+        if self.aperture == "rectangular":
+            return 0.5 * math.hypot(self.width, self.height)
+        return 0.5 * max(self.width, self.height)
 
     @property
     def n_rays(self) -> int:

@@ -69,8 +69,9 @@ from echocal.signal.gates import TimeGate, gated_metric, gates_by_name
 from echocal.signal.synthesis import _synthesize_unchecked
 from echocal.specimen import FinitePlane, Specimen
 from echocal.specimen.casting import _as_shapes
-from echocal.specimen.interior import Interior
+from echocal.specimen.interior import INTERIOR_SHAPES, Interior
 from echocal.specimen.normals import normal_incidence_directions, perpendicular_start
+from echocal.specimen.sphere import Sphere
 from echocal.transducer import Transducer
 
 __all__ = ["MAX_SIMULATED_SAMPLES", "ReceiverSettings", "VirtualSetup", "check_sample_count"]
@@ -209,12 +210,15 @@ class VirtualSetup(BaseSource):
             raise EchocalValueError(
                 "specimen.thickness: an interior needs a solid specimen.material"
             )
-        if len(self.specimen) != 1 or not isinstance(self.specimen[0], FinitePlane):
-            raise GeometryError(
-                "specimen.thickness: an interior needs a plate: one plane shape as the front "
-                "face; curved walls are not modelled"
-            )
-        interior.check_inside(self.specimen[0])
+        front = self.specimen[0] if len(self.specimen) == 1 else None
+        if not isinstance(front, (FinitePlane, Sphere)):
+            raise GeometryError(f"specimen.thickness: {INTERIOR_SHAPES}")
+        interior.check_inside(front)
+        if isinstance(front, Sphere):
+            from echocal.wave.shell import check_shell  # lazy: echocal.wave loads numba
+
+            ratio = self.material.longitudinal_speed / self.sound_speed
+            check_shell(front.radius, interior, self.transducer.face_radius, ratio)
 
     @property
     def thickness(self) -> float | None:

@@ -47,7 +47,7 @@ from echocal.specimen import (
     builtin_specimen,
     specimen_names,
 )
-from echocal.specimen.interior import Flaw, Interior
+from echocal.specimen.interior import INTERIOR_SHAPES, Flaw, Interior
 from echocal.transducer import Transducer, directivity_names, make_directivity
 from echocal.units import (
     parse_quantity,
@@ -390,11 +390,8 @@ def _build_interior(
     specimen = parts.get("specimen")
     if specimen is None:
         return None, []
-    if len(specimen) != 1 or not isinstance(specimen[0], FinitePlane):
-        return None, [
-            "specimen.thickness: an interior needs a plate: one plane shape as the front face "
-            '(e.g. builtin = "flat-plate"); curved walls are not modelled'
-        ]
+    if len(specimen) != 1 or not isinstance(specimen[0], (FinitePlane, Sphere)):
+        return None, [f"specimen.thickness: {INTERIOR_SHAPES}"]
     try:
         flaws = tuple(
             Flaw(

@@ -2,7 +2,8 @@
 
 A plate of a given ``thickness`` below its front face (a :class:`FinitePlane`, the part's
 only shape) has a back wall parallel to the front, at depth T along −n, and may hold
-reflectors (flaws):
+reflectors (flaws).  A :class:`Sphere` with a thickness is a spherical shell: its back
+wall is the concentric inner sphere of radius R − T (no flaws).  The reflector kinds:
 
 =====================  =====================================================================
 kind                   geometry
@@ -28,13 +29,20 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal.errors import GeometryError
 from echocal.specimen.plane import FinitePlane
+from echocal.specimen.sphere import Sphere
 
-__all__ = ["FLAW_KINDS", "Flaw", "Interior", "SurfaceSamples"]
+__all__ = ["FLAW_KINDS", "INTERIOR_SHAPES", "Flaw", "Interior", "SurfaceSamples"]
 
 FloatArray = NDArray[np.float64]
 
 FLAW_KINDS = ("side-drilled-hole", "flat-bottom-hole", "pore")
 """Reflector kinds a specimen's interior can hold."""
+
+INTERIOR_SHAPES = (
+    'an interior needs one plane (a plate\'s front face, e.g. builtin = "flat-plate") or one '
+    "sphere (a spherical shell's outer face); cylinders (pipe walls) and meshes are not modelled"
+)
+"""Why a specimen cannot have an interior: the one sentence every refusal shares."""
 
 MAX_BACK_WALL_ECHOES = 20
 """The largest back-wall multiple order a setup may ask for."""
@@ -223,8 +231,22 @@ class Interior:
             raise GeometryError(f"specimen.flaws: the name {duplicate!r} is used twice")
         object.__setattr__(self, "flaws", tuple(self.flaws))
 
-    def check_inside(self, front: FinitePlane) -> None:
-        """Refuse a flaw that is not wholly inside the plate below ``front``."""
+    def check_inside(self, front: FinitePlane | Sphere) -> None:
+        """Refuse a flaw that is not wholly inside the plate below ``front``; for a spherical
+        shell (``front`` its outer face), a wall as thick as the sphere, or any flaw."""
+        if isinstance(front, Sphere):
+            if not self.thickness < front.radius:
+                raise GeometryError(
+                    f"specimen.thickness: {1e3 * self.thickness:g} mm is not less than the "
+                    f"sphere's radius {1e3 * front.radius:g} mm; a shell's wall must be thinner "
+                    "than its radius"
+                )
+            if self.flaws:
+                raise GeometryError(
+                    f"specimen.flaws.{self.flaws[0].name}: flaws are modelled inside plates "
+                    "only, not inside a spherical shell; remove the flaws or use a plate"
+                )
+            return
         for flaw in self.flaws:
             shallow, deep = flaw.depth_range(front)
             where = f"specimen.flaws.{flaw.name}.position"

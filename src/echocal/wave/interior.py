@@ -27,11 +27,12 @@ water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).
 
 **Left out** (documented in docs/inside-the-specimen.md): mode-converted (L→T) echoes and
 the shear waves' own echoes (the coefficients account for the energy they take), shadowing
-of the back wall by flaws and of flaws by each other, flaw–wall interactions, and
-curvature of the front face (an interior needs a plate).  The paraxial expansion holds for
-the beam's angular spectrum well inside the first critical angle (≈ ±5° of tilt on steel);
-it is checked against an exact angular-spectrum solution with the fluid-loaded plate's
-reflection coefficient in tests/physics.
+of the back wall by flaws and of flaws by each other, and flaw–wall interactions.  A
+curved front face is modelled for a spherical shell's back wall only
+(:mod:`echocal.wave.shell`: an equivalent water sphere); no flaws in shells, no pipes.
+The paraxial expansion holds for the beam's angular spectrum well inside the first
+critical angle (≈ ±5° of tilt on steel); it is checked against an exact angular-spectrum
+solution with the fluid-loaded plate's reflection coefficient in tests/physics.
 """
 
 from __future__ import annotations
@@ -53,7 +54,9 @@ from echocal.materials import Material
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.interior import Flaw, Interior, SurfaceSamples
 from echocal.specimen.plane import FinitePlane
+from echocal.specimen.sphere import Sphere
 from echocal.wave.model import WaveEchoModel
+from echocal.wave.shell import equivalent_mirror
 
 __all__ = ["FRONT_WALL", "InteriorEchoes", "LabelledEcho", "back_wall_label", "echo_list"]
 
@@ -120,14 +123,15 @@ class InteriorEchoes:
     Parameters
     ----------
     model : the setup's wave model (the front wall's echo, exact probe fields).
-    front : the plate's front face.
+    front : the plate's front face, or a sphere: the outer face of a spherical shell
+        (:mod:`echocal.wave.shell`; no flaws).
     interior : its thickness and flaws.
     medium : the coupling fluid (its ``longitudinal_speed`` is the model's sound speed).
     material : the plate's solid material.
     """
 
     model: WaveEchoModel
-    front: FinitePlane
+    front: FinitePlane | Sphere
     interior: Interior
     medium: Material
     material: Material
@@ -179,8 +183,14 @@ class InteriorEchoes:
 
     def _front(self, position: FloatArray, frame: FloatArray) -> _Front | None:
         basis = self._basis(frame)
-        point = basis @ (self.front.center - position)
-        normal = basis @ self.front.normal
+        if isinstance(self.front, Sphere):  # the tangent plane where the radius meets the probe
+            outward = position - self.front.center
+            outward = outward / np.linalg.norm(outward)
+            point = basis @ (self.front.center + self.front.radius * outward - position)
+            normal = basis @ outward
+        else:
+            point = basis @ (self.front.center - position)
+            normal = basis @ self.front.normal
         if float(normal @ point) > 0.0:  # make it point towards the probe (the origin)
             normal = -normal
         along = -float(normal[2])  # the beam (+z) meets the face where z·(−n_z) = −n·p
@@ -225,6 +235,11 @@ class InteriorEchoes:
         """The ``order``-th back-wall echo: the face's mirror at the equivalent depth, by
         the image form when the wall fills the beam (the Kirchhoff sum otherwise)."""
         depth = order * self.interior.thickness
+        theta_w, theta_l = self._axis_angles(front)
+        r_sw = complex(reflection_solid_fluid(theta_l, self.material, self.medium).longitudinal)
+        through = self._through_the_face(theta_w, theta_l) * r_sw ** (2 * order - 1)
+        if isinstance(self.front, Sphere):
+            return self._shell_back_wall(order, position, frame, front, through)
         equivalent = FinitePlane(
             center=self.front.center
             - self.front.normal
@@ -237,9 +252,6 @@ class InteriorEchoes:
             coelevation=self.front.coelevation,
             name="equivalent back wall",
         )
-        theta_w, theta_l = self._axis_angles(front)
-        r_sw = complex(reflection_solid_fluid(theta_l, self.material, self.medium).longitudinal)
-        through = self._through_the_face(theta_w, theta_l) * r_sw ** (2 * order - 1)
         delay = self._delay_per_depth() * depth
         plane = self.model.image_plane((equivalent,), position, frame)
         if plane is not None:  # the wall fills the beam: the exact image form
@@ -251,8 +263,26 @@ class InteriorEchoes:
         spectrum, _ = self.model.spectrum(points, unit_m, area, coefficient, delays)
         return self._finish(spectrum, front, 2.0 * depth)
 
+    def _shell_back_wall(
+        self, order: int, position: FloatArray, frame: FloatArray, front: _Front, through: complex
+    ) -> FloatArray:
+        """A spherical shell's ``order``-th back-wall echo: the wave model's echo of the
+        equivalent water sphere (concentric with the part, :mod:`echocal.wave.shell`), its
+        two-way time corrected to 2kT/c_L below the face."""
+        assert isinstance(self.front, Sphere)
+        depth = order * self.interior.thickness
+        mirror = equivalent_mirror(self.front.radius, self.interior.thickness, order, self._ratio)
+        sphere = Sphere(center=self.front.center, radius=mirror.radius, name="equivalent back wall")
+        points, unit_m, area = self.model.surface_samples((sphere,), position, frame)
+        coefficient = np.full(area.shape, through, dtype=np.complex128)
+        c_l, c_w = self.material.longitudinal_speed, self.model.sound_speed
+        delays = np.full(area.shape, 2.0 * depth / c_l - 2.0 * mirror.distance / c_w)
+        spectrum, _ = self.model.spectrum(points, unit_m, area, coefficient, delays)
+        return self._finish(spectrum, front, 2.0 * depth)
+
     @cached_property
     def _flaw_samples(self) -> dict[str, SurfaceSamples]:
+        assert isinstance(self.front, FinitePlane)  # flaws are refused inside a shell
         c_l = self.material.longitudinal_speed
         spacing = c_l / self.model.pulse.center_frequency / _SOLID_SAMPLES_PER_WAVELENGTH
         return {f.name: f.surface_samples(spacing, self.front.normal) for f in self.interior.flaws}
