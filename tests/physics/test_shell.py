@@ -27,7 +27,7 @@ from echocal.specimen.builtins import builtin_specimen
 from echocal.specimen.interior import Flaw, Interior
 from echocal.wave import PistonProbe, WaveEchoModel
 from echocal.wave.interior import InteriorEchoes, echo_list
-from echocal.wave.shell import check_shell, equivalent_mirror, round_trip_matrix
+from echocal.wave.shell import check_curved_wall, equivalent_mirror, round_trip_matrix
 
 C_W = 1480.0
 STEEL = dataclasses.replace(material("steel"), attenuation=Attenuation())
@@ -165,5 +165,5 @@ def test_shells_the_model_does_not_cover_are_refused_naming_the_field() -> None:
     with pytest.raises(GeometryError, match=r"specimen\.flaws\.pore: .*plates only"):
         Interior(0.01, 1, (pore,)).check_inside(sphere)
     with pytest.raises(GeometryError, match=r"specimen\.thickness: .*paraxially.*6\.35 mm"):
-        check_shell(0.05, Interior(0.01, 1, ()), 6.35e-3, C_L / C_W)
-    check_shell(0.1, Interior(0.01, 3, ()), 6.35e-3, C_L / C_W)  # inside the limit
+        check_curved_wall(0.05, Interior(0.01, 1, ()), 6.35e-3, C_L / C_W, spherical=True)
+    check_curved_wall(0.1, Interior(0.01, 3, ()), 6.35e-3, C_L / C_W, spherical=True)

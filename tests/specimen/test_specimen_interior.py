@@ -36,6 +36,26 @@ n_samples = 4096
 reference_position = ["0 mm", "0 mm", "50 mm"]
 """
 
+PIPE = """
+[[specimen.shapes]]
+kind = "cylinder"
+center = [0, 0, "-{radius} mm"]
+radius = "{radius} mm"
+length = "200 mm"
+azimuth = 90
+coelevation = 90
+surface = "{surface}"
+"""
+
+
+def _pipe(text: str, radius: float, surface: str = "outside") -> str:
+    """``text`` with its plate replaced by a pipe along y, its top at z = 0."""
+    pipe = PIPE.format(radius=radius, surface=surface)
+    return text.replace('builtin = "flat-plate"\n', "").replace(
+        'thickness = "20 mm"\n', 'thickness = "20 mm"\n' + pipe
+    )
+
+
 SDH = """
 [[specimen.flaws]]
 name = "{name}"
@@ -81,18 +101,33 @@ def test_a_plate_with_flaws_loads(tmp_path: Path) -> None:
             "specimen.thickness",
             "solid",
         ),
-        (
+        (  # the built-in rod (radius 20 mm) as a 20 mm wall
             lambda t: t.replace('builtin = "flat-plate"', 'builtin = "cylinder"'),
             "specimen.thickness",
-            "pipe walls",
+            "thinner than its radius",
         ),
         (  # a 25 mm ball under a 12.7 mm probe: beyond the shell model's paraxial limit
             lambda t: t.replace('builtin = "flat-plate"', 'builtin = "sphere"'),
             "specimen.thickness",
-            "smaller probe or a larger sphere",
+            "smaller probe or a larger part",
+        ),
+        (  # a pipe of radius 40 mm under a 12.7 mm probe: a/R = 0.16 > 0.12
+            lambda t: _pipe(t, radius=40),
+            "specimen.thickness",
+            "smaller probe or a larger part",
+        ),
+        (
+            lambda t: _pipe(t, radius=100, surface="inside"),
+            "specimen.thickness",
+            "bores are not modelled",
+        ),
+        (
+            lambda t: t.replace('builtin = "flat-plate"', 'builtin = "wavy-surface"'),
+            "specimen.thickness",
+            "meshes",
         ),
     ],
-    ids=["negative", "bool", "ray-model", "no-material", "fluid", "pipe", "shell-probe"],
+    ids=["negative", "bool", "ray-model", "no-material", "fluid", "rod", "ball", "pipe", "bore", "mesh"],
 )
 def test_an_impossible_interior_is_refused_naming_the_field(tmp_path, edit, field, fix) -> None:
     problems = _problems(tmp_path, edit(PLATE.format(flaws="", model="wave")))

@@ -67,11 +67,10 @@ from echocal.signal import (
 )
 from echocal.signal.gates import TimeGate, gated_metric, gates_by_name
 from echocal.signal.synthesis import _synthesize_unchecked
-from echocal.specimen import FinitePlane, Specimen
+from echocal.specimen import Cylinder, FinitePlane, Specimen, Sphere
 from echocal.specimen.casting import _as_shapes
 from echocal.specimen.interior import INTERIOR_SHAPES, Interior
 from echocal.specimen.normals import normal_incidence_directions, perpendicular_start
-from echocal.specimen.sphere import Sphere
 from echocal.transducer import Transducer
 
 __all__ = ["MAX_SIMULATED_SAMPLES", "ReceiverSettings", "VirtualSetup", "check_sample_count"]
@@ -211,14 +210,15 @@ class VirtualSetup(BaseSource):
                 "specimen.thickness: an interior needs a solid specimen.material"
             )
         front = self.specimen[0] if len(self.specimen) == 1 else None
-        if not isinstance(front, (FinitePlane, Sphere)):
+        if not isinstance(front, (FinitePlane, Sphere, Cylinder)):
             raise GeometryError(f"specimen.thickness: {INTERIOR_SHAPES}")
         interior.check_inside(front)
-        if isinstance(front, Sphere):
-            from echocal.wave.shell import check_shell  # lazy: echocal.wave loads numba
+        if isinstance(front, (Sphere, Cylinder)):
+            from echocal.wave.shell import check_curved_wall  # lazy: echocal.wave loads numba
 
             ratio = self.material.longitudinal_speed / self.sound_speed
-            check_shell(front.radius, interior, self.transducer.face_radius, ratio)
+            face, spherical = self.transducer.face_radius, isinstance(front, Sphere)
+            check_curved_wall(front.radius, interior, face, ratio, spherical)
 
     @property
     def thickness(self) -> float | None:

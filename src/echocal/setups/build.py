@@ -390,7 +390,7 @@ def _build_interior(
     specimen = parts.get("specimen")
     if specimen is None:
         return None, []
-    if len(specimen) != 1 or not isinstance(specimen[0], (FinitePlane, Sphere)):
+    if len(specimen) != 1 or not isinstance(specimen[0], (FinitePlane, Sphere, Cylinder)):
         return None, [f"specimen.thickness: {INTERIOR_SHAPES}"]
     try:
         flaws = tuple(

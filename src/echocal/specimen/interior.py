@@ -2,8 +2,9 @@
 
 A plate of a given ``thickness`` below its front face (a :class:`FinitePlane`, the part's
 only shape) has a back wall parallel to the front, at depth T along −n, and may hold
-reflectors (flaws).  A :class:`Sphere` with a thickness is a spherical shell: its back
-wall is the concentric inner sphere of radius R − T (no flaws).  The reflector kinds:
+reflectors (flaws).  A :class:`Sphere` with a thickness is a spherical shell and a
+:class:`Cylinder` (its outer surface) a pipe: the back wall is the concentric inner
+surface of radius R − T (no flaws).  The reflector kinds:
 
 =====================  =====================================================================
 kind                   geometry
@@ -28,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal.errors import GeometryError
+from echocal.specimen.cylinder import Cylinder
 from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 
@@ -39,8 +41,9 @@ FLAW_KINDS = ("side-drilled-hole", "flat-bottom-hole", "pore")
 """Reflector kinds a specimen's interior can hold."""
 
 INTERIOR_SHAPES = (
-    'an interior needs one plane (a plate\'s front face, e.g. builtin = "flat-plate") or one '
-    "sphere (a spherical shell's outer face); cylinders (pipe walls) and meshes are not modelled"
+    "an interior needs one plane (a plate's front face, e.g. builtin = \"flat-plate\"), one "
+    "sphere (a spherical shell's outer face) or one cylinder with surface = \"outside\" (a "
+    "pipe's outer face); meshes and bores are not modelled"
 )
 """Why a specimen cannot have an interior: the one sentence every refusal shares."""
 
@@ -231,20 +234,24 @@ class Interior:
             raise GeometryError(f"specimen.flaws: the name {duplicate!r} is used twice")
         object.__setattr__(self, "flaws", tuple(self.flaws))
 
-    def check_inside(self, front: FinitePlane | Sphere) -> None:
-        """Refuse a flaw that is not wholly inside the plate below ``front``; for a spherical
-        shell (``front`` its outer face), a wall as thick as the sphere, or any flaw."""
-        if isinstance(front, Sphere):
+    def check_inside(self, front: FinitePlane | Sphere | Cylinder) -> None:
+        """Refuse a flaw that is not wholly inside the plate below ``front``; for a curved
+        wall (``front`` the outer face of a spherical shell or a pipe), a wall as thick as
+        the part, a bore, or any flaw."""
+        if isinstance(front, (Sphere, Cylinder)):
+            if isinstance(front, Cylinder) and front.bore:
+                raise GeometryError(f"specimen.thickness: {INTERIOR_SHAPES}")
             if not self.thickness < front.radius:
                 raise GeometryError(
                     f"specimen.thickness: {1e3 * self.thickness:g} mm is not less than the "
-                    f"sphere's radius {1e3 * front.radius:g} mm; a shell's wall must be thinner "
-                    "than its radius"
+                    f"{front.kind}'s radius {1e3 * front.radius:g} mm; a curved wall must be "
+                    "thinner than its radius"
                 )
             if self.flaws:
                 raise GeometryError(
                     f"specimen.flaws.{self.flaws[0].name}: flaws are modelled inside plates "
-                    "only, not inside a spherical shell; remove the flaws or use a plate"
+                    f"only, not inside a curved wall ({front.kind}); remove the flaws or use a "
+                    "plate"
                 )
             return
         for flaw in self.flaws:

@@ -123,9 +123,7 @@ def node_spacing(
     return nyquist_fraction * shortest_wavelength / (2.0 * sin_2a)
 
 
-def ring_count(
-    probe: Aperture, distance: float, shortest_wavelength: float, spacing: float
-) -> int:
+def ring_count(probe: Aperture, distance: float, shortest_wavelength: float, spacing: float) -> int:
     """Radial Gauss–Legendre nodes for the probe's face over a plane ``distance`` [m] away
     along the axis: at least :data:`MIN_RINGS`, at least a/``spacing`` (``spacing`` [m]
     from :func:`node_spacing`), and at least the number of Fresnel zones of the edge wave

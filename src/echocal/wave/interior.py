@@ -28,8 +28,10 @@ water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).
 **Left out** (documented in docs/inside-the-specimen.md): mode-converted (L→T) echoes and
 the shear waves' own echoes (the coefficients account for the energy they take), shadowing
 of the back wall by flaws and of flaws by each other, and flaw–wall interactions.  A
-curved front face is modelled for a spherical shell's back wall only
-(:mod:`echocal.wave.shell`: an equivalent water sphere); no flaws in shells, no pipes.
+curved front face is modelled for the back wall of a spherical shell
+(:mod:`echocal.wave.shell`: an equivalent water sphere) and of a pipe
+(:mod:`echocal.wave.curved_wall`: angular spectrum on the tangent plane); no flaws in
+curved parts.
 The paraxial expansion holds for the beam's angular spectrum well inside the first
 critical angle (≈ ±5° of tilt on steel); it is checked against an exact angular-spectrum
 solution with the fluid-loaded plate's reflection coefficient in tests/physics.
@@ -52,9 +54,11 @@ from echocal.coefficients import (
 )
 from echocal.materials import Material
 from echocal.signal.window import RecordingWindow
+from echocal.specimen.cylinder import Cylinder
 from echocal.specimen.interior import Flaw, Interior, SurfaceSamples
 from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
+from echocal.wave.curved_wall import curved_back_walls, tangent_plane
 from echocal.wave.model import WaveEchoModel
 from echocal.wave.shell import equivalent_mirror
 
@@ -123,15 +127,16 @@ class InteriorEchoes:
     Parameters
     ----------
     model : the setup's wave model (the front wall's echo, exact probe fields).
-    front : the plate's front face, or a sphere: the outer face of a spherical shell
-        (:mod:`echocal.wave.shell`; no flaws).
+    front : the plate's front face; or the outer face of a spherical shell
+        (:mod:`echocal.wave.shell`) or of a pipe (:mod:`echocal.wave.curved_wall`), with
+        no flaws.
     interior : its thickness and flaws.
     medium : the coupling fluid (its ``longitudinal_speed`` is the model's sound speed).
     material : the plate's solid material.
     """
 
     model: WaveEchoModel
-    front: FinitePlane | Sphere
+    front: FinitePlane | Sphere | Cylinder
     interior: Interior
     medium: Material
     material: Material
@@ -159,8 +164,24 @@ class InteriorEchoes:
         if front is None:  # the beam axis never meets the face: nothing enters the part
             zero = np.zeros(self.model.window.n_samples)
             return out | {label: zero for label in self.labels[1:]}
-        for k in range(1, self.interior.back_wall_echoes + 1):
-            out[back_wall_label(k)] = self._back_wall(k, position, frame, front)
+        orders = range(1, self.interior.back_wall_echoes + 1)
+        if isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
+            spectra = curved_back_walls(
+                self.model,
+                self.front,
+                self.interior.thickness,
+                len(orders),
+                self.material.longitudinal_speed,
+                position,
+                frame,
+                lambda k: self._wall_coefficient(k, front),
+            )
+            for k, spectrum in zip(orders, spectra, strict=True):
+                depth = k * self.interior.thickness
+                out[back_wall_label(k)] = self._finish(spectrum, front, 2.0 * depth)
+        else:
+            for k in orders:
+                out[back_wall_label(k)] = self._back_wall(k, position, frame, front)
         for flaw in self.interior.flaws:
             out[flaw.name] = self._flaw(flaw, position, frame, front)
         return out
@@ -183,11 +204,10 @@ class InteriorEchoes:
 
     def _front(self, position: FloatArray, frame: FloatArray) -> _Front | None:
         basis = self._basis(frame)
-        if isinstance(self.front, Sphere):  # the tangent plane where the radius meets the probe
-            outward = position - self.front.center
-            outward = outward / np.linalg.norm(outward)
-            point = basis @ (self.front.center + self.front.radius * outward - position)
-            normal = basis @ outward
+        if isinstance(self.front, (Sphere, Cylinder)):  # where the radius meets the probe
+            plane = tangent_plane(self.front, position)
+            point = basis @ (plane.origin - position)
+            normal = basis @ plane.basis[2]
         else:
             point = basis @ (self.front.center - position)
             normal = basis @ self.front.normal
@@ -219,6 +239,12 @@ class InteriorEchoes:
         t_out = transmission_solid_fluid(theta_l, self.material, self.medium)
         return complex(t_in * t_out)
 
+    def _wall_coefficient(self, order: int, front: _Front) -> complex:
+        """T_ws·R_sw^(2k−1)·T_sw of the ``order``-th back-wall echo at the beam axis's angle."""
+        theta_w, theta_l = self._axis_angles(front)
+        r_sw = complex(reflection_solid_fluid(theta_l, self.material, self.medium).longitudinal)
+        return self._through_the_face(theta_w, theta_l) * r_sw ** (2 * order - 1)
+
     def _solid_attenuation(self, path: float) -> FloatArray:
         attenuation = self.material.attenuation
         f = self.model.frequencies
@@ -235,11 +261,10 @@ class InteriorEchoes:
         """The ``order``-th back-wall echo: the face's mirror at the equivalent depth, by
         the image form when the wall fills the beam (the Kirchhoff sum otherwise)."""
         depth = order * self.interior.thickness
-        theta_w, theta_l = self._axis_angles(front)
-        r_sw = complex(reflection_solid_fluid(theta_l, self.material, self.medium).longitudinal)
-        through = self._through_the_face(theta_w, theta_l) * r_sw ** (2 * order - 1)
+        through = self._wall_coefficient(order, front)
         if isinstance(self.front, Sphere):
             return self._shell_back_wall(order, position, frame, front, through)
+        assert isinstance(self.front, FinitePlane)  # a pipe's walls come from curved_wall
         equivalent = FinitePlane(
             center=self.front.center
             - self.front.normal

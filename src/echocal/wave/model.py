@@ -503,6 +503,17 @@ class WaveEchoModel:
             spectrum += factor * scipy.fft.rfft(grid)
         return spectrum * self._transfer, path_time
 
+    def spectrum_of_response(self, response: NDArray[np.complex128]) -> NDArray[np.complex128]:
+        """The echo spectrum (as :meth:`spectrum` returns it) of a pulse-echo response V(f)
+        on :attr:`frequencies`, given in the e^{−iωt} convention and normalized as the
+        average over the receiving face of the returned pressure p/(ρcv₀) (V = e^{2ikd} for
+        a plane wave reflected at distance d): W(f)·conj(V)·e^{iωt₀}/Δ_g, t₀ the grid's
+        first time, Δ_g its spacing."""
+        _, dt, pad, _ = self._grid
+        t0 = self.window.start - pad * dt
+        f = self._frequencies
+        return self.pulse.spectrum(f) * np.conj(response) * np.exp(2j * math.pi * f * t0) / dt
+
     def samples(self, spectrum: NDArray[np.complex128]) -> FloatArray:
         """The recording window's samples ``(n_samples,)`` of a :meth:`spectrum`."""
         m, _, pad, n_fft = self._grid

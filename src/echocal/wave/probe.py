@@ -213,7 +213,6 @@ class PistonProbe:
             return 0.0
         return self.curvature - math.sqrt(self.curvature**2 - self.radius**2)
 
-
     @property
     def spread_radius(self) -> float:
         """[m] the half-width that sets the diffracted beam's spread λ/(2a): the radius."""
@@ -241,9 +240,7 @@ class RectangularProbe:
     curvature: None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "half_width", positive_float("transducer.width", self.half_width)
-        )
+        object.__setattr__(self, "half_width", positive_float("transducer.width", self.half_width))
         object.__setattr__(
             self, "half_height", positive_float("transducer.height", self.half_height)
         )

@@ -38,7 +38,8 @@ front face, Kirchhoff at the back wall) in tests/physics/test_shell.py.
 inside the first critical angle, i.e. a probe radius a ≪ R·sin θ_c.  The validity limit
 :data:`MAX_APERTURE_PER_RADIUS` is set from the reference's measured error.  A pipe
 (a cylindrical wall) is astigmatic, a different matrix in each plane with different
-equivalent distances, and no single mirror reproduces both; it is not modelled.
+equivalent distances, and no single mirror reproduces both: pipes are modelled on the
+tangent plane instead (:mod:`echocal.wave.curved_wall`).
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ from echocal.specimen.interior import Interior
 __all__ = [
     "MAX_APERTURE_PER_RADIUS",
     "EquivalentMirror",
-    "check_shell",
+    "check_curved_wall",
     "equivalent_mirror",
     "round_trip_matrix",
 ]
@@ -130,17 +131,21 @@ def equivalent_mirror(
     return EquivalentMirror((a - 1.0) / c, 2.0 / c)
 
 
-def check_shell(radius: float, interior: Interior, probe_radius: float, ratio: float) -> None:
-    """Refuse a spherical shell (front radius R [m]) the model does not cover, naming the
-    field: a probe (radius [m], a rectangle's half-diagonal) too wide for the paraxial
-    model, or a multiple that focuses.  The wall's own geometry is checked by
+def check_curved_wall(
+    radius: float, interior: Interior, probe_radius: float, ratio: float, spherical: bool
+) -> None:
+    """Refuse a curved wall (front radius R [m]; a sphere, or a pipe when not
+    ``spherical``) the paraxial models do not cover, naming the field: a probe (radius
+    [m], a rectangle's half-diagonal) wider than :data:`MAX_APERTURE_PER_RADIUS`·R, or a
+    shell's multiple that focuses.  The wall's own geometry is checked by
     :meth:`echocal.specimen.interior.Interior.check_inside`."""
     if probe_radius > MAX_APERTURE_PER_RADIUS * radius:
         limit = 1e3 * MAX_APERTURE_PER_RADIUS * radius
         raise GeometryError(
-            f"specimen.thickness: a shell's interior is modelled paraxially, for probes up to "
-            f"{MAX_APERTURE_PER_RADIUS:g} × the front radius ({limit:.3g} mm here); this "
-            f"probe's radius is {1e3 * probe_radius:g} mm: use a smaller probe or a larger sphere"
+            f"specimen.thickness: a curved wall's interior is modelled paraxially, for probes "
+            f"up to {MAX_APERTURE_PER_RADIUS:g} × the front radius ({limit:.3g} mm here); this "
+            f"probe's radius is {1e3 * probe_radius:g} mm: use a smaller probe or a larger part"
         )
-    for k in range(1, interior.back_wall_echoes + 1):
-        equivalent_mirror(radius, interior.thickness, k, ratio)
+    if spherical:
+        for k in range(1, interior.back_wall_echoes + 1):
+            equivalent_mirror(radius, interior.thickness, k, ratio)
