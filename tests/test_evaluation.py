@@ -211,6 +211,8 @@ def test_map_resolution_follows_the_models_cost():
     assert map_resolution(load_setup("immersion-5mhz-wave"), half_span=18.0) == 21
     assert map_resolution(load_setup("immersion-steel-plate"), half_span=18.0) == 15
     assert map_resolution(load_setup("thesis"), half_span=18.0) == 61
+    assert map_resolution(load_setup("immersion-steel-pipe")) == 11  # 0.1–1 s per pose
+    assert map_resolution(load_setup("immersion-steel-shell"), half_span=18.0) == 9
 
 
 def test_gated_truth_of_the_plate_is_normal_incidence_on_the_back_wall():

@@ -169,13 +169,16 @@ A-scan 10–100× costlier than at normal incidence."""
 def map_resolution(setup: VirtualSetup, half_span: float = 0.0) -> int:
     """Grid points per axis of a cost map of ``setup`` reaching ``half_span`` [deg] from its
     centre: 61 on the ray model (< 1 ms per pose); on the wave model 41, or 21 beyond
-    :data:`WIDE_MAP`; with an interior (each back-wall echo costs as much again) 25, or 15.
-    A map takes seconds to a minute or two, not many minutes; it is a picture, and smooth
-    shading hides the coarser grid."""
+    :data:`WIDE_MAP`; with an interior (each back-wall echo costs as much again) 25, or 15;
+    inside a curved wall (a pipe or a shell: 0.1–1 s per pose) 11, or 9.  A map takes
+    seconds to a minute or two, not many minutes; it is a picture, and smooth shading hides
+    the coarser grid."""
     if getattr(setup, "reflection", None) != "wave":
         return 61
     wide = half_span > WIDE_MAP
     if getattr(setup, "interior", None) is not None:
+        if any(shape.kind != "plane" for shape in setup.specimen):
+            return 9 if wide else 11
         return 15 if wide else 25
     return 21 if wide else 41
 

@@ -127,7 +127,18 @@ def test_a_plate_with_flaws_loads(tmp_path: Path) -> None:
             "meshes",
         ),
     ],
-    ids=["negative", "bool", "ray-model", "no-material", "fluid", "rod", "ball", "pipe", "bore", "mesh"],
+    ids=[
+        "negative",
+        "bool",
+        "ray-model",
+        "no-material",
+        "fluid",
+        "rod",
+        "ball",
+        "pipe",
+        "bore",
+        "mesh",
+    ],
 )
 def test_an_impossible_interior_is_refused_naming_the_field(tmp_path, edit, field, fix) -> None:
     problems = _problems(tmp_path, edit(PLATE.format(flaws="", model="wave")))

@@ -32,6 +32,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 from numpy.typing import NDArray
 
 from echocal.specimen.cylinder import Cylinder
@@ -44,14 +45,15 @@ __all__ = ["TangentPlane", "curved_back_walls", "responses", "tangent_plane"]
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
-FREQUENCIES = 40
+FREQUENCIES = 24
 """Frequencies at which the field is propagated; the spectrum between them is interpolated
-(after removing each echo's axial delay what is left varies slowly: tests/physics)."""
+(after removing each echo's axial delay what is left varies slowly).  24 against 40:
+within 0.75 % of the plate's exact image form either way, a third faster (tests/physics)."""
 _NYQUIST_FRACTION = 0.9
 """Grid spacing as a fraction of the Nyquist spacing λ_hi/(2 s_max) of the incident field."""
 _FRESNEL_MARGIN = 2.0
 """The grid reaches this many Fresnel lengths √(λ d) beyond the probe's footprint."""
-_BAND_FLOOR = 1e-3
+_BAND_FLOOR = 1e-2
 """Frequencies where the pulse's spectrum is below this fraction of its peak are left out."""
 
 
@@ -135,10 +137,13 @@ def _propagator(grid: _Grid, k: float, depth: float) -> ComplexArray:
 
 
 def _propagate(field: ComplexArray, propagator: ComplexArray) -> ComplexArray:
+    """``field`` (N, N) carried by ``propagator`` (2N, 2N): zero-padded, so that what
+    spreads beyond the grid does not wrap around onto it."""
     n = field.shape[0]
     padded = np.zeros(propagator.shape, dtype=np.complex128)
     padded[:n, :n] = field
-    return np.fft.ifft2(np.fft.fft2(padded) * propagator)[:n, :n]
+    spectrum = scipy.fft.fft2(padded, workers=-1, overwrite_x=True)
+    return scipy.fft.ifft2(spectrum * propagator, workers=-1, overwrite_x=True)[:n, :n]
 
 
 def responses(

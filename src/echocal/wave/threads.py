@@ -23,7 +23,9 @@ __all__ = [
     "MAX_THREADS",
     "MIN_NODES_PER_THREAD",
     "MIN_SAMPLES_PER_THREAD",
+    "cores",
     "one_way_grid",
+    "pool",
     "two_way_grid",
 ]
 
@@ -37,7 +39,8 @@ MIN_NODES_PER_THREAD = 1024
 """The same for the one-way kernel of the image form, 4–5 times cheaper per point."""
 
 
-def _cores() -> int:
+def cores() -> int:
+    """The cores this process may run on."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - macOS, Windows
@@ -45,7 +48,8 @@ def _cores() -> int:
 
 
 @cache
-def _pool(workers: int) -> ThreadPoolExecutor:
+def pool(workers: int) -> ThreadPoolExecutor:
+    """One shared pool of ``workers`` threads (made once per size)."""
     return ThreadPoolExecutor(max_workers=workers, thread_name_prefix="echocal-wave")
 
 
@@ -101,7 +105,7 @@ def _split(
     in this thread, for fewer than ``per_thread`` samples a thread); sum the grids in a
     fixed order and the two sums."""
     active = np.flatnonzero(weights)
-    n_threads = max(1, min(MAX_THREADS, _cores(), active.size // per_thread))
+    n_threads = max(1, min(MAX_THREADS, cores(), active.size // per_thread))
 
     def run(share: NDArray[np.intp]) -> tuple[FloatArray, float, float]:
         grid = np.zeros(n_grid)
@@ -111,7 +115,7 @@ def _split(
     shares = [active[i::n_threads] for i in range(n_threads)]
     if n_threads == 1:
         return run(shares[0])
-    results = list(_pool(n_threads).map(run, shares))
+    results = list(pool(n_threads).map(run, shares))
     grid = results[0][0]
     for other, _, _ in results[1:]:
         grid += other
