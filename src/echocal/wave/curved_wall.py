@@ -65,7 +65,6 @@ class TangentPlane:
     ----------
     origin : [m] (3,) the touching point Q, world frame.
     basis : (3, 3) rows e_x (across the curvature), e_y, e_z (the outward normal).
-    sag : (x, y) [m] → [m] the front face's depth below the plane.
     radius : [m] the front face's radius R.
     spherical : True for a sphere (curved both ways), False for a cylinder (across only).
     """

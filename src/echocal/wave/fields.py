@@ -1,11 +1,11 @@
 """The probe's transmit field at many points and frequencies at once (numba).
 
-:func:`echocal.wave.probe.transmit_field` gives one frequency at a time; a field on a grid
+``echocal.wave.probe.transmit_field`` gives one frequency at a time; a field on a grid
 over a band (the tangent-plane model of a curved wall, :mod:`echocal.wave.curved_wall`)
 needs thousands of points at tens of frequencies.  Each point's spatial impulse response is
 binned once (:func:`echocal.wave.sir._bin_sir`, quadratic B-splines of width Δ) and
 Fourier-transformed at every frequency by a rotating phasor; the B-spline projection's
-transform sinc³(fΔ) is divided out, as :func:`~echocal.wave.probe.transmit_field` does.
+transform sinc³(fΔ) is divided out, as ``transmit_field`` does.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ _MIN_POINTS_PER_THREAD = 256
 """A thread is worth starting for this many points (each costs tens of µs)."""
 _BINS_PER_PERIOD = 16
 """Δ = 1/(16 f_max): with the sinc³ correction the field agrees with the single-frequency
-:func:`~echocal.wave.probe.transmit_field` (Δ = 1/(64 f)) to 1e-4 (tests/physics)."""
+``transmit_field`` (Δ = 1/(64 f)) to 1e-4 (tests/physics)."""
 
 
 @sir._jit
