@@ -25,7 +25,7 @@ _MIN_POINTS_PER_THREAD = 256
 """A thread is worth starting for this many points (each costs tens of µs)."""
 _BINS_PER_PERIOD = 16
 """Δ = 1/(16 f_max): with the sinc³ correction the field agrees with the single-frequency
-``transmit_field`` (Δ = 1/(64 f)) to 1e-4 (tests/physics)."""
+``transmit_field`` (Δ = 1/(64 f)) to 2e-3 of the largest value (tests/physics)."""
 
 
 @sir._jit
