@@ -1033,6 +1033,15 @@ def _taper(r, r_max, frac=0.4):
     return np.cos(0.5 * np.pi * x) ** 2
 
 
+def _smooth(x, w, y, sigma):
+    """Gaussian-window average (width ``sigma``) of samples ``y`` at nodes ``x``
+    with quadrature weights ``w`` (normalised, so a constant is kept)."""
+    if sigma <= 0:
+        return y
+    K = np.exp(-0.5 * ((x[:, None] - x[None, :]) / sigma) ** 2) * w[None, :]
+    return (K @ y) / K.sum(axis=1)
+
+
 def _surface(rho, z0, radius):
     """Meridian of a surface of revolution convex towards -z: apex at z0, radius of
     curvature ``radius`` (inf: flat).  Returns z, unit normal (nx, nz) pointing to +z
@@ -1044,25 +1053,32 @@ def _surface(rho, z0, radius):
     return z, -rho / radius, w / radius, radius / w
 
 
-def _pulse_echo_shell_core(a, f, d, h, radius, c_w, rho_w, c_l, rho_s, T_func, R_func, accuracy):
+def _pulse_echo_shell_core(
+    a, f, d, h, radius, c_w, rho_w, c_l, rho_s, T_func, R_func, accuracy, extent=None
+):
     k_w = 2 * np.pi * f / c_w
     k_l = 2 * np.pi * f / c_l
     R1, R2 = radius, radius - h
     lam_w = c_w / f
     # extents (smooth cos^2 tapers); they grow with accuracy
     beam = a + (d + h) * 1.22 * lam_w / (2 * a)  # footprint of the piston's beam
-    r2_max = (1.5 + 1.0 * accuracy) * beam
+    if extent is None:
+        extent = 1.5 + 0.5 * accuracy
+    r2_max = extent * beam
     r1_max = r2_max + (1.0 + 0.5 * accuracy) * h
     if np.isfinite(radius):
         r1_max = min(r1_max, 0.7 * R1)
         r2_max = min(r2_max, 0.7 * R2)
     # --- 1. incident field on the front meridian (exact Rayleigh) -------------
-    n1 = int(accuracy * 1.5 * (k_w + k_l) * r1_max / np.pi) + 16
+    n1 = int(accuracy * 3.0 * (k_w + k_l) * r1_max / np.pi) + 16
     n_pan = max(2, n1 // 16)
     rho1, w1 = _gauss_legendre_panels(np.linspace(0.0, r1_max, n_pan + 1), 16)
     z1, nx1, nz1, g1 = _surface(rho1, d, R1)
     phi_face = k_w * a * (a + r1_max) / d
-    sx, sy, sw = _disc_nodes(a, int(accuracy * (12 + 0.6 * phi_face)), int(accuracy * (24 + 1.5 * phi_face)))
+    acc_p = max(accuracy, 1.0)
+    sx, sy, sw = _disc_nodes(
+        a, int(acc_p * (12 + 0.6 * phi_face)), int(acc_p * (24 + 1.5 * phi_face))
+    )
     p_in = np.zeros(rho1.size, complex)
     gx = np.zeros(rho1.size, complex)
     gz = np.zeros(rho1.size, complex)
@@ -1078,8 +1094,9 @@ def _pulse_echo_shell_core(a, f, d, h, radius, c_w, rho_w, c_l, rho_s, T_func, R
         gx[sl] = (de * dx) @ sw
         gz[sl] = (de * dz) @ sw
     # local incidence angle from the phase gradient
-    sxv = np.imag(gx / p_in)
-    szv = np.imag(gz / p_in)
+    sig = 1.0  # smoothing window of the local direction [wavelengths]
+    sxv = _smooth(rho1, w1 * rho1, np.imag(np.conj(p_in) * gx), sig * lam_w)
+    szv = _smooth(rho1, w1 * rho1, np.imag(np.conj(p_in) * gz), sig * lam_w)
     norm = np.hypot(sxv, szv)
     cos_i = np.clip((sxv * nx1 + szv * nz1) / norm, 0.0, 1.0)
     th_i = np.degrees(np.arccos(cos_i))
@@ -1088,11 +1105,11 @@ def _pulse_echo_shell_core(a, f, d, h, radius, c_w, rho_w, c_l, rho_s, T_func, R
     dn_pt = 1j * k_l * cos_L * p_t  # d p_t / d n_in
     wt1 = w1 * rho1 * g1 * _taper(rho1, r1_max)
     # --- 2. field in the solid on the back-wall meridian (Kirchhoff-Helmholtz) -
-    n2 = int(accuracy * 2.0 * k_l * r2_max / np.pi) + 16
+    n2 = int(accuracy * 3.0 * k_l * r2_max / np.pi) + 16
     rho2, w2 = _gauss_legendre_panels(np.linspace(0.0, r2_max, max(2, n2 // 16) + 1), 16)
     z2, nx2, nz2, g2 = _surface(rho2, d + h, R2)
     # azimuth: periodic trapezoid on [0, pi] (mirror symmetry y -> -y)
-    n_phi = int(accuracy * (k_l * min(r1_max, r2_max) * 1.1 + 40))
+    n_phi = int(accuracy * 0.6 * (k_l * min(r1_max, r2_max) * 1.1 + 40))
     phi = np.pi * (np.arange(n_phi) + 0.5) / n_phi
     wphi = np.full(n_phi, 2 * np.pi / n_phi)
     cph, sph = np.cos(phi), np.sin(phi)
@@ -1131,14 +1148,12 @@ def _pulse_echo_shell_core(a, f, d, h, radius, c_w, rho_w, c_l, rho_s, T_func, R
     # --- 3. back-wall echo by reciprocity -----------------------------------
     nbx, nbz = -nx2, -nz2  # normal towards the probe
     dn_p1 = q_x * nbx + q_z * nbz
-    sxv = np.imag(q_x / p1)
-    szv = np.imag(q_z / p1)
+    sxv = _smooth(rho2, w2 * rho2, np.imag(np.conj(p1) * q_x), sig * c_l / f)
+    szv = _smooth(rho2, w2 * rho2, np.imag(np.conj(p1) * q_z), sig * c_l / f)
     cos_b = np.clip(-(sxv * nbx + szv * nbz) / np.hypot(sxv, szv), 0.0, 1.0)
     Rb = R_func(np.degrees(np.arccos(cos_b)))
     wt2 = w2 * rho2 * g2 * _taper(rho2, r2_max) * 2 * np.pi
     integral = np.sum(wt2 * Rb * p1 * dn_p1)
-    global _DBG
-    _DBG = (rho2, z2, p1, q_x, q_z, dn_p1)
     return 1j * rho_w / (k_w * rho_s) * integral / (np.pi * a * a)
 
 
