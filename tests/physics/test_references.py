@@ -297,9 +297,7 @@ def test_solid_coefficients_limits_and_energy():
     assert ref.solid_fluid_reflection(th, 1e-9, C, rho, cL, cT) == pytest.approx(free, abs=1e-9)
     # no shear: fluid-fluid
     tt = np.array([0.0, 10.0, 30.0])
-    assert np.allclose(
-        ref.fluid_solid_transmission(tt, 1000.0, C, 1000.0, C, 0.0), 1.0, atol=1e-12
-    )
+    assert np.allclose(ref.fluid_solid_transmission(tt, 1000.0, C, 1000.0, C, 0.0), 1.0, atol=1e-12)
 
 
 def test_shell_kirchhoff_rigid_mirror_in_water():
@@ -321,7 +319,7 @@ def test_shell_kirchhoff_flat_steel_plate_paraxial_equivalent(d, h):
     """Steel plate: V ~ pulse_echo_plane at the equivalent water path d + h c_l/c_w times
     T_ws R_sw T_sw and the phase correction (paraxial; measured 0.7-1.5 %)."""
     a, f = SHELL["a"], SHELL["f"]
-    rho, cL, cT = STEEL
+    rho, cL, _ = STEEL
     V = ref.pulse_echo_shell_kirchhoff(a, f, d, 0.0, h, shape="flat")
     Zw, ZL = 1000.0 * C, rho * cL
     T, R, Tsw = 2 * ZL / (ZL + Zw), (Zw - ZL) / (Zw + ZL), 2 * Zw / (ZL + Zw)
