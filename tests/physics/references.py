@@ -1079,14 +1079,14 @@ def _pulse_echo_shell_core(
     # extents (smooth cos^2 tapers); they grow with accuracy
     beam = a + (d + h) * 1.22 * lam_w / (2 * a)  # footprint of the piston's beam
     if extent is None:
-        extent = 1.5 + 0.5 * accuracy
+        extent = 3.0 + 0.5 * accuracy
     r2_max = extent * beam
     r1_max = r2_max + (1.0 + 0.5 * accuracy) * h
     if np.isfinite(radius):
         r1_max = min(r1_max, 0.7 * R1)
         r2_max = min(r2_max, 0.7 * R2)
     # --- 1. incident field on the front meridian (exact Rayleigh) -------------
-    n1 = int(accuracy * 3.0 * (k_w + k_l) * r1_max / np.pi) + 16
+    n1 = int(accuracy * 2.5 * (k_w + k_l) * r1_max / np.pi) + 16
     n_pan = max(2, n1 // 16)
     rho1, w1 = _gauss_legendre_panels(np.linspace(0.0, r1_max, n_pan + 1), 16)
     z1, nx1, nz1, g1 = _surface(rho1, d, R1)
@@ -1119,7 +1119,7 @@ def _pulse_echo_shell_core(
     dn_pt = 1j * k_l * cos_L * p_t  # d p_t / d n_in
     wt1 = w1 * rho1 * g1 * _taper(rho1, r1_max)
     # --- 2. field in the solid on the back-wall meridian (Kirchhoff-Helmholtz) -
-    n2 = int(accuracy * 3.0 * k_l * r2_max / np.pi) + 16
+    n2 = int(accuracy * 2.5 * k_l * r2_max / np.pi) + 16
     rho2, w2 = _gauss_legendre_panels(np.linspace(0.0, r2_max, max(2, n2 // 16) + 1), 16)
     z2, nx2, nz2, g2 = _surface(rho2, d + h, R2)
     # azimuth: periodic trapezoid on [0, pi] (mirror symmetry y -> -y)
