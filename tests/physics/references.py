@@ -1140,7 +1140,7 @@ def _pulse_echo_shell_core(
     p1 = np.zeros(rho2.size, complex)
     q_x = np.zeros(rho2.size, complex)
     q_z = np.zeros(rho2.size, complex)
-    chunk = max(1, 4_000_000 // fx.size)
+    chunk = max(1, 1_500_000 // fx.size)
     for i0 in range(0, rho2.size, chunk):
         sl = slice(i0, i0 + chunk)
         dx = rho2[sl, None] - fx[None, :]  # x - x'
@@ -1256,22 +1256,32 @@ def pulse_echo_shell_kirchhoff(
     complex V (dimensionless, exp(-iwt), includes the round-trip phase).
 
     Accuracy / checks (tests/physics/test_references.py): water instead of
-    steel and a rigid back wall reproduce :func:`pulse_echo_plane` at
-    d + thickness to 0.02 %; the steel plate agrees with the paraxial
-    equivalent water path to ~1 % (a = 6.35 mm, 5 MHz, d = 30-50 mm,
-    h = 5-10 mm); accuracy 1 -> 1.5 changes V by < 0.3 % for the plate and
-    the 120 mm shell.  Limitations: Kirchhoff (local plane waves at both
-    faces; front face and back wall treated as locally planar), P waves only
-    (mode-converted shear waves are lost through the exact |T|, |R| but are
-    not propagated; the reciprocity integrand uses the fluid form, which
-    equals the elastic one at normal incidence and differs by
-    O(4 (c_t/c_l)^2 sin^2 th_b) obliquely).  For strongly diverging shells
-    (|V_sphere/V_flat| ~ 0.1, e.g. radius 60 mm, h 10 mm) the result depends
-    on how the local direction is defined where the piston's edge waves
-    interfere (window 0.5-2 wavelengths: ~+-30 % of V_sphere, ~1 % of
-    V_flat) -- use it there as a trend, not to a few %.
-    Cost per frequency (2 cores, accuracy 1, a = 6.35 mm, 5 MHz, d = 40 mm,
-    radius 60 mm, thickness 10 mm): COST s; O(f^3).
+    steel and a rigid flat back wall reproduce :func:`pulse_echo_plane` at
+    d + thickness to 0.014 % (a = 6.35 mm, 5 MHz, d = 40 mm, h = 10 mm); the
+    steel plate agrees with the paraxial equivalent water path
+    ``pulse_echo_plane(d + h c_l/c_w) T_ws R_sw T_sw exp(2ih(k_l - k_w c_l/c_w))``
+    to 0.3-1.4 % (complex; a = 6.35 mm, 5 MHz, d = 30-50 mm, h = 5-10 mm);
+    accuracy 1 -> 1.5 changes V by 0.02-0.06 % (plate) and 0.14 % (radius
+    120 mm), 0.2-2 % for radius 60 mm (a small echo, see below).  The
+    sphere/plate ratio agrees with a paraxial ABCD (Collins) estimate to ~1 %
+    for radius 120 mm (0.544/0.421/0.313 vs 0.529/0.417/0.316 at 4/5/6 MHz).
+
+    Limitations: Kirchhoff (local plane waves at both faces, each treated as
+    locally planar), single back-wall echo, P waves only (mode-converted shear
+    waves are lost through the exact |T|, |R| but not propagated; the
+    reciprocity integrand has the fluid form, which equals the elastic one at
+    normal incidence and differs by O(4 (c_t/c_l)^2 sin^2 th_b) obliquely).
+    The local direction is ill-defined where the piston's edge waves
+    interfere: for strongly diverging shells (|V_sphere/V_flat| < ~0.2, e.g.
+    radius 60 mm, h 10 mm, 5-6 MHz) V depends on the smoothing window
+    (0.5-4 wavelengths: ratio 0.069-0.119 at 5 MHz, up to 5 % of V_flat) --
+    use it there as a trend, not to a few %.  Axis through the centre of
+    curvature only (no tilt: a non-axisymmetric version would need the full
+    2-D surfaces, >> 60 s per frequency).
+    Cost per frequency (one process, 2 shared cores, accuracy 1): ~3 s at
+    4 MHz, ~6 s at 5 MHz, ~7 s at 6 MHz for a = 6.35 mm, d = 40 mm,
+    radius 60 or 120 mm or flat, thickness 10 mm (O(f^3)); a water-filled
+    check (k_l = k_w) costs ~16x more.  Peak memory ~0.4 GB (chunked pair sums).
     """
     if shape == "flat":
         radius = np.inf

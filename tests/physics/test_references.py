@@ -1,7 +1,7 @@
 """Cross-checks of the independent physics references (tests/physics/references.py).
 
 The references validate each other and closed forms; none of this imports
-echocal.  Runs in a few seconds.
+echocal.  Runs in about a minute (the shell-echo checks, section 8, take ~55 s).
 """
 
 from __future__ import annotations
@@ -303,13 +303,13 @@ def test_solid_coefficients_limits_and_energy():
 def test_shell_kirchhoff_rigid_mirror_in_water():
     """No solid (water everywhere, T = 1) and a rigid flat back wall (R = 1): the
     Kirchhoff-Helmholtz transmission through the 'front face' plus the reciprocity
-    integral must give the exact mirror echo at d + h (measured 0.02 %)."""
+    integral must give the exact mirror echo at d + h (measured 0.014 %)."""
     a, f, d, h = SHELL["a"], SHELL["f"], SHELL["d"], 10e-3
 
     def one(th):
         return np.ones(np.shape(th), complex)
 
-    V = ref._pulse_echo_shell_core(a, f, d, h, np.inf, C, 1000.0, C, 1000.0, one, one, 0.7)
+    V = ref._pulse_echo_shell_core(a, f, d, h, np.inf, C, 1000.0, C, 1000.0, one, one, 0.5)
     W = ref.pulse_echo_plane(a, f, d + h, 0.0)
     assert abs(V / W - 1) < 5e-3
 
@@ -317,7 +317,8 @@ def test_shell_kirchhoff_rigid_mirror_in_water():
 @pytest.mark.parametrize(("d", "h"), [(30e-3, 5e-3), (50e-3, 10e-3)])
 def test_shell_kirchhoff_flat_steel_plate_paraxial_equivalent(d, h):
     """Steel plate: V ~ pulse_echo_plane at the equivalent water path d + h c_l/c_w times
-    T_ws R_sw T_sw and the phase correction (paraxial; measured 0.7-1.5 %)."""
+    T_ws R_sw T_sw and the phase correction (paraxial; measured 0.35 % and 0.5 %;
+    0.3-1.4 % over d = 30-50 mm, h = 5-10 mm)."""
     a, f = SHELL["a"], SHELL["f"]
     rho, cL, _ = STEEL
     V = ref.pulse_echo_shell_kirchhoff(a, f, d, 0.0, h, shape="flat")
@@ -326,11 +327,12 @@ def test_shell_kirchhoff_flat_steel_plate_paraxial_equivalent(d, h):
     kw, kl = 2 * np.pi * f / C, 2 * np.pi * f / cL
     W = ref.pulse_echo_plane(a, f, d + h * cL / C, 0.0) * T * R * Tsw
     W *= np.exp(2j * h * (kl - kw * cL / C))
-    assert abs(V / W - 1) < 0.03
+    assert abs(V / W - 1) < 0.015
 
 
 @pytest.mark.parametrize(("shape", "radius"), [("flat", 0.0), ("sphere", 0.12)])
 def test_shell_kirchhoff_converged(shape, radius):
+    """accuracy 1 -> 1.5 at 4 MHz: measured 0.06 % (plate), 0.14 % (120 mm shell)."""
     a, f, d = SHELL["a"], 4e6, SHELL["d"]
     V1 = ref.pulse_echo_shell_kirchhoff(a, f, d, radius, 10e-3, shape=shape)
     V2 = ref.pulse_echo_shell_kirchhoff(a, f, d, radius, 10e-3, shape=shape, accuracy=1.5)
@@ -339,8 +341,8 @@ def test_shell_kirchhoff_converged(shape, radius):
 
 def test_shell_kirchhoff_convex_shell_weaker_than_plate():
     """A diverging convex front face and a convex back wall spread the echo:
-    |V_sphere| < |V_flat| (radius 60 mm, 10 mm wall; measured ratio ~0.07-0.1 at
-    5 MHz, ~0.41 for radius 120 mm)."""
+    |V_sphere| < |V_flat| (radius 60 mm, 10 mm wall; measured ratio 0.069 at 5 MHz,
+    0.42 for radius 120 mm; the paraxial ABCD estimate gives 0.087 and 0.42)."""
     a, f, d = SHELL["a"], SHELL["f"], SHELL["d"]
     Vf = ref.pulse_echo_shell_kirchhoff(a, f, d, 0.0, 10e-3, shape="flat")
     V60 = ref.pulse_echo_shell_kirchhoff(a, f, d, 0.06, 10e-3)
