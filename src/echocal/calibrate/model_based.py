@@ -44,12 +44,26 @@ from echocal._validate import one_of
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
+from echocal.calibrate.evidence import energy_sigma
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 
 _GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
+_REFUTE = 4.0
+"""A measurement this many of its noise σ above the model's maximum refutes the model."""
+_MAX_SHRINK = 4
+"""At most this many halvings of the fitting neighbourhood per refit."""
+_RIDGE_RATIO = 2.0
+"""A fitted peak whose widths differ by this factor is a ridge: search across it once."""
+_ACROSS_AFTER = 6
+"""Refinement steps on a ridge before it is searched across."""
+_ACROSS_STEPS = (0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5)
+"""[× radius] the offsets of the search across a ridge, first on the side where the data
+fall below the model, then on the other."""
+_ACROSS_REPEATS = 4
+"""At most this many measurements of one point of that search."""
 
 
 def hexagon(center: FloatArray, radius: float) -> FloatArray:
@@ -323,6 +337,12 @@ class ModelBased(Optimizer):
             ok = np.isfinite(hv)
             self._x, self._y = hp[ok], hv[ok]
         self._trust = self.radius
+        self._loc_scale = 1.0  # shrinks the fitting neighbourhood when the data refute the fit
+        self._across = np.zeros((0, 2))  # queued points of a search across a ridge
+        self._across_done = False
+        self._across_top = 0.0
+        self._across_from = self.x0.copy()
+        self._recentred: FloatArray | None = None
         self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
         self._n_fresh = 0
         self._design = self._initial_design()
@@ -359,25 +379,90 @@ class ModelBased(Optimizer):
             return 0.0
         return float(floor) / self._scale
 
+    def _fit_radius(self) -> float:
+        """[deg] the fitting neighbourhood's radius: ``locality`` × max(radius, trust),
+        shrunk (never below ``radius``) where the model was refuted by the data."""
+        return max(self.locality * max(self.radius, self._trust) * self._loc_scale, self.radius)
+
+    def _sigmas(self, values: FloatArray) -> FloatArray | None:
+        """[method scale] the noise σ of measurements whose echo energies (floor removed)
+        are ``values`` (k,), from the live noise model; None when it cannot tell."""
+        if self.noise_model is None:
+            return None
+        floor, sigma = self.noise_model()
+        if floor is None or sigma is None or not (np.isfinite(floor) and np.isfinite(sigma)):
+            return None
+        if sigma <= 0.0:
+            return None
+        floor_s, sigma_s = float(floor) / self._scale, float(sigma) / self._scale
+        return energy_sigma(np.asarray(values) + floor_s, floor_s, sigma_s)
+
+    def _refuting_point(
+        self, model: QuadraticModel, y_all: FloatArray, local: np.ndarray
+    ) -> int | None:
+        """Index of the strongest local measurement that lies clearly above everything
+        the model allows (its maximum in the fitted neighbourhood, or its largest value at
+        a measured point): ``_REFUTE`` σ of that measurement's noise, and 1 % — None when
+        there is none or the noise is unknown (log space only).
+
+        A quadratic fitted across several lobes (a near-field probe over a ball: a central
+        peak, a dip to 0.32 at 0.8°, a ring at 0.8 of the peak 1.6° out) puts its maximum
+        between them, below the central peak's measured values."""
+        if self.space != "log" or not local.any():
+            return None
+        sig = self._sigmas(np.maximum(y_all, 0.0))
+        if sig is None:
+            return None
+        top = float(np.max(model.energy(self._x[local])))
+        if model.concave:
+            xs = model.argmax()
+            if np.all(np.isfinite(xs)) and np.hypot(*(xs - model.center)) <= self._fit_radius():
+                top = max(top, float(model.energy(xs[None, :])[0]))
+        # repeats of one point are averaged: their mean's noise is σ/√n
+        _, group, count = np.unique(
+            np.round(self._x, 9), axis=0, return_inverse=True, return_counts=True
+        )
+        group = group.reshape(-1)
+        mean = np.bincount(group, weights=y_all) / count
+        excess = mean[group] - top
+        noise = sig / np.sqrt(count[group])
+        refuted = local & (excess > _REFUTE * noise) & (excess > 0.01 * top)
+        if not refuted.any():
+            return None
+        idx = np.flatnonzero(refuted)
+        return int(idx[np.argmax(mean[group][idx])])
+
     def _refit(self) -> None:
         center = self._incumbent
         y_all = self._y - self._floor()
-        model = fit_quadratic(
-            self._x,
-            y_all,
-            center,
-            space=self.space,
-            scale=self.radius,
-            locality=self.locality * max(self.radius, self._trust),
-            floor=self.floor,
-        )
+        for _ in range(_MAX_SHRINK + 1):
+            model = fit_quadratic(
+                self._x,
+                y_all,
+                center,
+                space=self.space,
+                scale=self.radius,
+                locality=self._fit_radius(),
+                floor=self.floor,
+            )
+            if model is None:
+                break
+            local = np.hypot(*(self._x - center).T) <= self._fit_radius()
+            refuting = self._refuting_point(model, y_all, local)
+            if refuting is None or self._fit_radius() <= self.radius:
+                break
+            # the data refute the model: fit a smaller neighbourhood of the strongest echo
+            center = self._x[refuting].copy()
+            self._incumbent = center
+            self._loc_scale *= 0.5
+            self._recentred = center
         self._model = model
         if model is None:
             best = self._x[int(np.argmax(y_all))] if len(y_all) else self.x0
             self._incumbent = best
             return
         pred = model(self._x)
-        local = np.hypot(*(self._x - center).T) <= self.locality * max(self.radius, self._trust)
+        local = np.hypot(*(self._x - center).T) <= self._fit_radius()
         if not local.any():
             local[:] = True
         if self.space == "log":
@@ -428,16 +513,56 @@ class ModelBased(Optimizer):
         if len(self._design):
             return self._design
         cand = self._propose()
-        if self._times_measured(cand[0]) >= 2:
+        if self._mode != "across" and self._times_measured(cand[0]) >= 2:
             cand = self._fresh_point()[None, :]
             self._mode = "approach"
             self._step_len = float(np.hypot(*(cand[0] - self._incumbent)))
         return cand
 
+    def _across_line(self, m: QuadraticModel, xs: FloatArray) -> FloatArray | None:
+        """The points of a search across a ridge through ``xs`` (see :data:`_ACROSS_STEPS`),
+        or None when the fitted peak is not a ridge (its widths' ratio below
+        :data:`_RIDGE_RATIO`).
+
+        A large probe in its near field over a ball sees a lobe made of a central peak,
+        a dip (0.32 of the peak 0.8° out) and a ring (0.8 of the peak, 1.6° out): a local
+        model started beyond the dip climbs the ring, on which it is a ridge — steep across
+        (the radius), flat along it — and the centre lies across it.  The side where the
+        data fall below the model (the dip) is searched first."""
+        eig, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
+        if eig[0] <= 0.0 or eig[1] / eig[0] < _RIDGE_RATIO**2:
+            return None
+        e = vec[:, 1]
+        s = (self._x - xs) @ e
+        t = (self._x - xs) @ vec[:, 0]
+        y = self._y - self._floor()
+        band = (np.abs(t) <= self.radius) & (np.abs(s) >= 0.25 * self.radius)
+        resid = y - m.energy(self._x)
+        plus = float(np.mean(resid[band & (s > 0)])) if np.any(band & (s > 0)) else 0.0
+        minus = float(np.mean(resid[band & (s < 0)])) if np.any(band & (s < 0)) else 0.0
+        first = 1.0 if plus < minus else -1.0
+        steps = np.asarray(_ACROSS_STEPS) * self.radius
+        offsets = np.concatenate([first * steps, -first * steps])
+        return self.clip(xs[None, :] + offsets[:, None] * e[None, :])
+
     def _propose(self) -> FloatArray:
         m = self._model
         xs = self._supported_max()
+        if len(self._across):
+            self._mode = "across"
+            self._pred = None
+            return self._across[:1].copy()
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
+            if not self._across_done and self._n_ring >= _ACROSS_AFTER:
+                line = self._across_line(m, xs)
+                self._across_done = True
+                if line is not None:
+                    self._across = line
+                    self._across_top = float(m.energy(xs[None, :])[0])
+                    self._across_from = xs.copy()
+                    self._mode = "across"
+                    self._pred = None
+                    return self._across[:1].copy()
             self._mode = "refine"
             self._n_ring += 1
             ang = self._n_ring * _GOLDEN
@@ -490,6 +615,8 @@ class ModelBased(Optimizer):
         self._x = np.vstack([self._x, points[ok]])
         self._y = np.concatenate([self._y, values[ok]])
         self._design = np.zeros((0, 2))
+        if self._mode == "across" and len(self._across):
+            self._across_step(points[0], values[0] if ok.all() else np.nan)
         if self._mode == "approach" and self._pred is not None and ok.all():
             m_center, m_cand = self._pred
             y = float(values[0]) - self._floor()
@@ -501,8 +628,36 @@ class ModelBased(Optimizer):
                     self._trust = min(2.0 * self._trust, self.max_radius)
             elif actual - m_center < -noise:
                 self._trust = max(0.5 * self._trust, self.min_radius)
+        self._recentred = None
         self._refit()
+        if self._recentred is not None:
+            # a new, narrower peak: trust a step of half the design radius, and measure a
+            # hexagon of that radius around it unless its neighbourhood is measured already
+            self._trust = max(0.5 * self.radius, self.min_radius)
+            near = np.hypot(*(self._x - self._recentred).T) <= 0.75 * self.radius
+            if np.count_nonzero(near) < 7:
+                self._design = self.clip(hexagon(self._recentred, 0.5 * self.radius)[1:])
+                self._across = np.zeros((0, 2))
         return True
+
+    def _across_step(self, point: FloatArray, value: float) -> None:
+        """After measuring a point of the search across a ridge: re-measure it (up to
+        :data:`_ACROSS_REPEATS` times) while its mean is above the ridge's top by more
+        than 2 σ of that mean, else go on to the next point.  A point that clearly
+        exceeds the top refutes the model, which then re-fits around it (:meth:`_refit`)
+        and the search ends."""
+        here = np.all(np.abs(self._x - point) <= 1e-9, axis=1)
+        y = self._y[here] - self._floor()
+        sig = self._sigmas(np.maximum(y, 0.0))
+        excess = float(np.mean(y)) - self._across_top
+        if np.isfinite(value) and sig is not None and len(y) <= _ACROSS_REPEATS:
+            noise = float(np.mean(sig)) / np.sqrt(len(y))
+            if excess > _REFUTE * noise and excess > 0.01 * self._across_top:
+                self._across = np.zeros((0, 2))  # found: the refit moves to it
+                return
+            if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
+                return  # measure it again
+        self._across = self._across[1:]
 
     def _recommend(self) -> FloatArray:
         xs = self._supported_max()
