@@ -53,15 +53,21 @@ __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_re
 _GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
 _REFUTE = 4.0
 """A measurement this many of its noise σ above the model's maximum refutes the model."""
+_REFUTE_RELATIVE = 0.05
+"""... and by this fraction of that maximum (a smooth peak's top is fitted within a few %;
+the central peak over a ball stands 25 % above the ring around it)."""
 _MAX_SHRINK = 4
+_MIN_FIT = 0.5
+"""[× radius] the smallest fitting neighbourhood (the central peak over a ball is 0.3°
+wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
 """At most this many halvings of the fitting neighbourhood per refit."""
-_RIDGE_RATIO = 2.0
+_RIDGE_RATIO = 1.6
 """A fitted peak whose widths differ by this factor is a ridge: search across it once."""
 _ACROSS_AFTER = 6
 """Refinement steps on a ridge before it is searched across."""
 _ACROSS_STEPS = (0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5)
-"""[× radius] the offsets of the search across a ridge, first on the side where the data
-fall below the model, then on the other."""
+"""[× radius] the offsets of the search across a ridge, nearest first, alternating sides
+(first the side where the data fall below the model)."""
 _ACROSS_REPEATS = 4
 """At most this many measurements of one point of that search."""
 
@@ -381,8 +387,10 @@ class ModelBased(Optimizer):
 
     def _fit_radius(self) -> float:
         """[deg] the fitting neighbourhood's radius: ``locality`` × max(radius, trust),
-        shrunk (never below ``radius``) where the model was refuted by the data."""
-        return max(self.locality * max(self.radius, self._trust) * self._loc_scale, self.radius)
+        shrunk (never below ``_MIN_FIT`` × radius) where the data refuted the model."""
+        return max(
+            self.locality * max(self.radius, self._trust) * self._loc_scale, _MIN_FIT * self.radius
+        )
 
     def _sigmas(self, values: FloatArray) -> FloatArray | None:
         """[method scale] the noise σ of measurements whose echo energies (floor removed)
@@ -402,7 +410,7 @@ class ModelBased(Optimizer):
     ) -> int | None:
         """Index of the strongest local measurement that lies clearly above everything
         the model allows (its maximum in the fitted neighbourhood, or its largest value at
-        a measured point): ``_REFUTE`` σ of that measurement's noise, and 1 % — None when
+        a measured point): ``_REFUTE`` σ of that measurement's noise, and 5 % — None when
         there is none or the noise is unknown (log space only).
 
         A quadratic fitted across several lobes (a near-field probe over a ball: a central
@@ -426,7 +434,7 @@ class ModelBased(Optimizer):
         mean = np.bincount(group, weights=y_all) / count
         excess = mean[group] - top
         noise = sig / np.sqrt(count[group])
-        refuted = local & (excess > _REFUTE * noise) & (excess > 0.01 * top)
+        refuted = local & (excess > _REFUTE * noise) & (excess > _REFUTE_RELATIVE * top)
         if not refuted.any():
             return None
         idx = np.flatnonzero(refuted)
@@ -447,9 +455,10 @@ class ModelBased(Optimizer):
             )
             if model is None:
                 break
-            local = np.hypot(*(self._x - center).T) <= self._fit_radius()
-            refuting = self._refuting_point(model, y_all, local)
-            if refuting is None or self._fit_radius() <= self.radius:
+            # any measurement refutes the model's maximum, the far ones included: they may
+            # lie on the stronger peak
+            refuting = self._refuting_point(model, y_all, np.ones(len(y_all), dtype=bool))
+            if refuting is None or self._fit_radius() <= _MIN_FIT * self.radius:
                 break
             # the data refute the model: fit a smaller neighbourhood of the strongest echo
             center = self._x[refuting].copy()
@@ -528,7 +537,7 @@ class ModelBased(Optimizer):
         a dip (0.32 of the peak 0.8° out) and a ring (0.8 of the peak, 1.6° out): a local
         model started beyond the dip climbs the ring, on which it is a ridge — steep across
         (the radius), flat along it — and the centre lies across it.  The side where the
-        data fall below the model (the dip) is searched first."""
+        data fall below the model (the dip) is searched first, alternating sides."""
         eig, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
         if eig[0] <= 0.0 or eig[1] / eig[0] < _RIDGE_RATIO**2:
             return None
@@ -542,7 +551,7 @@ class ModelBased(Optimizer):
         minus = float(np.mean(resid[band & (s < 0)])) if np.any(band & (s < 0)) else 0.0
         first = 1.0 if plus < minus else -1.0
         steps = np.asarray(_ACROSS_STEPS) * self.radius
-        offsets = np.concatenate([first * steps, -first * steps])
+        offsets = np.stack([first * steps, -first * steps], axis=1).reshape(-1)
         return self.clip(xs[None, :] + offsets[:, None] * e[None, :])
 
     def _propose(self) -> FloatArray:
@@ -555,8 +564,8 @@ class ModelBased(Optimizer):
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
             if not self._across_done and self._n_ring >= _ACROSS_AFTER:
                 line = self._across_line(m, xs)
-                self._across_done = True
                 if line is not None:
+                    self._across_done = True
                     self._across = line
                     self._across_top = float(m.energy(xs[None, :])[0])
                     self._across_from = xs.copy()
@@ -652,7 +661,7 @@ class ModelBased(Optimizer):
         excess = float(np.mean(y)) - self._across_top
         if np.isfinite(value) and sig is not None and len(y) <= _ACROSS_REPEATS:
             noise = float(np.mean(sig)) / np.sqrt(len(y))
-            if excess > _REFUTE * noise and excess > 0.01 * self._across_top:
+            if excess > _REFUTE * noise and excess > _REFUTE_RELATIVE * self._across_top:
                 self._across = np.zeros((0, 2))  # found: the refit moves to it
                 return
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
