@@ -65,10 +65,12 @@ _RIDGE_RATIO = 1.6
 """A fitted peak whose widths differ by this factor is a ridge: search across it once."""
 _ACROSS_AFTER = 6
 """Refinement steps on a ridge before it is searched across."""
-_ACROSS_STEPS = (0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5)
+_ACROSS_STEPS = (0.6, 0.9, 1.2, 1.5, 1.8, 2.1, 2.4)
 """[× radius] the offsets of the search across a ridge, nearest first, alternating sides
 (first the side where the data fall below the model)."""
 _ACROSS_REPEATS = 4
+_BUMP_RADIUS = 0.35
+"""[× radius] the hexagon measured around a bump of the search across a ridge."""
 """At most this many measurements of one point of that search."""
 
 
@@ -349,6 +351,8 @@ class ModelBased(Optimizer):
         self._across_top = 0.0
         self._across_from = self.x0.copy()
         self._recentred: FloatArray | None = None
+        self._across_line_points: FloatArray | None = None
+        self._across_bump = False
         self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
         self._n_fresh = 0
         self._design = self._initial_design()
@@ -567,6 +571,7 @@ class ModelBased(Optimizer):
                 if line is not None:
                     self._across_done = True
                     self._across = line
+                    self._across_line_points = line.copy()
                     self._across_top = float(m.energy(xs[None, :])[0])
                     self._across_from = xs.copy()
                     self._mode = "across"
@@ -667,6 +672,43 @@ class ModelBased(Optimizer):
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
                 return  # measure it again
         self._across = self._across[1:]
+        if not len(self._across) and not self._across_bump:
+            self._across_bump = True
+            bump = self._across_bump_point()
+            if bump is not None:
+                self._across = self.clip(hexagon(bump, _BUMP_RADIUS * self.radius)[1:])
+
+    def _across_bump_point(self) -> FloatArray | None:
+        """The line's strongest point beyond a dip on either side of the ridge: clearly
+        (3 σ) above the weakest point between it and the ridge — a line that passes near,
+        not through, a central peak (its direction is the fitted ridge's, a few degrees off
+        at 10 dB) crosses it as such a bump; None when there is none."""
+        xs = self._across_from
+        line = self._across_line_points
+        if line is None or not len(line):
+            return None
+        floor = self._floor()
+        vals = []
+        for p in line:
+            here = np.all(np.abs(self._x - p) <= 1e-9, axis=1)
+            vals.append(float(np.mean(self._y[here])) - floor if here.any() else np.nan)
+        v = np.asarray(vals)
+        sig = self._sigmas(np.maximum(np.nan_to_num(v), 0.0))
+        if sig is None:
+            return None
+        e = line[-1] - xs
+        side = np.sign((line - xs) @ e)
+        dist = np.hypot(*(line - xs).T)
+        best, best_v = None, -np.inf
+        for sgn in (-1.0, 1.0):
+            idx = np.flatnonzero((side == sgn) & np.isfinite(v))
+            idx = idx[np.argsort(dist[idx])]
+            for k in range(1, len(idx)):
+                j = idx[k]
+                low = float(np.min(v[idx[:k]]))
+                if v[j] - low > 3.0 * sig[j] and v[j] > best_v:
+                    best, best_v = line[j], v[j]
+        return None if best is None else best.copy()
 
     def _recommend(self) -> FloatArray:
         xs = self._supported_max()
