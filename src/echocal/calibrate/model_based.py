@@ -64,7 +64,8 @@ wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
 _RIDGE_RATIO = 1.6
 """A fitted peak whose widths differ by this factor is a ridge: search across it once."""
 _ACROSS_AFTER = 6
-"""Refinement steps on a ridge before it is searched across."""
+"""Consecutive refinement steps (no approach step between) on a ridge before it is
+searched across: only a settled model is trusted to be on the ridge's top."""
 _ACROSS_STEPS = (0.6, 0.9, 1.2, 1.5, 1.8, 2.1, 2.4)
 """[× radius] the offsets of the search across a ridge, nearest first, alternating sides
 (first the side where the data fall below the model)."""
@@ -353,6 +354,7 @@ class ModelBased(Optimizer):
         self._recentred: FloatArray | None = None
         self._across_line_points: FloatArray | None = None
         self._across_bump = False
+        self._streak = 0  # refinement steps since the last approach step
         self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
         self._n_fresh = 0
         self._design = self._initial_design()
@@ -566,7 +568,7 @@ class ModelBased(Optimizer):
             self._pred = None
             return self._across[:1].copy()
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
-            if not self._across_done and self._n_ring >= _ACROSS_AFTER:
+            if not self._across_done and self._streak >= _ACROSS_AFTER:
                 line = self._across_line(m, xs)
                 if line is not None:
                     self._across_done = True
@@ -579,6 +581,7 @@ class ModelBased(Optimizer):
                     return self._across[:1].copy()
             self._mode = "refine"
             self._n_ring += 1
+            self._streak += 1
             ang = self._n_ring * _GOLDEN
             u = np.array([np.cos(ang), np.sin(ang)])
             eig, vec = np.linalg.eigh(m.width())
@@ -590,6 +593,7 @@ class ModelBased(Optimizer):
             self._pred = None
             return (xs + off)[None, :]
         self._mode = "approach"
+        self._streak = 0
         if m is not None:
             cand = trust_region_max(m, self._trust)
             self._pred = (m.c, float(m(cand[None, :])[0]))
