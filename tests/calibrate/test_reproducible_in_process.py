@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import echocal.calibrate.model_based as model_based
+import echocal.calibrate.local_model as local_model
 from echocal import SourceObjective
 from echocal.calibrate import FunctionObjective, calibrate
 from echocal.cli._setup_option import resolve_setup
@@ -49,13 +49,13 @@ def test_the_model_fit_does_not_depend_on_memory_alignment(monkeypatch):
     # the exp-fit of every refit of a real run, its inputs placed at other alignments:
     # with MINPACK's LM the first fit of this run differed in the 13th digit
     calls = []
-    fit = model_based._refine_exp_fit
+    fit = local_model._refine_exp_fit
 
     def spy(d, y, coef):
         calls.append((d.copy(), y.copy(), coef.copy()))
         return fit(d, y, coef)
 
-    monkeypatch.setattr(model_based, "_refine_exp_fit", spy)
+    monkeypatch.setattr(local_model, "_refine_exp_fit", spy)
     _run()
     assert len(calls) >= 5
     for d, y, coef in calls:

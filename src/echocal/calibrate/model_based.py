@@ -34,7 +34,6 @@ that can be negative).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -44,212 +43,36 @@ from echocal._validate import one_of
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
+from echocal.calibrate.evidence import energy_sigma
+from echocal.calibrate.local_model import QuadraticModel, fit_quadratic, hexagon, trust_region_max
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 
 _GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
-
-
-def hexagon(center: FloatArray, radius: float) -> FloatArray:
-    """``center`` and 6 points on a circle of ``radius`` [deg], shape (7, 2)."""
-    ang = np.arange(6) * np.pi / 3.0
-    ring = center[None, :] + radius * np.stack([np.cos(ang), np.sin(ang)], axis=1)
-    return np.vstack([center[None, :], ring])
-
-
-@dataclass(frozen=True, slots=True)
-class QuadraticModel:
-    """m(x) = c + bᵀ(x − center) + ½ (x − center)ᵀ H (x − center).
-
-    center : [deg] (2,); c : model value at centre; b : (2,); H : (2, 2).
-    space : ``"log"`` (m models log f) or ``"linear"``.
-    """
-
-    center: FloatArray
-    c: float
-    b: FloatArray
-    H: FloatArray
-    space: str
-
-    def __call__(self, x: ArrayLike) -> FloatArray:
-        """Model values at points [deg], shape (k, 2) -> (k,)."""
-        d = np.atleast_2d(np.asarray(x, dtype=np.float64)) - self.center
-        return self.c + d @ self.b + 0.5 * np.einsum("ki,ij,kj->k", d, self.H, d)
-
-    @property
-    def concave(self) -> bool:
-        """True when H is negative definite."""
-        return bool(np.linalg.eigvalsh(self.H)[-1] < 0.0)
-
-    def argmax(self) -> FloatArray:
-        """Stationary point x* = centre − H⁻¹ b [deg] (the maximum when concave)."""
-        return self.center - np.linalg.solve(self.H, self.b)
-
-    def width(self) -> FloatArray:
-        """(−H)^{−1/2}, shape (2, 2) [deg]: the peak's 1-σ ellipse (log space, concave only)."""
-        eig, vec = np.linalg.eigh(-self.H)
-        return vec @ np.diag(1.0 / np.sqrt(eig)) @ vec.T
-
-    def energy(self, x: ArrayLike) -> FloatArray:
-        """Model of f itself at points (k, 2): exp(m) in log space."""
-        m = self(x)
-        return np.exp(np.minimum(m, 700.0)) if self.space == "log" else m
-
-
-def fit_quadratic(
-    points: FloatArray,
-    values: FloatArray,
-    center: FloatArray,
-    *,
-    space: str,
-    scale: float,
-    locality: float | None = None,
-    floor: float = 0.0,
-    refine: bool = True,
-) -> QuadraticModel | None:
-    """Weighted least-squares quadratic fit (see module docstring); None if underdetermined.
-
-    points : [deg] (n, 2); values : (n,) finite; scale : [deg] length for conditioning.
-    locality : [deg] only points within this distance of ``center`` are fitted (None: all).
-    floor : log space only — points below ``floor`` × the largest fitted value are left out
-        (at the noise floor log y says nothing about log f, and its residual would grow
-        with the squared distance from the peak); if fewer than 8 remain, the 8 largest
-        positive values are used.
-    refine : log space only — starting from that weighted log fit, fit f = exp(m) to *all*
-        local values (noise-floor and negative ones included) by nonlinear least squares
-        with equal weights, the maximum-likelihood fit for additive noise of fixed σ.
-    """
-    if locality is not None:
-        near = np.hypot(*(points - center).T) <= locality
-        points, values = points[near], values[near]
-    d_all, y_all = (points - center) / scale, values
-    d = d_all
-    if space == "log":
-        keep = values > 0.0
-        if np.any(keep) and floor > 0.0:
-            strong = values > floor * values.max()
-            if np.count_nonzero(strong) >= 8:
-                keep &= strong
-            else:
-                top = np.argsort(values)[::-1][:8]
-                keep &= np.isin(np.arange(len(values)), top)
-        d, y = d[keep], values[keep]
-        if len(y) < 6:
-            return None
-        z = np.log(y)
-        w = (y / y.max()) ** 2
-    else:
-        if len(values) < 6:
-            return None
-        z, w = values, np.ones(len(values))
-    if np.count_nonzero(w > 1e-8) < 6:
-        return None
-    phi = np.stack(
-        [np.ones(len(z)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
-    )
-    sw = np.sqrt(w)
-    ridge = np.sqrt(1e-12 * w.sum()) * np.eye(6)[1:]
-    a = np.vstack([phi * sw[:, None], ridge])
-    rhs = np.concatenate([z * sw, np.zeros(5)])
-    coef, *_ = np.linalg.lstsq(a, rhs, rcond=None)
-    if not np.all(np.isfinite(coef)):
-        return None
-    if space == "log" and refine and len(y_all) >= 7:
-        coef = _refine_exp_fit(d_all, y_all, coef)
-    b = coef[1:3] / scale
-    h = np.array([[2.0 * coef[3], coef[4]], [coef[4], 2.0 * coef[5]]]) / scale**2
-    return QuadraticModel(center=center.copy(), c=float(coef[0]), b=b, H=h, space=space)
-
-
-_PRIOR = np.array([-0.5, 0.0, -0.5])
-_PRIOR_STD = 0.5
-
-
-def _features(d: FloatArray) -> FloatArray:
-    return np.stack(
-        [np.ones(len(d)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
-    )
-
-
-def _refine_exp_fit(d: FloatArray, y: FloatArray, coef: FloatArray) -> FloatArray:
-    """Least squares of y ≈ exp(φ(d)·β) from ``coef``; the start is kept if not improved."""
-    from scipy.optimize import least_squares
-
-    phi = _features(d)
-    ymax = float(np.max(np.abs(y)))
-    if ymax <= 0.0:
-        return coef
-    yn = y / ymax
-    start = coef.copy()
-    start[0] -= np.log(ymax)
-
-    def model(beta: FloatArray) -> FloatArray:
-        return np.exp(np.minimum(phi @ beta, 50.0))
-
-    def res(beta: FloatArray) -> FloatArray:
-        return model(beta) - yn
-
-    def jac(beta: FloatArray) -> FloatArray:
-        return model(beta)[:, None] * phi
-
-    r0 = res(start)
-    try:
-        out = least_squares(res, start, jac=jac, method="trf", max_nfev=200)
-    except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
-        return coef
-    if not (np.all(np.isfinite(out.x)) and out.cost < 0.5 * float(r0 @ r0)):
-        return coef
-    n = len(y)
-    if n > 6:
-        # weak prior on the curvature: a peak about as wide as the design radius
-        # (scaled coordinates: -1/2 on the diagonal), std _PRIOR_STD, weighed against
-        # the data with their noise estimate (negligible at high SNR, stabilizing at low)
-        sig = np.sqrt(2.0 * out.cost / (n - 6))
-        wp = sig / _PRIOR_STD
-
-        def res_p(beta: FloatArray) -> FloatArray:
-            return np.concatenate([res(beta), wp * (beta[3:] - _PRIOR)])
-
-        def jac_p(beta: FloatArray) -> FloatArray:
-            return np.vstack([jac(beta), wp * np.eye(6)[3:]])
-
-        try:
-            out2 = least_squares(res_p, out.x, jac=jac_p, method="trf", max_nfev=200)
-            if np.all(np.isfinite(out2.x)):
-                out = out2
-        except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - defensive
-            pass
-    beta = out.x.copy()
-    beta[0] += np.log(ymax)
-    return beta
-
-
-def trust_region_max(model: QuadraticModel, radius: float) -> FloatArray:
-    """Maximizer [deg] of ``model`` in the ball of ``radius`` around its centre (2-D, by
-    bisection on the Levenberg shift λ ≥ max(0, λ_max(H)))."""
-    h, b = model.H, model.b
-    eig = np.linalg.eigvalsh(h)
-    if eig[-1] < 0.0:
-        d = -np.linalg.solve(h, b)
-        if np.hypot(*d) <= radius:
-            return model.center + d
-    bnorm = float(np.hypot(*b))
-    if bnorm == 0.0:
-        vec = np.linalg.eigh(h)[1][:, -1]
-        return model.center + radius * vec
-    lo = max(eig[-1], 0.0)
-    hi = lo + bnorm / radius + float(np.abs(eig).max()) + 1e-12
-    for _ in range(100):
-        lam = 0.5 * (lo + hi)
-        d = -np.linalg.solve(h - lam * np.eye(2), b)
-        if np.hypot(*d) > radius:
-            lo = lam
-        else:
-            hi = lam
-    d = -np.linalg.solve(h - hi * np.eye(2), b)
-    return model.center + d
+_REFUTE = 4.0
+"""A measurement this many of its noise σ above the model's maximum refutes the model."""
+_REFUTE_RELATIVE = 0.05
+"""... and by this fraction of that maximum (a smooth peak's top is fitted within a few %;
+the central peak over a ball stands 25 % above the ring around it)."""
+_MAX_SHRINK = 4
+"""At most this many halvings of the fitting neighbourhood per refit."""
+_MIN_FIT = 0.5
+"""[× radius] the smallest fitting neighbourhood (the central peak over a ball is 0.3°
+wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
+_RIDGE_RATIO = 1.6
+"""A fitted peak whose widths differ by this factor is a ridge: search across it once."""
+_ACROSS_AFTER = 6
+"""Consecutive refinement steps (no approach step between) on a ridge before it is
+searched across: only a settled model is trusted to be on the ridge's top."""
+_ACROSS_STEPS = (0.6, 0.9, 1.2, 1.5, 1.8, 2.1, 2.4)
+"""[× radius] the offsets of the search across a ridge, nearest first, alternating sides
+(first the side where the data fall below the model)."""
+_ACROSS_REPEATS = 4
+"""At most this many measurements of one point of that search."""
+_BUMP_RADIUS = 0.35
+"""[× radius] the hexagon measured around a bump of the search across a ridge."""
 
 
 @register_method("model-based")
@@ -323,6 +146,15 @@ class ModelBased(Optimizer):
             ok = np.isfinite(hv)
             self._x, self._y = hp[ok], hv[ok]
         self._trust = self.radius
+        self._loc_scale = 1.0  # shrinks the fitting neighbourhood when the data refute the fit
+        self._across = np.zeros((0, 2))  # queued points of a search across a ridge
+        self._across_done = False
+        self._across_top = 0.0
+        self._across_from = self.x0.copy()
+        self._recentred: FloatArray | None = None
+        self._across_line_points: FloatArray | None = None
+        self._across_bump = False
+        self._streak = 0  # refinement steps since the last approach step
         self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
         self._n_fresh = 0
         self._design = self._initial_design()
@@ -359,25 +191,93 @@ class ModelBased(Optimizer):
             return 0.0
         return float(floor) / self._scale
 
+    def _fit_radius(self) -> float:
+        """[deg] the fitting neighbourhood's radius: ``locality`` × max(radius, trust),
+        shrunk (never below ``_MIN_FIT`` × radius) where the data refuted the model."""
+        return max(
+            self.locality * max(self.radius, self._trust) * self._loc_scale, _MIN_FIT * self.radius
+        )
+
+    def _sigmas(self, values: FloatArray) -> FloatArray | None:
+        """[method scale] the noise σ of measurements whose echo energies (floor removed)
+        are ``values`` (k,), from the live noise model; None when it cannot tell."""
+        if self.noise_model is None:
+            return None
+        floor, sigma = self.noise_model()
+        if floor is None or sigma is None or not (np.isfinite(floor) and np.isfinite(sigma)):
+            return None
+        if sigma <= 0.0:
+            return None
+        floor_s, sigma_s = float(floor) / self._scale, float(sigma) / self._scale
+        return energy_sigma(np.asarray(values) + floor_s, floor_s, sigma_s)
+
+    def _refuting_point(
+        self, model: QuadraticModel, y_all: FloatArray, local: np.ndarray
+    ) -> int | None:
+        """Index of the strongest local measurement that lies clearly above everything
+        the model allows (its maximum in the fitted neighbourhood, or its largest value at
+        a measured point): ``_REFUTE`` σ of that measurement's noise, and 5 % — None when
+        there is none or the noise is unknown (log space only).
+
+        A quadratic fitted across several lobes (a near-field probe over a ball: a central
+        peak, a dip to 0.32 at 0.8°, a ring at 0.8 of the peak 1.6° out) puts its maximum
+        between them, below the central peak's measured values."""
+        if self.space != "log" or not local.any():
+            return None
+        sig = self._sigmas(np.maximum(y_all, 0.0))
+        if sig is None:
+            return None
+        top = float(np.max(model.energy(self._x[local])))
+        if model.concave:
+            xs = model.argmax()
+            if np.all(np.isfinite(xs)) and np.hypot(*(xs - model.center)) <= self._fit_radius():
+                top = max(top, float(model.energy(xs[None, :])[0]))
+        # repeats of one point are averaged: their mean's noise is σ/√n
+        _, group, count = np.unique(
+            np.round(self._x, 9), axis=0, return_inverse=True, return_counts=True
+        )
+        group = group.reshape(-1)
+        mean = np.bincount(group, weights=y_all) / count
+        excess = mean[group] - top
+        noise = sig / np.sqrt(count[group])
+        refuted = local & (excess > _REFUTE * noise) & (excess > _REFUTE_RELATIVE * top)
+        if not refuted.any():
+            return None
+        idx = np.flatnonzero(refuted)
+        return int(idx[np.argmax(mean[group][idx])])
+
     def _refit(self) -> None:
         center = self._incumbent
         y_all = self._y - self._floor()
-        model = fit_quadratic(
-            self._x,
-            y_all,
-            center,
-            space=self.space,
-            scale=self.radius,
-            locality=self.locality * max(self.radius, self._trust),
-            floor=self.floor,
-        )
+        for _ in range(_MAX_SHRINK + 1):
+            model = fit_quadratic(
+                self._x,
+                y_all,
+                center,
+                space=self.space,
+                scale=self.radius,
+                locality=self._fit_radius(),
+                floor=self.floor,
+            )
+            if model is None:
+                break
+            # any measurement refutes the model's maximum, the far ones included: they may
+            # lie on the stronger peak
+            refuting = self._refuting_point(model, y_all, np.ones(len(y_all), dtype=bool))
+            if refuting is None or self._fit_radius() <= _MIN_FIT * self.radius:
+                break
+            # the data refute the model: fit a smaller neighbourhood of the strongest echo
+            center = self._x[refuting].copy()
+            self._incumbent = center
+            self._loc_scale *= 0.5
+            self._recentred = center
         self._model = model
         if model is None:
             best = self._x[int(np.argmax(y_all))] if len(y_all) else self.x0
             self._incumbent = best
             return
         pred = model(self._x)
-        local = np.hypot(*(self._x - center).T) <= self.locality * max(self.radius, self._trust)
+        local = np.hypot(*(self._x - center).T) <= self._fit_radius()
         if not local.any():
             local[:] = True
         if self.space == "log":
@@ -428,18 +328,60 @@ class ModelBased(Optimizer):
         if len(self._design):
             return self._design
         cand = self._propose()
-        if self._times_measured(cand[0]) >= 2:
+        if self._mode != "across" and self._times_measured(cand[0]) >= 2:
             cand = self._fresh_point()[None, :]
             self._mode = "approach"
             self._step_len = float(np.hypot(*(cand[0] - self._incumbent)))
         return cand
 
+    def _across_line(self, m: QuadraticModel, xs: FloatArray) -> FloatArray | None:
+        """The points of a search across a ridge through ``xs`` (see :data:`_ACROSS_STEPS`),
+        or None when the fitted peak is not a ridge (its widths' ratio below
+        :data:`_RIDGE_RATIO`).
+
+        A large probe in its near field over a ball sees a lobe made of a central peak,
+        a dip (0.32 of the peak 0.8° out) and a ring (0.8 of the peak, 1.6° out): a local
+        model started beyond the dip climbs the ring, on which it is a ridge — steep across
+        (the radius), flat along it — and the centre lies across it.  The side where the
+        data fall below the model (the dip) is searched first, alternating sides."""
+        eig, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
+        if eig[0] <= 0.0 or eig[1] / eig[0] < _RIDGE_RATIO**2:
+            return None
+        e = vec[:, 1]
+        s = (self._x - xs) @ e
+        t = (self._x - xs) @ vec[:, 0]
+        y = self._y - self._floor()
+        band = (np.abs(t) <= self.radius) & (np.abs(s) >= 0.25 * self.radius)
+        resid = y - m.energy(self._x)
+        plus = float(np.mean(resid[band & (s > 0)])) if np.any(band & (s > 0)) else 0.0
+        minus = float(np.mean(resid[band & (s < 0)])) if np.any(band & (s < 0)) else 0.0
+        first = 1.0 if plus < minus else -1.0
+        steps = np.asarray(_ACROSS_STEPS) * self.radius
+        offsets = np.stack([first * steps, -first * steps], axis=1).reshape(-1)
+        return self.clip(xs[None, :] + offsets[:, None] * e[None, :])
+
     def _propose(self) -> FloatArray:
         m = self._model
         xs = self._supported_max()
+        if len(self._across):
+            self._mode = "across"
+            self._pred = None
+            return self._across[:1].copy()
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
+            if not self._across_done and self._streak >= _ACROSS_AFTER:
+                line = self._across_line(m, xs)
+                if line is not None:
+                    self._across_done = True
+                    self._across = line
+                    self._across_line_points = line.copy()
+                    self._across_top = float(m.energy(xs[None, :])[0])
+                    self._across_from = xs.copy()
+                    self._mode = "across"
+                    self._pred = None
+                    return self._across[:1].copy()
             self._mode = "refine"
             self._n_ring += 1
+            self._streak += 1
             ang = self._n_ring * _GOLDEN
             u = np.array([np.cos(ang), np.sin(ang)])
             eig, vec = np.linalg.eigh(m.width())
@@ -451,6 +393,7 @@ class ModelBased(Optimizer):
             self._pred = None
             return (xs + off)[None, :]
         self._mode = "approach"
+        self._streak = 0
         if m is not None:
             cand = trust_region_max(m, self._trust)
             self._pred = (m.c, float(m(cand[None, :])[0]))
@@ -490,6 +433,8 @@ class ModelBased(Optimizer):
         self._x = np.vstack([self._x, points[ok]])
         self._y = np.concatenate([self._y, values[ok]])
         self._design = np.zeros((0, 2))
+        if self._mode == "across" and len(self._across):
+            self._across_step(points[0], values[0] if ok.all() else np.nan)
         if self._mode == "approach" and self._pred is not None and ok.all():
             m_center, m_cand = self._pred
             y = float(values[0]) - self._floor()
@@ -501,8 +446,73 @@ class ModelBased(Optimizer):
                     self._trust = min(2.0 * self._trust, self.max_radius)
             elif actual - m_center < -noise:
                 self._trust = max(0.5 * self._trust, self.min_radius)
+        self._recentred = None
         self._refit()
+        if self._recentred is not None:
+            # a new, narrower peak: trust a step of half the design radius, and measure a
+            # hexagon of that radius around it unless its neighbourhood is measured already
+            self._trust = max(0.5 * self.radius, self.min_radius)
+            near = np.hypot(*(self._x - self._recentred).T) <= 0.75 * self.radius
+            if np.count_nonzero(near) < 7:
+                self._design = self.clip(hexagon(self._recentred, 0.5 * self.radius)[1:])
+                self._across = np.zeros((0, 2))
         return True
+
+    def _across_step(self, point: FloatArray, value: float) -> None:
+        """After measuring a point of the search across a ridge: re-measure it (up to
+        :data:`_ACROSS_REPEATS` times) while its mean is above the ridge's top by more
+        than 2 σ of that mean, else go on to the next point.  A point that clearly
+        exceeds the top refutes the model, which then re-fits around it (:meth:`_refit`)
+        and the search ends."""
+        here = np.all(np.abs(self._x - point) <= 1e-9, axis=1)
+        y = self._y[here] - self._floor()
+        sig = self._sigmas(np.maximum(y, 0.0))
+        excess = float(np.mean(y)) - self._across_top
+        if np.isfinite(value) and sig is not None and len(y) <= _ACROSS_REPEATS:
+            noise = float(np.mean(sig)) / np.sqrt(len(y))
+            if excess > _REFUTE * noise and excess > _REFUTE_RELATIVE * self._across_top:
+                self._across = np.zeros((0, 2))  # found: the refit moves to it
+                return
+            if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
+                return  # measure it again
+        self._across = self._across[1:]
+        if not len(self._across) and not self._across_bump:
+            self._across_bump = True
+            bump = self._across_bump_point()
+            if bump is not None:
+                self._across = self.clip(hexagon(bump, _BUMP_RADIUS * self.radius)[1:])
+
+    def _across_bump_point(self) -> FloatArray | None:
+        """The line's strongest point beyond a dip on either side of the ridge: clearly
+        (3 σ) above the weakest point between it and the ridge — a line that passes near,
+        not through, a central peak (its direction is the fitted ridge's, a few degrees off
+        at 10 dB) crosses it as such a bump; None when there is none."""
+        xs = self._across_from
+        line = self._across_line_points
+        if line is None or not len(line):
+            return None
+        floor = self._floor()
+        vals = []
+        for p in line:
+            here = np.all(np.abs(self._x - p) <= 1e-9, axis=1)
+            vals.append(float(np.mean(self._y[here])) - floor if here.any() else np.nan)
+        v = np.asarray(vals)
+        sig = self._sigmas(np.maximum(np.nan_to_num(v), 0.0))
+        if sig is None:
+            return None
+        e = line[-1] - xs
+        side = np.sign((line - xs) @ e)
+        dist = np.hypot(*(line - xs).T)
+        best, best_v = None, -np.inf
+        for sgn in (-1.0, 1.0):
+            idx = np.flatnonzero((side == sgn) & np.isfinite(v))
+            idx = idx[np.argsort(dist[idx])]
+            for k in range(1, len(idx)):
+                j = idx[k]
+                low = float(np.min(v[idx[:k]]))
+                if v[j] - low > 3.0 * sig[j] and v[j] > best_v:
+                    best, best_v = line[j], v[j]
+        return None if best is None else best.copy()
 
     def _recommend(self) -> FloatArray:
         xs = self._supported_max()
