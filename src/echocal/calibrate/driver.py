@@ -31,6 +31,7 @@ from echocal.calibrate.presets import method_options, presets
 from echocal.calibrate.registry import get_method
 from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, CalibrationResult
 from echocal.errors import BudgetExhaustedError, EchocalValueError
+from echocal.geometry import convert_angles, orientation_normal
 
 __all__ = ["CalibrationState", "build_optimizer", "calibrate"]
 
@@ -174,6 +175,18 @@ def _acquisition_cost(opt: Optimizer, objective: Objective) -> int | None:
     return None if found is None else objective.cost(found)
 
 
+def _beam_spread(recent: FloatArray, parameterization: str) -> float:
+    """[deg] the largest angle between the beams of ``recent`` orientations ``(n, 2)``
+    [deg] and their mean beam: what the probe's direction still moves.  In degrees of the
+    angles themselves the azimuth at the pole (co-elevation 0, where it does not move the
+    beam) would keep a converged run from ever settling."""
+    az, coel = convert_angles(recent[:, 0], recent[:, 1], parameterization, "azimuth-coelevation")
+    beams = orientation_normal(az, coel)
+    mean = beams.mean(axis=0)
+    mean /= np.linalg.norm(mean)
+    return float(np.degrees(np.arccos(np.clip(beams @ mean, -1.0, 1.0))).max())
+
+
 def _settle_test(
     settle: tuple[float, int], objective: Objective
 ) -> Callable[[ArrayLike, ArrayLike], bool]:
@@ -191,6 +204,7 @@ def _settle_test(
     patience = positive_int("settle patience", patience)
     history: list[FloatArray] = []
     peaks: list[float] = []
+    parameterization = getattr(objective, "parameterization", "tilt")
 
     def test(recommendation: ArrayLike, values: ArrayLike) -> bool:
         history.append(np.asarray(recommendation, dtype=np.float64))
@@ -199,8 +213,7 @@ def _settle_test(
         peaks.append(float(finite.max()) if finite.size else -np.inf)
         if len(history) < patience:
             return False
-        recent = np.array(history[-patience:])
-        if np.max(np.hypot(*(recent - recent.mean(axis=0)).T)) >= tol:
+        if _beam_spread(np.array(history[-patience:]), parameterization) >= tol:
             return False
         floor, sigma = objective.noise_estimate()
         if floor is None or sigma is None:
