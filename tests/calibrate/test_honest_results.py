@@ -149,3 +149,21 @@ def test_model_based_never_measures_a_point_a_third_time():
     assert counts.max() <= 2
     np.testing.assert_allclose(result.x, (2.0, 2.0))
     assert result.status == 8
+
+
+def test_a_run_settles_on_the_beam_not_on_the_angles():
+    """At the pole (co-elevation 0) the azimuth does not move the beam: recommendations
+    whose azimuth wanders by 40° at co-elevation 0.001° have settled (the beams are within
+    1e-3° of each other); the same wander at co-elevation 20° leaves them up to 6.75° from
+    their mean beam."""
+    from echocal.calibrate.driver import _beam_spread
+
+    azimuth = np.linspace(-20.0, 20.0, 8)
+    at_pole = np.stack([azimuth, np.full(8, 0.001)], axis=1)
+    assert _beam_spread(at_pole, "azimuth-coelevation") < 1e-3
+    off_pole = np.stack([azimuth, np.full(8, 20.0)], axis=1)
+    assert _beam_spread(off_pole, "azimuth-coelevation") == pytest.approx(6.75, abs=0.01)
+    tilts = np.array([[0.0, 0.0], [0.03, 0.0], [0.0, 0.04]])  # near the pole: degrees ≈ beam
+    assert _beam_spread(tilts, "tilt") == pytest.approx(
+        np.max(np.hypot(*(tilts - tilts.mean(axis=0)).T)), rel=1e-3
+    )
