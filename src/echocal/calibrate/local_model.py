@@ -1,5 +1,5 @@
 """The local model of ``model-based``: a quadratic of log-energy, its fit and its maximum
-in a trust region (see :mod:`echocal.calibrate.model_based` for why and how it is used).
+in a trust region (see ``echocal.calibrate.model_based`` for why and how it is used).
 
 - :func:`fit_quadratic`: m(x) = c + bᵀd + ½ dᵀHd (d = x − centre), weighted least squares
   of log f (weights ∝ f², as var(log f) ≈ σ²/f²) or of f itself, with a weak prior on
@@ -78,12 +78,18 @@ def fit_quadratic(
     floor: float = 0.0,
     refine: bool = True,
 ) -> QuadraticModel | None:
-    """Weighted least-squares quadratic fit (see module docstring); None if underdetermined.
+    """Weighted least-squares quadratic fit (see the module doc); None if underdetermined.
 
-    points : [deg] (n, 2); values : (n,) finite; scale : [deg] length for conditioning.
+    Parameters
+    ----------
+    points : [deg] ``(n, 2)``.
+    values : ``(n,)``, finite.
+    center : [deg] ``(2,)``, the model's centre.
+    space : ``"log"`` or ``"linear"``.
+    scale : [deg] length for conditioning.
     locality : [deg] only points within this distance of ``center`` are fitted (None: all).
-    floor : log space only — points below ``floor`` × the largest fitted value are left out
-        (at the noise floor log y says nothing about log f, and its residual would grow
+    floor : log space only — points below ``floor`` × the largest fitted value are left
+        out (at the noise floor log y says nothing about log f, and its residual would grow
         with the squared distance from the peak); if fewer than 8 remain, the 8 largest
         positive values are used.
     refine : log space only — starting from that weighted log fit, fit f = exp(m) to *all*
