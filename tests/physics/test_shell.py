@@ -105,11 +105,13 @@ def test_equivalent_mirror_limits_and_concentricity() -> None:
 
 
 # ---------------------------------------------------------------- echoes
-def _train(front, thickness=0.01, orders=2, flaws=()) -> tuple[InteriorEchoes, RecordingWindow]:
-    d = 0.04
+def _train(
+    front, thickness=0.01, orders=2, flaws=(), *, probe_radius=3.175e-3, d=0.04
+) -> tuple[InteriorEchoes, RecordingWindow]:
+    """The wave model's echo train of ``front`` with a wall, the probe ``d`` [m] above."""
     window = RecordingWindow(fs=100e6, start=2 * d / C_W - 4e-6, n_samples=2048)
     model = WaveEchoModel(
-        probe=PistonProbe(radius=3.175e-3),
+        probe=PistonProbe(radius=probe_radius),
         pulse=GaborPulse(center_frequency=5e6, bandwidth=60),
         window=window,
         sound_speed=C_W,
@@ -171,20 +173,8 @@ def test_shells_the_model_does_not_cover_are_refused_naming_the_field() -> None:
 
 def _back_wall_spectrum(front, radius_probe: float, d: float, thickness: float):
     """The model's first back-wall spectrum (before attenuation) and its frequencies."""
-    window = RecordingWindow(fs=100e6, start=2 * d / C_W - 4e-6, n_samples=2048)
-    model = WaveEchoModel(
-        probe=PistonProbe(radius=radius_probe),
-        pulse=GaborPulse(center_frequency=5e6, bandwidth=60),
-        window=window,
-        sound_speed=C_W,
-    )
-    train = InteriorEchoes(
-        model=model,
-        front=front,
-        interior=Interior(thickness, 1, ()),
-        medium=WATER_C,
-        material=STEEL,
-    )
+    train, _ = _train(front, thickness, 1, probe_radius=radius_probe, d=d)
+    model = train.model
     position, frame = np.array([0.0, 0.0, d]), tilt_frame(np.array([0.0]), np.array([0.0]))[0]
     face = train._front(position, frame)
     assert face is not None
