@@ -1,60 +1,49 @@
 """``method="auto"``: acquisition phase + the best local method we measured (model-based).
 
-Evidence: ``benchmarks/bench_calibration.py`` (docs/benchmarks/calibration.md), full run
-of 50 seeded runs per cell and method, budget 80, every method through the same
-SourceObjective; realistic setup immersion-5mhz-ray (5 MHz, 12.7 mm probe, tilted plate,
-ray model: energy lobe σ ≈ 0.28°, half-energy at 0.33°), tilt parameterization.  "@n" = fraction
-of runs whose estimate is within the tolerance after n measurements:
+Evidence (``benchmarks/bench_calibration.py``; the tables are in README.md and
+docs/benchmarks/): every method through the same SourceObjective and counter, budget 80,
+tilt parameterization, common random numbers.  On ``immersion-5mhz`` (12.7 mm 5 MHz
+probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per cell for
+``auto`` alone, share of runs within 0.1° after 20 / 40 / 80 measurements:
 
-==================  ============  ============  ============  ==========================
-immersion-5mhz-ray  near 30 dB    near 20 dB    near 10 dB    far (5-20°) 30 dB
-                    ≤0.05° @20    ≤0.1° @80     ≤0.1° @60     ≤0.1° @60 / @80
-==================  ============  ============  ============  ==========================
-auto                100 %         100 %         100 %         24 % / 68 %
-model-based         100 %         96 %          64 %          4 % / 6 %
-Py-BOBYQA (noisy)   54 %          92 %          28 %          0 % / 2 %
-Nelder-Mead         22 %          66 %          26 %          0 % / 0 %
-scikit-optimize GP  4 %           98 %          42 %          26 % / 40 %
-NGOpt (noisy)       0 %           0 %           0 %           0 % / 0 %
-==================  ============  ============  ============  ==========================
+==================  ==============  ==============
+start band          1–3°            5–20°
+==================  ==============  ==============
+30 dB               100/100/100 %   0/12/77 %
+20 dB               100/100/100 %   0/2/67 %
+10 dB               73/98/99 %      0/0/13 %
+==================  ==============  ==============
 
-Median measurements to 0.1° from 1-3°: auto 14 / 15 / 18 at 30 / 20 / 10 dB against the
-best peer's 18 (Py-BOBYQA) / 28.5 / 64.5 (GP).  On the thesis's broad lobe from 1-3° at
-30 dB: auto 11, no peer's median run within 80; the six thesis methods reach 0.1° within
-80 in at most 48 % of the runs of any cell.
+From 1–3° ``auto`` needs a median 14 measurements to 0.1° at 30 and 20 dB and 16 at
+10 dB; the best peer of the full benchmark (10 runs per cell) needed 17.5 (Py-BOBYQA),
+21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's GP, 80 % of runs).  Over curved parts, probe
+off axis, 1–3° at 10 dB, within 0.1° after 60: a ball 100 % (6.35 mm probe) and 70–75 %
+(12.7 mm, whose near-field lobe has a ring), a rod 100 % and 40 % (two equal humps);
+the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
+(docs/benchmarks/curved.md).
 
 Why each part:
 
 1. the model-based fit subtracts the objective's live noise floor (``noise_estimate()``)
    before taking logs — at 10 dB the floor is ~10 % of the peak, and left in it made the
-   lobe look broader than it is (10 dB near: 50 % → 100 % within 0.1° @60);
-2. the acquisition phase (model-based alone: 6 % from 5-20° @80) tests each A-scan's
-   matched-filter peak significance (:class:`~echocal.signal.detection.EchoDetector`),
-   which sees the echo 2.4° from the peak at 30 dB (90 % of the time) where the
-   pseudo-energy loses it at 2.0°, and re-measures a marginal detection once (false
-   hand-overs to a local method on noise were 2 of 40 far starts without it);
-3. beyond 3° from x0 the search runs on circles of point spacing up to 4.2° (gaps of at
-   most ≈ 2.75°, where one measurement still sees the echo half of the time) out to
-   ``max_radius``; inside 3° it keeps the 1° lattice that a 10 dB echo (detection radius
-   ≈ 0.55°) needs.  Far starts at 30 dB (40-run check, budget 150): 25 % within 60, 65 %
-   within 80, 97 % within 100, 100 % within 120 — before this detector and search, 7 / 15
-   / 43 / 80 % at 60 / 80 / 100 / 120.
+   lobe look broader than it is;
+2. the acquisition phase tests each A-scan's matched-filter peak significance
+   (:class:`~echocal.signal.detection.EchoDetector`; a first threshold, then a
+   confirming re-measurement of a marginal detection), so a false find on noise is not
+   handed to the local method;
+3. inside 3° of x0 the search keeps a 1° lattice, which a 10 dB echo needs (visible only
+   within about 0.55°); beyond, circles of point spacing up to 4.2° out to ``max_radius``;
+4. the local model refutes itself when a measurement stands clearly above its maximum
+   and refits a smaller neighbourhood (a near-field ring over a ball), and searches once
+   across a ridge.
 
-Targets: ≥ 99 % within 0.05° @20 at 30 dB from 1-3°: met (100 %).  ≥ 95 % within 0.1°
-@60 at 10 dB from 1-3°: met (100 %).  ≥ 99 % within 60 from 5-20° at 30 dB: NOT met
-(24 %), and out of reach for any blind search on this probe
-(``benchmarks/detection_range.py``): covering the 5-20° band with the 2.4° radius at
-which one A-scan sees the echo 90 % of the time takes 2π/(3√3)·(20² − 5²)/2.4² ≈ 81
-measurements before refinement; even granting every measurement the 2.7° radius of 50 %
-detection, at most ≈ 85 % of starts could be found and refined within 60.  Deferring the
-1° lattice's outer ring behind the first coarse circle would trade 10 points of far
-success at 60 for 15 of near success at 10 dB by 40; auto keeps the near-start cases
-first.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the lattice
-beyond x0's hexagon: from 5-20° at 30 dB 70 % within 60, 100 % within 80 (40 runs); 1-3°
-starts at 30 and 20 dB stay at 100 %; 1-3° starts at 10 dB would be missed.
-
-When the start is known to be near the echo, ``method="model-based"`` saves the
-acquisition.
+Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
+lower-bound.md): from 5–20° at 30 dB the wave model's echo is visible 4.75° away and any
+search needs ≥ 17 measurements for 99 % of runs, but ``auto`` first spends about 30 on the
+fine lattice that a 10 dB start needs — without knowing the SNR a fixed order cannot serve
+both.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the lattice beyond
+x0's hexagon.  When the start is known to be near the echo, ``method="model-based"``
+saves the acquisition.
 """
 
 from __future__ import annotations
