@@ -22,7 +22,7 @@ from echocal.geometry import tilt_frame
 from echocal.materials import WATER, Attenuation, material
 from echocal.signal.pulses import GaborPulse
 from echocal.signal.window import RecordingWindow
-from echocal.specimen import FinitePlane, Sphere
+from echocal.specimen import Sphere
 from echocal.specimen.builtins import builtin_specimen
 from echocal.specimen.interior import Flaw, Interior
 from echocal.wave import PistonProbe, WaveEchoModel
@@ -178,24 +178,7 @@ def _back_wall_spectrum(front, radius_probe: float, d: float, thickness: float):
     position, frame = np.array([0.0, 0.0, d]), tilt_frame(np.array([0.0]), np.array([0.0]))[0]
     face = train._front(position, frame)
     assert face is not None
-    through = train._wall_coefficient(1, face)
-    if isinstance(front, Sphere):
-        mirror = equivalent_mirror(front.radius, thickness, 1, C_L / C_W)
-        sphere = Sphere(center=front.center, radius=mirror.radius)
-        points, unit_m, area = model.surface_samples((sphere,), position, frame)
-        delay = 2 * thickness / C_L - 2 * mirror.distance / C_W
-        coefficient = np.full(area.shape, through, dtype=np.complex128)
-        spectrum, _ = model.spectrum(points, unit_m, area, coefficient, np.full(area.shape, delay))
-    else:
-        deeper = FinitePlane(
-            center=front.center - front.normal * thickness * C_L / C_W,
-            width=front.width,
-            height=front.height,
-        )
-        plane = model.image_plane((deeper,), position, frame)
-        assert plane is not None
-        delay = 2 * thickness * (1 / C_L - C_L / C_W**2)
-        spectrum, _ = model.image_spectrum(plane, through, delay)
+    spectrum = train.back_wall_spectrum(1, position, frame, face)
     return model.frequencies, spectrum
 
 

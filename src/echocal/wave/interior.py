@@ -258,12 +258,30 @@ class InteriorEchoes:
     def _back_wall(
         self, order: int, position: FloatArray, frame: FloatArray, front: _Front
     ) -> FloatArray:
-        """The ``order``-th back-wall echo: the face's mirror at the equivalent depth, by
-        the image form when the wall fills the beam (the Kirchhoff sum otherwise)."""
+        """The ``order``-th back-wall echo's samples (see :meth:`back_wall_spectrum`)."""
+        spectrum = self.back_wall_spectrum(order, position, frame, front)
+        return self._finish(spectrum, front, 2.0 * order * self.interior.thickness)
+
+    def back_wall_spectrum(
+        self, order: int, position: FloatArray, frame: FloatArray, front: _Front
+    ) -> ComplexArray:
+        """The ``order``-th back-wall echo's spectrum before attenuation, for a plate or a
+        spherical shell: the wave model's echo of the equivalent water mirror — the
+        plate's face at the equivalent depth (by the image form when it fills the beam),
+        or the shell's concentric equivalent sphere (:mod:`echocal.wave.shell`) — its
+        two-way time corrected to 2kT/c_L below the face."""
         depth = order * self.interior.thickness
         through = self._wall_coefficient(order, front)
         if isinstance(self.front, Sphere):
-            return self._shell_back_wall(order, position, frame, front, through)
+            mirror = equivalent_mirror(
+                self.front.radius, self.interior.thickness, order, self._ratio
+            )
+            sphere = Sphere(
+                center=self.front.center, radius=mirror.radius, name="equivalent back wall"
+            )
+            delay = 2.0 * depth / self.material.longitudinal_speed
+            delay -= 2.0 * mirror.distance / self.model.sound_speed
+            return self._kirchhoff(sphere, position, frame, through, delay)
         assert isinstance(self.front, FinitePlane)  # a pipe's walls come from curved_wall
         equivalent = FinitePlane(
             center=self.front.center
@@ -281,29 +299,23 @@ class InteriorEchoes:
         plane = self.model.image_plane((equivalent,), position, frame)
         if plane is not None:  # the wall fills the beam: the exact image form
             spectrum, _ = self.model.image_spectrum(plane, through, delay)
-            return self._finish(spectrum, front, 2.0 * depth)
-        points, unit_m, area = self.model.surface_samples((equivalent,), position, frame)
-        coefficient = np.full(area.shape, through, dtype=np.complex128)
-        delays = np.full(area.shape, delay)
-        spectrum, _ = self.model.spectrum(points, unit_m, area, coefficient, delays)
-        return self._finish(spectrum, front, 2.0 * depth)
+            return spectrum
+        return self._kirchhoff(equivalent, position, frame, through, delay)
 
-    def _shell_back_wall(
-        self, order: int, position: FloatArray, frame: FloatArray, front: _Front, through: complex
-    ) -> FloatArray:
-        """A spherical shell's ``order``-th back-wall echo: the wave model's echo of the
-        equivalent water sphere (concentric with the part, :mod:`echocal.wave.shell`), its
-        two-way time corrected to 2kT/c_L below the face."""
-        assert isinstance(self.front, Sphere)
-        depth = order * self.interior.thickness
-        mirror = equivalent_mirror(self.front.radius, self.interior.thickness, order, self._ratio)
-        sphere = Sphere(center=self.front.center, radius=mirror.radius, name="equivalent back wall")
-        points, unit_m, area = self.model.surface_samples((sphere,), position, frame)
-        coefficient = np.full(area.shape, through, dtype=np.complex128)
-        c_l, c_w = self.material.longitudinal_speed, self.model.sound_speed
-        delays = np.full(area.shape, 2.0 * depth / c_l - 2.0 * mirror.distance / c_w)
-        spectrum, _ = self.model.spectrum(points, unit_m, area, coefficient, delays)
-        return self._finish(spectrum, front, 2.0 * depth)
+    def _kirchhoff(
+        self,
+        mirror: FinitePlane | Sphere,
+        position: FloatArray,
+        frame: FloatArray,
+        coefficient: complex,
+        delay: float,
+    ) -> ComplexArray:
+        """The wave model's Kirchhoff sum over ``mirror`` with one coefficient and one
+        two-way ``delay`` [s] for every sample."""
+        points, unit_m, area = self.model.surface_samples((mirror,), position, frame)
+        weights = np.full(area.shape, coefficient, dtype=np.complex128)
+        spectrum, _ = self.model.spectrum(points, unit_m, area, weights, np.full(area.shape, delay))
+        return spectrum
 
     @cached_property
     def _flaw_samples(self) -> dict[str, SurfaceSamples]:
