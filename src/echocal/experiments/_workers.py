@@ -74,6 +74,7 @@ def stop_workers(pool: ProcessPoolExecutor, *, interrupted: bool) -> None:
         pool.shutdown(wait=True, cancel_futures=True)
         return
     processes = list(getattr(pool, "_processes", {}).values())  # no public API before 3.14
+    results = getattr(pool, "_result_queue", None)  # shutdown() forgets it
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         with contextlib.suppress(OSError, ValueError):
@@ -81,3 +82,20 @@ def stop_workers(pool: ProcessPoolExecutor, *, interrupted: bool) -> None:
     for process in processes:
         with contextlib.suppress(OSError, ValueError, AssertionError):
             process.join(timeout=5)
+    _unblock_result_reader(results)
+
+
+def _unblock_result_reader(results: object) -> None:
+    """End the pool's manager thread's read of a result a terminated worker left half written.
+
+    A worker killed in the middle of sending its result leaves a partial message in the
+    result pipe; the pool's manager thread then waits in ``recv()`` for bytes that never
+    come, and the interpreter, which joins that thread at exit, never ends (seen once in
+    CI: an interrupted ``sweep run`` printed "aborted" and hung).  With every worker gone,
+    this process holds the pipe's last write end: closing it turns the wait into
+    end-of-file, which the manager handles as a broken pool and ends.
+    """
+    writer = getattr(results, "_writer", None)
+    if writer is not None:
+        with contextlib.suppress(OSError):
+            writer.close()
