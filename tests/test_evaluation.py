@@ -166,7 +166,7 @@ def test_methods_command_lists_the_registry_and_one_methods_defaults():
     auto = json.loads(CliRunner().invoke(app, ["methods", "auto", "--json"]).stdout)
     # auto differs from acquisition only by its search geometry defaults
     acquisition = json.loads(CliRunner().invoke(app, ["methods", "acquisition", "--json"]).stdout)
-    assert {k: auto["options"][k] for k in AUTO_SEARCH} == AUTO_SEARCH
+    assert {k: auto["options"][k] for k in AUTO_SEARCH} == json.loads(json.dumps(AUTO_SEARCH))
     assert set(auto["options"]) == set(acquisition["options"])
     bad = CliRunner().invoke(app, ["methods", "magic"])
     assert bad.exit_code != 0 and "magic" in (bad.output + str(bad.exception))

@@ -22,8 +22,10 @@ from echocal.measurement import SourceObjective
 from echocal.setups import setup_with_overrides
 
 SEEDS = range(12)
-LOCKED_MEDIAN = 58
-"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 56; must not grow)."""
+LOCKED_MEDIAN = 56
+"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 54.5 with the
+search in passes, 56 before; 1.5 of margin for the fresh-install jitter above; must not
+grow)."""
 BUDGET = 80
 
 

@@ -8,7 +8,7 @@ import pytest
 from conftest import OPT, gaussian
 from echocal.calibrate import FunctionObjective, calibrate
 from echocal.calibrate.acquisition import hex_spiral
-from echocal.calibrate.model_based import fit_quadratic, hexagon, trust_region_max
+from echocal.calibrate.model_based import ModelBased, fit_quadratic, hexagon, trust_region_max
 
 SNR30 = 3.7 / np.sqrt(1e3)  # noise sigma for 30 dB below the peak of gaussian()
 
@@ -188,3 +188,90 @@ def test_search_rings_coarse_outside_cover_the_whole_disc(growth, cap):
     # growth 0 (the Acquisition default) is the plain hexagonal lattice
     plain = search_rings(np.zeros(2), 1.0, 3.0)
     assert sum(len(x) for x in plain) == 37
+
+
+@pytest.mark.parametrize("passes", [(6.9,), (6.9, 4.2), (5.0, 3.0, 2.0)])
+def test_search_passes_each_cover_the_disc_at_their_spacing(passes):
+    """Each pass, with the points before it, leaves no point of the disc farther than its
+    lattice's covering radius s/√3 plus the s/4 by which a left-out point may stand from
+    the point searched instead, and nearly all (95 %) within s/√3: checked on 5000
+    random points.  Passes come coarse to fine, and no point is measured twice."""
+    from echocal.calibrate.acquisition import search_rings
+
+    rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=passes)
+    for a, b in zip(rings[:4], hex_spiral(np.zeros(2), 1.0, 3), strict=True):
+        np.testing.assert_allclose(a, b)  # inside fine_radius: the 1° lattice
+    pts = np.vstack(rings)
+    assert len(np.unique(np.round(pts, 9), axis=0)) == len(pts)
+    q = np.random.default_rng(1).uniform(-20.0, 20.0, (5000, 2))
+    q = q[np.hypot(*q.T) < 20.0]
+    prefix = 4  # rings searched before the pass
+    for k, step in enumerate(passes):
+        cut = len(search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=passes[: k + 1]))
+        taken = np.vstack(rings[:cut])
+        nearest = np.min(np.hypot(*(q[:, None, :] - taken[None, :, :]).transpose(2, 0, 1)), 1)
+        assert nearest.max() <= step * (1.0 / np.sqrt(3.0) + 0.25) + 1e-9, step
+        assert np.mean(nearest <= step / np.sqrt(3.0) + 1e-9) > 0.95, step
+        assert prefix < cut  # every pass adds points
+        prefix = cut
+    assert np.hypot(*pts.T).max() <= 20.0 + passes[0] / np.sqrt(3.0) + 1e-9
+
+
+def test_a_pass_sqrt3_coarser_is_part_of_the_next():
+    """Nested passes: (√3·s, s) measures the same points as (s,) alone, the coarse ones
+    first — the fine pass spends nothing on what the coarse one measured."""
+    from echocal.calibrate.acquisition import search_rings
+
+    fine = np.vstack(search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(4.2,)))
+    rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(4.2 * np.sqrt(3), 4.2))
+    both = np.vstack(rings)
+    assert len(both) == len(fine)
+    key = lambda pts: {tuple(p) for p in np.round(pts, 6)}  # noqa: E731
+    assert key(both) == key(fine)
+    coarse = np.vstack(search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(7.27,)))
+    assert len(coarse) < 0.55 * len(fine)  # the coarse pass first: 73 of 145 points
+
+
+def test_a_model_that_does_not_hold_its_best_measurement_is_refuted():
+    """Regression (a far start on the wave model, seed 9 of the far-start lock): handed a
+    lobe's flat tail and one strong measurement 0.4° from the peak, the log-quadratic,
+    fitted mostly to the tail, was convex and predicted e^−6.7 (1/2700) of that
+    measurement at its own point — and a step 4° away that the model never learned from,
+    measured 28 times.  Nothing stood above the model's largest value (which the convex
+    model put far out), so nothing refuted it.  Now the strongest measurement standing
+    ``_MISFIT`` times and 4 σ above the model at its own point refutes it; a model that
+    holds its best measurement within a factor 2 is left alone."""
+    from echocal.calibrate.local_model import QuadraticModel
+
+    rng = np.random.default_rng(0)
+    tail = rng.uniform(-8.0, 8.0, (40, 2))
+    tail = tail[np.hypot(*tail.T) > 2.0]
+    strong = np.array([0.3, 0.25])
+    hx = np.vstack([tail, strong])
+    hy = np.concatenate([0.007 + rng.uniform(0.0, 0.008, len(tail)), [3.23]])
+    opt = ModelBased(strong, history=(hx, hy), noise_model=lambda: (0.007, 0.0005), rng=0)
+    y = hy - 0.007
+    every = np.ones(len(hy), dtype=bool)
+
+    def model(c_at_strong: float) -> QuadraticModel:  # convex: its largest values far out
+        return QuadraticModel(strong, c_at_strong, np.zeros(2), 0.2 * np.eye(2), "log")
+
+    assert opt._refuting_point(model(-6.7), y, every) == len(hy) - 1
+    assert opt._refuting_point(model(np.log(0.6 * 3.223)), y, every) is None
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"passes": "abc"}, "passes must be a list of spacings"),
+        ({"passes": [0.0]}, "passes[0] must be > 0"),
+        ({"passes": [True]}, "passes[0] must be a number"),
+        ({"max_spacing": 5.0}, "growth and max_spacing shape the circles"),
+    ],
+)
+def test_auto_refuses_bad_passes_in_one_line(options, message):
+    from echocal.errors import EchocalValueError
+
+    obj = FunctionObjective(lambda p: np.zeros(len(p)), noise_sigma=0.01, rng=0)
+    with pytest.raises(EchocalValueError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        calibrate(obj, "auto", x0=(0.0, 0.0), **options)

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import inspect
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -109,6 +109,16 @@ def _local_options(
     return dict(options)
 
 
+def _spacings(name: str, values: Any) -> tuple[float, ...]:
+    """A list of positive spacings [deg] (``passes``), or EchocalValueError naming it."""
+    if isinstance(values, str | bytes) or not isinstance(values, Sequence | np.ndarray):
+        raise EchocalValueError(
+            f"{name} must be a list of spacings in degrees, coarse to fine (e.g. [4.2]); "
+            f"got {values!r}"
+        )
+    return tuple(positive_float(f"{name}[{i}]", v) for i, v in enumerate(values))
+
+
 def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatArray]:
     """Rings of a hexagonal lattice around ``center`` [deg]: ring 0 (1 point), ring k (6k).
 
@@ -134,6 +144,7 @@ def search_rings(
     fine_radius: float = np.inf,
     growth: float = 0.0,
     max_spacing: float | None = None,
+    passes: Sequence[float] = (),
 ) -> list[FloatArray]:
     """Search rings around ``center`` [deg]: the hexagonal lattice of ``spacing`` out to
     ``fine_radius``, then (coarse-to-the-outside) circles whose point spacing s and
@@ -143,27 +154,85 @@ def search_rings(
     staggered: every point of the disc lies within ≈ 0.66 s of a search point (measured;
     a true hexagonal lattice would give s/√3 = 0.58 s).
 
-    Returns a list of arrays of shape (k_i, 2) (the first is ``center``); the last circle
-    is the first that lies beyond ``max_radius`` by no more than s/√3, which leaves no
-    point of the disc of ``max_radius`` farther than ≈ 0.66 s from a search point.
+    ``passes`` [deg]: when given, the search beyond ``fine_radius`` is instead a pass
+    per spacing s, coarse to fine, each the hexagonal lattice of spacing s around
+    ``center`` (every point of the disc within s/√3 of one of its points; the points
+    inside the fine lattice's hexagon and those farther than ``max_radius`` + s/√3 left
+    out, as are the points within s/4 of a point searched before — so after each pass
+    no point of the disc is farther than s/√3 + s/4 ≈ 0.83 s from a search point, and
+    most are within s/√3).  Each pass's lattice is turned by 30° from the next finer
+    one's, so a pass √3 times coarser than the next is a part of it: the finer pass
+    then spends nothing on the points the coarser one measured.  A coarse first
+    pass finds a strong echo far away in few measurements; when it misses, a weaker echo
+    is seen from less far, and the next pass searches again, more densely.
+
+    Returns a list of arrays of shape (k_i, 2) (the first is ``center``): the rings in
+    the order they are searched.  Without ``passes``, the last circle is the first that
+    lies beyond ``max_radius`` by no more than s/√3, which leaves no point of the disc
+    of ``max_radius`` farther than ≈ 0.66 s from a search point.
     """
     n_fine = int(np.ceil(min(fine_radius, max_radius) / spacing)) if np.isfinite(fine_radius) else 0
-    if not np.isfinite(fine_radius) or growth <= 0.0:
+    if not np.isfinite(fine_radius) or (growth <= 0.0 and not passes):
         return hex_spiral(center, spacing, max(1, int(np.ceil(max_radius / spacing))))
     rings = hex_spiral(center, spacing, max(1, n_fine))
-    cap = np.inf if max_spacing is None else max_spacing
-    r = max(1, n_fine) * spacing
-    k = 0
+    inner = max(1, n_fine) * spacing
+    if not passes:
+        cap = np.inf if max_spacing is None else max_spacing
+        return rings + _circles(
+            center, inner, max_radius, lambda r: min(max(spacing, growth * r), cap)
+        )
+    for k, step in enumerate(passes if inner < max_radius else ()):  # else: all fine
+        taken = np.vstack(rings)
+        turn = np.pi / 6.0 * (len(passes) - 1 - k)  # a pass √3 coarser is part of the next
+        for ring in _lattice(center, inner, max_radius, step, turn):
+            gap = np.min(np.hypot(*(ring[:, None, :] - taken[None, :, :]).transpose(2, 0, 1)), 1)
+            if np.any(gap > _PASS_SKIP * step):
+                rings.append(ring[gap > _PASS_SKIP * step])
+    return rings
+
+
+_PASS_SKIP = 0.25
+"""A point of a later pass this close to a point already searched (× its spacing) is
+left out."""
+
+
+def _lattice(
+    center: FloatArray, inner: float, max_radius: float, step: float, turn: float = 0.0
+) -> list[FloatArray]:
+    """The rings of the hexagonal lattice of spacing ``step`` around ``center`` [deg],
+    turned by ``turn`` [rad], whose points lie outside the hexagon of radius ``inner`` and
+    within ``max_radius`` plus their reach (step/√3, the farthest a point of the plane is
+    from the lattice): each ring an array of shape (k, 2), nearest ring first."""
+    out = []
+    reach = step / np.sqrt(3.0)
+    rotation = np.array([[np.cos(turn), np.sin(turn)], [-np.sin(turn), np.cos(turn)]])
+    k = 1
+    while 0.5 * np.sqrt(3.0) * k * step - reach <= max_radius:  # ring k's nearest point
+        ring = hex_spiral(np.zeros(2), step, k)[-1] @ rotation
+        r = np.hypot(*ring.T)
+        keep = (r > 0.5 * np.sqrt(3.0) * inner) & (r - reach <= max_radius)
+        if keep.any():
+            out.append(center[None, :] + ring[keep])
+        k += 1
+    return out
+
+
+def _circles(
+    center: FloatArray, inner: float, max_radius: float, spacing_at: Callable[[float], float]
+) -> list[FloatArray]:
+    """Circles around ``center`` beyond radius ``inner`` [deg] to ``max_radius``: point
+    spacing s = ``spacing_at(r)`` at radius r, circles (√3/2)·s apart, every other
+    circle turned by half a step; each an array of shape (k, 2)."""
+    circles: list[FloatArray] = []
+    r = inner
     while True:
-        s = min(max(spacing, growth * r), cap)
+        s = spacing_at(r)
         r += 0.5 * np.sqrt(3.0) * s
         if r - s / np.sqrt(3.0) > max_radius + 1e-9:  # the previous circle reached the edge
-            break
+            return circles
         n = int(np.ceil(2.0 * np.pi * r / s))
-        ang = (np.arange(n) + 0.5 * (k % 2)) * 2.0 * np.pi / n
-        rings.append(center[None, :] + r * np.stack([np.cos(ang), np.sin(ang)], axis=1))
-        k += 1
-    return rings
+        ang = (np.arange(n) + 0.5 * (len(circles) % 2)) * 2.0 * np.pi / n
+        circles.append(center[None, :] + r * np.stack([np.cos(ang), np.sin(ang)], axis=1))
 
 
 @register_method("acquisition")
@@ -201,7 +270,10 @@ class Acquisition(Optimizer):
     growth : beyond ``fine_radius`` the point spacing is ``max(spacing, growth · r)``.
     max_spacing : [deg] cap on that spacing; the search leaves gaps of up to ≈ 0.66 ×
         it, so about 1.5 × the distance from the peak at which one measurement still
-        sees the echo (auto: 4.2° for 2.4–2.75° on the 5 MHz probe at 30 dB).
+        sees the echo.
+    passes : [deg] point spacings of later passes beyond ``fine_radius``, coarse to fine
+        (see :func:`search_rings`): when the first pass, sized for a strong echo, misses,
+        the region is searched again as a weaker echo needs.  Default: none.
     """
 
     def __init__(
@@ -223,6 +295,7 @@ class Acquisition(Optimizer):
         fine_radius: float | None = None,
         growth: float = 0.0,
         max_spacing: float | None = None,
+        passes: Sequence[float] = (),
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -259,6 +332,13 @@ class Acquisition(Optimizer):
         self.max_spacing = (
             None if max_spacing is None else positive_float("max_spacing", max_spacing)
         )
+        self.passes = _spacings("passes", passes)
+        if self.passes and (self.growth > 0.0 or self.max_spacing is not None):
+            raise EchocalValueError(
+                "growth and max_spacing shape the circles searched when passes is empty; "
+                f"with passes {list(self.passes)} they have no effect: give passes=[] to "
+                "search in circles, or leave growth and max_spacing out"
+            )
         rings = search_rings(
             self.x0,
             self.spacing,
@@ -266,6 +346,7 @@ class Acquisition(Optimizer):
             fine_radius=self.fine_radius,
             growth=self.growth,
             max_spacing=self.max_spacing,
+            passes=self.passes,
         )
         pts = np.vstack(rings)
         inside = np.all((pts >= self.bounds[:, 0]) & (pts <= self.bounds[:, 1]), axis=1)

@@ -51,6 +51,7 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal.calibrate.acquisition import Acquisition
@@ -58,9 +59,21 @@ from echocal.calibrate.registry import register_method
 
 __all__ = ["AUTO_SEARCH", "Auto"]
 
-AUTO_SEARCH: dict[str, float] = {"fine_radius": 3.0, "growth": 2.0, "max_spacing": 4.2}
-"""auto's search geometry [deg, -, deg] — its only difference from ``acquisition``: the 1°
-lattice within 3° of x0, then circles of spacing up to 4.2° (see the evidence above)."""
+STRONG_ECHO_SPACING = float(4.2 * np.sqrt(3.0))
+"""[deg] the first pass beyond 3°: a hexagonal lattice of 7.27° leaves no point farther
+than 4.2° from a measurement, where the 5 MHz probe's echo at 30 dB is still detected in
+98 % of A-scans (docs/benchmarks/detection-wave.md)."""
+WEAK_ECHO_SPACING = 4.2
+"""[deg] the second pass: the 4.2° lattice (points within 2.4°, the 20 dB echo's detection
+radius), of which the first pass is a part (turned by 30°): it adds only its other two
+thirds."""
+AUTO_SEARCH: dict[str, Any] = {
+    "fine_radius": 3.0,
+    "passes": (STRONG_ECHO_SPACING, WEAK_ECHO_SPACING),
+}
+"""auto's search geometry [deg] — its only difference from ``acquisition``: the 1° lattice
+within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the
+evidence above and :func:`~echocal.calibrate.acquisition.search_rings`)."""
 
 
 @register_method("auto")

@@ -56,6 +56,12 @@ _REFUTE = 4.0
 _REFUTE_RELATIVE = 0.05
 """... and by this fraction of that maximum (a smooth peak's top is fitted within a few %;
 the central peak over a ball stands 25 % above the ring around it)."""
+_MISFIT = 2.0
+"""The strongest measurement more than this factor (and ``_REFUTE`` σ) above the model's
+own value at that point refutes the model too: a log-quadratic fitted mostly to a lobe's
+flat tail can predict 1/1000 of the peak it was given and send every step away from it."""
+_SAME_POINT = 0.01
+"""[× radius] proposals this close count as the same point (measured twice: look elsewhere)."""
 _MAX_SHRINK = 4
 """At most this many halvings of the fitting neighbourhood per refit."""
 _MIN_FIT = 0.5
@@ -216,8 +222,10 @@ class ModelBased(Optimizer):
     ) -> int | None:
         """Index of the strongest local measurement that lies clearly above everything
         the model allows (its maximum in the fitted neighbourhood, or its largest value at
-        a measured point): ``_REFUTE`` σ of that measurement's noise, and 5 % — None when
-        there is none or the noise is unknown (log space only).
+        a measured point): ``_REFUTE`` σ of that measurement's noise, and 5 % — or, when
+        there is none, the strongest local measurement if it stands ``_MISFIT`` times and
+        ``_REFUTE`` σ above the model's value at that very point; None when neither holds
+        or the noise is unknown (log space only).
 
         A quadratic fitted across several lobes (a near-field probe over a ball: a central
         peak, a dip to 0.32 at 0.8°, a ring at 0.8 of the peak 1.6° out) puts its maximum
@@ -242,6 +250,11 @@ class ModelBased(Optimizer):
         noise = sig / np.sqrt(count[group])
         refuted = local & (excess > _REFUTE * noise) & (excess > _REFUTE_RELATIVE * top)
         if not refuted.any():
+            strongest = int(np.flatnonzero(local)[np.argmax(mean[group][local])])
+            own = float(model.energy(self._x[strongest][None, :])[0])
+            under = mean[group][strongest] - own
+            if under > _REFUTE * noise[strongest] and mean[group][strongest] > _MISFIT * own:
+                return strongest  # the model does not hold its own best measurement
             return None
         idx = np.flatnonzero(refuted)
         return int(idx[np.argmax(mean[group][idx])])
@@ -406,10 +419,12 @@ class ModelBased(Optimizer):
 
     def _times_measured(self, point: FloatArray) -> int:
         """How often ``point`` [deg] (as the positioner reaches it: clipped) was measured,
-        NaN results included (to 1e-9°)."""
+        NaN results included — to ``_SAME_POINT`` × radius: a model that barely changes
+        proposes points that differ in the third decimal of a degree, and measuring them
+        again teaches it nothing."""
         if not len(self._tried):
             return 0
-        near = np.all(np.abs(self._tried - self.clip(point)) <= 1e-9, axis=1)
+        near = np.all(np.abs(self._tried - self.clip(point)) <= _SAME_POINT * self.radius, axis=1)
         return int(np.count_nonzero(near))
 
     def _fresh_point(self) -> FloatArray:

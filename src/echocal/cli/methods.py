@@ -64,5 +64,8 @@ def _first_line(cls: type) -> str:
 
 
 def _plain(value: object) -> object:
-    """JSON-ready default: numbers, strings, booleans and None as they are, else repr."""
-    return value if value is None or isinstance(value, (bool, int, float, str)) else repr(value)
+    """JSON-ready default: numbers, strings, booleans and None as they are, tuples and
+    lists of them as lists, else repr."""
+    if isinstance(value, tuple | list) and all(_plain(v) == v for v in value):
+        return list(value)
+    return value if value is None or isinstance(value, bool | int | float | str) else repr(value)
