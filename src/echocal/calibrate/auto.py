@@ -4,20 +4,22 @@ Evidence (``benchmarks/bench_calibration.py``; the tables are in README.md and
 docs/benchmarks/): every method through the same SourceObjective and counter, budget 80,
 tilt parameterization, common random numbers.  On ``immersion-5mhz`` (12.7 mm 5 MHz
 probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per cell for
-``auto`` alone, share of runs within 0.1° after 20 / 40 / 80 measurements:
+``auto`` alone, share of runs within 0.1° after 20 / 40 / 60 / 80 measurements:
 
-==================  ==============  ==============
-start band          1–3°            5–20°
-==================  ==============  ==============
-30 dB               100/100/100 %   0/12/77 %
-20 dB               100/100/100 %   0/2/67 %
-10 dB               73/98/99 %      0/0/13 %
-==================  ==============  ==============
+==================  ================  ================
+start band          1–3°              5–20°
+==================  ================  ================
+30 dB               100/100/100/100   0/12/56/99 %
+20 dB               100/100/100/100   0/2/37/54 %
+10 dB               73/100/100/100    0/0/8/8 %
+==================  ================  ================
 
+(Before the search in two passes and the misfit refutation below: 5–20° at 30 dB
+0/12/27/77, at 20 dB 0/2/–/67, at 10 dB 0/0/–/13 %; 1–3° at 10 dB 73/98/99/99 %.)
 From 1–3° ``auto`` needs a median 14 measurements to 0.1° at 30 and 20 dB and 16 at
 10 dB; the best peer of the full benchmark (10 runs per cell) needed 17.5 (Py-BOBYQA),
 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's GP, 80 % of runs).  Over curved parts, probe
-off axis, 1–3° at 10 dB, within 0.1° after 60: a ball 100 % (6.35 mm probe) and 70–75 %
+off axis, 1–3° at 10 dB, within 0.1° after 60: a ball 100 % (6.35 mm probe) and 75 %
 (12.7 mm, whose near-field lobe has a ring), a rod 100 % and 40 % (two equal humps);
 the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
 (docs/benchmarks/curved.md).
@@ -32,18 +34,25 @@ Why each part:
    confirming re-measurement of a marginal detection), so a false find on noise is not
    handed to the local method;
 3. inside 3° of x0 the search keeps a 1° lattice, which a 10 dB echo needs (visible only
-   within about 0.55°); beyond, circles of point spacing up to 4.2° out to ``max_radius``;
-4. the local model refutes itself when a measurement stands clearly above its maximum
-   and refits a smaller neighbourhood (a near-field ring over a ball), and searches once
-   across a ridge.
+   within about 0.55°); beyond, two passes out to ``max_radius``, coarse to fine
+   (:data:`AUTO_SEARCH`): a 7.27° hexagonal lattice, which leaves no point farther than
+   4.2° from a measurement — a 30 dB echo is detected there in 98 % of A-scans — then the
+   rest of the 4.2° lattice it is part of, for weaker echoes.  A 30 dB far start no
+   longer waits for the dense lattice; a 20 dB one waits for the coarse pass (36
+   measurements), hence its lower share after 80;
+4. the local model refutes itself when a measurement stands clearly above its maximum,
+   or the strongest measurement stands twice above the model's own value there (a fit to
+   a lobe's flat tail), and refits a smaller neighbourhood (a near-field ring over a
+   ball), and searches once across a ridge.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
-lower-bound.md): from 5–20° at 30 dB the wave model's echo is visible 4.75° away and any
-search needs ≥ 17 measurements for 99 % of runs, but ``auto`` first spends about 30 on the
-fine lattice that a 10 dB start needs — without knowing the SNR a fixed order cannot serve
-both.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the lattice beyond
-x0's hexagon.  When the start is known to be near the echo, ``method="model-based"``
-saves the acquisition.
+lower-bound.md): from 5–20° at 30 dB any search needs ≥ 17 measurements for 99 % of runs;
+``auto`` spends the 1° lattice first (37 measurements, which the 10 dB near start needs:
+without knowing the SNR a fixed order cannot serve both), then up to 36 on the coarse
+pass, and a median 15 to climb from a detection in the lobe's tail to 0.1°: 99 % within
+80, 56 % within 60.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the
+lattice beyond x0's hexagon.  When the start is known to be near the echo,
+``method="model-based"`` saves the acquisition.
 """
 
 from __future__ import annotations
