@@ -181,13 +181,15 @@ def search_rings(
         return rings + _circles(
             center, inner, max_radius, lambda r: min(max(spacing, growth * r), cap)
         )
+    from scipy.spatial import cKDTree
+
     for k, step in enumerate(passes if inner < max_radius else ()):  # else: all fine
-        taken = np.vstack(rings)
+        searched = cKDTree(np.vstack(rings))
         turn = np.pi / 6.0 * (len(passes) - 1 - k)  # a pass √3 coarser is part of the next
         for ring in _lattice(center, inner, max_radius, step, turn):
-            gap = np.min(np.hypot(*(ring[:, None, :] - taken[None, :, :]).transpose(2, 0, 1)), 1)
-            if np.any(gap > _PASS_SKIP * step):
-                rings.append(ring[gap > _PASS_SKIP * step])
+            new = ring[searched.query(ring)[0] > _PASS_SKIP * step]
+            if len(new):
+                rings.append(new)
     return rings
 
 
@@ -203,17 +205,16 @@ def _lattice(
     turned by ``turn`` [rad], whose points lie outside the hexagon of radius ``inner`` and
     within ``max_radius`` plus their reach (step/√3, the farthest a point of the plane is
     from the lattice): each ring an array of shape (k, 2), nearest ring first."""
-    out = []
     reach = step / np.sqrt(3.0)
+    n_rings = int((max_radius + reach) / (0.5 * np.sqrt(3.0) * step))  # ring k: ≥ (√3/2)·k·s
     rotation = np.array([[np.cos(turn), np.sin(turn)], [-np.sin(turn), np.cos(turn)]])
-    k = 1
-    while 0.5 * np.sqrt(3.0) * k * step - reach <= max_radius:  # ring k's nearest point
-        ring = hex_spiral(np.zeros(2), step, k)[-1] @ rotation
+    out = []
+    for ring in hex_spiral(np.zeros(2), step, n_rings)[1:]:
+        ring = ring @ rotation
         r = np.hypot(*ring.T)
         keep = (r > 0.5 * np.sqrt(3.0) * inner) & (r - reach <= max_radius)
         if keep.any():
             out.append(center[None, :] + ring[keep])
-        k += 1
     return out
 
 
@@ -271,9 +272,10 @@ class Acquisition(Optimizer):
     max_spacing : [deg] cap on that spacing; the search leaves gaps of up to ≈ 0.66 ×
         it, so about 1.5 × the distance from the peak at which one measurement still
         sees the echo.
-    passes : [deg] point spacings of later passes beyond ``fine_radius``, coarse to fine
-        (see :func:`search_rings`): when the first pass, sized for a strong echo, misses,
-        the region is searched again as a weaker echo needs.  Default: none.
+    passes : [deg] point spacings of the passes beyond ``fine_radius``, coarse to fine,
+        instead of the circles of ``growth`` and ``max_spacing`` (see
+        :func:`search_rings`): when the first pass, sized for a strong echo, misses, the
+        region is searched again as a weaker echo needs.  Default: none (circles).
     """
 
     def __init__(

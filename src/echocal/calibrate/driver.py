@@ -31,7 +31,7 @@ from echocal.calibrate.presets import method_options, presets
 from echocal.calibrate.registry import get_method
 from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, CalibrationResult
 from echocal.errors import BudgetExhaustedError, EchocalValueError
-from echocal.geometry import convert_angles, orientation_normal
+from echocal.geometry import angle_between, convert_angles, orientation_normal
 
 __all__ = ["CalibrationState", "build_optimizer", "calibrate"]
 
@@ -182,9 +182,7 @@ def _beam_spread(recent: FloatArray, parameterization: str) -> float:
     beam) would keep a converged run from ever settling."""
     az, coel = convert_angles(recent[:, 0], recent[:, 1], parameterization, "azimuth-coelevation")
     beams = orientation_normal(az, coel)
-    mean = beams.mean(axis=0)
-    mean /= np.linalg.norm(mean)
-    return float(np.degrees(np.arccos(np.clip(beams @ mean, -1.0, 1.0))).max())
+    return float(angle_between(beams, beams.mean(axis=0)).max())
 
 
 def _settle_test(
