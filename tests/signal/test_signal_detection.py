@@ -114,6 +114,16 @@ def test_threshold_amplitude_is_the_echo_detected_at_that_significance(detector,
     assert detector.threshold_amplitude(0.0, 4.5) == 0.0
 
 
+@pytest.mark.parametrize("sigma", [0.01, 0.3])
+def test_threshold_peak_inverts_the_significance_of_a_peak(detector, sigma):
+    # the matched-envelope peak at the threshold scores the threshold (to 1e-6 σ), and
+    # the level scales with sigma
+    level = detector.threshold_peak(sigma, 4.5)
+    assert float(detector.significance_of_peak(level, sigma)) == pytest.approx(4.5, abs=1e-6)
+    assert detector.threshold_peak(2 * sigma, 4.5) == pytest.approx(2 * level, rel=1e-9)
+    assert detector.threshold_peak(0.0, 4.5) == 0.0
+
+
 def test_a_detectors_calibration_is_kept_on_disk(tmp_path, monkeypatch):
     """The second detector of the same pulse, rate and length — in a new process as in
     this one — reads its two numbers from the cache instead of filtering 1,024 noise

@@ -118,7 +118,8 @@ def build_optimizer(
         del record["local"]
         return opt, {**local, "acquire": record}
     if issubclass(cls, Acquisition):
-        known = {**_search_inputs(objective), **known, **acq_opts}
+        given = {**known, **acq_opts}
+        known = {**_search_inputs(objective), **_search_plan(cls, objective, given), **given}
     elif "noise_model" in accepted_options(cls):
         known.setdefault("noise_model", objective.noise_estimate)
     opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
@@ -167,6 +168,22 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
         objective.detections,
     )
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
+
+
+_SEARCH_GEOMETRY = ("passes", "growth", "max_spacing")
+"""Options that set where a blind search looks beyond the fine lattice."""
+
+
+def _search_plan(
+    cls: type[Optimizer], objective: Objective, given: Mapping[str, Any]
+) -> dict[str, Any]:
+    """``{"passes": …}`` from the objective's probe (:meth:`Objective.search_passes`) for a
+    method that searches in passes by default (``auto``), unless the caller set the search
+    geometry; else ``{}``."""
+    if option_defaults(cls).get("passes") is None or any(k in given for k in _SEARCH_GEOMETRY):
+        return {}
+    passes = objective.search_passes()
+    return {} if passes is None else {"passes": passes}
 
 
 def _acquisition_cost(opt: Optimizer, objective: Objective) -> int | None:

@@ -183,6 +183,14 @@ class Objective:
         """
         return None if self._last_significance is None else self._last_significance.copy()
 
+    def search_passes(self) -> tuple[float, ...] | None:
+        """[deg] the spacings of a blind search's passes, coarse first, sized from what
+        the objective knows of its probe (see
+        :func:`echocal.measurement.detection_radius.search_passes`), or None when it knows
+        nothing of it (the base class, e.g. an analytic function): the method's defaults
+        apply."""
+        return None
+
     def cost(self, n_points: int) -> int:
         """Measurements needed to evaluate ``n_points`` points (``n_points * repeats``)."""
         return int(n_points) * self.repeats

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from echocal._validate import finite_array
 from echocal.ascan import AScan
 from echocal.calibrate.objective import Objective
-from echocal.errors import EchocalValueError
+from echocal.errors import EchocalValueError, GeometryError
 from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.signal import Pulse, RecordingWindow, get_metric
@@ -226,6 +226,22 @@ class SourceObjective(Objective):
             return np.full(len(self._peaks), np.nan)
         detector = _detector(self.pulse, scan.fs, scan.n_samples)
         return detector.significance_of_peak(self._peaks, sigma)
+
+    def search_passes(self) -> tuple[float, ...] | None:
+        """[deg] a blind search's pass spacings sized from the simulated probe's
+        diffraction lobe at this position
+        (:func:`~echocal.measurement.detection_radius.search_passes`); None for a source
+        that is not the simulator (a recording, a rig), a gated metric, or a position from
+        which the beam never meets the surface at normal incidence."""
+        from echocal.measurement.detection_radius import search_passes
+        from echocal.measurement.virtual import VirtualSetup
+
+        if not isinstance(self.source, VirtualSetup) or self.gate is not None:
+            return None
+        try:
+            return search_passes(self.source, self.position)
+        except GeometryError:
+            return None
 
     def noise_estimate(self) -> tuple[float | None, float | None]:
         """Live ``(noise_floor, noise_sigma)`` of the metric, measured from the A-scans.

@@ -157,6 +157,18 @@ class EchoDetector:
         filter's gain for this pulse (matched-envelope peak per envelope peak of the echo,
         measured on the pulse sampled at ``fs`` in the middle of the window).  0 for σ = 0.
         """
+        level = self.threshold_peak(sigma, significance)
+        if level == 0.0:
+            return 0.0
+        t = (np.arange(self.n_samples) - self.n_samples / 2) / self.fs
+        echo = self.pulse.waveform(t)
+        gain = float(matched_envelope(echo, self.pulse, self.fs).max() / envelope(echo).max())
+        return level / gain
+
+    def threshold_peak(self, sigma: float, significance: float) -> float:
+        """[a.u.] the matched-envelope peak whose significance against white noise of
+        per-sample σ ``sigma`` [a.u.] is ``significance`` g: :meth:`significance_of_peak`
+        inverted (it is monotonic in the peak).  0 for σ = 0."""
         sigma = nonnegative_float("sigma", sigma)
         if sigma == 0.0:
             return 0.0
@@ -169,10 +181,7 @@ class EchoDetector:
         while excess(hi) < 0.0:
             hi *= 2.0
         t_level = float(brentq(excess, 1.0, hi, xtol=1e-9)) if excess(1.0) < 0.0 else 1.0
-        t = (np.arange(self.n_samples) - self.n_samples / 2) / self.fs
-        echo = self.pulse.waveform(t)
-        gain = float(matched_envelope(echo, self.pulse, self.fs).max() / envelope(echo).max())
-        return t_level * unit / gain
+        return t_level * unit
 
     def significance(self, samples: ArrayLike, sigma: float) -> _F64:
         """Gaussian-equivalent significance of each A-scan's strongest echo, shape ``(...,)``.
