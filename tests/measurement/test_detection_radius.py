@@ -168,3 +168,16 @@ def test_a_bad_probability_is_refused_naming_it(ray, probability):
     _, profile = ray
     with pytest.raises(EchocalValueError, match="probability"):
         profile.radius(30.0, probability=probability)
+
+
+def test_a_rigs_twin_sizes_its_search_and_a_bare_source_has_no_plan(ray):
+    from tests.measurement.fake_sources import GaussianEchoSource
+
+    setup, _ = ray
+    pos = setup.reference_position
+    rig = GaussianEchoSource()
+    assert SourceObjective(rig, pos, pulse=setup.pulse).search_passes() is None
+    twin = SourceObjective(rig, pos, pulse=setup.pulse, twin=setup)
+    assert twin.search_passes() == dr.search_passes(setup, pos)
+    with pytest.raises(EchocalValueError, match="twin must be a simulated setup"):
+        SourceObjective(rig, pos, pulse=setup.pulse, twin="immersion-5mhz")

@@ -228,7 +228,12 @@ def _on_instrument(
         _check_reachable(hardware.limits, where)
         tally = _Tally(hardware)
         objective = SourceObjective(
-            tally, where, pulse=pulse, parameterization=parameterization, gate=chosen
+            tally,
+            where,
+            pulse=pulse,
+            parameterization=parameterization,
+            gate=chosen,
+            twin=_twin(setup),
         )
         tally.logged = lambda: objective.n_measurements
         where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
@@ -277,6 +282,14 @@ def _on_instrument(
             extra={"gate": None if chosen is None else chosen.describe()},
             figures=figures,
         )
+
+
+def _twin(setup: str) -> Any:
+    """The simulated setup of the rig's probe, pulse and part, from which ``auto`` sizes
+    its search (:meth:`~echocal.measurement.SourceObjective.search_passes`)."""
+    from echocal.setups import load_setup
+
+    return load_setup(setup)
 
 
 def _on_replay(

@@ -21,6 +21,7 @@ from echocal.calibrate.objective import Objective
 from echocal.errors import EchocalValueError, GeometryError
 from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
+from echocal.measurement.virtual import VirtualSetup
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import shared_detector as _detector
 from echocal.signal.gates import TimeGate, gated_metric
@@ -103,6 +104,9 @@ class SourceObjective(Objective):
         e.g. ``resolve_gate("back-wall", ...)``); None: the whole recording.  An absolute
         gate outside the first A-scan's window is refused.
     budget, out_of_bounds, repeats : see :class:`~echocal.calibrate.Objective`.
+    twin : the simulated setup of a rig's probe, pulse and part (its setup file), from
+        whose diffraction lobe a blind search is sized (:meth:`search_passes`); None:
+        the source itself when it is the simulator.
     """
 
     def __init__(
@@ -119,6 +123,7 @@ class SourceObjective(Objective):
         budget: int | None = None,
         out_of_bounds: str = "clip",
         repeats: int = 1,
+        twin: VirtualSetup | None = None,
     ) -> None:
         get_metric(metric)  # unknown names fail here, listing the valid ones
         pulse = pulse if pulse is not None else getattr(source, "pulse", None)
@@ -144,6 +149,11 @@ class SourceObjective(Objective):
         if gate is not None and not isinstance(gate, TimeGate):
             raise EchocalValueError(f"gate must be a TimeGate or None; got {gate!r}")
         self.gate = gate
+        if twin is not None and not isinstance(twin, VirtualSetup):
+            raise EchocalValueError(f"twin must be a simulated setup (VirtualSetup); got {twin!r}")
+        self.twin = (
+            twin if twin is not None else source if isinstance(source, VirtualSetup) else None
+        )
         self._last_scan: AScan | None = None
         self._scan_sigmas: list[float] = []  # robust per-sample noise σ of each A-scan
         self._noise_cache: tuple[float, tuple[float, float]] | None = None
@@ -228,18 +238,17 @@ class SourceObjective(Objective):
         return detector.significance_of_peak(self._peaks, sigma)
 
     def search_passes(self) -> tuple[float, ...] | None:
-        """[deg] a blind search's pass spacings sized from the simulated probe's
-        diffraction lobe at this position
-        (:func:`~echocal.measurement.detection_radius.search_passes`); None for a source
-        that is not the simulator (a recording, a rig), a gated metric, or a position from
-        which the beam never meets the surface at normal incidence."""
+        """[deg] a blind search's pass spacings sized from the diffraction lobe of the
+        simulated probe (the source, or the rig's ``twin``) at this position
+        (:func:`~echocal.measurement.detection_radius.search_passes`); None without a
+        simulated probe (a recording), for a gated metric, or from a position where the
+        beam never meets the simulated part at normal incidence."""
         from echocal.measurement.detection_radius import search_passes
-        from echocal.measurement.virtual import VirtualSetup
 
-        if not isinstance(self.source, VirtualSetup) or self.gate is not None:
+        if self.twin is None or self.gate is not None:
             return None
         try:
-            return search_passes(self.source, self.position)
+            return search_passes(self.twin, self.position)
         except GeometryError:
             return None
 
