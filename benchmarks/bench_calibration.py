@@ -32,7 +32,8 @@ echocal's methods the iterate after the last iteration completed within n measur
 (``iterates`` and ``iteration_measurements`` of the result; for the model-based methods
 this is the fitted model's maximum); for the peers the best point evaluated so far (what
 scipy, Py-BOBYQA and scikit-optimize return), or, for nevergrad, its own
-``provide_recommendation()``.  Per (case, method) the report gives
+``provide_recommendation()``, or, for BoTorch, the measured point of highest posterior mean
+(below).  Per (case, method) the report gives
 
 * success within 0.05° / 0.1°: the estimate at the budget (80) is within the tolerance;
 * measurements to 0.05° / 0.1° (median and 90th percentile over the runs, ``>80`` when
@@ -48,7 +49,8 @@ with Levenberg damping, BFGS from a calibrated identity) — the thesis's fixed 
 (preset ``thesis``) stalls far from the peak of a narrow lobe; model-based and auto with
 their defaults.  Peers: scipy Nelder–Mead (initial simplex of 1°, bounds), Py-BOBYQA
 (``objfun_has_noise=True``, ``seek_global_minimum=False``, ``rhobeg=1``), scikit-optimize's
-GP minimizer and nevergrad ``NGOpt`` told that the function is noisy.  The GP peer is
+GP minimizer, nevergrad ``NGOpt`` told that the function is noisy, and BoTorch's noisy
+expected improvement.  The GP peer is
 ``gp_minimize``'s loop written out with ``skopt.Optimizer`` ask/tell: the same surrogate
 (``cook_estimator("GP", noise="gaussian")``, a Matérn-5/2 GP whose white-noise term learns the
 noise level), the same random stream, x0 as the first point then 10 random ones, ``gp_hedge``
@@ -61,13 +63,32 @@ every measurement.  The likelihood fits were 80 % of gp_minimize's ~8 s of CPU p
 60 seed-paired runs of the previous full benchmark (5 per cell, refit at every update) the
 success within 0.1° was 30 % both ways and the median final error 0.24° before, 0.23° after.
 (EI instead of ``gp_hedge``, the other cheap option, was clearly worse at 10 dB: skopt's EI
-takes the noisy best observation as incumbent.)  The bounded peers
-(BOBYQA, the GP peer, nevergrad) search the box x0 ± (the start band's outer distance
-+ 1°), clipped to the positioner's limits — information the echocal methods are not given.
-Each peer minimizes −metric; the budget is enforced by the objective itself
-(:class:`~echocal.errors.BudgetExhaustedError` ends a peer's run).  Peers are optional
-(``pip install echocal[bench]``); a peer that is not installed or fails to import is
-skipped with a message.
+takes the noisy best observation as incumbent.)  The BoTorch peer (``botorch-qlognei``,
+issue 19) is BoTorch's standard loop for noisy problems: a ``SingleTaskGP`` (BoTorch's
+default kernel and priors, a homoskedastic noise level inferred with the other
+hyperparameters) on the angles normalized to the box (``Normalize``) and the standardized
+metric (``Standardize``), refitted by ``fit_gpytorch_mll`` after every measurement (warm-
+started from the previous fit's hyperparameters); x0 first, then 10 scrambled Sobol points
+in the box (``BOTORCH_N_SOBOL``), then each next point maximizes
+``qLogNoisyExpectedImprovement`` (128 quasi-MC samples, ``prune_baseline=True``) by
+``optimize_acqf`` (4 restarts from 128 raw samples); float64, torch seeded by the run's seed
+(a run is reproducible), one torch thread.  Its estimate after n measurements is the
+measured point of highest posterior mean under the GP fitted to those n (x0 after one) —
+BoTorch's usual recommendation on noisy problems, where the best observation tends to be a
+lucky noise draw rather than the best point.  A run costs ~12 s (the mean of 80 wave-model
+runs on a 2-core machine busy with other jobs, where skopt-gp took ~5 s), the likelihood
+fits and the acquisition optimization about equally.  botorch is not in the ``bench``
+extra: it brings torch, by default a CUDA build (about 3 GB of wheels with its NVIDIA libraries);
+with a CPU-only torch it adds ~0.9 GB.  Install it with
+``pip install "torch==2.13.0+cpu" botorch`` where pip finds a CPU-only torch wheel (on the
+project's machines, in its local wheel directory), else install torch from PyTorch's CPU
+wheel index first and then ``pip install botorch``.  The bounded peers (BOBYQA, the GP
+peer, nevergrad, BoTorch) search the box x0 ± (the start band's outer distance + 1°),
+clipped to the positioner's limits — information the echocal methods are not given.  Each
+peer minimizes −metric (BoTorch maximizes the metric); the budget is enforced by the
+objective itself (:class:`~echocal.errors.BudgetExhaustedError` ends a peer's run).  Peers
+are optional (``pip install echocal[bench]``; botorch as above); a peer that is not
+installed or fails to import is skipped with a message.
 
 Output: a Markdown table per case on stdout (headline lines start with ``HEADLINE``);
 ``--json OUT`` / ``--out-md OUT`` / ``--plot OUT``.  A full run writes
@@ -88,16 +109,23 @@ import json  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
-from collections.abc import Callable  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _common import machine_info, markdown_table  # noqa: E402
+from _peers import (  # noqa: E402
+    _PEER_FUNCS,
+    INSTALL_HINT,
+    PEERS,
+    _box,
+    _Stop,
+    _Tracker,
+    available_peers,
+)
 
 from echocal.calibrate import calibrate  # noqa: E402
-from echocal.errors import BudgetExhaustedError  # noqa: E402
 from echocal.evaluation import angular_error  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
@@ -175,18 +203,6 @@ OURS: dict[str, dict[str, Any]] = {
     "momentum": {},
     "nesterov": {},
 }
-PEERS = ("scipy-nelder-mead", "py-bobyqa", "skopt-gp", "nevergrad-ngopt")
-GP_REFIT_EVERY = 5
-"""The GP peer fits its hyperparameters by maximum likelihood (with restarts) at every this
-many-th model update and keeps them in between (see the module docstring)."""
-GP_N_POINTS = 2000
-"""Candidates sampled per step at which the GP peer evaluates its acquisition functions."""
-_PEER_MODULES = {
-    "scipy-nelder-mead": "scipy.optimize",
-    "py-bobyqa": "pybobyqa",
-    "skopt-gp": "skopt",
-    "nevergrad-ngopt": "nevergrad",
-}
 
 
 # ----------------------------------------------------------------------------- cases
@@ -262,156 +278,6 @@ def start_point(truth: np.ndarray, start: str, seed: int, bounds: np.ndarray) ->
     raise RuntimeError("no start inside the bounds")  # pragma: no cover
 
 
-# ----------------------------------------------------------------------------- peers
-class _Stop(Exception):
-    """Raised inside a peer's objective when the budget is spent."""
-
-
-class _Tracker:
-    """−metric for a minimizing peer, through the SourceObjective; keeps best-so-far."""
-
-    def __init__(self, objective: SourceObjective) -> None:
-        self.objective = objective
-        self.best_x: np.ndarray | None = None
-        self.best_f = np.inf
-        self.history: list[np.ndarray] = []  # estimate after each measurement
-
-    def __call__(self, x: Any) -> float:
-        x = np.asarray(x, dtype=float).reshape(2)
-        try:
-            value = float(self.objective(x[None, :])[0])
-        except BudgetExhaustedError:
-            raise _Stop from None
-        f = -value if np.isfinite(value) else np.inf
-        if f < self.best_f or self.best_x is None:
-            self.best_f, self.best_x = f, x.copy()
-        self.history.append(self.best_x.copy())
-        return f
-
-
-def _box(x0: np.ndarray, start: str, bounds: np.ndarray) -> np.ndarray:
-    half = STARTS[start][1] + 1.0
-    return np.stack(
-        [np.maximum(x0 - half, bounds[:, 0]), np.minimum(x0 + half, bounds[:, 1])], axis=1
-    )
-
-
-def _peer_nelder_mead(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
-    from scipy.optimize import minimize
-
-    simplex = x0 + np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    minimize(
-        tr,
-        x0,
-        method="Nelder-Mead",
-        bounds=tr.objective.bounds,
-        options={"initial_simplex": simplex, "maxfev": BUDGET, "xatol": 1e-4, "fatol": 0.0},
-    )
-
-
-def _peer_bobyqa(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
-    import pybobyqa
-
-    np.random.seed(seed % 2**32)  # noqa: NPY002 - Py-BOBYQA draws from the global stream
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        pybobyqa.solve(
-            tr,
-            x0,
-            bounds=(box[:, 0], box[:, 1]),
-            maxfun=BUDGET,
-            rhobeg=1.0,
-            rhoend=1e-3,
-            objfun_has_noise=True,
-            seek_global_minimum=False,
-            scaling_within_bounds=False,
-        )
-
-
-def _peer_skopt(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
-    """gp_minimize(noise="gaussian", x0=[x0], n_initial_points=10, acq_optimizer="sampling")
-    as an ask/tell loop whose GP refits its hyperparameters every GP_REFIT_EVERY-th update."""
-    from sklearn.base import clone
-    from sklearn.utils import check_random_state
-    from skopt import Optimizer
-    from skopt.learning.gaussian_process.kernels import WhiteKernel
-    from skopt.utils import cook_estimator, normalize_dimensions
-
-    rng = check_random_state(seed % 2**31)  # the stream gp_minimize draws from
-    space = normalize_dimensions([tuple(box[0]), tuple(box[1])])
-    gp = cook_estimator(
-        "GP", space=space, noise="gaussian", random_state=rng.randint(0, np.iinfo(np.int32).max)
-    )
-    n_initial = 1 + 10  # x0, then 10 random points
-    opt = Optimizer(
-        space,
-        clone(gp),
-        n_initial_points=n_initial,
-        acq_func="gp_hedge",
-        acq_optimizer="sampling",
-        acq_optimizer_kwargs={"n_points": GP_N_POINTS},
-        random_state=rng,
-    )
-    x = list(x0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for i in range(BUDGET):
-            y = tr(x)
-            if i == BUDGET - 1:
-                return  # no model needed after the last measurement
-            update = i + 1 - n_initial  # this tell's model update (< 0: none yet)
-            if update > 0 and update % GP_REFIT_EVERY:
-                # hold the last fitted hyperparameters; skopt zeroes the fitted white-noise
-                # term for prediction and keeps its level in noise_, so put it back
-                last = opt.models[-1]
-                kernel = last.kernel_.k1 + WhiteKernel(noise_level=max(last.noise_, 1e-5))
-                opt.base_estimator_ = clone(gp).set_params(kernel=kernel, optimizer=None)
-            else:
-                opt.base_estimator_ = clone(gp)  # maximum likelihood, 2 restarts
-            opt.tell(x, y)
-            x = opt.ask()
-
-
-def _peer_nevergrad(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
-    import nevergrad as ng
-
-    param = ng.p.Array(init=x0).set_bounds(box[:, 0], box[:, 1]).set_mutation(sigma=1.0)
-    param.random_state = np.random.RandomState(seed % 2**32)
-    param.function.deterministic = False  # noisy: NGOpt picks a noise-robust optimizer
-    opt = ng.optimizers.NGOpt(parametrization=param, budget=BUDGET, num_workers=1)
-    tr.history_override = []  # nevergrad's own recommendation after each tell
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for _ in range(BUDGET):
-            cand = opt.ask()
-            try:
-                f = tr(cand.value)
-            except _Stop:
-                return
-            opt.tell(cand, f)
-            tr.history_override.append(np.asarray(opt.provide_recommendation().value, float))
-
-
-_PEER_FUNCS: dict[str, Callable[..., None]] = {
-    "scipy-nelder-mead": _peer_nelder_mead,
-    "py-bobyqa": _peer_bobyqa,
-    "skopt-gp": _peer_skopt,
-    "nevergrad-ngopt": _peer_nevergrad,
-}
-
-
-def available_peers(names: list[str]) -> tuple[list[str], dict[str, str]]:
-    """The peers that import, and a reason for each skipped one."""
-    ok, skipped = [], {}
-    for name in names:
-        try:
-            __import__(_PEER_MODULES[name])
-            ok.append(name)
-        except Exception as exc:  # a broken install is a skip, not a crash
-            skipped[name] = f"{type(exc).__name__}: {exc}"
-    return ok, skipped
-
-
 # ----------------------------------------------------------------------------- one run
 def _estimates_ours(result: Any, x0: np.ndarray) -> np.ndarray:
     """Estimate after n = 0..BUDGET measurements [deg], shape (BUDGET + 1, 2)."""
@@ -457,10 +323,11 @@ def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
     else:
         tr = _Tracker(objective)
         try:
-            _PEER_FUNCS[method](tr, x0, _box(x0, start, objective.bounds), seed)
+            box = _box(x0, STARTS[start][1] + 1.0, objective.bounds)
+            _PEER_FUNCS[method](tr, x0, box, seed)
         except _Stop:
             pass
-        hist = getattr(tr, "history_override", None) or tr.history
+        hist = tr.history_override or tr.history
         est = np.empty((BUDGET + 1, 2))
         est[0] = x0
         for n in range(1, BUDGET + 1):
@@ -737,7 +604,8 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"unknown method(s) {unknown}; choose from {[*OURS, *PEERS]}")
     peers, skipped = available_peers([m for m in wanted if m in PEERS])
     for name, why in skipped.items():
-        print(f"SKIPPED peer {name}: not available ({why}); pip install echocal[bench]")
+        hint = INSTALL_HINT.get(name, "pip install echocal[bench]")
+        print(f"SKIPPED peer {name}: not available ({why}); {hint}")
     methods = [m for m in wanted if m in OURS] + peers
     tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in methods]
     print(
@@ -824,7 +692,7 @@ def main(argv: list[str] | None = None) -> int:
         "winners": winners,
         "auto_targets": auto_targets,
         "elapsed_s": elapsed,
-        "machine": machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize"]),
+        "machine": machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize", "botorch", "torch"]),
         "raw": results,
     }
     json_path, md_path, png_path = args.json, args.out_md, args.plot

@@ -53,7 +53,13 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
     # every peer is either run or reported as skipped (optional dependencies)
     ours = {"auto", "model-based", "newton", "quasi-newton", "spsa", "gradient"}
     assert ours <= set(data["methods"])
-    for peer in ("scipy-nelder-mead", "py-bobyqa", "skopt-gp", "nevergrad-ngopt"):
+    for peer in (
+        "scipy-nelder-mead",
+        "py-bobyqa",
+        "skopt-gp",
+        "nevergrad-ngopt",
+        "botorch-qlognei",
+    ):
         assert (peer in data["methods"]) + (peer in data["skipped_peers"]) == 1, peer
         if peer in data["skipped_peers"]:
             assert f"SKIPPED peer {peer}" in proc.stdout
