@@ -97,13 +97,13 @@ def test_the_radius_grows_with_the_snr_and_the_wave_lobe_reaches_farther_than_th
     wave = load_setup("immersion-5mhz", seed=0)
     wave_passes = dr.search_passes(wave, wave.reference_position)
     ray_passes = dr.search_passes(ray[0], ray[0].reference_position)
-    assert wave_passes[0] > 1.8 * ray_passes[0]  # the diffraction tails: 8.3° against 3.8°
+    assert wave_passes[0] > 1.8 * ray_passes[0]  # the diffraction tails: 8.6° against 4.2°
 
 
-def test_passes_are_root_three_times_the_radii_coarse_first_and_cached(ray):
+def test_passes_are_the_lattice_spacings_coarse_first_and_cached(ray):
     setup, profile = ray
     passes = dr.search_passes(setup, setup.reference_position)
-    expected = [np.sqrt(3.0) * profile.radius(snr) for snr in dr.SEARCH_SNRS]
+    expected = [profile.lattice_spacing(snr) for snr in dr.SEARCH_SNRS]
     np.testing.assert_allclose(passes, expected, atol=0.006)  # rounded to 0.01°
     assert passes[0] > passes[1]
     n = len(dr._PROFILES)
@@ -181,3 +181,58 @@ def test_a_rigs_twin_sizes_its_search_and_a_bare_source_has_no_plan(ray):
     assert twin.search_passes() == dr.search_passes(setup, pos)
     with pytest.raises(EchocalValueError, match="twin must be a simulated setup"):
         SourceObjective(rig, pos, pulse=setup.pulse, twin="immersion-5mhz")
+
+
+class _StepProfile(dr.LobeProfile):
+    """Detected with certainty within ``r`` [deg], never beyond: the closed forms below."""
+
+    def __init__(self, r: float):
+        angles = np.arange(0.0, 15.0001, 0.001)
+        super().__init__(None, angles, np.zeros((1, angles.size)), np.zeros(1))
+        self.r = r
+
+    def detection_probability(self, snr_db, threshold=ECHO_THRESHOLD):
+        return (self.angles <= self.r).astype(float)[None, :]
+
+
+def test_lattice_spacing_against_the_closed_forms_of_a_step_lobe():
+    """An echo seen exactly within r = 2°: full coverage needs the covering lattice
+    (spacing √3 r); a share c ≤ π/(2√3) ≈ 0.907 of the plane, where the discs do not
+    overlap, is covered at spacing r √(2π / (√3 c)) (disc area over cell area √3 s²/2).
+    Tolerance 0.02°: the bisection's 0.01° and the 200 × 200 cell grid's."""
+    step = _StepProfile(2.0)
+    assert step.lattice_spacing(30.0, coverage=1.0) == pytest.approx(2.0 * np.sqrt(3.0), abs=0.02)
+    for c in (0.5, 0.8):
+        expected = 2.0 * np.sqrt(2.0 * np.pi / (np.sqrt(3.0) * c))
+        assert step.lattice_spacing(30.0, coverage=c) == pytest.approx(expected, abs=0.02)
+
+
+def test_lattice_spacing_covers_its_share_of_random_points(ray):
+    """Independent of the cell grid: echoes at 20,000 random points of a large disc, the
+    lattice's nearest measurement found with a k-d tree, P_detect (worst direction) at
+    that distance averaged: the pass's stated coverage to 0.01 (20,000 draws of a
+    bounded variable: σ ≤ 0.0035)."""
+    from scipy.spatial import cKDTree
+
+    from echocal.calibrate.acquisition import hex_spiral
+
+    _, profile = ray
+    spacing = profile.lattice_spacing(30.0, coverage=0.9)
+    lattice = np.vstack(hex_spiral(np.zeros(2), spacing, 30))
+    rng = np.random.default_rng(3)
+    radius = 20.0 * spacing  # well inside the 30 rings
+    rho, phi = radius * np.sqrt(rng.uniform(size=20_000)), rng.uniform(0, 2 * np.pi, 20_000)
+    dist, _ = cKDTree(lattice).query(np.stack([rho * np.cos(phi), rho * np.sin(phi)], 1))
+    prob = profile.detection_probability(30.0).min(axis=0)
+    covered = np.interp(dist, profile.angles, prob, right=0.0).mean()
+    assert covered == pytest.approx(0.9, abs=0.01)
+    # more coverage or less SNR: a finer lattice
+    assert profile.lattice_spacing(30.0, coverage=0.99) < spacing
+    assert profile.lattice_spacing(20.0, coverage=0.9) < spacing
+
+
+@pytest.mark.parametrize("coverage", [1.5, float("nan"), True])
+def test_a_bad_coverage_is_refused_naming_it(ray, coverage):
+    _, profile = ray
+    with pytest.raises(EchocalValueError, match="coverage"):
+        profile.lattice_spacing(30.0, coverage=coverage)

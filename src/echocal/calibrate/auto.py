@@ -34,13 +34,19 @@ Why each part:
    confirming re-measurement of a marginal detection), so a false find on noise is not
    handed to the local method;
 3. inside 3° of x0 the search keeps a 1° lattice, which a 10 dB echo needs (visible only
-   within about 0.55°); beyond, two passes out to ``max_radius``, coarse to fine
-   (:data:`AUTO_SEARCH`): a 7.27° hexagonal lattice, which leaves no point farther than
-   4.2° from a measurement — a 30 dB echo is detected there in 98 % of A-scans — then the
-   rest of the 4.2° lattice it is part of, for weaker echoes.  A 30 dB far start no
-   longer waits for the dense lattice; a 20 dB one waits for the coarse pass (36
-   measurements), hence its lower share after 80;
-4. the local model refutes itself when a measurement stands clearly above its maximum,
+   within about 0.55–0.7°); beyond, two passes out to ``max_radius``, coarse to fine,
+   sized from the probe when the objective knows it
+   (:meth:`~echocal.calibrate.Objective.search_passes`: the simulator, or a rig's setup):
+   the coarsest hexagonal lattices that detect a 30 dB, then a 20 dB echo from 99 % of
+   the plane, computed from the probe's noiseless diffraction lobe before anything is
+   measured (:mod:`echocal.measurement.detection_radius`) — 8.62° and 4.17° for the
+   5 MHz probe on the wave model, 4.18° and 1.97° on the ray model, whose lobe has no
+   tails.  Without a known probe, :data:`AUTO_SEARCH`'s 7.27° and 4.2°, sized by hand for
+   the 5 MHz probe;
+4. the local method fits what the acquisition hands it before its first step (it used
+   to step in a random direction from x0 first, ignoring the 7 measurements around it:
+   the 30 dB near start within 0.05° after 15 went from 64 to 90 %);
+5. the local model refutes itself when a measurement stands clearly above its maximum,
    or the strongest measurement stands twice above the model's own value there (a fit to
    a lobe's flat tail), and refits a smaller neighbourhood (a near-field ring over a
    ball), and searches once across a ridge.
@@ -82,7 +88,11 @@ AUTO_SEARCH: dict[str, Any] = {
 }
 """auto's search geometry [deg] — its only difference from ``acquisition``: the 1° lattice
 within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the
-evidence above and :func:`~echocal.calibrate.acquisition.search_rings`)."""
+evidence above and :func:`~echocal.calibrate.acquisition.search_rings`).  The passes are
+the default for an objective that cannot size them from its probe
+(:meth:`~echocal.calibrate.Objective.search_passes` returns None); the driver puts the
+probe's own in their place unless the caller sets ``passes``, ``growth`` or
+``max_spacing``."""
 
 
 @register_method("auto")

@@ -171,6 +171,8 @@ class ModelBased(Optimizer):
         self._incumbent = self.x0.copy()
         self._pred: tuple[float, float] | None = None  # (m(center), m(candidate))
         self._step_len = 0.0
+        if len(self._x) and not len(self._design):
+            self._update_model()  # a warm start's first step already uses what it was given
 
     def _initial_design(self) -> FloatArray:
         near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius if len(self._x) else []
@@ -461,17 +463,21 @@ class ModelBased(Optimizer):
                     self._trust = min(2.0 * self._trust, self.max_radius)
             elif actual - m_center < -noise:
                 self._trust = max(0.5 * self._trust, self.min_radius)
+        self._update_model()
+        return True
+
+    def _update_model(self) -> None:
+        """Refit (:meth:`_refit`); when the data moved the model to a new, narrower peak,
+        trust a step of half the design radius there and measure a hexagon of that radius
+        around it unless its neighbourhood is measured already."""
         self._recentred = None
         self._refit()
         if self._recentred is not None:
-            # a new, narrower peak: trust a step of half the design radius, and measure a
-            # hexagon of that radius around it unless its neighbourhood is measured already
             self._trust = max(0.5 * self.radius, self.min_radius)
             near = np.hypot(*(self._x - self._recentred).T) <= 0.75 * self.radius
             if np.count_nonzero(near) < 7:
                 self._design = self.clip(hexagon(self._recentred, 0.5 * self.radius)[1:])
                 self._across = np.zeros((0, 2))
-        return True
 
     def _across_step(self, point: FloatArray, value: float) -> None:
         """After measuring a point of the search across a ridge: re-measure it (up to

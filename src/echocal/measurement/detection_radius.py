@@ -1,4 +1,4 @@
-"""How far from the optimum one A-scan still sees the echo: the probe's detection radius.
+"""How far from the optimum one A-scan still sees the echo, and how coarse a search may be.
 
 A blind search for a lost echo covers the disc around its start with a lattice of
 measurements; the lattice may be as coarse as the distance at which one measurement
@@ -8,10 +8,11 @@ simulated setup (its probe, pulse, window and physics model) this module compute
 *before anything is measured*:
 
 1. the noiseless A-scans of the probe tilted by θ = 0 … ``max_angle`` [deg] away from
-   its best direction of normal incidence on the surface, in ``directions`` directions (the lobe's
-   shape; where the surface normal lies only sets the centre, which the search is never
-   told);
-2. the matched-filter envelope peak p(θ) of each (:class:`~echocal.signal.detection.EchoDetector`);
+   its best direction of normal incidence on the surface, in ``directions`` directions
+   (the lobe's shape; where the surface normal lies only sets the centre, which the
+   search is never told);
+2. the matched-filter envelope peak p(θ) of each
+   (:class:`~echocal.signal.detection.EchoDetector`);
 3. for a peak SNR s [dB] (of the best echo at this position), the noise σ(s)
    (:func:`~echocal.signal.noise.noise_sigma_for_snr`) and the envelope peak p_t whose
    significance is the detector's threshold; at the echo's peak the matched envelope
@@ -22,11 +23,15 @@ simulated setup (its probe, pulse, window and physics model) this module compute
 
    one cell's chance — a lower bound, since the echo's neighbouring cells and the
    rest of the window add their own small chances;
+4. the detection radius r_q: the largest θ up to which P_detect ≥ q in every direction;
+   and the lattice spacing s_c: the coarsest hexagonal lattice of measurements from which
+   the echo is detected from a share c of the plane (P_detect averaged over a lattice
+   cell at the distance to the nearest measurement, in the worst direction).
 
-4. the radius r_q: the largest θ up to which P_detect ≥ ``probability`` in every direction.
-
-The normal approximation of step 3 is checked against Monte-Carlo noise draws through the
-detector itself in tests/measurement/test_detection_radius.py.
+Step 3 is checked against noise draws through the detector itself in
+tests/measurement/test_detection_radius.py; the radii against
+docs/benchmarks/detection-wave.md's.  ``auto`` searches in passes of s_c
+(:func:`search_passes`).
 """
 
 from __future__ import annotations
@@ -58,6 +63,8 @@ __all__ = [
 
 DETECTION_PROBABILITY = 0.9
 """The share of A-scans that must see the echo at the detection radius."""
+PASS_COVERAGE = 0.99
+"""The share of the plane from which a search pass must detect the echo."""
 SEARCH_SNRS = (30.0, 20.0)
 """[dB] the peak SNRs a blind search is sized for, coarse pass first (see :func:`search_passes`)."""
 _STEP = 0.1
@@ -124,6 +131,56 @@ class LobeProfile:
         prob = self.detection_probability(snr_db, threshold)
         radii = [_first_crossing(self.angles, p, probability) for p in prob]
         return float(min(radii))
+
+    def lattice_spacing(
+        self,
+        snr_db: float,
+        *,
+        coverage: float = PASS_COVERAGE,
+        threshold: float = ECHO_THRESHOLD,
+    ) -> float:
+        """[deg] the largest spacing of a hexagonal lattice of measurements that detects an
+        echo of peak SNR ``snr_db`` [dB] from a share ``coverage`` of the plane: the mean,
+        over points uniform in a lattice cell, of P_detect at their distance to the nearest
+        measurement (the worst direction's P_detect; 0 beyond the profile), bisected to
+        0.01°.  When the echo is still seen with ``coverage`` at the profile's last angle
+        (a broad lobe), √3 × that angle (a lattice leaving no point farther from it)."""
+        coverage = in_range("coverage", coverage, 0.0, 1.0)
+        prob = self.detection_probability(snr_db, threshold).min(axis=0)
+        if prob[-1] >= coverage:
+            return float(np.sqrt(3.0) * self.angles[-1])
+
+        def covered(spacing: float) -> float:
+            d = spacing * _UNIT_CELL_DISTANCES
+            return float(np.mean(np.interp(d, self.angles, prob, right=0.0)))
+
+        lo, hi = 0.0, float(2.0 * np.sqrt(3.0) * self.angles[-1])
+        if covered(_BISECT_TOL) < coverage:
+            return 0.0
+        while hi - lo > _BISECT_TOL:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if covered(mid) >= coverage else (lo, mid)
+        return lo
+
+
+def _unit_cell_distances(n: int = 200) -> np.ndarray:
+    """Distances from points uniform in a cell of the hexagonal lattice of unit spacing to
+    the nearest lattice point, shape ``(n²,)``: a grid over the rhombus spanned by the
+    lattice vectors (1, 0) and (½, √3/2), whose nearest lattice point is one of its
+    corners."""
+    u, v = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n)
+    x = u + 0.5 * v
+    y = (np.sqrt(3.0) / 2.0) * v
+    corners = np.array(
+        [[0.0, 0.0], [1.0, 0.0], [0.5, np.sqrt(3.0) / 2.0], [1.5, np.sqrt(3.0) / 2.0]]
+    )
+    d = np.hypot(x.ravel()[:, None] - corners[:, 0], y.ravel()[:, None] - corners[:, 1])
+    return d.min(axis=1)
+
+
+_UNIT_CELL_DISTANCES = _unit_cell_distances()
+_BISECT_TOL = 0.01
+"""[deg] the resolution of :meth:`LobeProfile.lattice_spacing`."""
 
 
 def _first_crossing(angles: np.ndarray, prob: np.ndarray, level: float) -> float:
@@ -210,16 +267,16 @@ def detection_radius(
 
 def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -> tuple[float, ...]:
     """[deg] the spacings of a blind search's passes, coarse first, for ``setup``'s probe
-    at ``position`` [m]: pass k is the hexagonal lattice of spacing √3 · r_k, which leaves
-    no point farther than r_k from a measurement, r_k the detection radius
-    (:data:`DETECTION_PROBABILITY`) of an echo of peak SNR ``SEARCH_SNRS[k]``.
+    at ``position`` [m]: pass k is the coarsest hexagonal lattice that detects an echo of
+    peak SNR ``SEARCH_SNRS[k]`` from :data:`PASS_COVERAGE` of the plane
+    (:meth:`LobeProfile.lattice_spacing`).
 
-    For the 12.7 mm 5 MHz probe at 50 mm on the wave model: (8.3, 3.9)°; on the ray
-    model, whose lobe has no diffraction tails: (3.8, 1.9)°.  A pass no finer than the one
-    before it is left out (a broad lobe seen beyond the profile's ``max_angle`` at both
-    SNRs needs one pass).  The profile is computed once
-    per probe, specimen and position in a process (seconds on the wave model) and reused
-    by every setup that differs only in its noise or seed.
+    For the 12.7 mm 5 MHz probe at 50 mm on the wave model: (8.62, 4.17)°; on the ray
+    model, whose lobe has no diffraction tails: (4.18, 1.97)°.  A pass no finer than the
+    one before it is left out (a broad lobe seen beyond the profile's ``max_angle`` at both
+    SNRs needs one pass).  The profile is computed once per probe, specimen and position
+    in a process (2 s on the wave model) and reused by every setup that differs only in its
+    noise or seed.
     """
     pos = np.asarray(position, dtype=np.float64).reshape(3)
     key = hashlib.sha256(
@@ -228,5 +285,5 @@ def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -
     if key not in _PROFILES:
         _PROFILES[key] = lobe_profile(setup, pos, until_snr_db=max(SEARCH_SNRS))
     profile = _PROFILES[key]
-    spacings = [round(float(np.sqrt(3.0) * profile.radius(snr)), 2) for snr in SEARCH_SNRS]
+    spacings = [round(profile.lattice_spacing(snr), 2) for snr in SEARCH_SNRS]
     return tuple(s for i, s in enumerate(spacings) if i == 0 or s < spacings[i - 1])
