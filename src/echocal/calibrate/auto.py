@@ -9,18 +9,21 @@ probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per 
 ==================  ================  ================
 start band          1–3°              5–20°
 ==================  ================  ================
-30 dB               100/100/100/100   0/12/56/99 %
-20 dB               100/100/100/100   0/2/37/54 %
-10 dB               73/100/100/100    0/0/8/8 %
+30 dB               100/100/100/100   3/11/66/97 %
+20 dB               100/100/100/100   0/2/39/53 %
+10 dB               74/100/100/100    0/0/6/8 %
 ==================  ================  ================
 
-(Before the search in two passes and the misfit refutation below: 5–20° at 30 dB
-0/12/27/77, at 20 dB 0/2/–/67, at 10 dB 0/0/–/13 %; 1–3° at 10 dB 73/98/99/99 %.)
-From 1–3° ``auto`` needs a median 14 measurements to 0.1° at 30 and 20 dB and 16 at
+From 1–3° at 30 dB, 91 % of runs are within 0.05° after 15 measurements (64 % before the
+local method fitted its warm start before its first step).  (Before the passes were
+sized from the probe: 5–20° at 30 dB 0/12/56/99, at 20 dB 0/2/37/54, at 10 dB 0/0/8/8 %;
+before the search in passes: 0/12/27/77, 0/2/–/67, 0/0/–/13 %.)
+From 1–3° ``auto`` needs a median 14, 13 and 15 measurements to 0.1° at 30, 20 and
 10 dB; the best peer of the full benchmark (10 runs per cell) needed 17.5 (Py-BOBYQA),
 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's GP, 80 % of runs).  Over curved parts, probe
-off axis, 1–3° at 10 dB, within 0.1° after 60: a ball 100 % (6.35 mm probe) and 75 %
-(12.7 mm, whose near-field lobe has a ring), a rod 100 % and 40 % (two equal humps);
+off axis, 1–3° at 10 dB, within 0.1° after 60: a ball 100 % (6.35 mm probe) and 65 %
+(12.7 mm, whose near-field lobe has a ring), a rod 100 % and 20 % (two equal humps; 40
+runs each for the 12.7 mm probe);
 the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
 (docs/benchmarks/curved.md).
 
@@ -54,9 +57,9 @@ Why each part:
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): from 5–20° at 30 dB any search needs ≥ 17 measurements for 99 % of runs;
 ``auto`` spends the 1° lattice first (37 measurements, which the 10 dB near start needs:
-without knowing the SNR a fixed order cannot serve both), then up to 36 on the coarse
-pass, and a median 15 to climb from a detection in the lobe's tail to 0.1°: 99 % within
-80, 56 % within 60.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the
+without knowing the SNR a fixed order cannot serve both), then up to ~30 on the coarse
+pass, and a median 15 to climb from a detection in the lobe's tail to 0.1°: 97 % within
+80, 66 % within 60.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the
 lattice beyond x0's hexagon.  When the start is known to be near the echo,
 ``method="model-based"`` saves the acquisition.
 """
