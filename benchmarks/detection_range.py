@@ -28,6 +28,7 @@ import numpy as np
 from _common import markdown_table
 
 from echocal.io import atomic_write_text
+from echocal.measurement.detection_radius import first_crossing
 from echocal.measurement.truth import pose_arrays
 from echocal.setups import load_setup
 from echocal.signal.detection import EchoDetector
@@ -69,15 +70,7 @@ def detection_curves(
 
 def radius(angles: np.ndarray, prob: np.ndarray, level: float = 0.9) -> float:
     """[deg] the largest misalignment up to which detection has probability ≥ ``level``."""
-    below = np.nonzero(prob < level)[0]
-    if below.size == 0:
-        return float(angles[-1])
-    k = int(below[0])
-    if k == 0:
-        return 0.0
-    # linear interpolation between the last angle above and the first below the level
-    a0, a1, p0, p1 = angles[k - 1], angles[k], prob[k - 1], prob[k]
-    return float(a0 + (p0 - level) * (a1 - a0) / (p0 - p1))
+    return first_crossing(angles, prob, level)
 
 
 def cover(band: tuple[float, float], r: float) -> float:

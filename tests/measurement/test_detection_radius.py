@@ -84,8 +84,8 @@ def test_the_rice_detection_probability_against_noise_draws_through_the_detector
     assert np.all(formula <= measured + 0.04)
     if tight:
         np.testing.assert_allclose(formula, measured, atol=0.06)
-    r_formula = dr._first_crossing(angles, formula, 0.9)
-    r_measured = dr._first_crossing(angles, measured, 0.9)
+    r_formula = dr.first_crossing(angles, formula, 0.9)
+    r_measured = dr.first_crossing(angles, measured, 0.9)
     assert 0.88 * r_measured <= r_formula <= r_measured + 0.05
 
 

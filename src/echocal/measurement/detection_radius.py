@@ -57,6 +57,7 @@ __all__ = [
     "SEARCH_SNRS",
     "LobeProfile",
     "detection_radius",
+    "first_crossing",
     "lobe_profile",
     "search_passes",
 ]
@@ -129,7 +130,7 @@ class LobeProfile:
         incidence falls short, ``angles[-1]`` when no angle does."""
         probability = in_range("probability", probability, 0.0, 1.0)
         prob = self.detection_probability(snr_db, threshold)
-        radii = [_first_crossing(self.angles, p, probability) for p in prob]
+        radii = [first_crossing(self.angles, p, probability) for p in prob]
         return float(min(radii))
 
     def lattice_spacing(
@@ -183,7 +184,10 @@ _BISECT_TOL = 0.01
 """[deg] the resolution of :meth:`LobeProfile.lattice_spacing`."""
 
 
-def _first_crossing(angles: np.ndarray, prob: np.ndarray, level: float) -> float:
+def first_crossing(angles: np.ndarray, prob: np.ndarray, level: float) -> float:
+    """[deg] the largest angle up to which ``prob`` (at ``angles`` [deg], ascending, shape
+    ``(n,)``) stays ≥ ``level``: linear interpolation between the last angle above and the
+    first below; 0 when the first falls short, ``angles[-1]`` when none does."""
     below = np.flatnonzero(prob < level)
     if below.size == 0:
         return float(angles[-1])
