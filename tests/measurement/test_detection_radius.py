@@ -74,7 +74,7 @@ def test_the_rice_detection_probability_against_noise_draws_through_the_detector
     far tail where the neighbouring cells weigh most)."""
     setup, profile = request.getfixturevalue(model)
     first = profile.detection_probability(snr)[0]
-    lo = int(np.flatnonzero(first < 0.99)[0]) - 1
+    lo = max(int(np.flatnonzero(first < 0.99)[0]) - 1, 0)
     hi = int(np.flatnonzero(first < 0.1)[0])
     idx = np.unique(np.linspace(lo, hi, 12).round().astype(int))
     angles = profile.angles[idx]
@@ -126,6 +126,9 @@ def test_auto_sizes_its_passes_from_the_simulated_probe_unless_told(ray):
 
     assert list(run()["passes"]) == expected
     assert list(run(passes=[5.0])["passes"]) == [5.0]
+    plain = SourceObjective(setup, pos, parameterization="tilt", budget=12)
+    res = calibrate(plain, method="acquisition", x0=[0.5, 0.5], budget=12, rng=1, fine_radius=3)
+    assert tuple(res.options["passes"]) == ()  # only auto searches in passes by default
     analytic = FunctionObjective(lambda x: np.exp(-np.sum(x**2, axis=1)), budget=12)
     res = calibrate(analytic, method="auto", x0=[0.5, 0.5], budget=12, rng=1)
     assert list(res.options["passes"]) == list(AUTO_SEARCH["passes"])

@@ -113,7 +113,11 @@ def test_warm_starts_need_fewer_measurements_than_cold_starts():
     grid = ScanGrid.regular(x=(-8 * MM, 8 * MM, 2 * MM), y=(0.0, 0.0, 2 * MM), z=25 * MM)
     warm = scan_surface(_setup("sphere", 5), grid, rng=7, progress=False)
     cold = scan_surface(_setup("sphere", 5), grid, rng=7, progress=False, warm_start=False)
-    assert warm.summary["found"] == cold.summary["found"] == grid.size
+    assert warm.summary["found"] == grid.size
+    # cold starts at the ball's steep edge can fail: since the local method fits its warm
+    # start before its first step (issue 19), the cold start at x = +8 mm spends its 78
+    # measurements without settling (status 6); every other point is found either way
+    assert cold.summary["found"] >= grid.size - 1
     # same seeds and points: the only difference is where each calibration starts
     assert warm.summary["measurements_total"] < cold.summary["measurements_total"]
 

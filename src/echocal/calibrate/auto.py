@@ -48,7 +48,7 @@ Why each part:
    the 5 MHz probe;
 4. the local method fits what the acquisition hands it before its first step (it used
    to step in a random direction from x0 first, ignoring the 7 measurements around it:
-   the 30 dB near start within 0.05° after 15 went from 64 to 90 %);
+   the 30 dB near start within 0.05° after 15 went from 64 to 91 %);
 5. the local model refutes itself when a measurement stands clearly above its maximum,
    or the strongest measurement stands twice above the model's own value there (a fit to
    a lobe's flat tail), and refits a smaller neighbourhood (a near-field ring over a

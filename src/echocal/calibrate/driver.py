@@ -180,7 +180,7 @@ def _search_plan(
     """``{"passes": …}`` from the objective's probe (:meth:`Objective.search_passes`) for a
     method that searches in passes by default (``auto``), unless the caller set the search
     geometry; else ``{}``."""
-    if option_defaults(cls).get("passes") is None or any(k in given for k in _SEARCH_GEOMETRY):
+    if not option_defaults(cls).get("passes") or any(k in given for k in _SEARCH_GEOMETRY):
         return {}
     passes = objective.search_passes()
     return {} if passes is None else {"passes": passes}

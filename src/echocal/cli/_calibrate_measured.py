@@ -233,7 +233,6 @@ def _on_instrument(
             pulse=pulse,
             parameterization=parameterization,
             gate=chosen,
-            twin=_twin(setup),
         )
         tally.logged = lambda: objective.n_measurements
         where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
@@ -282,14 +281,6 @@ def _on_instrument(
             extra={"gate": None if chosen is None else chosen.describe()},
             figures=figures,
         )
-
-
-def _twin(setup: str) -> Any:
-    """The simulated setup of the rig's probe, pulse and part, from which ``auto`` sizes
-    its search (:meth:`~echocal.measurement.SourceObjective.search_passes`)."""
-    from echocal.setups import load_setup
-
-    return load_setup(setup)
 
 
 def _on_replay(

@@ -29,22 +29,22 @@ simulated setup (its probe, pulse, window and physics model) this module compute
    cell at the distance to the nearest measurement, in the worst direction).
 
 Step 3 is checked against noise draws through the detector itself in
-tests/measurement/test_detection_radius.py; the radii against
-docs/benchmarks/detection-wave.md's.  ``auto`` searches in passes of s_c
+tests/measurement/test_detection_radius.py; docs/benchmarks/detection-wave.md compares
+the radii with its own noise draws.  ``auto`` searches in passes of s_c
 (:func:`search_passes`).
 """
 
 from __future__ import annotations
 
-import hashlib
-import pickle
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.stats import rice
 
-from echocal._validate import in_range, positive_float, positive_int
+from echocal._validate import finite_array, finite_float, in_range, positive_float, positive_int
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
@@ -77,7 +77,6 @@ _PROFILE_FIELDS = (
     "transducer",
     "pulse",
     "window",
-    "reference_position",
     "sound_speed",
     "medium",
     "material",
@@ -86,11 +85,14 @@ _PROFILE_FIELDS = (
     "synthesis",
     "wave_spacing",
 )
-"""What a lobe profile depends on: every field of the setup but its noise, seed and name."""
-_PROFILES: dict[str, LobeProfile] = {}
+"""What a lobe profile depends on: the setup's physics (not its noise, seed, limits,
+gates, reference position or name)."""
+_CACHE_SIZE = 16
+"""Lobe profiles kept per process (least recently used dropped first)."""
+_PROFILES: OrderedDict[tuple[Any, ...], tuple[tuple[Any, ...], LobeProfile]] = OrderedDict()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LobeProfile:
     """The probe's matched-filter peak versus misalignment at one position.
 
@@ -144,18 +146,18 @@ class LobeProfile:
         echo of peak SNR ``snr_db`` [dB] from a share ``coverage`` of the plane: the mean,
         over points uniform in a lattice cell, of P_detect at their distance to the nearest
         measurement (the worst direction's P_detect; 0 beyond the profile), bisected to
-        0.01°.  When the echo is still seen with ``coverage`` at the profile's last angle
-        (a broad lobe), √3 × that angle (a lattice leaving no point farther from it)."""
+        0.01°, never beyond √3 × the profile's last angle (the lattice that leaves no point
+        farther than that angle, which a broad lobe seen beyond the profile gets)."""
         coverage = in_range("coverage", coverage, 0.0, 1.0)
         prob = self.detection_probability(snr_db, threshold).min(axis=0)
-        if prob[-1] >= coverage:
-            return float(np.sqrt(3.0) * self.angles[-1])
 
         def covered(spacing: float) -> float:
             d = spacing * _UNIT_CELL_DISTANCES
             return float(np.mean(np.interp(d, self.angles, prob, right=0.0)))
 
-        lo, hi = 0.0, float(2.0 * np.sqrt(3.0) * self.angles[-1])
+        lo, hi = 0.0, float(np.sqrt(3.0) * self.angles[-1])  # no point beyond the profile
+        if covered(hi) >= coverage:
+            return hi
         if covered(_BISECT_TOL) < coverage:
             return 0.0
         while hi - lo > _BISECT_TOL:
@@ -220,7 +222,7 @@ def lobe_profile(
     """
     max_angle = positive_float("max_angle", max_angle)
     directions = positive_int("directions", directions)
-    pos = np.asarray(position, dtype=np.float64).reshape(3)
+    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
     detector = shared_detector(setup.pulse, setup.window.fs, setup.window.n_samples)
     candidates = setup.normal_incidence_directions(pos)  # tilts [deg], best first
     if not len(candidates):
@@ -233,6 +235,7 @@ def lobe_profile(
     centre, reference = candidates[best], at_normal[best]
     stop = 0.0
     if until_snr_db is not None:
+        until_snr_db = finite_float("until_snr_db", until_snr_db)
         sigma = float(noise_sigma_for_snr(reference, until_snr_db, setup.window, setup.pulse))
         stop = 0.5 * detector.threshold_peak(sigma, ECHO_THRESHOLD)
     phi = np.linspace(0.0, 2.0 * np.pi, directions, endpoint=False)
@@ -279,15 +282,32 @@ def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -
     model, whose lobe has no diffraction tails: (4.18, 1.97)°.  A pass no finer than the
     one before it is left out (a broad lobe seen beyond the profile's ``max_angle`` at both
     SNRs needs one pass).  The profile is computed once per probe, specimen and position
-    in a process (2 s on the wave model) and reused by every setup that differs only in its
-    noise or seed.
+    in a process (2 s on the wave model) and reused by every setup built from the same
+    physics objects (one that differs only in its noise or seed).
     """
-    pos = np.asarray(position, dtype=np.float64).reshape(3)
-    key = hashlib.sha256(
-        pickle.dumps(([getattr(setup, f) for f in _PROFILE_FIELDS], pos.tobytes()))
-    ).hexdigest()
-    if key not in _PROFILES:
-        _PROFILES[key] = lobe_profile(setup, pos, until_snr_db=max(SEARCH_SNRS))
-    profile = _PROFILES[key]
-    spacings = [round(profile.lattice_spacing(snr), 2) for snr in SEARCH_SNRS]
-    return tuple(s for i, s in enumerate(spacings) if i == 0 or s < spacings[i - 1])
+    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
+    profile = _cached_profile(setup, pos)
+    passes: list[float] = []
+    for snr in SEARCH_SNRS:
+        spacing = np.floor(100.0 * profile.lattice_spacing(snr)) / 100.0  # never coarser
+        if spacing > 0.0 and (not passes or spacing < passes[-1]):
+            passes.append(float(spacing))
+    return tuple(passes)
+
+
+def _cached_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:
+    """:func:`lobe_profile` of ``setup`` at ``pos`` [m], computed once per process for the
+    same physics objects (a setup rebuilt with another noise level or seed shares them)
+    and position.  Keyed by the objects' identities, which the entry keeps alive and
+    checks, so a key is never reused by another object."""
+    parts = tuple(getattr(setup, f) for f in _PROFILE_FIELDS)
+    key = (*(id(p) for p in parts), pos.tobytes())
+    hit = _PROFILES.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], parts, strict=True)):
+        _PROFILES.move_to_end(key)
+        return hit[1]
+    profile = lobe_profile(setup, pos, until_snr_db=max(SEARCH_SNRS))
+    _PROFILES[key] = (parts, profile)
+    while len(_PROFILES) > _CACHE_SIZE:
+        _PROFILES.popitem(last=False)
+    return profile

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from echocal._validate import finite_array
 from echocal.ascan import AScan
 from echocal.calibrate.objective import Objective
-from echocal.errors import EchocalValueError, GeometryError
+from echocal.errors import EchocalError, EchocalValueError
 from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.virtual import VirtualSetup
@@ -241,15 +241,16 @@ class SourceObjective(Objective):
         """[deg] a blind search's pass spacings sized from the diffraction lobe of the
         simulated probe (the source, or the rig's ``twin``) at this position
         (:func:`~echocal.measurement.detection_radius.search_passes`); None without a
-        simulated probe (a recording), for a gated metric, or from a position where the
-        beam never meets the simulated part at normal incidence."""
+        simulated probe (a recording), for a gated metric, or where the simulated probe
+        cannot see the part from this position (no normal incidence, no echo in the
+        window)."""
         from echocal.measurement.detection_radius import search_passes
 
         if self.twin is None or self.gate is not None:
             return None
         try:
             return search_passes(self.twin, self.position)
-        except GeometryError:
+        except EchocalError:  # no normal incidence, no echo in the window, ...: the defaults
             return None
 
     def noise_estimate(self) -> tuple[float | None, float | None]:

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 from scipy.special import ndtri
 
-from echocal._validate import nonnegative_float, positive_float
+from echocal._validate import finite_float, nonnegative_float, positive_float
 from echocal.errors import EchocalValueError
 from echocal.signal import detector_cache
 from echocal.signal.processing import _samples, envelope, matched_envelope
@@ -170,6 +170,7 @@ class EchoDetector:
         per-sample σ ``sigma`` [a.u.] is ``significance`` g: :meth:`significance_of_peak`
         inverted (it is monotonic in the peak).  0 for σ = 0."""
         sigma = nonnegative_float("sigma", sigma)
+        significance = finite_float("significance", significance)
         if sigma == 0.0:
             return 0.0
         unit = sigma * self.noise_gain
