@@ -14,7 +14,7 @@ simulated setup (its probe, pulse, window and physics model) this module compute
 2. the matched-filter envelope peak p(θ) of each
    (:class:`~echocal.signal.detection.EchoDetector`);
 3. for a peak SNR s [dB] (of the best echo at this position), the noise σ(s)
-   (:func:`~echocal.signal.noise.noise_sigma_for_snr`) and the envelope peak p_t whose
+   (``echocal.signal.noise.noise_sigma_for_snr``) and the envelope peak p_t whose
    significance is the detector's threshold; at the echo's peak the matched envelope
    is the modulus of the echo plus complex Gaussian noise of σ·gain per component (gain:
    the filter's Rayleigh scale per unit σ), a Rice variable, so
