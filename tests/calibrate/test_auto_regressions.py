@@ -22,10 +22,11 @@ from echocal.measurement import SourceObjective
 from echocal.setups import setup_with_overrides
 
 SEEDS = range(12)
-LOCKED_MEDIAN = 56
-"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 54.5 with the
-search in passes, 56 before; 1.5 of margin for the fresh-install jitter above; must not
-grow)."""
+LOCKED_MEDIAN = 27
+"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 25 since the
+search is sized for the echo predicted against the measured noise — no 1° lattice out to
+3° at 30 dB —, 54.5 with the search in passes before, 56 before that; 2 of margin for the
+fresh-install jitter above; must not grow)."""
 BUDGET = 80
 
 

@@ -276,6 +276,13 @@ class Acquisition(Optimizer):
         instead of the circles of ``growth`` and ``max_spacing`` (see
         :func:`search_rings`): when the first pass, sized for a strong echo, misses, the
         region is searched again as a weaker echo needs.  Default: none (circles).
+    replan : callable returning the passes for the rest of the search once x0 and its
+        first ring saw no echo, or None to keep the plan — e.g.
+        :meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, which sizes them
+        for the echo the probe's model predicts against the noise those 7 A-scans
+        measured.  Passes returned replace ``passes`` and the fine lattice beyond the
+        first ring (an echo strong enough to be seen from far needs no fine lattice);
+        called once.
     """
 
     def __init__(
@@ -298,6 +305,7 @@ class Acquisition(Optimizer):
         growth: float = 0.0,
         max_spacing: float | None = None,
         passes: Sequence[float] = (),
+        replan: Callable[[], Sequence[float] | None] | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -341,19 +349,12 @@ class Acquisition(Optimizer):
                 f"with passes {list(self.passes)} they have no effect: give passes=[] to "
                 "search in circles, or leave growth and max_spacing out"
             )
-        rings = search_rings(
-            self.x0,
-            self.spacing,
-            self.max_radius,
-            fine_radius=self.fine_radius,
-            growth=self.growth,
-            max_spacing=self.max_spacing,
-            passes=self.passes,
-        )
-        pts = np.vstack(rings)
-        inside = np.all((pts >= self.bounds[:, 0]) & (pts <= self.bounds[:, 1]), axis=1)
-        self._queue = pts[inside]
-        self._ring = np.concatenate([np.full(len(r), k) for k, r in enumerate(rings)])[inside]
+        if replan is not None and not callable(replan):
+            raise EchocalValueError(f"replan must be a callable or None; got {replan!r}")
+        self.replan = replan
+        self.replanned: tuple[float, ...] | None = None
+        """The passes ``replan`` returned (None: the plan was kept, or not yet asked)."""
+        self._queue, self._ring = self._search_queue(self.fine_radius, self.passes)
         self._next = 0
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
@@ -364,6 +365,43 @@ class Acquisition(Optimizer):
         """The local optimizer once the echo has been found."""
         self.found_at: int | None = None
         """Measurements spent by the acquisition phase (None while searching)."""
+
+    def _search_queue(
+        self, fine_radius: float, passes: tuple[float, ...]
+    ) -> tuple[FloatArray, np.ndarray]:
+        """The points to search, in order, shape ``(n, 2)`` [deg], and the ring of each,
+        shape ``(n,)``: :func:`search_rings` around x0, within the bounds."""
+        rings = search_rings(
+            self.x0,
+            self.spacing,
+            self.max_radius,
+            fine_radius=fine_radius,
+            growth=self.growth,
+            max_spacing=self.max_spacing,
+            passes=passes,
+        )
+        pts = np.vstack(rings)
+        inside = np.all((pts >= self.bounds[:, 0]) & (pts <= self.bounds[:, 1]), axis=1)
+        ring = np.concatenate([np.full(len(r), k) for k, r in enumerate(rings)])
+        return pts[inside], ring[inside]
+
+    def _replan(self) -> None:
+        """Once x0's first ring has been searched in vain: ask ``replan`` for the passes of
+        the rest of the search; if it gives some, they replace the fine lattice beyond
+        the first ring and the planned passes (what was measured stays measured)."""
+        first = min(7, len(self._queue))
+        if self.replan is None or self._next < first:
+            return
+        plan, self.replan = self.replan(), None
+        if plan is None:
+            return
+        passes = _spacings("replan", plan)
+        queue, ring = self._search_queue(self.spacing, passes)
+        if len(queue) < first or not np.allclose(queue[:first], self._queue[:first]):
+            return  # the bounds clip the first ring differently: keep the plan
+        self.replanned = passes
+        self._queue = np.vstack([self._queue[: self._next], queue[first:]])
+        self._ring = np.concatenate([self._ring[: self._next], ring[first:]])
 
     @property
     def batch_size(self) -> int:  # type: ignore[override]
@@ -503,6 +541,8 @@ class Acquisition(Optimizer):
             if own and self.scores()[-1] > self._threshold():
                 self._start_local(self._x[-1].copy())
                 return False
+        if not confirming and not self._detected():
+            self._replan()
         if len(self._y) and self._next < len(self._queue):
             # search first where the echo is strongest so far: within each ring, the points
             # nearest to the best value come first

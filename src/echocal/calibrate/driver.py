@@ -132,7 +132,11 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
     as that number); the objective's own callables named ``"objective"``; an
     acquisition's ``local_options`` expanded the same way (its warm-start ``history``
     named ``"acquisition"``)."""
-    supplied = {objective.noise_estimate: "objective", objective.detections: "objective"}
+    supplied = {
+        objective.noise_estimate: "objective",
+        objective.detections: "objective",
+        objective.passes_for_measured_noise: "objective",
+    }
 
     def name(value: Any) -> Any:
         if callable(value) and not isinstance(value, type):
@@ -177,13 +181,19 @@ _SEARCH_GEOMETRY = ("passes", "growth", "max_spacing")
 def _search_plan(
     cls: type[Optimizer], objective: Objective, given: Mapping[str, Any]
 ) -> dict[str, Any]:
-    """``{"passes": …}`` from the objective's probe (:meth:`Objective.search_passes`) for a
-    method that searches in passes by default (``auto``), unless the caller set the search
-    geometry; else ``{}``."""
+    """For a method that searches in passes by default (``auto``), unless the caller set
+    the search geometry: ``passes`` from the objective's probe
+    (:meth:`Objective.search_passes`), and ``replan``, the objective's passes for the echo
+    it predicts against the noise the first ring measures
+    (:meth:`Objective.passes_for_measured_noise`), unless the caller set ``fine_radius``;
+    else ``{}``."""
     if not option_defaults(cls).get("passes") or any(k in given for k in _SEARCH_GEOMETRY):
         return {}
     passes = objective.search_passes()
-    return {} if passes is None else {"passes": passes}
+    plan: dict[str, Any] = {} if passes is None else {"passes": passes}
+    if "fine_radius" not in given and "replan" not in given:
+        plan["replan"] = objective.passes_for_measured_noise
+    return plan
 
 
 def _acquisition_cost(opt: Optimizer, objective: Objective) -> int | None:

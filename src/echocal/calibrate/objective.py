@@ -191,6 +191,14 @@ class Objective:
         apply."""
         return None
 
+    def passes_for_measured_noise(self) -> tuple[float, ...] | None:
+        """[deg] the spacings of a blind search's passes, coarse first, for the echo the
+        objective predicts against the noise measured so far (see
+        :func:`echocal.measurement.detection_radius.passes_for_noise`), or None when it
+        predicts none, or one too weak to be searched without the fine lattice (the base
+        class: an analytic function has no probe)."""
+        return None
+
     def cost(self, n_points: int) -> int:
         """Measurements needed to evaluate ``n_points`` points (``n_points * repeats``)."""
         return int(n_points) * self.repeats

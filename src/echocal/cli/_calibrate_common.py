@@ -259,6 +259,9 @@ _API_ONLY = {
     "replace it with another Python callable use the Python API",
     "noise_model": "is the source objective's live noise estimate, supplied automatically; "
     "to replace it with another Python callable use the Python API",
+    "replan": "is the source objective's search plan for the echo it predicts against the "
+    "measured noise, supplied automatically; to turn it off give --option fine_radius=3 "
+    "(or set passes), to replace it use the Python API",
     "callback": "is a Python function called after each iteration; use the Python API",
     "bounds": "are the positioner's angle limits, taken from the setup",
 }

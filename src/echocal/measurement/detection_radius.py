@@ -50,7 +50,7 @@ from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
 from echocal.measurement.virtual import VirtualSetup
 from echocal.signal.detection import shared_detector
-from echocal.signal.noise import noise_sigma_for_snr
+from echocal.signal.noise import SNR_DB_RANGE, noise_sigma_for_snr, snr_for_noise_sigma
 
 __all__ = [
     "DETECTION_PROBABILITY",
@@ -59,6 +59,7 @@ __all__ = [
     "detection_radius",
     "first_crossing",
     "lobe_profile",
+    "passes_for_noise",
     "search_passes",
 ]
 
@@ -289,10 +290,39 @@ def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -
     profile = _cached_profile(setup, pos)
     passes: list[float] = []
     for snr in SEARCH_SNRS:
-        spacing = np.floor(100.0 * profile.lattice_spacing(snr)) / 100.0  # never coarser
+        spacing = _floored(profile.lattice_spacing(snr))
         if spacing > 0.0 and (not passes or spacing < passes[-1]):
-            passes.append(float(spacing))
+            passes.append(spacing)
     return tuple(passes)
+
+
+def passes_for_noise(
+    setup: VirtualSetup, position: Sequence[float] | np.ndarray, noise_sigma: float
+) -> tuple[float, ...] | None:
+    """[deg] a blind search's passes for ``setup``'s probe at ``position`` [m] once the
+    receiver's noise σ [a.u. per sample] has been measured: the best echo here then has
+    a known peak SNR ŝ (its noiseless A-scan against σ); the first pass is the coarsest
+    hexagonal lattice that detects it from :data:`PASS_COVERAGE` of the plane, the finer
+    passes of :func:`search_passes` follow as a fall-back (should the echo be weaker than
+    the model says).
+
+    None when ŝ is below the weakest of :data:`SEARCH_SNRS` (20 dB): the fine lattice
+    around the start, which such an echo needs, stays.  At or above it the passes alone
+    detect the echo from 99 % of the plane, the fine lattice adds nothing to that, and a
+    far search saves its 30 measurements (``auto``'s 1° lattice out to 3°).
+    """
+    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
+    profile = _cached_profile(setup, pos)
+    snr = snr_for_noise_sigma(profile.reference, noise_sigma, setup.window, setup.pulse)
+    if not snr >= min(SEARCH_SNRS):
+        return None
+    first = _floored(profile.lattice_spacing(min(snr, SNR_DB_RANGE[1])))
+    return (first, *(p for p in search_passes(setup, pos) if p < first))
+
+
+def _floored(spacing: float) -> float:
+    """[deg] ``spacing`` floored to 0.01° (a pass is never coarser than its rule)."""
+    return float(np.floor(100.0 * spacing) / 100.0)
 
 
 def _cached_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:

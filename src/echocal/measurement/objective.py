@@ -253,6 +253,28 @@ class SourceObjective(Objective):
         except EchocalError:  # no normal incidence, no echo in the window, ...: the defaults
             return None
 
+    def passes_for_measured_noise(self) -> tuple[float, ...] | None:
+        """[deg] the passes for the echo the simulated source predicts at this position
+        against the noise σ measured in its A-scans so far (median of the per-scan robust
+        estimates; :func:`~echocal.measurement.detection_radius.passes_for_noise`).  None
+        before a noisy A-scan, for a gated metric, where the probe cannot see the part,
+        and for a rig's ``twin``: a setup file does not give the rig's echo amplitude in
+        the rig's units, so it cannot say how far above the rig's noise the echo stands."""
+        from echocal.measurement.detection_radius import passes_for_noise
+
+        twin = self.twin
+        if twin is None or twin is not self.source or self.gate is not None:
+            return None
+        if not self._scan_sigmas:
+            return None
+        sigma = float(np.median(self._scan_sigmas))
+        if not sigma > 0.0:
+            return None
+        try:
+            return passes_for_noise(twin, self.position, sigma)
+        except EchocalError:  # no normal incidence, no echo in the window, ...
+            return None
+
     def noise_estimate(self) -> tuple[float | None, float | None]:
         """Live ``(noise_floor, noise_sigma)`` of the metric, measured from the A-scans.
 

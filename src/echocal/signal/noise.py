@@ -29,7 +29,14 @@ from echocal.signal.processing import _energy_window
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
 
-__all__ = ["SNR_DB_RANGE", "Receiver", "check_snr_db", "noise_sigma_for_snr", "signal_power"]
+__all__ = [
+    "SNR_DB_RANGE",
+    "Receiver",
+    "check_snr_db",
+    "noise_sigma_for_snr",
+    "signal_power",
+    "snr_for_noise_sigma",
+]
 
 
 def signal_power(
@@ -85,6 +92,21 @@ def noise_sigma_for_snr(
         raise EchocalValueError("reference_samples must hold an echo; its power is zero")
     sigma = np.sqrt(power / 10.0 ** (snr / 10.0))
     return float(sigma) if sigma.ndim == 0 else sigma
+
+
+def snr_for_noise_sigma(
+    reference_samples: ArrayLike,
+    noise_sigma: float,
+    window: RecordingWindow,
+    pulse: Pulse,
+) -> float:
+    """[dB] the SNR of the reference echo against white noise of ``noise_sigma`` [a.u.]
+    per sample: 10·log10(P_signal / σ²), the inverse of :func:`noise_sigma_for_snr` (inf
+    for σ = 0, -inf for an echo of zero power)."""
+    sigma = nonnegative_float("noise_sigma", noise_sigma)
+    power = float(signal_power(reference_samples, window, pulse))
+    with np.errstate(divide="ignore"):
+        return float(10.0 * np.log10(power) - 20.0 * np.log10(sigma))
 
 
 @dataclass(frozen=True, kw_only=True)
