@@ -10,6 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 import echocal
+from cli_helpers import flat, run_main
 from echocal.cli import app
 
 runner = CliRunner()
@@ -79,10 +80,17 @@ def test_no_gate_key_or_legend_without_a_gate(tmp_path, monkeypatch):
     assert any(label.startswith("gate 20us,15us") for label in labels)
 
 
-def test_a_gate_without_the_echo_detects_nothing(tmp_path):
-    # the echo is at ~27 us; [40, 45] us holds only noise
-    data = summary_of(tmp_path, "--pose", "0,0,20", "--gate", "40,5")
-    assert data["detected"] is False and data["tof_s"] is None
+def test_a_gate_that_never_sees_an_echo_is_refused_before_anything_is_written(
+    tmp_path, capsys, monkeypatch
+):
+    # issue #14: the echo is at ~27 us; [40, 45] us holds only noise -> one line, exit 2
+    out = tmp_path / "new" / "sim"
+    args = ["simulate", "--pose", "0,0,20", "--gate", "40,5", "--out", str(out)]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code == 2, err
+    assert "--gate 40us,5us: never sees an echo" in flat(err) and "put it on an echo" in flat(err)
+    assert err.count("error:") == 1 and "Traceback" not in err
+    assert not (tmp_path / "new").exists()  # no folder, no A-scan files
 
 
 def _samples(path: Path) -> np.ndarray:

@@ -18,15 +18,14 @@ GATE_HELP = (
 )
 
 
-def gate_for_setup(
-    text: str | None, virtual: Any, *, field: str = "--gate", sees_echo: bool = True
-) -> TimeGate | None:
-    """:func:`echocal.signal.gates.setup_gate` of ``text`` (None without a gate)."""
+def gate_for_setup(text: str | None, virtual: Any, *, field: str = "--gate") -> TimeGate | None:
+    """:func:`echocal.signal.gates.setup_gate` of ``text`` (None without a gate): refused,
+    before anything is measured, outside the recording window or never seeing an echo."""
     if text is None:
         return None
     from echocal.signal.gates import setup_gate
 
-    return setup_gate(text, virtual, field=field, sees_echo=sees_echo)
+    return setup_gate(text, virtual, field=field)
 
 
 def gate_for_source(

@@ -50,7 +50,9 @@ def register(app: typer.Typer) -> None:
             str | None,
             typer.Option(
                 help=GATE_HELP + "  Here the echo is also looked for, and its time of "
-                "flight taken, inside the gate; a gate may hold only noise (no echo detected)."
+                "flight taken, inside the gate.  A gate that never sees an echo (in the "
+                "noiseless A-scan at the setup's reference pose) is refused before anything "
+                "is simulated."
             ),
         ] = None,
         out: Annotated[Path, typer.Option(help="Folder for the A-scan file and plot.")] = Path(
@@ -85,9 +87,9 @@ def register(app: typer.Typer) -> None:
         refuse_existing_output(out, overwrite=overwrite)
         virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
         target = parse_pose(pose)
+        user_gate = gate_for_setup(gate, virtual)  # refused here, as calibrate/scan/... do
         scan = virtual.measure(target)
         window, pulse = virtual.window, virtual.pulse
-        user_gate = gate_for_setup(gate, virtual, sees_echo=False)
         # as on a flaw detector, a gate restricts the time of flight to the echo inside it
         peak_tof = _gated_tof(scan.samples, window, pulse, user_gate)
         significance = _significance(scan.samples, virtual, user_gate)
