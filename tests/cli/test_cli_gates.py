@@ -161,6 +161,42 @@ def test_simulate_back_wall_gate_measures_the_back_wall_echo(tmp_path, capsys, m
     assert summary["peak_amplitude"] == pytest.approx(back["amplitude"], rel=0.02)
 
 
+THIN_PLATE = 'builtin = "flat-plate"\nmaterial = "steel"\nthickness = "3 mm"\nback_wall_echoes = 1'
+
+
+def test_simulate_back_wall_gate_reports_its_own_energy_window_and_the_water_path(
+    tmp_path, capsys, monkeypatch
+):
+    """A tiny 3 mm steel plate (back wall 1.02 µs after the front wall): the pseudo-energy
+    window reported and shaded is the one inside the back-wall gate; distance_m stays the
+    water path (from the front-wall echo), depth_m is the back wall's depth in the part."""
+    import echocal.plots
+
+    figures = []
+    real = echocal.plots.save_figure
+    monkeypatch.setattr(
+        echocal.plots, "save_figure", lambda fig, *a, **k: figures.append(fig) or real(fig, *a, **k)
+    )
+    path = tmp_path / "plate.toml"
+    path.write_text(tiny_setup_toml(THIN_PLATE) + '[echo]\nreflection = "wave"\n')
+    args = ["simulate", "--setup", str(path), "--pose", "0,0,16", "--snr", "none"]
+    code, stdout, err = run_main(
+        [*args, "--gate", "back-wall", "--json", "--out", str(tmp_path / "o")], capsys, monkeypatch
+    )
+    assert code == 0, err
+    summary = json.loads(stdout)
+    gate_start, gate_width = summary["gate_s"]
+    start, width = summary["energy_window_s"]
+    assert gate_start - 1e-12 <= start and start + width <= gate_start + gate_width + 1e-12
+    assert start <= summary["tof_s"] <= start + width  # the back wall's, not the front wall's
+    assert summary["distance_m"] == pytest.approx(0.016, abs=0.1e-3)  # 16 mm of water
+    assert summary["depth_m"] == pytest.approx(0.003, abs=0.1e-3)  # the 3 mm back wall
+    shaded = [p for p in figures[-1].axes[0].patches if p.get_label() == "pseudo-energy window"]
+    assert len(shaded) == 1
+    lo, span = shaded[0].get_x(), shaded[0].get_width()  # [µs]
+    assert lo == pytest.approx(start * 1e6) and span == pytest.approx(width * 1e6)
+
+
 def test_scan_calibrates_each_point_in_the_gate_and_records_it(tiny, tmp_path, capsys, monkeypatch):
     from echocal.provenance import read_provenance
 

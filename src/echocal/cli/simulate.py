@@ -77,6 +77,11 @@ def register(app: typer.Typer) -> None:
         is significant (g > 4.5, see echocal.signal.detection.EchoDetector); otherwise
         "no echo detected" is printed with g, and the time of flight and distance are
         null in the JSON output ("detected": false).
+
+        The distance is the water path, probe to front surface (c0 times the front-wall
+        echo's time of flight over 2); with a --gate on a deeper echo (back wall, flaw) its
+        depth in the part, c_L (tau - tau_front)/2, is printed too (JSON depth_m).  See
+        docs/gates.md.
         """
         from echocal.plots import plot_ascan, save_figure
         from echocal.signal import distance
@@ -97,6 +102,7 @@ def register(app: typer.Typer) -> None:
             significance is None or significance > ECHO_THRESHOLD
         )
         tof = peak_tof if detected else float("nan")
+        surface_tof = _surface_tof(scan.samples, virtual, user_gate, tof)
         energy = float(gated_metric("pseudo-energy", scan.samples, window, pulse, user_gate))
         summary: dict[str, Any] = {
             "setup": virtual.name,
@@ -113,19 +119,22 @@ def register(app: typer.Typer) -> None:
             "significance": significance,
             "detection_threshold": None if significance is None else ECHO_THRESHOLD,
             "tof_s": tof,
-            "distance_m": float(distance(tof, virtual.sound_speed)),
+            "distance_m": float(distance(surface_tof, virtual.sound_speed)),
             "pseudo_energy": energy,
             "energy_db": float(gated_metric("energy-db", scan.samples, window, pulse, user_gate)),
             "peak_amplitude": float(
                 gated_metric("peak-amplitude", scan.samples, window, pulse, user_gate)
             ),
         }
+        depth = _depth(virtual, tof, surface_tof)
+        if depth is not None:
+            summary["depth_m"] = depth
         summary["echoes"] = _echoes(virtual, target)
         if user_gate is not None:
             start = float(user_gate.starts(scan.samples, window))
             summary["gate_s"] = [start, user_gate.width]  # where it was on this A-scan
             summary["gate"] = user_gate.describe()
-        energy_window = _energy_window(scan.samples, window, pulse)
+        energy_window = _energy_window(scan.samples, window, pulse, user_gate)
         if energy_window is not None:
             summary["energy_window_s"] = list(energy_window)
         hold_output_lock(out)  # one writer per --out
@@ -166,9 +175,14 @@ def register(app: typer.Typer) -> None:
                     f"amplitude {echo['amplitude']:.4g}"
                 )
         seen = "" if significance is None else f"   (significance g = {significance:.1f})"
+        water = "   (water path, from the front-wall echo)" if depth is not None else ""
+        inside = (
+            "" if depth is None else f"depth           {_show(depth * 1e3, 'mm')}   (in the part)\n"
+        )
         output.print(
             f"time of flight  {_show(tof * 1e6, 'µs')}{seen if detected else ''}\n"
-            f"distance        {_show(summary['distance_m'] * 1e3, 'mm')}\n"
+            f"distance        {_show(summary['distance_m'] * 1e3, 'mm')}{water}\n"
+            f"{inside}"
             f"pseudo-energy   {energy:10.4g}\n"
             f"saved           {data_path}, {plots[0]}"
         )
@@ -209,15 +223,53 @@ def _significance(samples: np.ndarray, virtual: Any, gate: Any) -> float | None:
     return float(detector.significance_of_peak(float(np.max(env)), sigma))
 
 
-def _energy_window(samples: np.ndarray, window: Any, pulse: Any) -> tuple[float, float] | None:
-    """[s] (start, width) of the pseudo-energy window: two pulse durations centred on the
-    strongest matched-filter peak of the whole recording; None for an all-zero A-scan."""
+def _energy_window(
+    samples: np.ndarray, window: Any, pulse: Any, gate: Any
+) -> tuple[float, float] | None:
+    """[s] (start, width) of the samples the pseudo-energy summed: two pulse durations
+    centred on the strongest matched-filter peak of the trace (of the gated trace with a
+    ``gate``, then clipped to the gate where it is on this A-scan, as its samples outside
+    are zero); None for an all-zero (gated) trace."""
     from echocal.signal import time_of_flight
 
-    peak = float(time_of_flight(samples, window, pulse))
+    trace = samples if gate is None else gate.apply(samples, window)
+    peak = float(time_of_flight(trace, window, pulse))
     if np.isnan(peak):
         return None
-    return peak - pulse.duration, 2.0 * pulse.duration
+    lo, hi = peak - pulse.duration, peak + pulse.duration
+    if gate is not None:
+        start, end = (float(v) for v in gate.spans(samples, window))
+        lo, hi = max(lo, start), min(hi, end)
+    return (lo, hi - lo) if hi > lo else None
+
+
+def _surface_tof(samples: np.ndarray, virtual: Any, gate: Any, tof: float) -> float:
+    """[s] the time of flight ``distance_m`` converts with the water's speed c₀: the
+    front-wall echo's (the probe-to-surface water path) when the echo in ``gate`` lies more
+    than a pulse duration after it (a back wall, a flaw), else ``tof`` itself."""
+    from echocal.signal.gates import named_gate
+
+    if gate is None or np.isnan(tof):
+        return tof
+    pulse = virtual.pulse
+    front_wall = named_gate(
+        "front-wall",
+        pulse=pulse,
+        thickness=getattr(virtual, "thickness", None),
+        material=getattr(virtual, "material", None),
+    )
+    front = _gated_tof(samples, virtual.window, pulse, front_wall)
+    return front if front < tof - pulse.duration else tof
+
+
+def _depth(virtual: Any, tof: float, surface_tof: float) -> float | None:
+    """[m] depth of the gated echo below the front surface, c_L·(τ − τ_front)/2 (a flaw
+    detector's IF-gate sound path), when it lies deeper than the front wall in a plate with
+    an interior; else None."""
+    speed = getattr(getattr(virtual, "material", None), "longitudinal_speed", None)
+    if getattr(virtual, "thickness", None) is None or speed is None or surface_tof == tof:
+        return None
+    return float(speed) * (tof - surface_tof) / 2.0
 
 
 def _shade(fig: Any, span: tuple[float, float], label: str) -> None:
