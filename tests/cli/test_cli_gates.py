@@ -283,3 +283,23 @@ def test_lobe_takes_the_envelope_peak_inside_the_gate(tiny, tmp_path, capsys, mo
     # the plate's echo is the only one: inside a gate around it the lobe is the same
     assert gated["amplitude"] == pytest.approx(whole["amplitude"], rel=1e-3)
     refused([*base, "--gate", "24us,0.5us"], capsys, monkeypatch, "never sees an echo")
+
+
+@pytest.mark.parametrize("gate", ["200,1", "24us,0.5us"], ids=["outside", "no-echo"])
+@pytest.mark.parametrize(
+    ("command", "target"),
+    [
+        (["record", "--azimuth", "0:0:1", "--coelevation", "0:0:1"], "sub/x.nc"),
+        ([*FAST], "sub"),
+        (["scan", "--grid", "0:0:1,0:0:1", "--z", "16"], "sub"),
+    ],
+    ids=["record", "calibrate", "scan"],
+)
+def test_a_bad_gate_makes_no_output_folder(
+    command, target, gate, tiny, tmp_path, capsys, monkeypatch
+):
+    """Issue #14: a refused gate leaves no empty --out folder (nor its parents) behind."""
+    new = tmp_path / "newdir"
+    args = [*command, "--setup", tiny, "--gate", gate, "--out", str(new / target)]
+    refused(args, capsys, monkeypatch, "--gate")
+    assert not new.exists()

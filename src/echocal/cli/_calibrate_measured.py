@@ -35,6 +35,7 @@ from echocal.cli._replay_grid import (
     replay_position,
     tilt_bounds_in_recording,
 )
+from echocal.locking import hold_output_lock
 from echocal.measurement.base import BaseSource
 
 
@@ -219,6 +220,7 @@ def _on_instrument(
     wait: dict[str, Any] = {}
     if timeout is not None:
         wait["timeout"] = _check_timeout(timeout)
+    hold_output_lock(out)  # one writer per --out (made here, the options checked)
     connect = (
         (lambda: open_rig(rig))
         if rig is not None
@@ -314,6 +316,7 @@ def _on_replay(
             fs=recording.fs, start=recording.start_time, n_samples=recording.n_samples
         )
         chosen = gate_for_source(gate, pulse=pulse, setup=setup, window=window)
+        hold_output_lock(out)  # one writer per --out (made here, the options checked)
         if start is None:
             start = grid_centre(recording, parameterization)
         bounds = (

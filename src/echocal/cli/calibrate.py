@@ -218,8 +218,7 @@ def register(app: typer.Typer) -> None:
         run = _Run.parse(
             method, budget, max_iter, settle, preset, option, search_radius, final_measure
         )
-        refuse_existing_output(out, overwrite=overwrite)
-        hold_output_lock(out)  # one writer per --out, from the first measurement to the last file
+        refuse_existing_output(out, overwrite=overwrite)  # --out is locked once the inputs pass
         if replay is not None or instrument is not None or rig is not None:
             from echocal.cli._calibrate_measured import (
                 _calibrate_measured,
@@ -290,6 +289,7 @@ def _calibrate_simulated(
     virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
     where = _parse_position(position) if position else virtual.reference_position
     chosen = gate_for_setup(gate, virtual)  # refused here, before any measurement
+    hold_output_lock(out)  # one writer per --out (made here), from the first measurement on
     objective = SourceObjective(virtual, where, parameterization=parameterization, gate=chosen)
     # the effective seed: --seed, else the setup file's, else 0
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)

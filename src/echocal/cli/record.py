@@ -169,17 +169,19 @@ def register(app: typer.Typer) -> None:
         grid = RecordingGrid.regular(azimuth=az, coelevation=coel, positions=positions)
         n_samples = None if rig is not None or config is None else config.window.n_samples
         total = check_recording_size(grid, repeats, n_samples)
+        # the gate is refused before any folder is made or anything measured
+        simulated: Any = None
+        if rig is not None:
+            chosen = gate_for_source(gate, pulse=_setup_pulse(setup), setup=setup)
+        else:
+            assert setup is not None  # refused above
+            simulated = resolve_setup(setup, snr=snr, seed=seed)
+            chosen = gate_for_setup(gate, simulated)
         hold_output_lock(out, folder=False)  # one recording per file, from here to the end
         sidecar = partial_path(out)
         if out.exists() and not sidecar.exists() and not overwrite:
             raise DataFileError(f"{out} already exists; pass --overwrite to record it again")
-        if rig is not None:
-            chosen = gate_for_source(gate, pulse=_setup_pulse(setup), setup=setup)
-            source: Any = open_rig(rig)
-        else:
-            assert setup is not None
-            source = resolve_setup(setup, snr=snr, seed=seed)
-            chosen = gate_for_setup(gate, source)  # refused before anything is measured
+        source: Any = simulated if rig is None else open_rig(rig)
         with source:
             _record(
                 source,
