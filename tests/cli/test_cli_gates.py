@@ -303,3 +303,12 @@ def test_a_bad_gate_makes_no_output_folder(
     args = [*command, "--setup", tiny, "--gate", gate, "--out", str(new / target)]
     refused(args, capsys, monkeypatch, "--gate")
     assert not new.exists()
+
+
+def test_a_setup_gate_outside_the_window_is_named_once(tmp_path, capsys, monkeypatch):
+    path = tmp_path / "bad.toml"
+    path.write_text(
+        tiny_setup_toml() + '\n[[gates]]\nname = "g"\nstart = "200 us"\nwidth = "1 us"\n'
+    )
+    err = refused([*FAST, "--setup", str(path), "--out", str(tmp_path / "o")], capsys, monkeypatch)
+    assert "gates.0 (g): [200, 201] µs is outside the recording window" in err, err

@@ -350,9 +350,9 @@ def _build_gates(
                 name=g.name, width=g.width, start=g.start, delay=g.delay, threshold=g.threshold
             )
             if window is not None:
-                check_gate(gate, window, field=f"{where} ({g.name})")
+                check_gate(gate, window, field=where)
         except EchocalError as exc:
-            problems.append(_problem(where, exc))
+            problems.append(_gate_problem(where, g.name, exc))
             continue
         built.append(gate)
     try:
@@ -360,6 +360,17 @@ def _build_gates(
     except EchocalError as exc:
         problems.append(str(exc))
     return (None, problems) if problems else (tuple(built), [])
+
+
+def _gate_problem(where: str, name: str, exc: Exception) -> str:
+    """``gates.0 (NAME): message``: the gate's index and name, each once (the gate's own
+    messages start with ``gates.0 NAME:`` or ``gate NAME:``)."""
+    message = str(exc)
+    for prefix in (f"{where} {name}: ", f"gate {name}: "):
+        if message.startswith(prefix):
+            message = message[len(prefix) :]
+            break
+    return f"{where} ({name}): {message}"
 
 
 def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
