@@ -28,13 +28,15 @@ def _quantity(
     *,
     allow_infinite: bool = False,
     check: Callable[[str, float], float] | None = None,
+    positive_in: str | None = None,
 ):
     """A BeforeValidator: text with a unit → SI; implausible numbers refused with a hint.
 
     ``plausible_max`` [SI] bounds bare numbers only (``12.7`` for a probe width was meant in
     mm; ``"2 m"`` is deliberate); ``check(field, value)`` — a plausible range, e.g. of
     frequencies — applies to every finite value.  Infinite values are left to the field
-    (refused unless it allows them).
+    (refused unless it allows them); with ``positive_in`` (the unit users write, ``"mm"``)
+    a NaN or infinite value is refused as "must be a finite number > 0 [mm]".
     """
 
     def parse(value: Any) -> Any:
@@ -48,6 +50,8 @@ def _quantity(
         elif not isinstance(value, int | float):
             return value  # the field reports the wrong type
         if not math.isfinite(value):
+            if positive_in is not None:
+                raise ValueError(f"must be a finite number > 0 [{positive_in}]")
             return value
         if bare and plausible_max is not None and abs(value) > plausible_max:
             raise ValueError(
@@ -89,14 +93,20 @@ _HINT_UNIT = {"time": "us", "frequency": "MHz"}
 _SI_UNIT = {"length": "m", "time": "s", "frequency": "Hz", "speed": "m/s", "angle": "deg"}
 
 ProbeLength = Annotated[
-    float, _quantity("length", plausible_max=1.0), Field(gt=0, allow_inf_nan=False)
+    float,
+    _quantity("length", plausible_max=1.0, positive_in="mm"),
+    Field(gt=0, allow_inf_nan=False),
 ]
 Position = Annotated[float, _quantity("length", plausible_max=10.0), Field(allow_inf_nan=False)]
 LimitBound = Annotated[
     float, _quantity("length", plausible_max=10.0, allow_infinite=True), AfterValidator(_not_nan)
 ]
 """A positioner limit [m]: ``inf``/``-inf`` (bare or as text) means unlimited."""
-Size = Annotated[float, _quantity("length", plausible_max=10.0), Field(gt=0, allow_inf_nan=False)]
+Size = Annotated[
+    float,
+    _quantity("length", plausible_max=10.0, positive_in="mm"),
+    Field(gt=0, allow_inf_nan=False),
+]
 Frequency = Annotated[
     float, _quantity("frequency", check=plausible_frequency), Field(gt=0, allow_inf_nan=False)
 ]

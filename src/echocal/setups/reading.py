@@ -64,7 +64,7 @@ def load_setup_config(name_or_path: str | Path) -> tuple[SetupConfig, Path]:
     try:
         return SetupConfig.model_validate(raw), base_dir
     except ValidationError as exc:
-        problems = _format_errors(exc)
+        problems = _format_errors(exc, raw=raw)
         raise ConfigError(
             f"{name_or_path}: {len(problems)} problem(s):\n  " + "\n  ".join(problems)
         ) from None
@@ -82,7 +82,7 @@ def _check(
     try:
         config = SetupConfig.model_validate(raw)
     except ValidationError as exc:
-        problems = _format_errors(exc)
+        problems = _format_errors(exc, raw=raw)
         invalid = frozenset(str(item["loc"][0]) for item in exc.errors() if item["loc"])
     else:
         return config, base_dir, *_build_parts(config, base_dir)

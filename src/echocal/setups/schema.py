@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import typing
+from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 import pydantic
@@ -272,13 +273,33 @@ class SetupConfig(_Model):
     """Named measurement gates (``--gate NAME``), besides front-wall and back-wall."""
 
 
+def _flaw_by_name(parts: list[str], raw: Mapping[str, Any] | None) -> list[str]:
+    """``specimen.flaws.0.x`` → ``specimen.flaws.NAME.x`` when the raw file's flaw 0 has a
+    name: flaws are named the same way here and in the interior's own checks."""
+    if raw is None or parts[:2] != ["specimen", "flaws"] or len(parts) < 3:
+        return parts
+    if not parts[2].isdigit():
+        return parts
+    try:
+        name = raw["specimen"]["flaws"][int(parts[2])]["name"]
+    except (KeyError, IndexError, TypeError):
+        return parts
+    if not isinstance(name, str) or not name.strip():
+        return parts
+    return [*parts[:2], name, *parts[3:]]
+
+
 def _format_errors(
-    error: ValidationError, hint: str = "see `echocal setup show thesis`"
+    error: ValidationError,
+    hint: str = "see `echocal setup show thesis`",
+    raw: Mapping[str, Any] | None = None,
 ) -> list[str]:
-    """One line per pydantic error: ``field.path: message, got value`` (``hint`` for typos)."""
+    """One line per pydantic error: ``field.path: message, got value`` (``hint`` for typos);
+    given the ``raw`` setup data, a flaw is named by its name (``specimen.flaws.sdh``)."""
     lines = []
     for item in error.errors():
         parts = [str(part) for part in item["loc"] if part not in LOC_TAGS]
+        parts = _flaw_by_name(parts, raw)
         where = ".".join(parts) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
