@@ -90,3 +90,23 @@ def test_the_report_says_in_words_why_points_are_missing(rod_end, tmp_path):
     counts = scan.summary["missing_by_status"]
     assert counts and all(f"{status} ({n} points): " in row for status, n in counts.items())
     assert "{" not in row and "&quot;" not in row  # not a JSON dump
+
+
+def test_a_single_row_map_keeps_its_title_clear_of_the_colour_bar(tmp_path):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from cli_helpers import tiny_setup_file
+    from echocal.plots.surface import height_map_figure
+
+    setup = load_setup(tiny_setup_file(tmp_path), seed=0)
+    grid = ScanGrid.regular(x=(-2 * MM, 2 * MM, 2 * MM), y=(0.0, 0.0, 1 * MM), z=16 * MM)
+    scan = scan_surface(setup, grid, rng=0, progress=False)
+    fig = height_map_figure(scan)
+    fig.axes[0].set_title("a title much wider than the thin strip of one row of points")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    title = fig.axes[0].title.get_window_extent(renderer)
+    bar = fig.axes[1].get_window_extent(renderer)  # the colour bar, below the strip
+    assert not title.overlaps(bar)
+    assert bar.y1 < fig.axes[0].get_window_extent(renderer).y0

@@ -81,7 +81,9 @@ def _image(
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_aspect("equal")
-    fig.colorbar(im, ax=ax, label=label)
+    # a single row is a thin strip: a colour bar beside it would crowd its (wider) title
+    below = values.shape[0] == 1 and not (mark_missing and np.any(missing))
+    fig.colorbar(im, ax=ax, label=label, location="bottom" if below else "right")
 
 
 def _map_figure(
