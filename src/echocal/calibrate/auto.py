@@ -9,15 +9,16 @@ probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per 
 ==================  ================  ================
 start band          1–3°              5–20°
 ==================  ================  ================
-30 dB               100/100/100/100   3/11/66/97 %
-20 dB               100/100/100/100   0/2/39/53 %
-10 dB               74/100/100/100    0/0/6/8 %
+30 dB               100/100/100/100   4/95/100/100 %
+20 dB               100/100/100/100   0/23/62/74 %
+10 dB               74/100/100/100    0/0/5/7 %
 ==================  ================  ================
 
 From 1–3° at 30 dB, 91 % of runs are within 0.05° after 15 measurements (64 % before the
-local method fitted its warm start before its first step).  (Before the passes were
-sized from the probe: 5–20° at 30 dB 0/12/56/99, at 20 dB 0/2/37/54, at 10 dB 0/0/8/8 %;
-before the search in passes: 0/12/27/77, 0/2/–/67, 0/0/–/13 %.)
+local method fitted its warm start before its first step).  From 5–20° at 30 dB the median
+is 29 measurements to 0.1° (p90 36, p99 52) since the search is sized for the echo the
+probe's model predicts against the noise the first ring measures (before: 3/11/66/97 %,
+median 58.5; with hand-sized passes 0/12/56/99, before the passes 0/12/27/77 %).
 From 1–3° ``auto`` needs a median 14, 13 and 15 measurements to 0.1° at 30, 20 and
 10 dB; the best peer of the full benchmark (10 runs per cell) needed 17.5 (Py-BOBYQA),
 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's GP, 80 % of runs).  Over curved parts, probe
@@ -37,8 +38,13 @@ Why each part:
    confirming re-measurement of a marginal detection), so a false find on noise is not
    handed to the local method;
 3. inside 3° of x0 the search keeps a 1° lattice, which a 10 dB echo needs (visible only
-   within about 0.55–0.7°); beyond, two passes out to ``max_radius``, coarse to fine,
-   sized from the probe when the objective knows it
+   within about 0.55–0.7°) — unless x0's first ring saw nothing and the objective predicts
+   an echo of ≥ 20 dB against the noise those 7 A-scans measured
+   (:meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, the ``replan``
+   option: a simulated probe's noiseless best echo against the A-scans' robust σ), which
+   the passes alone detect from 99 % of the plane: then the 1° lattice is dropped and the
+   first pass is the coarsest for that SNR; beyond, two passes out to ``max_radius``,
+   coarse to fine, sized from the probe when the objective knows it
    (:meth:`~echocal.calibrate.Objective.search_passes`: the simulator, or a rig's setup):
    the coarsest hexagonal lattices that detect a 30 dB, then a 20 dB echo from 99 % of
    the plane, computed from the probe's noiseless diffraction lobe before anything is
@@ -55,12 +61,14 @@ Why each part:
    ball), and searches once across a ridge.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
-lower-bound.md): from 5–20° at 30 dB any search needs ≥ 17 measurements for 99 % of runs;
-``auto`` spends the 1° lattice first (37 measurements, which the 10 dB near start needs:
-without knowing the SNR a fixed order cannot serve both), then up to ~30 on the coarse
-pass, and a median 15 to climb from a detection in the lobe's tail to 0.1°: 97 % within
-80, 66 % within 60.  When the SNR is known to be ≥ 20 dB, ``fine_radius=1.0`` drops the
-lattice beyond x0's hexagon.  When the start is known to be near the echo,
+lower-bound.md): the 30 dB near start within 0.05° after 15 (91 %: the first steps from
+the lobe's edge overshoot a 1° lobe); the lower-bound ratio (any search needs ≥ 17
+measurements for 99 % of far starts at 30 dB; ``auto``'s p99 is 52, since detection alone
+costs a median 13 and the climb from a detection in the lobe's tail a median 15); the
+12.7 mm probe over curved parts at 10 dB.  Without a probe model (a recording, a rig) the
+far search still spends the 1° lattice first (a fixed order cannot serve both a 10 dB near
+start and a 30 dB far one without knowing the SNR); ``fine_radius=1.0`` drops it when the
+SNR is known to be ≥ 20 dB.  When the start is known to be near the echo,
 ``method="model-based"`` saves the acquisition.
 """
 

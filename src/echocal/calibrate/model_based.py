@@ -436,14 +436,16 @@ class ModelBased(Optimizer):
         cannot learn more there — measured twice already, e.g. clipped onto a limit — and
         re-measuring it froze the estimate for 49 measurements), so it looks elsewhere.
 
-        Not the model's step, so it cannot grow the trust radius; but when its echo is
-        below half the incumbent's measured one it shrinks it as a failed step does —
-        else, with a model too poor to judge steps (its noise scale blown up by a strong
-        measurement it misses), a trust circle out in the noise keeps its radius and the
-        search circles there until the budget ends (measured: 33 measurements on a 4°
-        circle around a point 0.27° from the peak, a far start at 30 dB)."""
+        Not the model's step, so it cannot grow the trust radius; but while the model has
+        no supported maximum, when the point's echo is below half the incumbent's measured
+        one it shrinks it as a failed step does — else, with a model too poor to judge
+        steps (its noise scale blown up by a strong measurement it misses), a trust circle
+        out in the noise keeps its radius and the search circles there until the budget
+        ends (measured: 33 measurements on a 4° circle around a point 0.27° from the peak,
+        a far start at 30 dB).  A supported maximum keeps its trust radius: its support
+        (the nearest measurement within it) is what makes it the recommendation."""
         self._pred = None  # not the model's step: judged against the incumbent instead
-        if len(self._x):
+        if len(self._x) and self._supported_max() is None:
             nearest = int(np.argmin(np.hypot(*(self._x - self._incumbent).T)))
             self._fresh_ref = float(self._y[nearest] - self._floor())
         for k in range(1, 64):
