@@ -295,39 +295,3 @@ def test_a_warm_start_is_fitted_before_the_first_step():
     np.testing.assert_allclose(proposals, [proposals[0]] * 5)
     assert np.hypot(*(proposals[0] - peak)) < 0.6 * np.hypot(*(x0 - peak))
 
-
-def _stuck(strong_value: float) -> tuple[ModelBased, np.ndarray]:
-    """A model whose own proposal was measured twice (so it asks for a fresh point on its
-    trust circle), its incumbent a strong measurement among a lobe's flat tail."""
-    rng = np.random.default_rng(0)
-    tail = rng.uniform(-8.0, 8.0, (40, 2))
-    tail = tail[np.hypot(*tail.T) > 2.0]
-    strong = np.array([0.3, 0.25])
-    hx = np.vstack([tail, strong])
-    hy = np.concatenate([0.007 + rng.uniform(0.0, 0.008, len(tail)), [strong_value]])
-    opt = ModelBased(strong, history=(hx, hy), noise_model=lambda: (0.007, 0.0005), rng=0)
-    opt._design = np.zeros((0, 2))  # past the design: the model's proposals from here
-    proposal = np.array([4.3, 0.25])  # the model's step out into the tail, measured twice
-    opt._propose = lambda: proposal[None, :]  # type: ignore[method-assign]
-    opt._tried = np.vstack([opt._tried, proposal, proposal])
-    return opt, strong
-
-
-def test_a_fresh_point_in_the_noise_shrinks_the_trust_radius():
-    """Regression (far start at 30 dB, benchmark run 16): a model whose noise scale a strong
-    measurement had blown up judged no step, so its fresh points — asked because its own
-    proposal was measured twice — stayed on a 4° trust circle in the noise for 33
-    measurements.  A fresh point whose echo is below half the incumbent's now halves the
-    trust radius as a failed step does; one that holds the echo leaves it."""
-    opt, _ = _stuck(3.23)
-    trust = opt._trust
-    point = opt.ask()[0]
-    assert np.hypot(*(point - opt._incumbent)) == pytest.approx(trust, rel=1e-9)
-    opt.tell(np.array([0.008]))  # the noise floor: a failed step
-    assert opt._trust == pytest.approx(max(0.5 * trust, opt.min_radius))
-
-    opt, _ = _stuck(3.23)
-    trust = opt._trust
-    opt.ask()
-    opt.tell(np.array([2.5]))  # above half the incumbent's 3.22 above the floor
-    assert opt._trust >= trust

@@ -170,7 +170,6 @@ class ModelBased(Optimizer):
         self._sigma_log = 0.0
         self._incumbent = self.x0.copy()
         self._pred: tuple[float, float] | None = None  # (m(center), m(candidate))
-        self._fresh_ref: float | None = None  # the incumbent's echo, judging a fresh point
         self._step_len = 0.0
         if len(self._x) and not len(self._design):
             self._update_model()  # a warm start's first step already uses what it was given
@@ -434,20 +433,8 @@ class ModelBased(Optimizer):
         """A point [deg] on the trust circle around the incumbent, at golden-angle steps of
         direction, that was measured fewer than twice: the model's own proposal was (it
         cannot learn more there — measured twice already, e.g. clipped onto a limit — and
-        re-measuring it froze the estimate for 49 measurements), so it looks elsewhere.
-
-        Not the model's step, so it cannot grow the trust radius; but while the model has
-        no supported maximum, when the point's echo is below half the incumbent's measured
-        one it shrinks it as a failed step does — else, with a model too poor to judge
-        steps (its noise scale blown up by a strong measurement it misses), a trust circle
-        out in the noise keeps its radius and the search circles there until the budget
-        ends (measured: 33 measurements on a 4° circle around a point 0.27° from the peak,
-        a far start at 30 dB).  A supported maximum keeps its trust radius: its support
-        (the nearest measurement within it) is what makes it the recommendation."""
-        self._pred = None  # not the model's step: judged against the incumbent instead
-        if len(self._x) and self._supported_max() is None:
-            nearest = int(np.argmin(np.hypot(*(self._x - self._incumbent).T)))
-            self._fresh_ref = float(self._y[nearest] - self._floor())
+        re-measuring it froze the estimate for 49 measurements), so it looks elsewhere."""
+        self._pred = None  # not the model's step: no trust-radius verdict on it
         for k in range(1, 64):
             self._n_fresh += 1
             ang = self._n_fresh * _GOLDEN
@@ -465,10 +452,6 @@ class ModelBased(Optimizer):
         self._design = np.zeros((0, 2))
         if self._mode == "across" and len(self._across):
             self._across_step(points[0], values[0] if ok.all() else np.nan)
-        if self._fresh_ref is not None and ok.all():
-            if float(values[0]) - self._floor() < 0.5 * self._fresh_ref:
-                self._trust = max(0.5 * self._trust, self.min_radius)
-        self._fresh_ref = None
         if self._mode == "approach" and self._pred is not None and ok.all():
             m_center, m_cand = self._pred
             y = float(values[0]) - self._floor()
