@@ -294,4 +294,3 @@ def test_a_warm_start_is_fitted_before_the_first_step():
         proposals.append(opt.ask()[0])
     np.testing.assert_allclose(proposals, [proposals[0]] * 5)
     assert np.hypot(*(proposals[0] - peak)) < 0.6 * np.hypot(*(x0 - peak))
-
