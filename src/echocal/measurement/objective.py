@@ -225,13 +225,18 @@ class SourceObjective(Objective):
                 stacklevel=5,
             )
 
+    def _receiver_sigma(self) -> float:
+        """[a.u.] the receiver's per-sample noise σ measured so far: the median of the
+        A-scans' robust estimates (0 before the first)."""
+        return float(np.median(self._scan_sigmas)) if self._scan_sigmas else 0.0
+
     def _significance(self) -> np.ndarray | None:
         """Matched-filter peak significance of each A-scan of the last batch against the
         receiver noise σ measured so far (median of the per-scan robust estimates)."""
         scan = self._last_scan
         if scan is None:
             return None
-        sigma = float(np.median(self._scan_sigmas)) if self._scan_sigmas else 0.0
+        sigma = self._receiver_sigma()
         if sigma <= 0.0:  # no noise measured yet: no evidence either way
             return np.full(len(self._peaks), np.nan)
         detector = _detector(self.pulse, scan.fs, scan.n_samples)
@@ -265,10 +270,8 @@ class SourceObjective(Objective):
         twin = self.twin
         if twin is None or twin is not self.source or self.gate is not None:
             return None
-        if not self._scan_sigmas:
-            return None
-        sigma = float(np.median(self._scan_sigmas))
-        if not sigma > 0.0:
+        sigma = self._receiver_sigma()
+        if not sigma > 0.0:  # no noise measured yet
             return None
         try:
             return passes_for_noise(twin, self.position, sigma)
@@ -287,7 +290,7 @@ class SourceObjective(Objective):
         """
         if not self._scan_sigmas or self._last_scan is None:
             return super().noise_estimate()
-        sigma = float(np.median(self._scan_sigmas))
+        sigma = self._receiver_sigma()
         cached = self._noise_cache
         if cached is not None and abs(cached[0] - sigma) <= 0.05 * max(cached[0], 1e-300):
             return cached[1]
