@@ -77,8 +77,22 @@ _ACROSS_STEPS = (0.6, 0.9, 1.2, 1.5, 1.8, 2.1, 2.4)
 (first the side where the data fall below the model)."""
 _ACROSS_REPEATS = 4
 """At most this many measurements of one point of that search."""
+_ACROSS_LOW = 0.15
+"""A side of that search ends at a point clearly (2 σ) below this fraction of the
+ridge's top: the lobe has fallen away there.  The dip between a near-field ring and
+the central peak over a ball is 0.4 of the ring's top, which the search must cross; a
+plate's lobe, fitted as a ridge from noisy data, fell to 0.08 of the top 0.9° out on
+both sides and the search went on to 2.4° (12 measurements, far start at 30 dB)."""
 _BUMP_RADIUS = 0.35
 """[× radius] the hexagon measured around a bump of the search across a ridge."""
+_MAX_SIGMA_LOG = 1.0
+"""The largest log-space noise the trust-region test allows for (a factor e) once the
+model's value at the incumbent is a significant echo (``_REFUTE`` σ of the measurement
+noise).  The residuals of a model that one strong measurement had just refuted (a
+lobe's top 1.7× above the fitted maximum) gave 40: every step passed the test, the
+trust radius stayed at its maximum and the run circled 4° out for its last 36
+measurements.  In the noise (no significant echo) the residuals keep their scale: large,
+so the trust radius grows and the steps explore."""
 
 
 @register_method("model-based")
@@ -308,6 +322,9 @@ class ModelBased(Optimizer):
                 sig = float(np.sqrt(np.sum((y_all[near] - e[near]) ** 2) / (n - 6)))
                 inc = float(np.exp(min(float(model(self._incumbent[None, :])[0]), 700.0)))
                 self._sigma_log = sig / max(inc, 1e-300)
+                noise = self._sigmas(np.array([inc]))
+                if noise is not None and inc > _REFUTE * float(noise[0]):
+                    self._sigma_log = min(self._sigma_log, _MAX_SIGMA_LOG)
         else:
             idx = np.flatnonzero(local)
             self._incumbent = self._x[idx[int(np.argmax(pred[idx]))]]
@@ -507,6 +524,11 @@ class ModelBased(Optimizer):
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
                 return  # measure it again
         self._across = self._across[1:]
+        if sig is not None and np.isfinite(value):
+            mean_high = float(np.mean(y)) + 2.0 * float(np.mean(sig)) / np.sqrt(len(y))
+            if mean_high < _ACROSS_LOW * self._across_top:  # this side has fallen away
+                beyond = (self._across - self._across_from) @ (point - self._across_from) > 0.0
+                self._across = self._across[~beyond]
         if not len(self._across) and not self._across_bump:
             self._across_bump = True
             bump = self._across_bump_point()
