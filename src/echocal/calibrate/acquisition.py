@@ -72,6 +72,9 @@ __all__ = [
 NoiseModel = Callable[[], tuple[float | None, float | None]]
 """A live ``(noise_floor, noise_sigma)`` estimate [energy units] (either may be None)."""
 
+_FIRST_RING = 7
+"""x0 and its hexagonal first ring: measured as one batch, tested at ``first_threshold``,
+and, when none of them sees the echo, the moment the search is replanned."""
 _SURE_MARGIN = 2.0
 """A detection this many σ above ``threshold`` needs no confirmation."""
 _CONFIRM_LEVEL = 1.0
@@ -389,7 +392,7 @@ class Acquisition(Optimizer):
         """Once x0's first ring has been searched in vain: ask ``replan`` for the passes of
         the rest of the search; if it gives some, they replace the fine lattice beyond
         the first ring and the planned passes (what was measured stays measured)."""
-        first = min(7, len(self._queue))
+        first = self._first_ring_size()
         if self.replan is None or self._next < first:
             return
         plan, self.replan = self.replan(), None
@@ -409,7 +412,7 @@ class Acquisition(Optimizer):
 
     @property
     def min_budget(self) -> int:
-        return min(7, len(self._queue)) if len(self._queue) else 1
+        return self._first_ring_size() if len(self._queue) else 1
 
     def _add(self, points: FloatArray, values: FloatArray, significance: FloatArray) -> None:
         """Append measurements and update the neighbour sums (lattice neighbours: points
@@ -468,10 +471,15 @@ class Acquisition(Optimizer):
         # x0 and its first ring: only 7 tests, so a lower threshold keeps the false-alarm
         # rate low (7 Q(3) ≈ 1 %, neighbourhoods overlapping) and a start near a weak
         # peak hands over at once; repeats made to confirm do not count as new points
-        return self.first_threshold if len(self._y) - self._confirmed <= 7 else self.threshold
+        first_ring = len(self._y) - self._confirmed <= _FIRST_RING
+        return self.first_threshold if first_ring else self.threshold
+
+    def _first_ring_size(self) -> int:
+        """x0 and its first ring as the bounds leave them: measured as one batch."""
+        return min(_FIRST_RING, len(self._queue))
 
     def _detected(self) -> bool:
-        if len(self._y) < min(7, len(self._queue)) or len(self._y) == 0:
+        if len(self._y) < self._first_ring_size() or len(self._y) == 0:
             return False
         return bool(np.max(self.scores()) > self._threshold())
 
@@ -512,7 +520,7 @@ class Acquisition(Optimizer):
             return self._confirming[None, :]
         n = self.batch
         if self._next == 0:
-            n = max(n, min(7, len(self._queue)))
+            n = max(n, self._first_ring_size())
         out = self._queue[self._next : self._next + n]
         return out
 
@@ -541,7 +549,8 @@ class Acquisition(Optimizer):
             if own and self.scores()[-1] > self._threshold():
                 self._start_local(self._x[-1].copy())
                 return False
-        if not confirming and not self._detected():
+        detected = self._detected()
+        if not confirming and not detected:
             self._replan()
         if len(self._y) and self._next < len(self._queue):
             # search first where the echo is strongest so far: within each ring, the points
@@ -551,7 +560,7 @@ class Acquisition(Optimizer):
             order = np.lexsort((np.hypot(*(rest - best).T), self._ring[self._next :]))
             self._queue[self._next :] = rest[order]
             self._ring[self._next :] = self._ring[self._next :][order]
-        if self._detected():
+        if detected:
             sure = float(np.max(self.scores())) > self.threshold + _SURE_MARGIN
             if self.confirm and not sure:
                 self._confirming = self._x[int(np.argmax(self.scores()))].copy()
