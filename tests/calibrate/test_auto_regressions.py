@@ -14,12 +14,14 @@ also reach 0.1° within the budget.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from echocal import angle_between, tilt_normal
 from echocal.calibrate import calibrate
-from echocal.measurement import SourceObjective
-from echocal.setups import setup_with_overrides
+from echocal.measurement import ReceiverSettings, SourceObjective
+from echocal.setups import load_setup, setup_with_overrides
 
 SEEDS = range(12)
 LOCKED_MEDIAN = 27
@@ -102,29 +104,34 @@ def test_auto_over_the_sphere_finds_the_central_peak() -> None:
 
 
 def test_auto_does_not_circle_the_trust_circle_after_a_refuted_fit() -> None:
-    """The benchmark's far start at 30 dB, run 16 (its seed and start, 19.4° off): the
-    local model's fit was refuted by a lobe top 1.7× above its maximum, the fit's
-    residuals put its log-space noise at 40, every trust-region step passed and the last
-    36 measurements circled 4° out — the run never stayed within 0.1°.  With the noise
-    capped (a factor e) once the incumbent is a significant echo it stays within 0.1°
-    after 35 (locked at 45: a margin for the fresh-install jitter in the module doc)."""
-    import dataclasses
-
-    from echocal.measurement import ReceiverSettings
-    from echocal.setups import load_setup
-
+    """The benchmark's far start at 30 dB, run 16 (``bench_calibration``'s seed, start and
+    tilt box, rebuilt here by the same formulas): the local model's fit was refuted by a
+    lobe top 1.7× above its maximum, the fit's residuals put its log-space noise at 40,
+    every trust-region step passed and the last 36 measurements circled 4° out — the run
+    never stayed within 0.1°.  With the noise capped (a factor e) once the incumbent is a
+    significant echo, and the search across a ridge ended where the lobe has fallen
+    away, it stays within 0.1° after 35; locked at 50 (the far cell's 99th percentile:
+    one seed's count jitters between installs, see the module doc)."""
     seed = 887101703  # bench_calibration.run_seed("immersion-5mhz", "far", 30.0, 16)
     base = load_setup("immersion-5mhz", seed=0)
     setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=30.0), rng=seed)
     position = setup.reference_position
     truth = np.array(setup.true_optimum(position, parameterization="tilt"))
-    half = 21.4707  # bench_calibration.tilt_bounds: the positioner's co-elevation cone
+    # bench_calibration.tilt_bounds: the largest tilt box inside the co-elevation cone
+    cone = np.radians(max(abs(v) for v in setup.limits.coelevation))
+    half = float(np.degrees(np.arccos(np.sqrt(np.cos(cone))))) - 1e-6
+    # bench_calibration.start_point: uniform distance in 5–20°, uniform direction
+    rng = np.random.default_rng(seed)
+    dist, angle = rng.uniform(5.0, 20.0), rng.uniform(0.0, 2.0 * np.pi)
+    x0 = truth + dist * np.array([np.cos(angle), np.sin(angle)])
+    assert np.all(np.abs(x0) <= half)  # the benchmark's first draw: no redraw needed
     objective = SourceObjective(
         setup, position, parameterization="tilt", budget=BUDGET, bounds=[[-half, half]] * 2
     )
-    x0 = (-19.21334512, 12.49240936)
     result = calibrate(objective, method="auto", x0=x0, budget=BUDGET, max_iter=10_000, rng=seed)
+    assert result.n_measurements == objective.n_measurements <= BUDGET  # every one counted
     errors = [angle_between(tilt_normal(*x), tilt_normal(*truth)) for x in result.iterates]
     counts = list(result.iteration_measurements)
     reached = next((counts[i] for i in range(len(errors)) if max(errors[i:]) < 0.1), None)
-    assert reached is not None and reached <= 45, f"within 0.1° after {reached}"
+    assert reached is not None, "never stayed within 0.1°"
+    assert reached <= 50, f"within 0.1° after {reached}"

@@ -60,7 +60,10 @@ Why each part:
 5. the local model refutes itself when a measurement stands clearly above its maximum,
    or the strongest measurement stands twice above the model's own value there (a fit to
    a lobe's flat tail), and refits a smaller neighbourhood (a near-field ring over a
-   ball), and searches once across a ridge.
+   ball), and searches once across a ridge;
+6. the local model's log-space noise, the tolerance of its trust-region test, is capped
+   at a factor e once its incumbent is a significant echo: a refuted fit's residuals
+   gave 40, every step passed, and a far run circled 4° out for 36 measurements.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the 30 dB near start within 0.05° after 15 (91 %: the first steps from

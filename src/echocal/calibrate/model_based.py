@@ -18,7 +18,9 @@ Algorithm (one measurement per iteration after a 7-point initial design):
    never the luckiest raw sample), measure the maximizer of m in the ball of
    radius Δ.  Δ doubles after a successful step to the boundary and halves
    when the measured value is below the incumbent's model value by more
-   than the estimated noise (2 σ̂ in log units) — noise-aware control.
+   than the estimated noise (2 σ̂ in log units, σ̂ from the fit's residuals,
+   at most ``_MAX_SIGMA_LOG`` once the incumbent is a significant echo) —
+   noise-aware control.
 4. Refine: once x* is inside the trust region and supported by data, the
    peak's location is best learned from points on its flanks, not its top
    (the Fisher information of x* from a point at distance r is ∝ r² e^{−r²/w²},
@@ -511,7 +513,8 @@ class ModelBased(Optimizer):
         :data:`_ACROSS_REPEATS` times) while its mean is above the ridge's top by more
         than 2 σ of that mean, else go on to the next point.  A point that clearly
         exceeds the top refutes the model, which then re-fits around it (:meth:`_refit`)
-        and the search ends."""
+        and the search ends; a point of the line clearly below :data:`_ACROSS_LOW` of the
+        top ends that side of it (not the hexagon around a bump, which lies on one side)."""
         here = np.all(np.abs(self._x - point) <= 1e-9, axis=1)
         y = self._y[here] - self._floor()
         sig = self._sigmas(np.maximum(y, 0.0))
@@ -524,7 +527,7 @@ class ModelBased(Optimizer):
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
                 return  # measure it again
         self._across = self._across[1:]
-        if sig is not None and np.isfinite(value):
+        if not self._across_bump and sig is not None and np.isfinite(value):
             mean_high = float(np.mean(y)) + 2.0 * float(np.mean(sig)) / np.sqrt(len(y))
             if mean_high < _ACROSS_LOW * self._across_top:  # this side has fallen away
                 beyond = (self._across - self._across_from) @ (point - self._across_from) > 0.0
