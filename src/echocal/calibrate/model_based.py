@@ -518,18 +518,18 @@ class ModelBased(Optimizer):
         here = np.all(np.abs(self._x - point) <= 1e-9, axis=1)
         y = self._y[here] - self._floor()
         sig = self._sigmas(np.maximum(y, 0.0))
-        excess = float(np.mean(y)) - self._across_top
-        if np.isfinite(value) and sig is not None and len(y) <= _ACROSS_REPEATS:
-            noise = float(np.mean(sig)) / np.sqrt(len(y))
+        mean = float(np.mean(y))
+        noise = None if sig is None else float(np.mean(sig)) / np.sqrt(len(y))  # of the mean
+        excess = mean - self._across_top
+        if np.isfinite(value) and noise is not None and len(y) <= _ACROSS_REPEATS:
             if excess > _REFUTE * noise and excess > _REFUTE_RELATIVE * self._across_top:
                 self._across = np.zeros((0, 2))  # found: the refit moves to it
                 return
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
                 return  # measure it again
         self._across = self._across[1:]
-        if not self._across_bump and sig is not None and np.isfinite(value):
-            mean_high = float(np.mean(y)) + 2.0 * float(np.mean(sig)) / np.sqrt(len(y))
-            if mean_high < _ACROSS_LOW * self._across_top:  # this side has fallen away
+        if not self._across_bump and noise is not None and np.isfinite(value):
+            if mean + 2.0 * noise < _ACROSS_LOW * self._across_top:  # this side fell away
                 beyond = (self._across - self._across_from) @ (point - self._across_from) > 0.0
                 self._across = self._across[~beyond]
         if not len(self._across) and not self._across_bump:
