@@ -191,7 +191,8 @@ class _StepProfile(dr.LobeProfile):
 
     def __init__(self, r: float):
         angles = np.arange(0.0, 15.0001, 0.001)
-        super().__init__(None, angles, np.zeros((1, angles.size)), np.zeros(1))
+        blank = np.zeros((1, angles.size))
+        super().__init__(None, angles, blank, np.zeros(1), blank)
         self.r = r
 
     def detection_probability(self, snr_db, threshold=ECHO_THRESHOLD):

@@ -27,7 +27,7 @@ from echocal.signal.noise import noise_sigma_for_snr, signal_power, snr_for_nois
 def ray():
     setup = load_setup("immersion-5mhz-ray", seed=0)
     pos = np.asarray(setup.reference_position, float)
-    return setup, pos, dr._cached_profile(setup, pos)
+    return setup, pos, dr.cached_lobe_profile(setup, pos)
 
 
 def _sigma(setup, profile, snr):

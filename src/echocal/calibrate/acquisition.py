@@ -56,6 +56,7 @@ from echocal.calibrate._options import (
     suggestion,
 )
 from echocal.calibrate.base import Optimizer
+from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.registry import get_method, register_method
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import EchocalValueError
@@ -264,6 +265,9 @@ class Acquisition(Optimizer):
     noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
         estimates (either may be None), consulted at every decision when the fixed values
         above are None — e.g. a source objective that measures the noise in each A-scan.
+    lobe_template : callable returning the probe's lobe template or None (e.g.
+        :meth:`~echocal.calibrate.Objective.lobe_template`), handed to a local method
+        that takes one.
     detector : callable returning the detection significances of the points just
         measured, shape (k,), or None (then the values are tested) — e.g.
         :meth:`~echocal.calibrate.Objective.detections`.
@@ -302,6 +306,7 @@ class Acquisition(Optimizer):
         noise_sigma: float | None = None,
         noise_floor: float | None = None,
         noise_model: NoiseModel | None = None,
+        lobe_template: Callable[[], LobeTemplate | None] | None = None,
         detector: Detector | None = None,
         batch: int = 1,
         fine_radius: float | None = None,
@@ -315,6 +320,7 @@ class Acquisition(Optimizer):
     ) -> None:
         super().__init__(x0, bounds=bounds, rng=rng, normalize="none")
         self.noise_model = noise_model
+        self.lobe_template = lobe_template
         self.detector = detector
         self._use_significance = detector is not None
         if not isinstance(local, str):
@@ -497,8 +503,9 @@ class Acquisition(Optimizer):
         params = self._local_params
         if "history" in params and "radius" in params:
             opts.setdefault("radius", self.spacing)
-        if "noise_model" in params and self.noise_model is not None:
-            opts.setdefault("noise_model", self.noise_model)
+        for name in ("noise_model", "lobe_template"):
+            if name in params and getattr(self, name) is not None:
+                opts.setdefault(name, getattr(self, name))
         if "noise_floor" in params and self.noise_floor is not None:
             opts.setdefault("noise_floor", self.noise_floor)
         opts.setdefault("normalize", self._local_normalize)

@@ -120,8 +120,13 @@ def build_optimizer(
     if issubclass(cls, Acquisition):
         given = {**known, **acq_opts}
         known = {**_search_inputs(objective), **_search_plan(cls, objective, given), **given}
-    elif "noise_model" in accepted_options(cls):
-        known.setdefault("noise_model", objective.noise_estimate)
+    else:
+        for name, value in (
+            ("noise_model", objective.noise_estimate),
+            ("lobe_template", objective.lobe_template),
+        ):
+            if name in accepted_options(cls):
+                known.setdefault(name, value)
     opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
     return opt, _record(opt, known, objective)
 
@@ -136,6 +141,7 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
         objective.noise_estimate: "objective",
         objective.detections: "objective",
         objective.passes_for_measured_noise: "objective",
+        objective.lobe_template: "objective",
     }
 
     def name(value: Any) -> Any:
@@ -158,17 +164,18 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
     return out
 
 
-OBJECTIVE_INPUTS = ("noise_sigma", "noise_floor", "noise_model", "detector")
+OBJECTIVE_INPUTS = ("noise_sigma", "noise_floor", "noise_model", "lobe_template", "detector")
 """Acquisition options the driver takes from the objective unless they are given."""
 
 
 def _search_inputs(objective: Objective) -> dict[str, Any]:
     """The :data:`OBJECTIVE_INPUTS` of ``objective``: its noise level and floor, the live
-    noise estimate and the echo detector."""
+    noise estimate, the probe's lobe and the echo detector."""
     values = (
         objective.noise_sigma,
         objective.noise_floor,
         objective.noise_estimate,
+        objective.lobe_template,
         objective.detections,
     )
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))

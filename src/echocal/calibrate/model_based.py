@@ -46,6 +46,7 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
+from echocal.calibrate.lobe_template import LobeTemplate, TemplateFit, fit_template
 from echocal.calibrate.local_model import QuadraticModel, fit_quadratic, hexagon, trust_region_max
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
@@ -96,6 +97,19 @@ trust radius stayed at its maximum and the run circled 4° out for its last 36
 measurements.  In the noise (no significant echo) the residuals keep their scale: large,
 so the trust radius grows and the steps explore."""
 
+_TEMPLATE_TOP = 0.5
+"""A measurement where the probe's lobe (fitted to every measurement) is above this
+fraction of its peak puts the search on the lobe's top, where the log-quadratic takes
+over from the lobe's template (see :meth:`ModelBased._template_step`)."""
+
+_QUADRATIC_TOP = 6
+"""Measurements on the lobe's top before the log-quadratic (6 parameters) takes over from
+the template there."""
+
+_AGREE = 0.5
+"""[× the lobe's width] the log-quadratic's maximum and the template's peak agree within
+this distance before the quadratic takes over."""
+
 
 @register_method("model-based")
 class ModelBased(Optimizer):
@@ -118,6 +132,12 @@ class ModelBased(Optimizer):
         (e.g. :meth:`~echocal.calibrate.Objective.noise_estimate`); its floor is used when
         ``noise_floor`` is None.  At 10 dB SNR the floor is ~10 % of the peak: left in, it
         makes log f look like a much broader peak than the echo's and the fit wanders.
+    lobe_template : callable returning the probe's lobe (a
+        :class:`~echocal.calibrate.lobe_template.LobeTemplate`) or None, e.g.
+        :meth:`~echocal.calibrate.Objective.lobe_template`; called once, when first
+        needed.  Given one, the steps from the lobe's tail go to the peak of the template
+        fitted to every measurement, until a measurement lies on the lobe's top
+        (:meth:`_template_step`).
     """
 
     batch_size = 1
@@ -136,6 +156,7 @@ class ModelBased(Optimizer):
         history: tuple[ArrayLike, ArrayLike] | None = None,
         noise_floor: float | None = None,
         noise_model: Callable[[], tuple[float | None, float | None]] | None = None,
+        lobe_template: Callable[[], LobeTemplate | None] | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -143,6 +164,11 @@ class ModelBased(Optimizer):
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
         self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
         self.noise_model = noise_model
+        self.lobe_template = lobe_template
+        self._template: LobeTemplate | None = None
+        self._template_asked = False
+        self._tfit: TemplateFit | None = None
+        self._n_top = 0  # measurements on the fitted template's top
         self.radius = positive_float("radius", radius)
         self.max_radius = positive_float(
             "max_radius", 4.0 * self.radius if max_radius is None else max_radius
@@ -401,6 +427,23 @@ class ModelBased(Optimizer):
             self._mode = "across"
             self._pred = None
             return self._across[:1].copy()
+        target = self._template_step()
+        if target is not None:
+            self._mode = "approach"
+            self._streak = 0
+            self._pred = None  # not the quadratic's step: no trust-radius verdict on it
+            self._step_len = float(np.hypot(*(target - self._incumbent)))
+            return target[None, :]
+        top = self._template_top()
+        if top is not None and self._template is not None:
+            # on the lobe's top before the quadratic is: the flanks around the template's
+            # peak, where a measurement says most about where the peak is
+            self._mode = "refine"
+            self._n_ring += 1
+            ang = self._n_ring * _GOLDEN
+            self._pred = None
+            off = self.ring * self._template.width * np.array([np.cos(ang), np.sin(ang)])
+            return self.clip(top + off)[None, :]
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
             if not self._across_done and self._streak >= _ACROSS_AFTER:
                 line = self._across_line(m, xs)
@@ -437,6 +480,52 @@ class ModelBased(Optimizer):
             self._pred = None
         self._step_len = float(np.hypot(*(cand - self._incumbent)))
         return cand[None, :]
+
+    def _fit_template(self) -> None:
+        """Fit the probe's lobe template to every measurement
+        (:func:`~echocal.calibrate.lobe_template.fit_template`, peaks within
+        ``max_radius`` of the incumbent): ``_tfit`` is the fit when its peak is a
+        significant echo (``_REFUTE`` standard errors), else None; ``_on_top`` says
+        whether a measurement lies on the lobe's top (the template above
+        :data:`_TEMPLATE_TOP` of its peak there).  Log space only, with a live noise model."""
+        self._tfit, self._n_top = None, 0
+        if not self._template_asked:
+            self._template_asked = True
+            self._template = None if self.lobe_template is None else self.lobe_template()
+        template = self._template
+        if template is None or self.space != "log" or not len(self._x):
+            return
+        y = self._y - self._floor()
+        sig = self._sigmas(np.maximum(y, 0.0))
+        if sig is None:
+            return
+        fit = fit_template(template, self._x, y, sig, self._incumbent, self.max_radius)
+        if fit is None or fit.energy < _REFUTE * fit.energy_sigma:
+            return
+        self._tfit = fit
+        self._n_top = int(np.count_nonzero(template(self._x - fit.centre) >= _TEMPLATE_TOP))
+
+    def _template_step(self) -> FloatArray | None:
+        """While no measurement lies on the lobe's top: the fitted template's peak [deg]
+        (2,) unless measured already; else None (the log-quadratic's steps)."""
+        if self._tfit is None or self._n_top:
+            return None
+        target = self.clip(self._tfit.centre)
+        return None if self._times_measured(target) else target
+
+    def _template_top(self) -> FloatArray | None:
+        """The fitted template's peak [deg] (2,) once a measurement lies on the lobe's top,
+        until :data:`_QUADRATIC_TOP` do (the log-quadratic's 6 parameters need them there)
+        and the log-quadratic's maximum agrees with it (:data:`_AGREE`); else
+        None."""
+        if self._tfit is None or self._template is None or not self._n_top:
+            return None
+        centre = self._tfit.centre
+        xs = self._supported_max()
+        if self._n_top >= _QUADRATIC_TOP and xs is not None:
+            if np.hypot(*(xs - centre)) <= _AGREE * self._template.width:
+                return None
+        return centre
 
     def _times_measured(self, point: FloatArray) -> int:
         """How often ``point`` [deg] (as the positioner reaches it: clipped) was measured,
@@ -491,6 +580,7 @@ class ModelBased(Optimizer):
         around it unless its neighbourhood is measured already."""
         self._recentred = None
         self._refit()
+        self._fit_template()
         if self._recentred is not None:
             self._trust = max(0.5 * self.radius, self.min_radius)
             near = np.hypot(*(self._x - self._recentred).T) <= 0.75 * self.radius
@@ -571,7 +661,9 @@ class ModelBased(Optimizer):
         return None if best is None else best.copy()
 
     def _recommend(self) -> FloatArray:
-        xs = self._supported_max()
+        xs = self._template_top()
+        if xs is None:
+            xs = self._supported_max()
         return xs if xs is not None else self._incumbent
 
     @property

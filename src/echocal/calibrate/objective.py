@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, finite_float, nonnegative_float, one_of, positive_int
+from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
 
 __all__ = [
@@ -197,6 +198,12 @@ class Objective:
         :func:`echocal.measurement.detection_radius.passes_for_noise`), or None when it
         predicts none, or one too weak to be searched without the fine lattice (the base
         class: an analytic function has no probe)."""
+        return None
+
+    def lobe_template(self) -> LobeTemplate | None:
+        """The probe's lobe — the metric relative to its peak versus misalignment (see
+        :mod:`echocal.calibrate.lobe_template`) — when the objective knows its probe, else
+        None (the base class: an analytic function has no probe)."""
         return None
 
     def cost(self, n_points: int) -> int:

@@ -45,17 +45,20 @@ import numpy as np
 from scipy.stats import rice
 
 from echocal._validate import finite_array, finite_float, in_range, positive_float, positive_int
+from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
 from echocal.measurement.virtual import VirtualSetup
 from echocal.signal.detection import shared_detector
 from echocal.signal.noise import SNR_DB_RANGE, noise_sigma_for_snr, snr_for_noise_sigma
+from echocal.signal.processing import pseudo_energy
 
 __all__ = [
     "DETECTION_PROBABILITY",
     "SEARCH_SNRS",
     "LobeProfile",
+    "cached_lobe_profile",
     "detection_radius",
     "first_crossing",
     "lobe_profile",
@@ -88,6 +91,9 @@ _PROFILE_FIELDS = (
 )
 """What a lobe profile depends on: the setup's physics (not its noise, seed, limits,
 gates, reference position or name)."""
+_PEAK_AT_NORMAL = 1.01
+"""A lobe whose pseudo-energy exceeds normal incidence's by more than this factor
+somewhere does not peak at normal incidence (see :meth:`LobeProfile.energy_template`)."""
 _CACHE_SIZE = 16
 """Lobe profiles kept per process (least recently used dropped first)."""
 _PROFILES: OrderedDict[tuple[Any, ...], tuple[tuple[Any, ...], LobeProfile]] = OrderedDict()
@@ -104,12 +110,26 @@ class LobeProfile:
     peaks : [a.u.] matched-envelope peak of the noiseless A-scan, shape ``(directions, n)``.
     reference : [a.u.] the noiseless A-scan at the best direction of normal incidence
         (the echo a peak SNR refers to), shape ``(n_samples,)``.
+    energies : [a.u.] pseudo-energy of the noiseless A-scan (default energy window),
+        shape ``(directions, n)``.
     """
 
     setup: VirtualSetup
     angles: np.ndarray
     peaks: np.ndarray
     reference: np.ndarray
+    energies: np.ndarray
+
+    def energy_template(self) -> LobeTemplate | None:
+        """The lobe's pseudo-energy relative to normal incidence's, as a
+        :class:`~echocal.calibrate.lobe_template.LobeTemplate` centred on the peak — or
+        None when the peak is not at normal incidence (a large probe over a curved part:
+        a ring, two humps), where the lobe seen from normal incidence is not one peak."""
+        top = float(np.mean(self.energies[:, 0]))
+        if not top > 0.0 or float(self.energies.max()) > _PEAK_AT_NORMAL * top:
+            return None
+        phi = np.linspace(0.0, 2.0 * np.pi, len(self.energies), endpoint=False)
+        return LobeTemplate(self.angles.copy(), phi, self.energies / top)
 
     def detection_probability(self, snr_db: float, threshold: float = ECHO_THRESHOLD) -> np.ndarray:
         """P_detect(θ), shape ``(directions, n)``, for an echo whose best A-scan here has
@@ -242,15 +262,20 @@ def lobe_profile(
     phi = np.linspace(0.0, 2.0 * np.pi, directions, endpoint=False)
     angles = np.arange(0.0, max_angle + 0.5 * _STEP, _STEP)
     blocks: list[np.ndarray] = []
+    energies: list[np.ndarray] = []
     for block in np.array_split(angles, max(1, int(np.ceil(max_angle / _BLOCK)))):
         tx = centre[0] + block[None, :] * np.cos(phi)[:, None]
         ty = centre[1] + block[None, :] * np.sin(phi)[:, None]
-        peaks = detector.peak(_scans(setup, pos, tx.ravel(), ty.ravel()))
-        blocks.append(peaks.reshape(directions, len(block)))
+        scans = _scans(setup, pos, tx.ravel(), ty.ravel())
+        blocks.append(detector.peak(scans).reshape(directions, len(block)))
+        energy = pseudo_energy(scans, setup.window, setup.pulse)
+        energies.append(np.asarray(energy).reshape(directions, len(block)))
         if np.all(blocks[-1] < stop):
             break
     profile = np.concatenate(blocks, axis=1)
-    return LobeProfile(setup, angles[: profile.shape[1]], profile, reference)
+    return LobeProfile(
+        setup, angles[: profile.shape[1]], profile, reference, np.concatenate(energies, axis=1)
+    )
 
 
 def _scans(setup: VirtualSetup, pos: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
@@ -287,7 +312,7 @@ def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -
     physics objects (one that differs only in its noise or seed).
     """
     pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
-    profile = _cached_profile(setup, pos)
+    profile = cached_lobe_profile(setup, pos)
     passes: list[float] = []
     for snr in SEARCH_SNRS:
         spacing = _floored(profile.lattice_spacing(snr))
@@ -312,7 +337,7 @@ def passes_for_noise(
     far search saves its 30 measurements (``auto``'s 1° lattice out to 3°).
     """
     pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
-    profile = _cached_profile(setup, pos)
+    profile = cached_lobe_profile(setup, pos)
     snr = snr_for_noise_sigma(profile.reference, noise_sigma, setup.window, setup.pulse)
     if not snr >= min(SEARCH_SNRS):
         return None
@@ -325,7 +350,7 @@ def _floored(spacing: float) -> float:
     return float(np.floor(100.0 * spacing) / 100.0)
 
 
-def _cached_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:
+def cached_lobe_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:
     """:func:`lobe_profile` of ``setup`` at ``pos`` [m], computed once per process for the
     same physics objects (a setup rebuilt with another noise level or seed shares them)
     and position.  Keyed by the objects' identities, which the entry keeps alive and

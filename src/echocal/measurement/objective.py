@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike
 
 from echocal._validate import finite_array
 from echocal.ascan import AScan
+from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.objective import Objective
 from echocal.errors import EchocalError, EchocalValueError
 from echocal.geometry import Pose, pose_from_angles
@@ -275,6 +276,28 @@ class SourceObjective(Objective):
             return None
         try:
             return passes_for_noise(twin, self.position, sigma)
+        except EchocalError:  # no normal incidence, no echo in the window, ...
+            return None
+
+    def lobe_template(self) -> LobeTemplate | None:
+        """The simulated probe's pseudo-energy lobe at this position (the source, or the
+        rig's ``twin``; :meth:`~echocal.measurement.detection_radius.LobeProfile.energy_template`),
+        relative to its peak: for the pseudo-energy in its default window, over the whole
+        recording, with tilt angles (whose offsets are the lobe's misalignments).  None
+        otherwise, without a simulated probe, where the probe cannot see the part, and
+        where the lobe does not peak at normal incidence (a large probe over a curved part)."""
+        from echocal.measurement.detection_radius import cached_lobe_profile
+
+        if (
+            self.twin is None
+            or self.gate is not None
+            or self.metric != "pseudo-energy"
+            or self.window_length is not None
+            or self.parameterization != "tilt"
+        ):
+            return None
+        try:
+            return cached_lobe_profile(self.twin, self.position).energy_template()
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
 

@@ -1,0 +1,156 @@
+"""The probe's known lobe as a model of the echo far from its peak: where is the peak, seen
+from the lobe's tail?
+
+A log-quadratic (``local_model``) is right near a lobe's top, but a diffraction lobe's
+tail is not Gaussian: the 12.7 mm 5 MHz probe's pseudo-energy falls to 0.3 of its peak
+0.5° out, to 0.035 at 0.9° and then only slowly (0.016 at 1.4°, 0.01 at 1.8°).  A
+quadratic fitted to tail points sees a lobe twice as broad and puts its peak where it
+is not; a start 2.6° off at 30 dB spent 8–10 measurements stepping through the tail.
+Given the lobe's shape g(d) (relative metric versus misalignment d from the peak,
+g(0) = 1; from the simulated probe, :meth:`~echocal.calibrate.Objective.lobe_template`)
+the measurements y_i at points x_i are y_i ≈ E₀ g(x_i − c) + noise, whose two unknowns
+— the peak c and its energy E₀ — every point constrains, the tail points included
+(a point in the noise says "the peak is not near here").
+
+:func:`fit_template` finds them by weighted least squares: E₀ is linear (solved in closed
+form for each c) and c is searched on a grid, coarse then fine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from echocal.calibrate._fd import FloatArray
+
+__all__ = ["LobeTemplate", "TemplateFit", "fit_template"]
+
+_COARSE = 0.1
+"""[deg] the first grid of candidate peaks."""
+_FINE = 0.01
+"""[deg] the second grid, around the best coarse candidates."""
+_CANDIDATES = 4
+"""Coarse candidates refined on the fine grid (the tail's ring ambiguity: a few points
+in the tail are fitted as well by mirror images of the peak)."""
+
+
+@dataclass(frozen=True, eq=False)
+class LobeTemplate:
+    """The lobe's relative metric versus misalignment from its peak.
+
+    Attributes
+    ----------
+    angles : [deg] misalignments from the peak, ascending from 0, shape ``(n,)``.
+    directions : [rad] directions of the misalignment in the plane of the two angles,
+        evenly spaced from 0, shape ``(k,)``.
+    values : relative metric (1 at the peak), shape ``(k, n)``; beyond ``angles[-1]``
+        the last value holds.
+    """
+
+    angles: FloatArray
+    directions: FloatArray
+    values: FloatArray
+
+    @property
+    def width(self) -> float:
+        """[deg] the misalignment at which the lobe, averaged over directions, falls to
+        e^(−1/2) of its peak (a Gaussian's σ)."""
+        mean = self.values.mean(axis=0)
+        below = np.flatnonzero(mean < np.exp(-0.5))
+        if not below.size:
+            return float(self.angles[-1])
+        k = int(below[0])
+        a0, a1, v0, v1 = self.angles[k - 1], self.angles[k], mean[k - 1], mean[k]
+        return float(a0 + (v0 - np.exp(-0.5)) * (a1 - a0) / (v0 - v1))
+
+    def __call__(self, offsets: FloatArray) -> FloatArray:
+        """Relative metric at ``offsets`` [deg] from the peak, shape ``(..., 2)`` ->
+        ``(...)``: linear in the misalignment along each direction, then linear in the
+        direction between the two nearest."""
+        d = np.hypot(offsets[..., 0], offsets[..., 1])
+        k = len(self.directions)
+        along = np.stack([np.interp(d, self.angles, row) for row in self.values])
+        if k == 1:
+            return along[0]
+        phi = np.mod(np.arctan2(offsets[..., 1], offsets[..., 0]), 2.0 * np.pi)
+        pos = phi / (2.0 * np.pi / k)
+        lo = np.floor(pos).astype(int) % k
+        t = pos - np.floor(pos)
+        take = np.take_along_axis
+        first = take(along, lo[None, ...], axis=0)[0]
+        second = take(along, ((lo + 1) % k)[None, ...], axis=0)[0]
+        return (1.0 - t) * first + t * second
+
+
+@dataclass(frozen=True)
+class TemplateFit:
+    """The best peak of a template fit.
+
+    centre : [deg] the lobe's peak, shape (2,); energy : E₀ [metric units, as the values
+    given]; energy_sigma : its standard error; chi2 : the weighted residual sum of squares.
+    """
+
+    centre: FloatArray
+    energy: float
+    energy_sigma: float
+    chi2: float
+
+
+def fit_template(
+    template: LobeTemplate,
+    points: FloatArray,
+    values: FloatArray,
+    sigmas: FloatArray,
+    around: FloatArray,
+    radius: float,
+) -> TemplateFit | None:
+    """Weighted least-squares fit of y_i ≈ E₀ g(x_i − c) over peaks c within ``radius``
+    [deg] of ``around`` (2,): for each c the best E₀ ≥ 0 in closed form, c on a 0.1° grid,
+    then on a 0.01° grid around the best few.
+
+    ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed),
+    ``sigmas`` (n,) their noise σ (> 0).  None when no point carries weight or no
+    candidate gives a positive E₀.
+    """
+    ok = np.isfinite(values) & (sigmas > 0.0)
+    if not ok.any():
+        return None
+    x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
+    coarse = _disc_grid(around, radius, _COARSE)
+    chi2, energy, _ = _scores(template, coarse, x, y, w)
+    order = np.argsort(chi2)[:_CANDIDATES]
+    order = order[energy[order] > 0.0]
+    if not order.size:
+        return None
+    fine = np.concatenate([_disc_grid(c, _COARSE, _FINE) for c in coarse[order]])
+    chi2, energy, info = _scores(template, fine, x, y, w)
+    best = int(np.argmin(np.where(energy > 0.0, chi2, np.inf)))
+    if not energy[best] > 0.0:
+        return None
+    return TemplateFit(
+        centre=fine[best].copy(),
+        energy=float(energy[best]),
+        energy_sigma=float(1.0 / np.sqrt(info[best])),
+        chi2=float(chi2[best]),
+    )
+
+
+def _disc_grid(centre: FloatArray, radius: float, step: float) -> FloatArray:
+    """Points of a square grid of ``step`` [deg] within ``radius`` of ``centre``, (m, 2)."""
+    k = int(np.ceil(radius / step))
+    u = np.arange(-k, k + 1) * step
+    gx, gy = np.meshgrid(u, u)
+    inside = np.hypot(gx, gy) <= radius + 1e-12
+    return centre[None, :] + np.stack([gx[inside], gy[inside]], axis=1)
+
+
+def _scores(
+    template: LobeTemplate, centres: FloatArray, x: FloatArray, y: FloatArray, w: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """For each candidate peak (m, 2): χ², the best E₀ ≥ 0 and Σ w g² (E₀'s information)."""
+    g = template(x[None, :, :] - centres[:, None, :])  # (m, n)
+    info = np.maximum((w * g * g).sum(axis=1), 1e-300)
+    energy = np.maximum((w * y * g).sum(axis=1) / info, 0.0)
+    resid = y[None, :] - energy[:, None] * g
+    return (w * resid * resid).sum(axis=1), energy, info
