@@ -18,7 +18,20 @@ from numpy.typing import ArrayLike
 
 from echocal.calibrate._fd import FloatArray
 
-__all__ = ["QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
+__all__ = [
+    "REFUTE",
+    "REFUTE_RELATIVE",
+    "QuadraticModel",
+    "fit_quadratic",
+    "hexagon",
+    "trust_region_max",
+]
+
+REFUTE = 4.0
+"""A measurement this many of its noise σ above the model's maximum refutes the model."""
+REFUTE_RELATIVE = 0.05
+"""... and by this fraction of that maximum (a smooth peak's top is fitted within a few %;
+the central peak over a ball stands 25 % above the ring around it)."""
 
 
 def hexagon(center: FloatArray, radius: float) -> FloatArray:

@@ -47,20 +47,23 @@ from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
 from echocal.calibrate.lobe_template import LobeTemplate, TemplateFit, fit_template
-from echocal.calibrate.local_model import QuadraticModel, fit_quadratic, hexagon, trust_region_max
+from echocal.calibrate.local_model import (
+    REFUTE,
+    REFUTE_RELATIVE,
+    QuadraticModel,
+    fit_quadratic,
+    hexagon,
+    trust_region_max,
+)
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
+from echocal.calibrate.ridge_search import RidgeSearch
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 
 _GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
-_REFUTE = 4.0
-"""A measurement this many of its noise σ above the model's maximum refutes the model."""
-_REFUTE_RELATIVE = 0.05
-"""... and by this fraction of that maximum (a smooth peak's top is fitted within a few %;
-the central peak over a ball stands 25 % above the ring around it)."""
 _MISFIT = 2.0
-"""The strongest measurement more than this factor (and ``_REFUTE`` σ) above the model's
+"""The strongest measurement more than this factor (and ``REFUTE`` σ) above the model's
 own value at that point refutes the model too: a log-quadratic fitted mostly to a lobe's
 flat tail can predict 1/1000 of the peak it was given and send every step away from it."""
 _SAME_POINT = 0.01
@@ -70,27 +73,9 @@ _MAX_SHRINK = 4
 _MIN_FIT = 0.5
 """[× radius] the smallest fitting neighbourhood (the central peak over a ball is 0.3°
 wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
-_RIDGE_RATIO = 1.6
-"""A fitted peak whose widths differ by this factor is a ridge: search across it once."""
-_ACROSS_AFTER = 6
-"""Consecutive refinement steps (no approach step between) on a ridge before it is
-searched across: only a settled model is trusted to be on the ridge's top."""
-_ACROSS_STEPS = (0.6, 0.9, 1.2, 1.5, 1.8, 2.1, 2.4)
-"""[× radius] the offsets of the search across a ridge, nearest first, alternating sides
-(first the side where the data fall below the model)."""
-_ACROSS_REPEATS = 4
-"""At most this many measurements of one point of that search."""
-_ACROSS_LOW = 0.15
-"""A side of that search ends at a point clearly (2 σ) below this fraction of the
-ridge's top: the lobe has fallen away there.  The dip between a near-field ring and
-the central peak over a ball is 0.4 of the ring's top, which the search must cross; a
-plate's lobe, fitted as a ridge from noisy data, fell to 0.08 of the top 0.9° out on
-both sides and the search went on to 2.4° (12 measurements, far start at 30 dB)."""
-_BUMP_RADIUS = 0.35
-"""[× radius] the hexagon measured around a bump of the search across a ridge."""
 _MAX_SIGMA_LOG = 1.0
 """The largest log-space noise the trust-region test allows for (a factor e) once the
-model's value at the incumbent is a significant echo (``_REFUTE`` σ of the measurement
+model's value at the incumbent is a significant echo (``REFUTE`` σ of the measurement
 noise).  The residuals of a model that one strong measurement had just refuted (a
 lobe's top 1.7× above the fitted maximum) gave 40: every step passed the test, the
 trust radius stayed at its maximum and the run circled 4° out for its last 36
@@ -112,7 +97,7 @@ this distance before the quadratic takes over."""
 
 
 @register_method("model-based")
-class ModelBased(Optimizer):
+class ModelBased(RidgeSearch, Optimizer):
     """Trust-region ascent on a log-quadratic model of all measurements (1 per iteration).
 
     Parameters
@@ -195,13 +180,8 @@ class ModelBased(Optimizer):
             self._x, self._y = hp[ok], hv[ok]
         self._trust = self.radius
         self._loc_scale = 1.0  # shrinks the fitting neighbourhood when the data refute the fit
-        self._across = np.zeros((0, 2))  # queued points of a search across a ridge
-        self._across_done = False
-        self._across_top = 0.0
-        self._across_from = self.x0.copy()
+        self._init_ridge_search()
         self._recentred: FloatArray | None = None
-        self._across_line_points: FloatArray | None = None
-        self._across_bump = False
         self._streak = 0  # refinement steps since the last approach step
         self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
         self._n_fresh = 0
@@ -266,9 +246,9 @@ class ModelBased(Optimizer):
     ) -> int | None:
         """Index of the strongest local measurement that lies clearly above everything
         the model allows (its maximum in the fitted neighbourhood, or its largest value at
-        a measured point): ``_REFUTE`` σ of that measurement's noise, and 5 % — or, when
+        a measured point): ``REFUTE`` σ of that measurement's noise, and 5 % — or, when
         there is none, the strongest local measurement if it stands ``_MISFIT`` times and
-        ``_REFUTE`` σ above the model's value at that very point; None when neither holds
+        ``REFUTE`` σ above the model's value at that very point; None when neither holds
         or the noise is unknown (log space only).
 
         A quadratic fitted across several lobes (a near-field probe over a ball: a central
@@ -292,12 +272,12 @@ class ModelBased(Optimizer):
         mean = np.bincount(group, weights=y_all) / count
         excess = mean[group] - top
         noise = sig / np.sqrt(count[group])
-        refuted = local & (excess > _REFUTE * noise) & (excess > _REFUTE_RELATIVE * top)
+        refuted = local & (excess > REFUTE * noise) & (excess > REFUTE_RELATIVE * top)
         if not refuted.any():
             strongest = int(np.flatnonzero(local)[np.argmax(mean[group][local])])
             own = float(model.energy(self._x[strongest][None, :])[0])
             under = mean[group][strongest] - own
-            if under > _REFUTE * noise[strongest] and mean[group][strongest] > _MISFIT * own:
+            if under > REFUTE * noise[strongest] and mean[group][strongest] > _MISFIT * own:
                 return strongest  # the model does not hold its own best measurement
             return None
         idx = np.flatnonzero(refuted)
@@ -351,7 +331,7 @@ class ModelBased(Optimizer):
                 inc = float(np.exp(min(float(model(self._incumbent[None, :])[0]), 700.0)))
                 self._sigma_log = sig / max(inc, 1e-300)
                 noise = self._sigmas(np.array([inc]))
-                if noise is not None and inc > _REFUTE * float(noise[0]):
+                if noise is not None and inc > REFUTE * float(noise[0]):
                     self._sigma_log = min(self._sigma_log, _MAX_SIGMA_LOG)
         else:
             idx = np.flatnonzero(local)
@@ -394,32 +374,6 @@ class ModelBased(Optimizer):
             self._step_len = float(np.hypot(*(cand[0] - self._incumbent)))
         return cand
 
-    def _across_line(self, m: QuadraticModel, xs: FloatArray) -> FloatArray | None:
-        """The points of a search across a ridge through ``xs`` (see :data:`_ACROSS_STEPS`),
-        or None when the fitted peak is not a ridge (its widths' ratio below
-        :data:`_RIDGE_RATIO`).
-
-        A large probe in its near field over a ball sees a lobe made of a central peak,
-        a dip (0.32 of the peak 0.8° out) and a ring (0.8 of the peak, 1.6° out): a local
-        model started beyond the dip climbs the ring, on which it is a ridge — steep across
-        (the radius), flat along it — and the centre lies across it.  The side where the
-        data fall below the model (the dip) is searched first, alternating sides."""
-        eig, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
-        if eig[0] <= 0.0 or eig[1] / eig[0] < _RIDGE_RATIO**2:
-            return None
-        e = vec[:, 1]
-        s = (self._x - xs) @ e
-        t = (self._x - xs) @ vec[:, 0]
-        y = self._y - self._floor()
-        band = (np.abs(t) <= self.radius) & (np.abs(s) >= 0.25 * self.radius)
-        resid = y - m.energy(self._x)
-        plus = float(np.mean(resid[band & (s > 0)])) if np.any(band & (s > 0)) else 0.0
-        minus = float(np.mean(resid[band & (s < 0)])) if np.any(band & (s < 0)) else 0.0
-        first = 1.0 if plus < minus else -1.0
-        steps = np.asarray(_ACROSS_STEPS) * self.radius
-        offsets = np.stack([first * steps, -first * steps], axis=1).reshape(-1)
-        return self.clip(xs[None, :] + offsets[:, None] * e[None, :])
-
     def _propose(self) -> FloatArray:
         m = self._model
         xs = self._supported_max()
@@ -445,17 +399,10 @@ class ModelBased(Optimizer):
             off = self.ring * self._template.width * np.array([np.cos(ang), np.sin(ang)])
             return self.clip(top + off)[None, :]
         if m is not None and xs is not None and np.hypot(*(xs - m.center)) <= self._trust:
-            if not self._across_done and self._streak >= _ACROSS_AFTER:
-                line = self._across_line(m, xs)
-                if line is not None:
-                    self._across_done = True
-                    self._across = line
-                    self._across_line_points = line.copy()
-                    self._across_top = float(m.energy(xs[None, :])[0])
-                    self._across_from = xs.copy()
-                    self._mode = "across"
-                    self._pred = None
-                    return self._across[:1].copy()
+            if self._start_ridge_search(m, xs):
+                self._mode = "across"
+                self._pred = None
+                return self._across[:1].copy()
             self._mode = "refine"
             self._n_ring += 1
             self._streak += 1
@@ -485,7 +432,7 @@ class ModelBased(Optimizer):
         """Fit the probe's lobe template to every measurement
         (:func:`~echocal.calibrate.lobe_template.fit_template`, peaks within
         ``max_radius`` of the incumbent): ``_tfit`` is the fit when its peak is a
-        significant echo (``_REFUTE`` standard errors), else None; ``_on_top`` says
+        significant echo (``REFUTE`` standard errors), else None; ``_on_top`` says
         whether a measurement lies on the lobe's top (the template above
         :data:`_TEMPLATE_TOP` of its peak there).  Log space only, with a live noise model."""
         self._tfit, self._n_top = None, 0
@@ -500,7 +447,7 @@ class ModelBased(Optimizer):
         if sig is None:
             return
         fit = fit_template(template, self._x, y, sig, self._incumbent, self.max_radius)
-        if fit is None or fit.energy < _REFUTE * fit.energy_sigma:
+        if fit is None or fit.energy < REFUTE * fit.energy_sigma:
             return
         self._tfit = fit
         self._n_top = int(np.count_nonzero(template(self._x - fit.centre) >= _TEMPLATE_TOP))
@@ -597,68 +544,6 @@ class ModelBased(Optimizer):
             if self._times_measured(p) < 2 and all(np.any(p != q) for q in keep):
                 keep.append(p)
         return np.array(keep).reshape(-1, 2)
-
-    def _across_step(self, point: FloatArray, value: float) -> None:
-        """After measuring a point of the search across a ridge: re-measure it (up to
-        :data:`_ACROSS_REPEATS` times) while its mean is above the ridge's top by more
-        than 2 σ of that mean, else go on to the next point.  A point that clearly
-        exceeds the top refutes the model, which then re-fits around it (:meth:`_refit`)
-        and the search ends; a point of the line clearly below :data:`_ACROSS_LOW` of the
-        top ends that side of it (not the hexagon around a bump, which lies on one side)."""
-        here = np.all(np.abs(self._x - point) <= 1e-9, axis=1)
-        y = self._y[here] - self._floor()
-        sig = self._sigmas(np.maximum(y, 0.0))
-        mean = float(np.mean(y))
-        noise = None if sig is None else float(np.mean(sig)) / np.sqrt(len(y))  # of the mean
-        excess = mean - self._across_top
-        if np.isfinite(value) and noise is not None and len(y) <= _ACROSS_REPEATS:
-            if excess > _REFUTE * noise and excess > _REFUTE_RELATIVE * self._across_top:
-                self._across = np.zeros((0, 2))  # found: the refit moves to it
-                return
-            if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
-                return  # measure it again
-        self._across = self._across[1:]
-        if not self._across_bump and noise is not None and np.isfinite(value):
-            if mean + 2.0 * noise < _ACROSS_LOW * self._across_top:  # this side fell away
-                beyond = (self._across - self._across_from) @ (point - self._across_from) > 0.0
-                self._across = self._across[~beyond]
-        if not len(self._across) and not self._across_bump:
-            self._across_bump = True
-            bump = self._across_bump_point()
-            if bump is not None:
-                self._across = self.clip(hexagon(bump, _BUMP_RADIUS * self.radius)[1:])
-
-    def _across_bump_point(self) -> FloatArray | None:
-        """The line's strongest point beyond a dip on either side of the ridge: clearly
-        (3 σ) above the weakest point between it and the ridge — a line that passes near,
-        not through, a central peak (its direction is the fitted ridge's, a few degrees off
-        at 10 dB) crosses it as such a bump; None when there is none."""
-        xs = self._across_from
-        line = self._across_line_points
-        if line is None or not len(line):
-            return None
-        floor = self._floor()
-        vals = []
-        for p in line:
-            here = np.all(np.abs(self._x - p) <= 1e-9, axis=1)
-            vals.append(float(np.mean(self._y[here])) - floor if here.any() else np.nan)
-        v = np.asarray(vals)
-        sig = self._sigmas(np.maximum(np.nan_to_num(v), 0.0))
-        if sig is None:
-            return None
-        e = line[-1] - xs
-        side = np.sign((line - xs) @ e)
-        dist = np.hypot(*(line - xs).T)
-        best, best_v = None, -np.inf
-        for sgn in (-1.0, 1.0):
-            idx = np.flatnonzero((side == sgn) & np.isfinite(v))
-            idx = idx[np.argsort(dist[idx])]
-            for k in range(1, len(idx)):
-                j = idx[k]
-                low = float(np.min(v[idx[:k]]))
-                if v[j] - low > 3.0 * sig[j] and v[j] > best_v:
-                    best, best_v = line[j], v[j]
-        return None if best is None else best.copy()
 
     def _recommend(self) -> FloatArray:
         xs = self._template_top()
