@@ -30,6 +30,10 @@ _COARSE = 0.1
 """[deg] the first grid of candidate peaks."""
 _FINE = 0.01
 """[deg] the second grid, around the best coarse candidates."""
+_PEAK_PRIOR = 0.25
+"""Relative σ of the prior on the peak's metric when it is known (a simulated source:
+its receiver's noise, the metric's floor subtraction and the lobe's spread between
+directions keep it within a few % of the noiseless value)."""
 _CANDIDATES = 4
 """Coarse candidates refined on the fine grid (the tail's ring ambiguity: a few points
 in the tail are fitted as well by mirror images of the peak)."""
@@ -46,11 +50,15 @@ class LobeTemplate:
         evenly spaced from 0, shape ``(k,)``.
     values : relative metric (1 at the peak), shape ``(k, n)``; beyond ``angles[-1]``
         the last value holds.
+    peak : [metric units] the metric at the peak, noise excluded, when the objective
+        knows it in its own units (a simulated source); None otherwise (a rig's twin: a
+        setup file does not give the rig's echo amplitude in the rig's units).
     """
 
     angles: FloatArray
     directions: FloatArray
     values: FloatArray
+    peak: float | None = None
 
     @property
     def width(self) -> float:
@@ -88,11 +96,14 @@ class TemplateFit:
     """The best peak of a template fit.
 
     centre : [deg] the lobe's peak, shape (2,); energy : E₀ [metric units, as the values
-    given]; energy_sigma : its standard error; chi2 : the weighted residual sum of squares.
+    given], with the prior on the peak when one was given; measured : E₀ from the
+    measurements alone, and energy_sigma its standard error (how clearly the data show
+    an echo); chi2 : the weighted residual sum of squares (the prior's term included).
     """
 
     centre: FloatArray
     energy: float
+    measured: float
     energy_sigma: float
     chi2: float
 
@@ -104,33 +115,39 @@ def fit_template(
     sigmas: FloatArray,
     around: FloatArray,
     radius: float,
+    peak: float | None = None,
 ) -> TemplateFit | None:
     """Weighted least-squares fit of y_i ≈ E₀ g(x_i − c) over peaks c within ``radius``
     [deg] of ``around`` (2,): for each c the best E₀ ≥ 0 in closed form, c on a 0.1° grid,
     then on a 0.01° grid around the best few.
 
     ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed),
-    ``sigmas`` (n,) their noise σ (> 0).  None when no point carries weight or no
-    candidate gives a positive E₀.
+    ``sigmas`` (n,) their noise σ (> 0).  ``peak``: the metric expected at the peak (same
+    units), a Gaussian prior on E₀ of relative σ :data:`_PEAK_PRIOR` — it breaks the
+    tail's trade between the peak's energy and its distance (a lobe 10× stronger twice as
+    far looks alike); None: no prior.  None when no point carries weight or no candidate
+    gives a positive E₀.
     """
     ok = np.isfinite(values) & (sigmas > 0.0)
     if not ok.any():
         return None
     x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
+    prior = None if peak is None or not peak > 0.0 else (peak, 1.0 / (_PEAK_PRIOR * peak) ** 2)
     coarse = _disc_grid(around, radius, _COARSE)
-    chi2, energy, _ = _scores(template, coarse, x, y, w)
+    chi2, energy, *_ = _scores(template, coarse, x, y, w, prior)
     order = np.argsort(chi2)[:_CANDIDATES]
     order = order[energy[order] > 0.0]
     if not order.size:
         return None
     fine = np.concatenate([_disc_grid(c, _COARSE, _FINE) for c in coarse[order]])
-    chi2, energy, info = _scores(template, fine, x, y, w)
+    chi2, energy, measured, info = _scores(template, fine, x, y, w, prior)
     best = int(np.argmin(np.where(energy > 0.0, chi2, np.inf)))
     if not energy[best] > 0.0:
         return None
     return TemplateFit(
         centre=fine[best].copy(),
         energy=float(energy[best]),
+        measured=float(measured[best]),
         energy_sigma=float(1.0 / np.sqrt(info[best])),
         chi2=float(chi2[best]),
     )
@@ -146,11 +163,26 @@ def _disc_grid(centre: FloatArray, radius: float, step: float) -> FloatArray:
 
 
 def _scores(
-    template: LobeTemplate, centres: FloatArray, x: FloatArray, y: FloatArray, w: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """For each candidate peak (m, 2): χ², the best E₀ ≥ 0 and Σ w g² (E₀'s information)."""
+    template: LobeTemplate,
+    centres: FloatArray,
+    x: FloatArray,
+    y: FloatArray,
+    w: FloatArray,
+    prior: tuple[float, float] | None,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """For each candidate peak (m, 2): χ² (with the prior's term), the best E₀ ≥ 0 (with
+    the prior ``(mean, weight)`` on it, if any), E₀ from the data alone, and Σ w g² (the
+    data's information on E₀)."""
     g = template(x[None, :, :] - centres[:, None, :])  # (m, n)
     info = np.maximum((w * g * g).sum(axis=1), 1e-300)
-    energy = np.maximum((w * y * g).sum(axis=1) / info, 0.0)
+    moment = (w * y * g).sum(axis=1)
+    measured = moment / info
+    if prior is None:
+        energy = np.maximum(measured, 0.0)
+        penalty = 0.0
+    else:
+        mean, weight = prior
+        energy = np.maximum((moment + weight * mean) / (info + weight), 0.0)
+        penalty = weight * (energy - mean) ** 2
     resid = y[None, :] - energy[:, None] * g
-    return (w * resid * resid).sum(axis=1), energy, info
+    return (w * resid * resid).sum(axis=1) + penalty, energy, measured, info

@@ -446,8 +446,9 @@ class ModelBased(RidgeSearch, Optimizer):
         sig = self._sigmas(np.maximum(y, 0.0))
         if sig is None:
             return
-        fit = fit_template(template, self._x, y, sig, self._incumbent, self.max_radius)
-        if fit is None or fit.energy < REFUTE * fit.energy_sigma:
+        peak = None if template.peak is None else template.peak / self._scale
+        fit = fit_template(template, self._x, y, sig, self._incumbent, self.max_radius, peak)
+        if fit is None or fit.measured < REFUTE * fit.energy_sigma:  # the data's own evidence
             return
         self._tfit = fit
         self._n_top = int(np.count_nonzero(template(self._x - fit.centre) >= _TEMPLATE_TOP))
@@ -522,16 +523,17 @@ class ModelBased(RidgeSearch, Optimizer):
         return True
 
     def _update_model(self) -> None:
-        """Refit (:meth:`_refit`); when the data moved the model to a new, narrower peak,
-        trust a step of half the design radius there and measure a hexagon of that radius
-        around it unless its neighbourhood is measured already."""
+        """Refit (:meth:`_refit`) and the lobe's template (:meth:`_fit_template`); when
+        the data moved the model to a new, narrower peak, trust a step of half the design
+        radius there and measure a hexagon of that radius around it unless its
+        neighbourhood is measured already or the template already says where the peak is."""
         self._recentred = None
         self._refit()
         self._fit_template()
         if self._recentred is not None:
             self._trust = max(0.5 * self.radius, self.min_radius)
             near = np.hypot(*(self._x - self._recentred).T) <= 0.75 * self.radius
-            if np.count_nonzero(near) < 7:
+            if np.count_nonzero(near) < 7 and self._tfit is None:
                 self._design = self._fresh_design(hexagon(self._recentred, 0.5 * self.radius)[1:])
                 self._across = np.zeros((0, 2))
 

@@ -120,16 +120,20 @@ class LobeProfile:
     reference: np.ndarray
     energies: np.ndarray
 
-    def energy_template(self) -> LobeTemplate | None:
+    def energy_template(self, absolute: bool = False) -> LobeTemplate | None:
         """The lobe's pseudo-energy relative to normal incidence's, as a
         :class:`~echocal.calibrate.lobe_template.LobeTemplate` centred on the peak — or
         None when the peak is not at normal incidence (a large probe over a curved part:
-        a ring, two humps), where the lobe seen from normal incidence is not one peak."""
+        a ring, two humps), where the lobe seen from normal incidence is not one peak.
+        ``absolute``: the template's ``peak`` is normal incidence's noiseless
+        pseudo-energy (for a source measured in this setup's own units)."""
         top = float(np.mean(self.energies[:, 0]))
         if not top > 0.0 or float(self.energies.max()) > _PEAK_AT_NORMAL * top:
             return None
         phi = np.linspace(0.0, 2.0 * np.pi, len(self.energies), endpoint=False)
-        return LobeTemplate(self.angles.copy(), phi, self.energies / top)
+        return LobeTemplate(
+            self.angles.copy(), phi, self.energies / top, peak=top if absolute else None
+        )
 
     def detection_probability(self, snr_db: float, threshold: float = ECHO_THRESHOLD) -> np.ndarray:
         """P_detect(θ), shape ``(directions, n)``, for an echo whose best A-scan here has
