@@ -26,8 +26,9 @@ from echocal.calibrate._fd import FloatArray
 
 __all__ = ["LobeTemplate", "TemplateFit", "fit_template"]
 
-_COARSE = 0.1
-"""[deg] the first grid of candidate peaks."""
+_COARSE = 0.2
+"""[deg] the first grid of candidate peaks (the 5 MHz probe's lobe falls to e^(−1/2) of its
+peak 0.3° out: a candidate within 0.14° of the true peak is on its top)."""
 _FINE = 0.01
 """[deg] the second grid, around the best coarse candidates."""
 _PEAK_PRIOR = 0.25
@@ -118,7 +119,7 @@ def fit_template(
     peak: float | None = None,
 ) -> TemplateFit | None:
     """Weighted least-squares fit of y_i ≈ E₀ g(x_i − c) over peaks c within ``radius``
-    [deg] of ``around`` (2,): for each c the best E₀ ≥ 0 in closed form, c on a 0.1° grid,
+    [deg] of ``around`` (2,): for each c the best E₀ ≥ 0 in closed form, c on a 0.2° grid,
     then on a 0.01° grid around the best few.
 
     ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed),
