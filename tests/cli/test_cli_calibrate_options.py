@@ -64,6 +64,7 @@ def test_parse_options_reads_booleans_none_and_json(text, value):
         ("fine_raduis=1", ["fine_raduis", "did you mean fine_radius?", "valid: batch"]),
         ("history=0", ["history", "warm start", "Python API"]),
         ("detector=1", ["detector", "supplied automatically"]),
+        ("lobe_template=0", ["lobe_template", "probe's lobe", "Python API"]),
         ("budget=3", ["--option budget", "--budget"]),
         ("xtol=abc", ["xtol"]),
         ('local_options={"raduis": 1}', ["'raduis'", "did you mean radius?"]),
