@@ -174,6 +174,20 @@ def test_the_simulated_probes_template_is_its_pseudo_energy_off_its_peak(plate):
     peak = float(setup.metric_values(pos, truth[:1], truth[1:], parameterization="tilt")[0])
     relative = values / peak
     assert np.all(np.abs(template(offsets) - relative) <= 0.03 + 0.15 * relative)
+    # the simulator's template knows its peak's pseudo-energy, in the objective's units
+    assert template.peak == pytest.approx(peak, rel=0.01)
+
+
+def test_a_rigs_twin_gives_the_lobe_but_not_its_peak_energy(plate):
+    """A setup file does not give the rig's echo amplitude in the rig's units."""
+    from tests.measurement.fake_sources import GaussianEchoSource
+
+    setup, pos = plate
+    rig = SourceObjective(
+        GaussianEchoSource(), pos, pulse=setup.pulse, twin=setup, parameterization="tilt"
+    )
+    template = rig.lobe_template()
+    assert template is not None and template.peak is None
 
 
 def test_no_template_for_a_gate_another_metric_or_other_angles(plate):
