@@ -111,8 +111,9 @@ def test_auto_does_not_circle_the_trust_circle_after_a_refuted_fit() -> None:
     every trust-region step passed and the last 36 measurements circled 4° out — the run
     never stayed within 0.1°.  With the noise capped (a factor e) once the incumbent is a
     significant echo, and the search across a ridge ended where the lobe has fallen
-    away, it stays within 0.1° after 35; locked at 50 (the far cell's 99th percentile:
-    one seed's count jitters between installs, see the module doc)."""
+    away, it stayed within 0.1° after 35, and after 21 since the local method follows the
+    probe's lobe from its tail; locked at 31 (the far cell's 99th percentile: one seed's
+    count jitters between installs, see the module doc)."""
     seed = 887101703  # bench_calibration.run_seed("immersion-5mhz", "far", 30.0, 16)
     base = load_setup("immersion-5mhz", seed=0)
     setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=30.0), rng=seed)
@@ -134,4 +135,4 @@ def test_auto_does_not_circle_the_trust_circle_after_a_refuted_fit() -> None:
     counts = list(result.iteration_measurements)
     reached = next((counts[i] for i in range(len(errors)) if max(errors[i:]) < 0.1), None)
     assert reached is not None, "never stayed within 0.1°"
-    assert reached <= 50, f"within 0.1° after {reached}"
+    assert reached <= 31, f"within 0.1° after {reached}"

@@ -9,18 +9,20 @@ probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per 
 ==================  ================  ================
 start band          1–3°              5–20°
 ==================  ================  ================
-30 dB               100/100/100/100   4/97/100/100 %
-20 dB               100/100/100/100   0/23/62/74 %
-10 dB               74/100/100/100    0/0/5/7 %
+30 dB               100/100/100/100   30/100/100/100 %
+20 dB               100/100/100/100   2/29/67/77 %
+10 dB               75/100/100/100    0/0/5/7 %
 ==================  ================  ================
 
-From 1–3° at 30 dB, 91 % of runs are within 0.05° after 15 measurements (64 % before the
-local method fitted its warm start before its first step).  From 5–20° at 30 dB the median
-is 29 measurements to 0.1° (p90 35, p99 50; every run gets there) since the search
-is sized for the echo the probe's model predicts against the noise the first ring
-measures (before: 3/11/66/97 %, median 58.5; with hand-sized passes 0/12/56/99, before
-the passes 0/12/27/77 %) and the local model's log-space noise is capped once its
-incumbent is a significant echo (before, 4/95/99/99 %: one run in 100 circled 4° out).
+From 1–3° at 30 dB, 100 % of runs are within 0.05° after 15 measurements (median 9;
+91 % before the local method followed the probe's lobe from its tail, 64 % before it
+fitted its warm start before its first step).  From 5–20° at 30 dB the median is 22
+measurements to 0.1° (p90 25, p99 31; every run gets there; 29, 35 and 50 before the
+lobe's template) since the search is sized for the echo the probe's model predicts
+against the noise the first ring measures (before: 3/11/66/97 %, median 58.5; with
+hand-sized passes 0/12/56/99, before the passes 0/12/27/77 %) and the local model's
+log-space noise is capped once its incumbent is a significant echo (before, 4/95/99/99 %:
+one run in 100 circled 4° out).
 From 1–3° ``auto`` needs a median 14, 13 and 15 measurements to 0.1° at 30, 20 and
 10 dB; the best peer of the full benchmark (10 runs per cell) needed 17.5 (Py-BOBYQA),
 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's GP, 80 % of runs).  Over curved parts, probe
@@ -63,15 +65,21 @@ Why each part:
    ball), and searches once across a ridge;
 6. the local model's log-space noise, the tolerance of its trust-region test, is capped
    at a factor e once its incumbent is a significant echo: a refuted fit's residuals
-   gave 40, every step passed, and a far run circled 4° out for 36 measurements.
+   gave 40, every step passed, and a far run circled 4° out for 36 measurements;
+7. from the lobe's tail the local method follows the probe's lobe
+   (:meth:`~echocal.calibrate.Objective.lobe_template`, the simulated probe's
+   pseudo-energy versus misalignment; :mod:`echocal.calibrate.lobe_template`): fitted
+   to every measurement, with the peak's energy known to 25 % on the simulator, its
+   fitted peak is the next point until one lies on the lobe's top — a quadratic reads the
+   tail as a lobe twice as broad.  Near 30 dB within 0.05° after 15: 91 → 100 %; far
+   30 dB median 29 → 22, p99 50 → 31; a detection 3.7° out reached the top in one step.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
-lower-bound.md): the 30 dB near start within 0.05° after 15 (91 %: the first steps from
-the lobe's edge overshoot a 1° lobe); the lower-bound ratio (any search needs ≥ 17
-measurements for 99 % of far starts at 30 dB; ``auto``'s p99 is 50, a ratio of 2.9,
-since detection alone costs a median 13 and the climb from a detection in the lobe's
-tail a median 16); the
-12.7 mm probe over curved parts at 10 dB.  Without a probe model (a recording, a rig) the
+lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of
+far starts at 30 dB; ``auto``'s p99 is 31, a ratio of 1.82, since detection alone costs
+a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 9); the
+12.7 mm probe over curved parts at 10 dB (its lobes have a ring or two humps, for which
+there is no template yet).  Without a probe model (a recording, a rig) the
 far search still spends the 1° lattice first (a fixed order cannot serve both a 10 dB near
 start and a 30 dB far one without knowing the SNR); ``fine_radius=1.0`` drops it when the
 SNR is known to be ≥ 20 dB.  When the start is known to be near the echo,
