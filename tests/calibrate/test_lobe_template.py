@@ -75,7 +75,8 @@ def test_the_fit_finds_a_peak_seen_only_from_its_tail():
     points = truth + radius[:, None] * np.stack([np.cos(ang), np.sin(ang)], axis=1)
     values = energy * template(points - truth)
     assert values.max() < 0.03 * energy
-    fit = fit_template(template, points, values, np.full(7, 1e-4), points[0], 4.0)
+    around = points[0] + np.array([0.037, 0.013])  # the truth on no grid node
+    fit = fit_template(template, points, values, np.full(7, 1e-4), around, 4.0)
     assert fit is not None
     assert np.hypot(*(fit.centre - truth)) <= 0.01 * np.sqrt(2.0) / 2.0 + 1e-9
     assert fit.energy == pytest.approx(energy, rel=0.02)
@@ -90,9 +91,10 @@ def test_the_fit_of_pure_noise_is_not_a_significant_echo():
         fit_template(template, points, rng.normal(0.0, 1.0, 30), sigma, np.zeros(2), 4.0)
         for _ in range(20)
     ]
-    significant = [f for f in fits if f is not None and f.energy > 4.0 * f.energy_sigma]
-    # the best of ~5,000 candidate peaks on 30 noise values: E₀/σ(E₀) is a max of
-    # correlated normals, rarely above 4 (the threshold model-based uses)
+    significant = [f for f in fits if f is not None and f.measured > 4.0 * f.energy_sigma]
+    # the best of ~1,300 candidate peaks on 30 noise values: E₀/σ(E₀) is a max of
+    # correlated normals, above 4 (the threshold model-based uses) in 3 of 200 draws
+    # measured (1.5 %); ≤ 2 of 20 fails with probability 0.4 % at that rate
     assert len(significant) <= 2
 
 
@@ -135,7 +137,7 @@ def test_model_based_climbs_from_the_tail_faster_with_the_template():
             )
             counts[given].append(_measurements_to_stay_within(result, truth, 0.1))
     assert None not in counts[True] and None not in counts[False], counts
-    assert max(counts[True]) <= 10, counts  # type: ignore[type-var]
+    assert max(counts[True]) <= 11, counts  # type: ignore[type-var]  # measured 10, +1
     assert max(counts[True]) < min(counts[False]), counts  # type: ignore[type-var]
 
 
@@ -159,7 +161,7 @@ def plate():
 
 def test_the_simulated_probes_template_is_its_pseudo_energy_off_its_peak(plate):
     """The template against the simulator's own metric at tilts the test picks around the
-    true optimum: within 3 % of the peak's energy plus 6 % of the value (the template
+    true optimum: within 3 % of the peak's energy plus 15 % of the value (the template
     interpolates between 4 directions; the tilted plate's lobe differs by up to ±15 %
     between them at 0.5°)."""
     setup, pos = plate
@@ -200,20 +202,73 @@ def test_no_template_for_a_gate_another_metric_or_other_angles(plate):
 
 
 def test_no_template_for_a_lobe_that_does_not_peak_at_normal_incidence(plate):
-    """Two humps off normal incidence (a large probe over a rod) are not one peak."""
+    """Two humps off normal incidence (a large probe over a rod), or a ring around the
+    peak (its near field over a ball), are not one peak."""
     setup = plate[0]
     angles = np.arange(0.0, 3.0, 0.1)
     humps = np.exp(-0.5 * ((angles - 1.5) / 0.4) ** 2) + 0.8
     profile = LobeProfile(setup, angles, humps[None, :], np.zeros(4), humps[None, :])
     assert profile.energy_template() is None
+    ring = np.exp(-0.5 * (angles / 0.3) ** 2) + 0.8 * np.exp(-0.5 * ((angles - 1.6) / 0.3) ** 2)
+    ringed = LobeProfile(setup, angles, ring[None, :], np.zeros(4), ring[None, :])
+    assert ringed.energy_template() is None  # a near-field ring around the peak
     single = np.exp(-0.5 * (angles / 0.4) ** 2)
     template = LobeProfile(setup, angles, single[None, :], np.zeros(4), 3.0 * single[None, :])
     assert template.energy_template().values == pytest.approx(single[None, :])
 
 
-def test_model_based_refuses_nothing_new_without_a_noise_model():
-    """Without a live noise model the template cannot weigh the measurements: the
-    log-quadratic's steps, as before."""
-    opt = ModelBased((0.0, 0.0), lobe_template=lambda: _gaussian(0.35))
-    opt.ask()
-    assert opt._tfit is None
+def _path(optimizer: ModelBased, f, n: int, recommend_calls: int = 0) -> np.ndarray:
+    """The points an ask/tell loop of ``n`` measurements asks for, calling ``recommend()``
+    ``recommend_calls`` times after each tell."""
+    asked = []
+    for _ in range(n):
+        points = optimizer.ask()
+        optimizer.tell(f(points))
+        asked.append(points)
+        for _ in range(recommend_calls):
+            optimizer.recommend()
+    return np.vstack(asked)
+
+
+def _strong_lobe(points: np.ndarray) -> np.ndarray:
+    return 100.0 * _gaussian(0.35)(points - np.array([0.8, -0.5])) + 1.0
+
+
+def test_without_a_noise_model_the_template_is_not_used():
+    """Without a live noise model the template cannot weigh the measurements: the same
+    path as without a template."""
+    with_template = ModelBased((0.0, 0.0), lobe_template=lambda: _gaussian(0.35), rng=0)
+    without = ModelBased((0.0, 0.0), rng=0)
+    path = _path(with_template, _strong_lobe, 12)
+    assert with_template._tfit is None
+    np.testing.assert_array_equal(path, _path(without, _strong_lobe, 12))
+
+
+def test_the_path_does_not_depend_on_how_often_the_estimate_is_read():
+    """The hand-over from the template to the quadratic happens in ``tell``, not in
+    ``recommend()``: reading the estimate any number of times leaves the path alone."""
+
+    def build() -> ModelBased:
+        return ModelBased(
+            (0.0, 0.0),
+            lobe_template=lambda: _gaussian(0.35),
+            noise_model=lambda: (1.0, 0.05),
+            rng=0,
+        )
+
+    quiet, chatty = build(), build()
+    path = _path(quiet, _strong_lobe, 20)
+    np.testing.assert_array_equal(path, _path(chatty, _strong_lobe, 20, recommend_calls=3))
+    assert quiet._quadratic_on_top  # the hand-over happened within the 20
+
+
+def test_a_template_must_be_one_normalised_lobe():
+    from echocal.errors import EchocalValueError
+
+    good = _gaussian(0.35)
+    with pytest.raises(EchocalValueError, match="shape"):
+        LobeTemplate(good.angles, good.directions, good.values[:, :-1])
+    with pytest.raises(EchocalValueError, match="1 at the peak"):
+        LobeTemplate(good.angles, good.directions, 2.0 * good.values)
+    with pytest.raises(EchocalValueError, match="evenly spaced"):
+        LobeTemplate(good.angles, good.directions + 0.1, good.values)

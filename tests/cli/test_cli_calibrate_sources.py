@@ -255,12 +255,13 @@ def test_instrument_reaches_the_simulated_estimate(plate, truth, tmp_path, capsy
     assert beam_error(rig["estimate_deg"], truth_tilt, "tilt") < NOISE_TOL
     assert direct["error_deg"] < NOISE_TOL
     # Over the socket nothing is lost (poses and float64 samples travel exactly) and the
-    # rig has the simulator's noise seed: the same measurements, so the same estimate.
-    np.testing.assert_array_equal(rig["estimate_deg"], direct["estimate_deg"])
-    assert rig["n_measurements"] == direct["n_measurements"]
+    # rig has the simulator's noise seed: x0 and its first ring, measured before any model
+    # acts, are the same measurements.  Beyond them the paths part: the simulator's lobe
+    # template knows its echo's energy in its own units, a rig's twin does not.
     measured = CalibrationResult.load_json(tmp_path / "rig" / "result.json")
     simulated = CalibrationResult.load_json(tmp_path / "sim" / "result.json")
-    np.testing.assert_array_equal(measured.values, simulated.values)
+    np.testing.assert_array_equal(measured.points[:7], simulated.points[:7])
+    np.testing.assert_array_equal(measured.values[:7], simulated.values[:7])
 
 
 def test_instrument_plots_the_path_without_a_map(plate, tmp_path, capsys, monkeypatch):
@@ -287,8 +288,10 @@ RIG_ARGS = ["--position", "0,0,20", "--x0", "-7,15", "--seed", "3", "--no-plots"
 
 # The rig vanishes after 2 + 3 k commands (*IDN?, LIMITS?, then MOVE, POS?, ACQ? per pose):
 # k A-scans.  The run measures a first batch of 7 poses, then one at a time: k = 5 cuts the
-# first batch short (the objective has logged nothing), k = 10 stops between batches.
-DROPS = [(5, 5), (10, 0)]  # (k, A-scans of the unfinished batch)
+# first batch short (the objective has logged nothing), k = 7 stops between batches.  The
+# simulated run is the rig's reference up to there: beyond, the simulator's lobe template
+# knows its echo's energy in its own units and a rig's twin does not, so the paths part.
+DROPS = [(5, 5), (7, 0)]  # (k, A-scans of the unfinished batch)
 
 
 @pytest.mark.parametrize(("k", "unfinished"), DROPS, ids=["in-a-batch", "between-batches"])

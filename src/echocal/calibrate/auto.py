@@ -23,12 +23,13 @@ against the noise the first ring measures (before: 3/11/66/97 %, median 58.5; wi
 hand-sized passes 0/12/56/99, before the passes 0/12/27/77 %) and the local model's
 log-space noise is capped once its incumbent is a significant echo (before, 4/95/99/99 %:
 one run in 100 circled 4° out).
-From 1–3° ``auto`` needs a median 14, 13 and 15 measurements to 0.1° at 30, 20 and
-10 dB; the best peer of the full benchmark (10 runs per cell) needed 17.5 (Py-BOBYQA),
-21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's GP, 80 % of runs).  Over curved parts, probe
-off axis, 1–3° at 10 dB, within 0.1° after 60: a ball 100 % (6.35 mm probe) and 60 %
-(12.7 mm, whose near-field lobe has a ring), a rod 100 % and 5 % (12.7 mm: two equal
-humps 3° apart across the rod with a dip to 0.79 between them; 20 runs per cell);
+From 1–3° ``auto`` needs a median 8, 9 and 12 measurements to 0.1° at 30, 20 and
+10 dB (14, 13 and 15 before the lobe's template); the best peer of the full benchmark
+(10 runs per cell) needed 17.5 (Py-BOBYQA), 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's
+GP, 80 % of runs).  Over curved parts, probe off axis, 1–3° at 10 dB, within 0.1° after
+60: a ball 100 % (6.35 mm probe) and 60 % (12.7 mm, whose near-field lobe has a ring), a
+rod 100 % and 5 % (12.7 mm: two equal humps 3° apart across the rod with a dip to 0.79
+between them; 20 runs per cell);
 the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
 (docs/benchmarks/curved.md).
 
@@ -72,7 +73,8 @@ Why each part:
    to every measurement, with the peak's energy known to 25 % on the simulator, its
    fitted peak is the next point until one lies on the lobe's top — a quadratic reads the
    tail as a lobe twice as broad.  Near 30 dB within 0.05° after 15: 91 → 100 %; far
-   30 dB median 29 → 22, p99 50 → 31; a detection 3.7° out reached the top in one step.
+   30 dB median 29 → 22, p99 50 → 31; a detection 3.7° out stepped to 0.44° in one
+   measurement.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of

@@ -19,6 +19,7 @@ form for each c) and c is searched on a grid, coarse then fine.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -36,8 +37,8 @@ _PEAK_PRIOR = 0.25
 its receiver's noise, the metric's floor subtraction and the lobe's spread between
 directions keep it within a few % of the noiseless value)."""
 _CANDIDATES = 4
-"""Coarse candidates refined on the fine grid (the tail's ring ambiguity: a few points
-in the tail are fitted as well by mirror images of the peak)."""
+"""Coarse candidates refined on the fine grid: the best few (often neighbours of one
+basin; the tail's mirror images are told apart by the measurement at the chosen peak)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +62,26 @@ class LobeTemplate:
     values: FloatArray
     peak: float | None = None
 
-    @property
+    def __post_init__(self) -> None:
+        from echocal.errors import EchocalValueError
+
+        k, n = len(self.directions), len(self.angles)
+        if self.values.shape != (k, n) or n < 2 or k < 1:
+            raise EchocalValueError(
+                f"a lobe template needs values of shape (directions, angles) = ({k}, {n}) "
+                f"with at least 2 angles; got {self.values.shape}"
+            )
+        if self.angles[0] != 0.0 or np.any(np.diff(self.angles) <= 0.0):
+            raise EchocalValueError("a lobe template's angles must ascend from 0 [deg]")
+        even = np.linspace(0.0, 2.0 * np.pi, k, endpoint=False)
+        if not np.allclose(self.directions, even):
+            raise EchocalValueError(
+                "a lobe template's directions must be evenly spaced from 0 [rad]"
+            )
+        if not np.allclose(self.values[:, 0], 1.0, rtol=1e-6):
+            raise EchocalValueError("a lobe template's values must be 1 at the peak (angle 0)")
+
+    @cached_property
     def width(self) -> float:
         """[deg] the misalignment at which the lobe, averaged over directions, falls to
         e^(−1/2) of its peak (a Gaussian's σ)."""
@@ -120,27 +140,29 @@ def fit_template(
 ) -> TemplateFit | None:
     """Weighted least-squares fit of y_i ≈ E₀ g(x_i − c) over peaks c within ``radius``
     [deg] of ``around`` (2,): for each c the best E₀ ≥ 0 in closed form, c on a 0.2° grid,
-    then on a 0.01° grid around the best few.
+    then on a 0.01° grid around the best few (a lobe narrower than 0.2° — its
+    e^(−1/2) width — is searched on a grid of its width first).
 
     ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed),
     ``sigmas`` (n,) their noise σ (> 0).  ``peak``: the metric expected at the peak (same
     units), a Gaussian prior on E₀ of relative σ :data:`_PEAK_PRIOR` — it breaks the
     tail's trade between the peak's energy and its distance (a lobe 10× stronger twice as
-    far looks alike); None: no prior.  None when no point carries weight or no candidate
-    gives a positive E₀.
+    far looks alike); None: no prior.  None when no point carries weight or none of the
+    best coarse candidates gives a positive E₀.
     """
     ok = np.isfinite(values) & (sigmas > 0.0)
     if not ok.any():
         return None
     x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
     prior = None if peak is None or not peak > 0.0 else (peak, 1.0 / (_PEAK_PRIOR * peak) ** 2)
-    coarse = _disc_grid(around, radius, _COARSE)
+    step = min(_COARSE, template.width)  # a narrower lobe than 0.2° gets a finer grid
+    coarse = _disc_grid(around, radius, step)
     chi2, energy, *_ = _scores(template, coarse, x, y, w, prior)
     order = np.argsort(chi2)[:_CANDIDATES]
     order = order[energy[order] > 0.0]
     if not order.size:
         return None
-    fine = np.concatenate([_disc_grid(c, _COARSE, _FINE) for c in coarse[order]])
+    fine = np.concatenate([_disc_grid(c, step, _FINE) for c in coarse[order]])
     chi2, energy, measured, info = _scores(template, fine, x, y, w, prior)
     best = int(np.argmin(np.where(energy > 0.0, chi2, np.inf)))
     if not energy[best] > 0.0:

@@ -404,7 +404,8 @@ class ModelBased(RidgeSearch, Optimizer):
             self._step_len = float(np.hypot(*(target - self._incumbent)))
             return target[None, :]
         top = self._template_top()
-        if top is not None and self._template is not None:
+        if top is not None:
+            assert self._template is not None  # a fit implies a template
             # on the lobe's top before the quadratic is: the flanks around the template's
             # peak, where a measurement says most about where the peak is
             self._mode = "refine"
@@ -447,23 +448,25 @@ class ModelBased(RidgeSearch, Optimizer):
         """Fit the probe's lobe template to every measurement
         (:func:`~echocal.calibrate.lobe_template.fit_template`, peaks within
         ``max_radius`` of the incumbent): ``_tfit`` is the fit when its peak is a
-        significant echo (``REFUTE`` standard errors), else None; ``_on_top`` says
-        whether a measurement lies on the lobe's top (the template above
-        :data:`_TEMPLATE_TOP` of its peak there).  Log space only, with a live noise model."""
+        significant echo (``REFUTE`` standard errors), else None; ``_n_top`` counts the
+        measurements on the lobe's top (the template above :data:`_TEMPLATE_TOP` of its
+        peak there).  Log space only, with a live noise model; the prior on the peak's
+        energy only when the values keep the objective's units (``normalize="none"``)."""
         self._tfit, self._n_top = None, 0
-        if self._quadratic_on_top:
+        if self._quadratic_on_top or self.space != "log" or not len(self._x):
             return
         if not self._template_asked:
             self._template_asked = True
             self._template = None if self.lobe_template is None else self.lobe_template()
         template = self._template
-        if template is None or self.space != "log" or not len(self._x):
+        if template is None:
             return
         y = self._y - self._floor()
         sig = self._sigmas(np.maximum(y, 0.0))
         if sig is None:
             return
-        peak = None if template.peak is None else template.peak / self._scale
+        known = template.peak is not None and self.normalize == "none"
+        peak = template.peak / self._scale if known and template.peak is not None else None
         fit = fit_template(template, self._x, y, sig, self._incumbent, self.max_radius, peak)
         if fit is None or fit.measured < REFUTE * fit.energy_sigma:  # the data's own evidence
             return
@@ -479,19 +482,30 @@ class ModelBased(RidgeSearch, Optimizer):
         return None if self._times_measured(target) else target
 
     def _template_top(self) -> FloatArray | None:
-        """The fitted template's peak [deg] (2,) once a measurement lies on the lobe's top,
-        until :data:`_QUADRATIC_TOP` do (the log-quadratic's 6 parameters need them there)
-        and the log-quadratic's maximum agrees with it (:data:`_AGREE`); else None.  Once
-        they agree the quadratic stays in charge (the template is not fitted again)."""
-        if self._tfit is None or self._template is None or not self._n_top:
+        """The fitted template's peak [deg] (2,), clipped to the bounds, once a measurement
+        lies on the lobe's top and until the log-quadratic takes over
+        (:meth:`_hand_over`); else None."""
+        if self._tfit is None or not self._n_top:
             return None
-        centre = self._tfit.centre
+        return self.clip(self._tfit.centre)
+
+    def _hand_over(self) -> None:
+        """Once :data:`_QUADRATIC_TOP` measurements lie on the lobe's top (the
+        log-quadratic's 6 parameters need them there) and the quadratic's maximum agrees
+        with the template's peak (:data:`_AGREE`), the quadratic takes over for good: the
+        template is not fitted again.  The maximum need not be supported by a measurement
+        near it: over a broad lobe the flank points lie a lobe's width out (a 4 mm 1 MHz
+        probe's template, biased by 0.1°, otherwise kept the estimate to the end)."""
+        if self._tfit is None or self._template is None or self._n_top < _QUADRATIC_TOP:
+            return
         xs = self._supported_max()
-        if self._n_top >= _QUADRATIC_TOP and xs is not None:
-            if np.hypot(*(xs - centre)) <= _AGREE * self._template.width:
-                self._quadratic_on_top = True  # for good: no more template fits
-                return None
-        return centre
+        m = self._model
+        if xs is None and m is not None and m.concave:
+            xs = m.argmax()  # flank points only (a broad lobe): none near the maximum yet
+        centre = self.clip(self._tfit.centre)
+        if xs is not None and np.hypot(*(xs - centre)) <= _AGREE * self._template.width:
+            self._quadratic_on_top = True
+            self._tfit, self._n_top = None, 0
 
     def _times_measured(self, point: FloatArray) -> int:
         """How often ``point`` [deg] (as the positioner reaches it: clipped) was measured,
@@ -554,6 +568,7 @@ class ModelBased(RidgeSearch, Optimizer):
             if np.count_nonzero(near) < 7 and self._tfit is None:
                 self._design = self._fresh_design(hexagon(self._recentred, 0.5 * self.radius)[1:])
                 self._across = np.zeros((0, 2))
+        self._hand_over()
 
     def _fresh_design(self, points: FloatArray) -> FloatArray:
         """``points`` [deg] (k, 2) clipped to the bounds, in order, without those the
@@ -573,11 +588,17 @@ class ModelBased(RidgeSearch, Optimizer):
 
     @property
     def concave(self) -> bool:
-        """True when the fitted model is concave and its maximum, supported by the data,
-        is the recommendation (not the incumbent fallback)."""
-        return self._supported_max() is not None
+        """True when a peak model's maximum, supported by the data, is the recommendation
+        (not the incumbent fallback): the lobe's template with a measurement on its top,
+        or the fitted log-quadratic, concave."""
+        return self._template_top() is not None or self._supported_max() is not None
 
     def recommend_value(self) -> float | None:
+        """The model's echo energy (noise floor removed) at the recommendation [objective
+        units]: the template's fitted peak energy while it is in charge, else the
+        log-quadratic's value there; None before a model."""
+        if self._template_top() is not None and self._tfit is not None:
+            return self._tfit.energy * self._scale
         if self._model is None:
             return None
         return float(self._model.energy(self.recommend()[None, :])[0]) * self._scale

@@ -115,7 +115,7 @@ class RidgeSearch:
         """After measuring a point of the search across a ridge: re-measure it (up to
         :data:`_ACROSS_REPEATS` times) while its mean is above the ridge's top by more
         than 2 σ of that mean, else go on to the next point.  A point that clearly
-        exceeds the top refutes the model, which then re-fits around it (:meth:`_refit`)
+        exceeds the top refutes the model, which then re-fits around it (``_refit``)
         and the search ends; a point of the line clearly below :data:`_ACROSS_LOW` of the
         top ends that side of it (not the hexagon around a bump, which lies on one side)."""
         here = np.all(np.abs(self._x - point) <= 1e-9, axis=1)

@@ -132,7 +132,9 @@ class LobeProfile:
         fit from a few points is ambiguous (the ball's 12.7 mm regression cases went from
         a median 32 measurements to 0.1° to 52, one never within 60).
         ``absolute``: the template's ``peak`` is normal incidence's noiseless
-        pseudo-energy (for a source measured in this setup's own units)."""
+        pseudo-energy (for a source measured in this setup's own units).  The lobe ends
+        where the profile does (cached to the 2° block where a 30 dB echo is no longer
+        detected, 9.4° for the 5 MHz probe); beyond, its last value holds."""
         top = float(np.mean(self.energies[:, 0]))
         if not top > 0.0 or float(self.energies.max()) > _PEAK_AT_NORMAL * top:
             return None

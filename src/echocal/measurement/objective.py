@@ -284,8 +284,9 @@ class SourceObjective(Objective):
         rig's ``twin``; :meth:`~echocal.measurement.detection_radius.LobeProfile.energy_template`),
         relative to its peak: for the pseudo-energy in its default window, over the whole
         recording, with tilt angles (whose offsets are the lobe's misalignments).  The
-        peak's own pseudo-energy comes with it for the simulator, measured in its units
-        (not for a rig's twin, whose units are not the rig's).  None
+        peak's own pseudo-energy comes with it for the simulator measured with its own
+        pulse, in its units (not for a rig's twin, whose units are not the rig's, nor for
+        another matched-filter pulse).  None
         otherwise, without a simulated probe, where the probe cannot see the part, and
         where the lobe does not peak at normal incidence (a large probe over a curved part)."""
         from echocal.measurement.detection_radius import cached_lobe_profile
@@ -300,7 +301,8 @@ class SourceObjective(Objective):
             return None
         try:
             profile = cached_lobe_profile(self.twin, self.position)
-            return profile.energy_template(absolute=self.twin is self.source)
+            own = self.twin is self.source and self.pulse is self.twin.pulse
+            return profile.energy_template(absolute=own)
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
 

@@ -41,8 +41,8 @@ FLAW_KINDS = ("side-drilled-hole", "flat-bottom-hole", "pore")
 """Reflector kinds a specimen's interior can hold."""
 
 INTERIOR_SHAPES = (
-    "an interior needs one plane (a plate's front face, e.g. builtin = \"flat-plate\"), one "
-    "sphere (a spherical shell's outer face) or one cylinder with surface = \"outside\" (a "
+    'an interior needs one plane (a plate\'s front face, e.g. builtin = "flat-plate"), one '
+    'sphere (a spherical shell\'s outer face) or one cylinder with surface = "outside" (a '
     "pipe's outer face); meshes and bores are not modelled"
 )
 """Why a specimen cannot have an interior: the one sentence every refusal shares."""
