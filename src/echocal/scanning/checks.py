@@ -14,6 +14,7 @@ from echocal.errors import EchocalError, EchocalValueError, LimitError
 from echocal.geometry import PARAMETERIZATIONS
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.objective import SourceObjective
+from echocal.scanning.defaults import point_options
 from echocal.scanning.grid import ScanGrid
 from echocal.signal import Pulse
 
@@ -89,7 +90,7 @@ def check_scan(
             method,
             start,
             rng=np.random.default_rng(0),
-            options=dict(method_options or {}),
+            options=dict(point_options(method, method_options or {})),
         )
     except EchocalError:
         raise

@@ -59,7 +59,6 @@ from echocal._validate import (
     positive_int,
 )
 from echocal.calibrate import calibrate
-from echocal.calibrate.auto import AUTO_SEARCH
 from echocal.calibrate.result import NO_ECHO_STATUSES, SUCCESS_STATUSES
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.errors import DataFileError, EchocalError
@@ -68,6 +67,7 @@ from echocal.measurement.objective import SourceObjective
 from echocal.provenance import stamped
 from echocal.scanning.checks import check_scan
 from echocal.scanning.dataset import STATUS, SurfaceScan, surface_dataset
+from echocal.scanning.defaults import point_options
 from echocal.scanning.grid import ScanGrid
 from echocal.scanning.neighbours import attempt_score, demote_weak, predict, suspicious_points
 from echocal.scanning.store import (
@@ -197,7 +197,7 @@ def _measure_point(
                 rng=rng,
                 settle=(ctx.tol, ctx.patience),
                 final_check=0,  # the time-of-flight A-scans below measure the estimate
-                **_with_default_passes(ctx.method, ctx.options),
+                **point_options(ctx.method, ctx.options),
             )
     except EchocalError as exc:
         record.update(status=STATUS["source-error"], message=str(exc))
@@ -537,13 +537,3 @@ def scan_surface(
         result.save(out)
         store.remove()
     return result
-
-
-def _with_default_passes(method: str, options: Mapping[str, Any]) -> Mapping[str, Any]:
-    """``options`` with ``auto``'s default passes unless the search geometry is given: a
-    scan point starts near its neighbour's optimum, and sizing the passes from the probe
-    (:meth:`~echocal.measurement.SourceObjective.search_passes`) would compute its lobe
-    anew at every position (2 s each on the wave model)."""
-    if method != "auto" or any(k in options for k in ("passes", "growth", "max_spacing")):
-        return options
-    return {**options, "passes": AUTO_SEARCH["passes"]}

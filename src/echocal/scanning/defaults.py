@@ -1,0 +1,27 @@
+"""What a scan point's calibration is told rather than computing from its position."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from echocal.calibrate._options import accepted_options
+from echocal.calibrate.auto import AUTO_SEARCH
+from echocal.calibrate.registry import get_method
+
+__all__ = ["point_options"]
+
+
+def point_options(method: str, options: Mapping[str, Any]) -> Mapping[str, Any]:
+    """``options`` with a scan's defaults for what a calibration would otherwise compute
+    from the probe's lobe at each position (a lobe profile: 2-8 s per position on the wave
+    model, against ~1 s for a point's whole calibration): ``auto``'s default passes unless
+    the search geometry is given, and no lobe template (``lobe_template=None``) unless one
+    is given.  A scan point starts near its neighbour's optimum, where the template adds
+    little (:mod:`echocal.calibrate.lobe_template`: it is for steps from the lobe's tail)."""
+    out = dict(options)
+    if method == "auto" and not any(k in options for k in ("passes", "growth", "max_spacing")):
+        out["passes"] = AUTO_SEARCH["passes"]
+    if "lobe_template" in accepted_options(get_method(method)):
+        out.setdefault("lobe_template", None)
+    return out
