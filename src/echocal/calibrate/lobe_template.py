@@ -23,6 +23,7 @@ from functools import cached_property
 
 import numpy as np
 
+from echocal._curves import first_crossing
 from echocal.calibrate._fd import FloatArray
 
 __all__ = ["LobeTemplate", "TemplateFit", "fit_template"]
@@ -85,13 +86,7 @@ class LobeTemplate:
     def width(self) -> float:
         """[deg] the misalignment at which the lobe, averaged over directions, falls to
         e^(−1/2) of its peak (a Gaussian's σ)."""
-        mean = self.values.mean(axis=0)
-        below = np.flatnonzero(mean < np.exp(-0.5))
-        if not below.size:
-            return float(self.angles[-1])
-        k = int(below[0])
-        a0, a1, v0, v1 = self.angles[k - 1], self.angles[k], mean[k - 1], mean[k]
-        return float(a0 + (v0 - np.exp(-0.5)) * (a1 - a0) / (v0 - v1))
+        return first_crossing(self.angles, self.values.mean(axis=0), float(np.exp(-0.5)))
 
     def __call__(self, offsets: FloatArray) -> FloatArray:
         """Relative metric at ``offsets`` [deg] from the peak, shape ``(..., 2)`` ->

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import rice
 
+from echocal._curves import first_crossing
 from echocal._validate import finite_array, finite_float, in_range, positive_float, positive_int
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.constants import ECHO_THRESHOLD
@@ -220,20 +221,6 @@ def _unit_cell_distances(n: int = 200) -> np.ndarray:
 _UNIT_CELL_DISTANCES = _unit_cell_distances()
 _BISECT_TOL = 0.01
 """[deg] the resolution of :meth:`LobeProfile.lattice_spacing`."""
-
-
-def first_crossing(angles: np.ndarray, prob: np.ndarray, level: float) -> float:
-    """[deg] the largest angle up to which ``prob`` (at ``angles`` [deg], ascending, shape
-    ``(n,)``) stays ≥ ``level``: linear interpolation between the last angle above and the
-    first below; 0 when the first falls short, ``angles[-1]`` when none does."""
-    below = np.flatnonzero(prob < level)
-    if below.size == 0:
-        return float(angles[-1])
-    k = int(below[0])
-    if k == 0:
-        return 0.0
-    a0, a1, p0, p1 = angles[k - 1], angles[k], prob[k - 1], prob[k]
-    return float(a0 + (p0 - level) * (a1 - a0) / (p0 - p1))
 
 
 def lobe_profile(
