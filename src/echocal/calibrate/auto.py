@@ -16,9 +16,10 @@ start band          1–3°              5–20°
 
 From 1–3° at 30 dB, 100 % of runs are within 0.05° after 15 measurements (median 9;
 91 % before the local method followed the probe's lobe from its tail, 64 % before it
-fitted its warm start before its first step).  From 5–20° at 30 dB the median is 22
-measurements to 0.1° (p90 25, p99 31; every run gets there; 29, 35 and 50 before the
-lobe's template) since the search is sized for the echo the probe's model predicts
+fitted its warm start before its first step).  From 5–20° at 30 dB the median is 18
+measurements to 0.1° (p90 23, p99 29; every run gets there; 22, 25 and 31 before a warm
+start that the template fits skipped its hexagon, 29, 35 and 50 before the lobe's
+template) since the search is sized for the echo the probe's model predicts
 against the noise the first ring measures (before: 3/11/66/97 %, median 58.5; with
 hand-sized passes 0/12/56/99, before the passes 0/12/27/77 %) and the local model's
 log-space noise is capped once its incumbent is a significant echo (before, 4/95/99/99 %:
@@ -78,8 +79,8 @@ Why each part:
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of
-far starts at 30 dB; ``auto``'s p99 is 31, a ratio of 1.82, since detection alone costs
-a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 9); the
+far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71, since detection alone costs
+a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5); the
 12.7 mm probe over curved parts at 10 dB (its lobes have a ring or two humps, for which
 there is no template yet).  Without a probe model (a recording, a rig) the
 far search still spends the 1° lattice first (a fixed order cannot serve both a 10 dB near
