@@ -67,7 +67,7 @@ def start(args: list[str], cwd: Path) -> subprocess.Popen:
     )
 
 
-def finish(process: subprocess.Popen, timeout: float = 900) -> tuple[int, str, str]:
+def finish(process: subprocess.Popen, timeout: float = 300) -> tuple[int, str, str]:
     out, err = process.communicate(timeout=timeout)
     return process.returncode, out, err
 
@@ -76,7 +76,7 @@ def run(args: list[str], cwd: Path) -> tuple[int, str, str]:
     return finish(start(args, cwd))
 
 
-def wait_for(condition, process: subprocess.Popen, timeout: float = 360) -> None:
+def wait_for(condition, process: subprocess.Popen, timeout: float = 120) -> None:
     """Poll ``condition()`` until true; fail if the process ends first."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:

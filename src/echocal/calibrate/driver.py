@@ -181,7 +181,7 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
 
 
-_SEARCH_GEOMETRY = ("passes", "growth", "max_spacing")
+SEARCH_GEOMETRY = ("passes", "growth", "max_spacing")
 """Options that set where a blind search looks beyond the fine lattice."""
 
 
@@ -194,7 +194,7 @@ def _search_plan(
     it predicts against the noise the first ring measures
     (:meth:`Objective.passes_for_measured_noise`), unless the caller set ``fine_radius``;
     else ``{}``."""
-    if not option_defaults(cls).get("passes") or any(k in given for k in _SEARCH_GEOMETRY):
+    if not option_defaults(cls).get("passes") or any(k in given for k in SEARCH_GEOMETRY):
         return {}
     passes = objective.search_passes()
     plan: dict[str, Any] = {} if passes is None else {"passes": passes}

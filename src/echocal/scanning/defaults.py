@@ -7,6 +7,7 @@ from typing import Any
 
 from echocal.calibrate._options import accepted_options
 from echocal.calibrate.auto import AUTO_SEARCH
+from echocal.calibrate.driver import SEARCH_GEOMETRY
 from echocal.calibrate.registry import get_method
 
 __all__ = ["point_options"]
@@ -20,7 +21,7 @@ def point_options(method: str, options: Mapping[str, Any]) -> Mapping[str, Any]:
     is given.  A scan point starts near its neighbour's optimum, where the template adds
     little (:mod:`echocal.calibrate.lobe_template`: it is for steps from the lobe's tail)."""
     out = dict(options)
-    if method == "auto" and not any(k in options for k in ("passes", "growth", "max_spacing")):
+    if method == "auto" and not any(k in options for k in SEARCH_GEOMETRY):
         out["passes"] = AUTO_SEARCH["passes"]
     if "lobe_template" in accepted_options(get_method(method)):
         out.setdefault("lobe_template", None)
