@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.special import j1
+from tests.run_helpers import measurements_to_stay_within
 
 from echocal.calibrate import FunctionObjective, calibrate
 from echocal.calibrate.lobe_template import LobeTemplate, fit_template
@@ -112,9 +113,9 @@ def _tail_objective(truth: np.ndarray, template: LobeTemplate, seed: int) -> Fun
 
 
 def _measurements_to_stay_within(result, truth: np.ndarray, tolerance: float) -> int | None:
+    """On a function of two plain coordinates: the error is the distance [deg]."""
     err = np.hypot(*(np.asarray(result.iterates) - truth).T)
-    counts = list(result.iteration_measurements)
-    return next((counts[i] for i in range(len(err)) if max(err[i:]) < tolerance), None)
+    return measurements_to_stay_within(result, err, tolerance)
 
 
 def test_model_based_climbs_from_the_tail_faster_with_the_template():
@@ -201,20 +202,63 @@ def test_no_template_for_a_gate_another_metric_or_other_angles(plate):
     assert SourceObjective(setup, pos).lobe_template() is None  # azimuth, co-elevation
 
 
+def _ring(angles: np.ndarray) -> np.ndarray:
+    """A near-field lobe over a ball: a central peak, a dip, a ring at 0.8 of the peak."""
+    return np.exp(-0.5 * (angles / 0.3) ** 2) + 0.8 * np.exp(-0.5 * ((angles - 1.6) / 0.3) ** 2)
+
+
 def test_no_template_for_a_lobe_that_does_not_peak_at_normal_incidence(plate):
-    """Two humps off normal incidence (a large probe over a rod), or a ring around the
-    peak (its near field over a ball), are not one peak."""
+    """Two humps off normal incidence (a large probe over a rod) are not one peak; a ring
+    around the peak (its near field over a ball) is part of the template."""
     setup = plate[0]
     angles = np.arange(0.0, 3.0, 0.1)
     humps = np.exp(-0.5 * ((angles - 1.5) / 0.4) ** 2) + 0.8
     profile = LobeProfile(setup, angles, humps[None, :], np.zeros(4), humps[None, :])
     assert profile.energy_template() is None
-    ring = np.exp(-0.5 * (angles / 0.3) ** 2) + 0.8 * np.exp(-0.5 * ((angles - 1.6) / 0.3) ** 2)
+    ring = _ring(angles)
     ringed = LobeProfile(setup, angles, ring[None, :], np.zeros(4), ring[None, :])
-    assert ringed.energy_template() is None  # a near-field ring around the peak
+    assert ringed.energy_template().values == pytest.approx(ring[None, :] / ring[0])
     single = np.exp(-0.5 * (angles / 0.4) ** 2)
     template = LobeProfile(setup, angles, single[None, :], np.zeros(4), 3.0 * single[None, :])
     assert template.energy_template().values == pytest.approx(single[None, :])
+
+
+def test_the_top_of_a_ringed_lobe_is_its_main_lobe_only():
+    """A ring at 0.8 of the peak is above half of it but is not the top: ``on_top`` holds
+    inside the main lobe (half energy at 0.3·√(2 ln 2) = 0.353°, the ring's share there
+    ~0) and nowhere on the ring."""
+    template = LobeTemplate(ANGLES, np.zeros(1), _ring(ANGLES)[None, :] / _ring(ANGLES)[0])
+    assert template.top_radius == pytest.approx(0.3 * np.sqrt(2.0 * np.log(2.0)), abs=0.005)
+    phi = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    around = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    assert template.on_top(0.3 * around).all()
+    assert template(1.6 * around).min() > 0.75  # the ring: high, yet not the top
+    assert not template.on_top(1.6 * around).any()
+    assert not template.on_top(0.8 * around).any()  # the dip
+
+
+def test_a_previous_peak_is_kept_unless_the_data_clearly_prefer_another():
+    """One measurement of 0.6 of a known peak energy puts the peak anywhere on the circle
+    where the Gaussian lobe is 0.6 (radius 0.4·√(2 ln(1/0.6)) = 0.405°): every centre there
+    fits alike, and the previous one is kept.  A second measurement of the full peak
+    energy 0.405° the other way is a clear preference (χ² ≫ 9): the fit moves there.
+    "Kept" is to the coarse grid's 0.2°: the previous peak is refined on the fine grid
+    within that of it, where the circle's points tie."""
+    template = _gaussian(0.4)
+    r = 0.4 * np.sqrt(2.0 * np.log(1.0 / 0.6))
+    points, values, sigmas = np.zeros((1, 2)), np.array([0.6]), np.array([0.01])
+    for previous in (np.array([r, 0.0]), np.array([0.0, -r]), np.array([-0.7 * r, 0.7 * r])):
+        fit = fit_template(
+            template, points, values, sigmas, np.zeros(2), 2.0, peak=1.0, previous=previous
+        )
+        assert np.hypot(*(fit.centre - previous)) <= 0.2 + 1e-9
+        assert np.hypot(*fit.centre) == pytest.approx(r, abs=0.01)
+    points = np.array([[0.0, 0.0], [-r, 0.0]])
+    values, sigmas = np.array([0.6, 1.0]), np.array([0.01, 0.01])
+    fit = fit_template(
+        template, points, values, sigmas, np.zeros(2), 2.0, peak=1.0, previous=np.array([r, 0.0])
+    )
+    assert np.hypot(*(fit.centre - [-r, 0.0])) <= 0.1  # the flat top: ±0.05° fit alike
 
 
 def _path(optimizer: ModelBased, f, n: int, recommend_calls: int = 0) -> np.ndarray:

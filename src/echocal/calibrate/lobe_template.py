@@ -37,6 +37,13 @@ _PEAK_PRIOR = 0.25
 """Relative σ of the prior on the peak's metric when it is known (a simulated source:
 its receiver's noise, the metric's floor subtraction and the lobe's spread between
 directions keep it within a few % of the noiseless value)."""
+_TOP = 0.5
+"""The lobe's top: where it is above this fraction of its peak (:meth:`LobeTemplate.on_top`)."""
+_KEEP = 9.0
+"""[χ²] a previous fit's peak is kept unless another fits the data better by more than
+this (a 3σ preference).  A lobe with a ring fits a few points on the ring almost as well
+with its peak across the ring: at 10 dB the best fit flipped 1.6° there and back for
+single measurements, and the estimate with it (the 12.7 mm probe over a ball)."""
 _CANDIDATES = 4
 """Coarse candidates refined on the fine grid: the best few (often neighbours of one
 basin; the tail's mirror images are told apart by the measurement at the chosen peak)."""
@@ -88,6 +95,19 @@ class LobeTemplate:
         e^(−1/2) of its peak (a Gaussian's σ)."""
         return first_crossing(self.angles, self.values.mean(axis=0), float(np.exp(-0.5)))
 
+    @cached_property
+    def top_radius(self) -> float:
+        """[deg] the main lobe's extent: the largest misalignment, over directions, up to
+        which the lobe stays above half its peak (a ring beyond a dip is not the top)."""
+        return max(first_crossing(self.angles, row, _TOP) for row in self.values)
+
+    def on_top(self, offsets: FloatArray) -> np.ndarray:
+        """True where ``offsets`` [deg] from the peak, shape ``(..., 2)``, lie on the main
+        lobe's top: above half the peak and within :attr:`top_radius` — not on a ring
+        around it (the 12.7 mm probe over a ball: a ring at 0.82 of the peak 1.6° out)."""
+        d = np.hypot(offsets[..., 0], offsets[..., 1])
+        return (self(offsets) >= _TOP) & (d <= self.top_radius)
+
     def __call__(self, offsets: FloatArray) -> FloatArray:
         """Relative metric at ``offsets`` [deg] from the peak, shape ``(..., 2)`` ->
         ``(...)``: linear in the misalignment along each direction, then linear in the
@@ -132,6 +152,7 @@ def fit_template(
     around: FloatArray,
     radius: float,
     peak: float | None = None,
+    previous: FloatArray | None = None,
 ) -> TemplateFit | None:
     """Weighted least-squares fit of y_i ≈ E₀ g(x_i − c) over peaks c within ``radius``
     [deg] of ``around`` (2,): for each c the best E₀ ≥ 0 in closed form, c on a 0.2° grid,
@@ -142,7 +163,9 @@ def fit_template(
     ``sigmas`` (n,) their noise σ (> 0).  ``peak``: the metric expected at the peak (same
     units), a Gaussian prior on E₀ of relative σ :data:`_PEAK_PRIOR` — it breaks the
     tail's trade between the peak's energy and its distance (a lobe 10× stronger twice as
-    far looks alike); None: no prior.  None when no point carries weight or none of the
+    far looks alike); None: no prior.  ``previous`` [deg] (2,): the peak of the previous
+    fit, kept (refined on the fine grid around it) unless the best peak fits better by
+    more than :data:`_KEEP` in χ².  None when no point carries weight or none of the
     best coarse candidates gives a positive E₀.
     """
     ok = np.isfinite(values) & (sigmas > 0.0)
@@ -162,6 +185,12 @@ def fit_template(
     best = int(np.argmin(np.where(energy > 0.0, chi2, np.inf)))
     if not energy[best] > 0.0:
         return None
+    if previous is not None:
+        near = _disc_grid(np.asarray(previous, dtype=np.float64), step, _FINE)
+        kept = _scores(template, near, x, y, w, prior)
+        k = int(np.argmin(np.where(kept[1] > 0.0, kept[0], np.inf)))
+        if kept[1][k] > 0.0 and kept[0][k] <= chi2[best] + _KEEP:
+            fine, (chi2, energy, measured, info), best = near, kept, k
     return TemplateFit(
         centre=fine[best].copy(),
         energy=float(energy[best]),

@@ -63,7 +63,7 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
-from echocal.calibrate.lobe_template import LobeTemplate, TemplateFit, fit_template
+from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.local_model import (
     REFUTE,
     REFUTE_RELATIVE,
@@ -75,6 +75,7 @@ from echocal.calibrate.local_model import (
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
 from echocal.calibrate.ridge_search import RidgeSearch
+from echocal.calibrate.template_steps import TemplateSteps
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 
@@ -99,27 +100,9 @@ trust radius stayed at its maximum and the run circled 4° out for its last 36
 measurements.  In the noise (no significant echo) the residuals keep their scale: large,
 so the trust radius grows and the steps explore."""
 
-_TEMPLATE_TOP = 0.5
-"""A measurement where the probe's lobe (fitted to every measurement) is above this
-fraction of its peak puts the search on the lobe's top, where the log-quadratic takes
-over from the lobe's template (see :meth:`ModelBased._template_step`)."""
-
-_TEMPLATE_MISFIT = 25.0
-"""A template fit whose χ² per degree of freedom (against the measurement noise) exceeds
-this refutes the template for the run: the log-quadratic alone, as without one.  On the
-5 MHz plate the fits stay at 1–4; a 4 mm 1 MHz probe over a plate tilted 36° (ray model)
-gave 150, its template's peak 1.5° off the echo's, and the run ended 1° off."""
-_QUADRATIC_TOP = 6
-"""Measurements on the lobe's top before the log-quadratic (6 parameters) takes over from
-the template there."""
-
-_AGREE = 0.25
-"""[× the lobe's width] the log-quadratic's maximum and the template's peak agree within
-this distance before the quadratic takes over."""
-
 
 @register_method("model-based")
-class ModelBased(RidgeSearch, Optimizer):
+class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
     """Trust-region ascent on a log-quadratic model of all measurements (1 per iteration).
 
     Parameters
@@ -171,12 +154,7 @@ class ModelBased(RidgeSearch, Optimizer):
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
         self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
         self.noise_model = noise_model
-        self.lobe_template = lobe_template
-        self._template: LobeTemplate | None = None
-        self._template_asked = False
-        self._tfit: TemplateFit | None = None
-        self._n_top = 0  # measurements on the fitted template's top
-        self._quadratic_on_top = False  # the log-quadratic has taken over from the template
+        self._init_template_steps(lobe_template)
         self.radius = positive_float("radius", radius)
         self.max_radius = positive_float(
             "max_radius", 4.0 * self.radius if max_radius is None else max_radius
@@ -208,7 +186,6 @@ class ModelBased(RidgeSearch, Optimizer):
         self._streak = 0  # refinement steps since the last approach step
         self._tried = np.zeros((0, 2))  # every point this method asked for, NaN ones too
         self._n_fresh = 0
-        self._design = self._initial_design()
         self._model: QuadraticModel | None = None
         self._mode = "design"
         self._n_ring = 0
@@ -216,17 +193,23 @@ class ModelBased(RidgeSearch, Optimizer):
         self._incumbent = self.x0.copy()
         self._pred: tuple[float, float] | None = None  # (m(center), m(candidate))
         self._step_len = 0.0
-        if len(self._x) and len(self._design):
-            self._fit_template()  # a warm start whose history already places the lobe:
-            if self._tfit is not None:  # its fitted peak is the first step, no hexagon
-                self._design = np.zeros((0, 2))
+        self._design = self._initial_design()
         if len(self._x) and not len(self._design):
             self._update_model()  # a warm start's first step already uses what it was given
 
     def _initial_design(self) -> FloatArray:
-        near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius if len(self._x) else []
-        if np.count_nonzero(near) >= 6:
-            return np.zeros((0, 2))
+        """x0 and a hexagon of ``radius`` around it — none for a warm start whose history
+        already has 6 points within 2 × radius of x0, or that the lobe's template already
+        fits (a far detection handed on by the acquisition: its fitted peak is the first
+        step).  The template is fitted around x0 here and again around the refit's
+        incumbent by the first model update."""
+        if len(self._x):
+            near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius
+            if np.count_nonzero(near) >= 6:
+                return np.zeros((0, 2))
+            self._fit_template()
+            if self._tfit is not None:
+                return np.zeros((0, 2))
         return self.clip(hexagon(self.x0, self.radius))
 
     @property
@@ -455,72 +438,6 @@ class ModelBased(RidgeSearch, Optimizer):
             self._pred = None
         self._step_len = float(np.hypot(*(cand - self._incumbent)))
         return cand[None, :]
-
-    def _fit_template(self) -> None:
-        """Fit the probe's lobe template to every measurement
-        (:func:`~echocal.calibrate.lobe_template.fit_template`, peaks within
-        ``max_radius`` of the incumbent): ``_tfit`` is the fit when its peak is a
-        significant echo (``REFUTE`` standard errors), else None; ``_n_top`` counts the
-        measurements on the lobe's top (the template above :data:`_TEMPLATE_TOP` of its
-        peak there).  Log space only, with a live noise model; the prior on the peak's
-        energy only when the values keep the objective's units (``normalize="none"``)."""
-        self._tfit, self._n_top = None, 0
-        if self._quadratic_on_top or self.space != "log" or not len(self._x):
-            return
-        if not self._template_asked:
-            self._template_asked = True
-            self._template = None if self.lobe_template is None else self.lobe_template()
-        template = self._template
-        if template is None:
-            return
-        y = self._y - self._floor()
-        sig = self._sigmas(np.maximum(y, 0.0))
-        if sig is None:
-            return
-        known = template.peak is not None and self.normalize == "none"
-        peak = template.peak / self._scale if known and template.peak is not None else None
-        fit = fit_template(template, self._x, y, sig, self._incumbent, self.max_radius, peak)
-        if fit is None or fit.measured < REFUTE * fit.energy_sigma:  # the data's own evidence
-            return
-        if len(y) >= 7 and fit.chi2 > _TEMPLATE_MISFIT * (len(y) - 3):
-            self._template = None  # refuted: this lobe is not the probe's, for the whole run
-            return
-        self._tfit = fit
-        self._n_top = int(np.count_nonzero(template(self._x - fit.centre) >= _TEMPLATE_TOP))
-
-    def _template_step(self) -> FloatArray | None:
-        """While no measurement lies on the lobe's top: the fitted template's peak [deg]
-        (2,) unless measured already; else None (the log-quadratic's steps)."""
-        if self._tfit is None or self._n_top:
-            return None
-        target = self.clip(self._tfit.centre)
-        return None if self._times_measured(target) else target
-
-    def _template_top(self) -> FloatArray | None:
-        """The fitted template's peak [deg] (2,), clipped to the bounds, once a measurement
-        lies on the lobe's top and until the log-quadratic takes over
-        (:meth:`_hand_over`); else None."""
-        if self._tfit is None or not self._n_top:
-            return None
-        return self.clip(self._tfit.centre)
-
-    def _hand_over(self) -> None:
-        """Once :data:`_QUADRATIC_TOP` measurements lie on the lobe's top (the
-        log-quadratic's 6 parameters need them there) and the quadratic's maximum agrees
-        with the template's peak (:data:`_AGREE`), the quadratic takes over for good: the
-        template is not fitted again.  The maximum need not be supported by a measurement
-        near it: over a broad lobe the flank points lie a lobe's width out (a 4 mm 1 MHz
-        probe's template, biased by 0.1°, otherwise kept the estimate to the end)."""
-        if self._tfit is None or self._template is None or self._n_top < _QUADRATIC_TOP:
-            return
-        xs = self._supported_max()
-        m = self._model
-        if xs is None and m is not None and m.concave:
-            xs = m.argmax()  # flank points only (a broad lobe): none near the maximum yet
-        centre = self.clip(self._tfit.centre)
-        if xs is not None and np.hypot(*(xs - centre)) <= _AGREE * self._template.width:
-            self._quadratic_on_top = True
-            self._tfit, self._n_top = None, 0
 
     def _times_measured(self, point: FloatArray) -> int:
         """How often ``point`` [deg] (as the positioner reaches it: clipped) was measured,

@@ -1,0 +1,147 @@
+"""The lobe's template in ``model-based``'s steps: from the lobe's tail to its fitted peak,
+then flanks around it until the log-quadratic takes over (a mixin of
+:class:`~echocal.calibrate.model_based.ModelBased`).
+
+The template (:mod:`echocal.calibrate.lobe_template`, the simulated probe's pseudo-energy
+versus misalignment) is fitted to every measurement after each tell.  While no
+measurement lies on the main lobe's top the next point is the fitted peak; once one does,
+the flanks around it are measured and the recommendation is the fitted peak; once
+:data:`_QUADRATIC_TOP` measurements lie on the top and the quadratic's maximum agrees
+with the template's, the quadratic takes over for good (:meth:`TemplateSteps._hand_over`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from echocal.calibrate._fd import FloatArray
+from echocal.calibrate.lobe_template import LobeTemplate, TemplateFit, fit_template
+from echocal.calibrate.local_model import REFUTE, QuadraticModel
+
+__all__ = ["TemplateSteps"]
+
+_TEMPLATE_MISFIT = 25.0
+"""A template fit whose χ² per degree of freedom (against the measurement noise) exceeds
+this refutes the template for the run: the log-quadratic alone, as without one.  On the
+5 MHz plate the fits stay at 1–4; a 4 mm 1 MHz probe over a plate tilted 36° (ray model)
+gave 150, its template's peak 1.5° off the echo's, and the run ended 1° off."""
+_QUADRATIC_TOP = 6
+"""Measurements on the lobe's top before the log-quadratic (6 parameters) takes over from
+the template there."""
+
+_AGREE = 0.25
+"""[× the lobe's width] the log-quadratic's maximum and the template's peak agree within
+this distance before the quadratic takes over."""
+
+
+class TemplateSteps:
+    """The template's steps, for a local method that keeps its measurements in ``_x``
+    [deg] (n, 2) and ``_y`` (n,), its incumbent in ``_incumbent``, its fitted
+    log-quadratic in ``_model``, and provides ``_floor()``, ``_sigmas(values)``,
+    ``clip(points)``, ``_times_measured(point)`` and ``_supported_max()``."""
+
+    _x: FloatArray
+    _y: FloatArray
+    _incumbent: FloatArray
+    _model: QuadraticModel | None
+    _scale: float
+    space: str
+    normalize: str
+    max_radius: float
+
+    if TYPE_CHECKING:  # provided by the method
+
+        def _floor(self) -> float: ...
+
+        def _sigmas(self, values: FloatArray) -> FloatArray | None: ...
+
+        def clip(self, points: ArrayLike) -> FloatArray: ...
+
+        def _times_measured(self, point: FloatArray) -> int: ...
+
+        def _supported_max(self) -> FloatArray | None: ...
+
+    def _init_template_steps(self, lobe_template: Callable[[], LobeTemplate | None] | None) -> None:
+        self.lobe_template = lobe_template
+        self._template: LobeTemplate | None = None
+        self._template_asked = False
+        self._tfit: TemplateFit | None = None
+        self._last_peak: FloatArray | None = None  # the last fit's peak, kept on ties
+        self._n_top = 0  # measurements on the fitted template's top
+        self._quadratic_on_top = False  # the log-quadratic has taken over from the template
+
+    def _fit_template(self) -> None:
+        """Fit the probe's lobe template to every measurement
+        (:func:`~echocal.calibrate.lobe_template.fit_template`, peaks within
+        ``max_radius`` of the incumbent): ``_tfit`` is the fit when its peak is a
+        significant echo (``REFUTE`` standard errors), else None; ``_n_top`` counts the
+        measurements on the lobe's main top (:meth:`LobeTemplate.on_top`: above half its
+        peak, not on a ring around it); the previous fit's peak is kept unless the data
+        clearly prefer another (``fit_template``'s ``previous``).  Log space only, with a
+        live noise model; the prior on the peak's energy only when the values keep the
+        objective's units (``normalize="none"``)."""
+        self._tfit, self._n_top = None, 0
+        if self._quadratic_on_top or self.space != "log" or not len(self._x):
+            return
+        if not self._template_asked:
+            self._template_asked = True
+            self._template = None if self.lobe_template is None else self.lobe_template()
+        template = self._template
+        if template is None:
+            return
+        y = self._y - self._floor()
+        sig = self._sigmas(np.maximum(y, 0.0))
+        if sig is None:
+            return
+        known = template.peak is not None and self.normalize == "none"
+        peak = template.peak / self._scale if known and template.peak is not None else None
+        fit = fit_template(
+            template, self._x, y, sig, self._incumbent, self.max_radius, peak, self._last_peak
+        )
+        if fit is not None:
+            self._last_peak = fit.centre
+        if fit is None or fit.measured < REFUTE * fit.energy_sigma:  # the data's own evidence
+            return
+        if len(y) >= 7 and fit.chi2 > _TEMPLATE_MISFIT * (len(y) - 3):
+            self._template = None  # refuted: this lobe is not the probe's, for the whole run
+            return
+        self._tfit = fit
+        self._n_top = int(np.count_nonzero(template.on_top(self._x - fit.centre)))
+
+    def _template_step(self) -> FloatArray | None:
+        """While no measurement lies on the lobe's top: the fitted template's peak [deg]
+        (2,) unless measured already; else None (the log-quadratic's steps)."""
+        if self._tfit is None or self._n_top:
+            return None
+        target = self.clip(self._tfit.centre)
+        return None if self._times_measured(target) else target
+
+    def _template_top(self) -> FloatArray | None:
+        """The fitted template's peak [deg] (2,), clipped to the bounds, once a measurement
+        lies on the lobe's top and until the log-quadratic takes over
+        (:meth:`_hand_over`); else None."""
+        if self._tfit is None or not self._n_top:
+            return None
+        return self.clip(self._tfit.centre)
+
+    def _hand_over(self) -> None:
+        """Once :data:`_QUADRATIC_TOP` measurements lie on the lobe's top (the
+        log-quadratic's 6 parameters need them there) and the quadratic's maximum agrees
+        with the template's peak (:data:`_AGREE`), the quadratic takes over for good: the
+        template is not fitted again.  The maximum need not be supported by a measurement
+        near it: over a broad lobe the flank points lie a lobe's width out (a 4 mm 1 MHz
+        probe's template, biased by 0.1°, otherwise kept the estimate to the end)."""
+        if self._tfit is None or self._template is None or self._n_top < _QUADRATIC_TOP:
+            return
+        xs = self._supported_max()
+        m = self._model
+        if xs is None and m is not None and m.concave:
+            xs = m.argmax()  # flank points only (a broad lobe): none near the maximum yet
+        centre = self.clip(self._tfit.centre)
+        if xs is not None and np.hypot(*(xs - centre)) <= _AGREE * self._template.width:
+            self._quadratic_on_top = True
+            self._tfit, self._n_top = None, 0
