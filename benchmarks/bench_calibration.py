@@ -129,6 +129,7 @@ from echocal.calibrate import calibrate  # noqa: E402
 from echocal.evaluation import angular_error  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
+from echocal.measurement.objective import default_bounds  # noqa: E402
 from echocal.measurement.truth import search_optimum  # noqa: E402
 from echocal.plots import save_figure  # noqa: E402
 from echocal.plots._style import MARKERS  # noqa: E402
@@ -249,11 +250,10 @@ def _equal_optima(setup: Any, pos: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 def tilt_bounds(setup: Any) -> np.ndarray:
-    """[deg] (2, 2): the largest tilt box whose corners stay inside the positioner's
-    co-elevation cone (cos θ = cos t_x cos t_y at a corner: t = arccos √cos θ_max)."""
-    cone = np.radians(max(abs(v) for v in setup.limits.coelevation))
-    half = float(np.degrees(np.arccos(np.sqrt(np.cos(cone))))) - 1e-6
-    return np.array([[-half, half], [-half, half]])
+    """[deg] (2, 2): the objective's default tilt box (:func:`default_bounds`, the largest
+    tilt box inside the positioner's co-elevation cone), 1e-6° inside, so a corner's
+    rounding never leaves the cone."""
+    return default_bounds(setup, PARAM) + np.array([1e-6, -1e-6])
 
 
 def run_seed(case: str, start: str, snr: float, run: int) -> int:

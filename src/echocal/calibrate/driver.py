@@ -33,7 +33,7 @@ from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, Calibrat
 from echocal.errors import BudgetExhaustedError, EchocalValueError
 from echocal.geometry import angle_between, convert_angles, orientation_normal
 
-__all__ = ["CalibrationState", "build_optimizer", "calibrate"]
+__all__ = ["SEARCH_GEOMETRY", "CalibrationState", "build_optimizer", "calibrate"]
 
 
 @dataclass(frozen=True, slots=True)

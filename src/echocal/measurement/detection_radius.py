@@ -36,6 +36,7 @@ the radii with its own noise draws.  ``auto`` searches in passes of s_c
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -98,6 +99,8 @@ somewhere does not peak at normal incidence (see :meth:`LobeProfile.energy_templ
 _CACHE_SIZE = 16
 """Lobe profiles kept per process (least recently used dropped first)."""
 _PROFILES: OrderedDict[tuple[Any, ...], tuple[tuple[Any, ...], LobeProfile]] = OrderedDict()
+_PROFILES_LOCK = threading.Lock()
+"""Guards :data:`_PROFILES` (calibrations in a thread pool share the cache)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -353,12 +356,16 @@ def cached_lobe_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:
     checks, so a key is never reused by another object."""
     parts = tuple(getattr(setup, f) for f in _PROFILE_FIELDS)
     key = (*(id(p) for p in parts), pos.tobytes())
-    hit = _PROFILES.get(key)
-    if hit is not None and all(a is b for a, b in zip(hit[0], parts, strict=True)):
-        _PROFILES.move_to_end(key)
-        return hit[1]
+    with _PROFILES_LOCK:
+        hit = _PROFILES.get(key)
+        if hit is not None and all(a is b for a, b in zip(hit[0], parts, strict=True)):
+            _PROFILES.move_to_end(key)
+            return hit[1]
+    # computed outside the lock: two threads may both compute a missing profile (the same
+    # result), but no thread waits on another's 2–50 s computation
     profile = lobe_profile(setup, pos, until_snr_db=max(SEARCH_SNRS))
-    _PROFILES[key] = (parts, profile)
-    while len(_PROFILES) > _CACHE_SIZE:
-        _PROFILES.popitem(last=False)
+    with _PROFILES_LOCK:
+        _PROFILES[key] = (parts, profile)
+        while len(_PROFILES) > _CACHE_SIZE:
+            _PROFILES.popitem(last=False)
     return profile
