@@ -13,7 +13,7 @@ from echocal.calibrate.result import CalibrationResult
 def tilt_errors(result: CalibrationResult, truth: Sequence[float] | np.ndarray) -> list[float]:
     """[deg] the angle between each iterate's beam (x0 first; tilts [deg]) and the true
     optimum's ``truth`` (2,) [deg]."""
-    return [angle_between(tilt_normal(*x), tilt_normal(*truth)) for x in result.iterates]
+    return [float(angle_between(tilt_normal(*x), tilt_normal(*truth))) for x in result.iterates]
 
 
 def measurements_to_stay_within(

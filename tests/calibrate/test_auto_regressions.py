@@ -25,10 +25,10 @@ from echocal.measurement import ReceiverSettings, SourceObjective, VirtualSetup
 from echocal.setups import load_setup, setup_with_overrides
 
 SEEDS = range(12)
-LOCKED_MEDIAN = 18
+LOCKED_MEDIAN = 18.5
 """Median measurements to stay within 0.1° over :data:`SEEDS` (measured 16.5 since the lobe
 template's fit keeps its previous peak unless the data clearly prefer another (13, 22,
-11, 19, 18, 10, 21, 22, 13, 15, 11, 19); 17 since a warm
+11, 21, 18, 10, 20, 20, 13, 15, 11, 19); 17 since a warm
 start whose history the lobe template already fits steps to its peak without a hexagon
 (13, 22, 11, 21, 20, 10, 20, 20, 12, 15, 11, 19); 19.5 since the local method follows
 the probe's lobe from its tail (18, 22, 16, 21, 20, 15, 20, 20, 17, 19, 15, 20), 25
@@ -83,9 +83,9 @@ def test_auto_from_a_far_start_on_the_wave_model() -> None:
 
 
 # Over the built-in sphere (ball r = 25 mm) a 12.7 mm probe 50 mm above it is in its near
-# field: the noiseless lobe is a central peak (0.3° to half energy), a dip to 0.32 of it
-# at 0.8° and a ring at 0.80 of it 1.6° out.  ``auto`` used to climb the ring (or fit a
-# quadratic across peak and ring) and end 1.0–1.7° off from every such start.  The
+# field: the noiseless lobe is a central peak (0.3° to half energy), a dip to about 0.3
+# of it at 0.8° and a ring at about 0.8 of it 1.6° out.  ``auto`` used to climb the ring
+# (or fit a quadratic across peak and ring) and end 1.0–1.7° off from every such start.  The
 # benchmark's ``sphere-12.7`` cell (docs/benchmarks/curved.md) measures the same on 20
 # seeded starts per SNR.
 # (position [mm], snr [dB], seed, start offset from the truth [deg]): the old code never
@@ -96,14 +96,14 @@ SPHERE_CASES = (
     ((4.0, 2.0, 50.0), 10.0, 1, (2.214, 0.219)),
     ((4.0, 2.0, 50.0), 10.0, 5, (1.055, -0.492)),
 )
-SPHERE_LOCKED_MEDIAN = 10
+SPHERE_LOCKED_MEDIAN = 12
 """Median measurements to stay within 0.1° over :data:`SPHERE_CASES` (must not grow; a
-median, as for the far start above; 1.5 of margin).  Measured 8.5 (8, 8, 9, 12) since the
-local method fits the lobe's template with its ring (the fit tells the ring from the
-central peak, only the main lobe counts as the top, and a fitted peak is kept unless the
-data clearly prefer another); before, 32 (29, 29, 41, 35) with a log-quadratic refuted
-and refitted on a smaller neighbourhood, and 29.5 (30, 29, 30, 29) before the local
-method fitted what the acquisition handed it."""
+median, as for the far start above; 3.5 of margin, since a median of four moves with one
+case).  Measured 8.5 (8, 8, 9, 12) since the local method fits the lobe's template with
+its ring (the fit tells the ring from the central peak, only the main lobe counts as the
+top, and a fitted peak is kept unless the data clearly prefer another); before, 32 (29,
+29, 41, 35) with a log-quadratic refuted and refitted on a smaller neighbourhood, and
+29.5 (30, 29, 30, 29) before the local method fitted what the acquisition handed it."""
 
 
 def _sphere_measurements(case) -> int | None:

@@ -226,15 +226,32 @@ def test_no_template_for_a_lobe_that_does_not_peak_at_normal_incidence(plate):
 def test_the_top_of_a_ringed_lobe_is_its_main_lobe_only():
     """A ring at 0.8 of the peak is above half of it but is not the top: ``on_top`` holds
     inside the main lobe (half energy at 0.3·√(2 ln 2) = 0.353°, the ring's share there
-    ~0) and nowhere on the ring."""
+    ~0) and nowhere on the ring or in the dip."""
     template = LobeTemplate(ANGLES, np.zeros(1), _ring(ANGLES)[None, :] / _ring(ANGLES)[0])
-    assert template.top_radius == pytest.approx(0.3 * np.sqrt(2.0 * np.log(2.0)), abs=0.005)
     phi = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
     around = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-    assert template.on_top(0.3 * around).all()
+    assert template.on_top(0.34 * around).all()
+    assert not template.on_top(0.37 * around).any()
     assert template(1.6 * around).min() > 0.75  # the ring: high, yet not the top
     assert not template.on_top(1.6 * around).any()
     assert not template.on_top(0.8 * around).any()  # the dip
+
+
+def test_the_top_is_each_directions_own_main_lobe():
+    """Along +x the lobe stays above half to 1.0°; along −x it dips to 0.2 at 0.4° and
+    rises to a ring of 0.83 at 0.8°; along ±y it never falls below half in the template's
+    8° (its last value holds beyond).  A point on the −x ring is not on the top, though
+    the +x lobe reaches farther; 0.8° along +x is; ±y is top to the end and beyond."""
+    main = np.clip(1.0 - 0.5 * ANGLES / 1.0, 0.0, 1.0)  # 0.5 at 1.0°
+    ringed = np.interp(ANGLES, [0.0, 0.4, 0.8, 1.2, 8.0], [1.0, 0.2, 0.83, 0.3, 0.0])
+    broad = np.maximum(1.0 - 0.05 * ANGLES, 0.55)
+    values = np.stack([main, broad, ringed, broad])
+    template = LobeTemplate(ANGLES, np.linspace(0.0, 2.0 * np.pi, 4, endpoint=False), values)
+    assert template.on_top(np.array([0.8, 0.0]))
+    assert not template.on_top(np.array([-0.8, 0.0]))
+    assert template(np.array([-0.8, 0.0])) > 0.8  # on the ring
+    assert template.on_top(np.array([[0.0, 5.0], [0.0, -7.9], [0.0, 9.0]])).all()
+    assert not template.on_top(np.array([1.1, 0.0]))
 
 
 def test_a_previous_peak_is_kept_unless_the_data_clearly_prefer_another():
@@ -259,6 +276,26 @@ def test_a_previous_peak_is_kept_unless_the_data_clearly_prefer_another():
         template, points, values, sigmas, np.zeros(2), 2.0, peak=1.0, previous=np.array([r, 0.0])
     )
     assert np.hypot(*(fit.centre - [-r, 0.0])) <= 0.1  # the flat top: ±0.05° fit alike
+
+
+@pytest.mark.parametrize(("delta_chi2", "kept"), [(8.5, True), (9.5, False)])
+def test_a_previous_peak_is_kept_up_to_a_chi2_of_9(delta_chi2: float, kept: bool):
+    """Noiseless points of a Gaussian lobe (σ_w 0.4°) peaked at the origin, previous peak
+    0.6° out: the best kept peak is 0.4° out (the fine grid within the coarse 0.2° step of
+    the previous one), whose χ² the test computes itself (E₀ by least squares, no prior:
+    S = Σ (y − Ê g)² / σ²).  The measurement σ is set so that χ² there exceeds the
+    origin's (0) by 8.5 — kept — or 9.5 — the fit moves to the origin."""
+    template = _gaussian(0.4)
+    x = np.stack([np.linspace(-0.6, 0.6, 5), np.zeros(5)], axis=1)
+    y = np.exp(-0.5 * np.hypot(*x.T) ** 2 / 0.4**2)
+    g = np.exp(-0.5 * np.hypot(*(x - [0.4, 0.0]).T) ** 2 / 0.4**2)
+    residual = float(np.sum((y - (y @ g) / (g @ g) * g) ** 2))
+    sigma = np.sqrt(residual / delta_chi2)
+    fit = fit_template(
+        template, x, y, np.full(5, sigma), np.zeros(2), 2.0, previous=np.array([0.6, 0.0])
+    )
+    expected = [0.4, 0.0] if kept else [0.0, 0.0]
+    assert fit.centre == pytest.approx(expected, abs=1e-9)
 
 
 def _path(optimizer: ModelBased, f, n: int, recommend_calls: int = 0) -> np.ndarray:

@@ -35,9 +35,7 @@ SIGMA_T = 1.0 / math.sqrt(2.0 * PULSE.alpha)
 PLANE = tuple(builtin_specimen("flat-plate"))
 
 
-def _model(
-    radius: float, d: float, curvature: float | None = None, **kw: object
-) -> WaveEchoModel:
+def _model(radius: float, d: float, curvature: float | None = None, **kw: object) -> WaveEchoModel:
     return _model_of(PistonProbe(radius=radius, curvature=curvature), d, **kw)
 
 

@@ -28,9 +28,9 @@ From 1–3° ``auto`` needs a median 8, 9 and 12 measurements to 0.1° at 30, 20
 10 dB (14, 13 and 15 before the lobe's template); the best peer of the full benchmark
 (10 runs per cell) needed 17.5 (Py-BOBYQA), 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's
 GP, 80 % of runs).  Over curved parts, probe off axis, 1–3° at 10 dB, within 0.1° after
-60: a ball 100 % (6.35 mm probe) and 60 % (12.7 mm, whose near-field lobe has a ring), a
-rod 100 % and 5 % (12.7 mm: two equal humps 3° apart across the rod with a dip to 0.79
-between them; 20 runs per cell);
+60: a ball 100 % with the 6.35 mm probe and with the 12.7 mm one (whose near-field lobe
+has a ring, which the lobe's template keeps), a rod 100 % and 5 % (12.7 mm: two equal
+humps 3° apart across the rod with a dip to 0.79 between them; 20 runs per cell);
 the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
 (docs/benchmarks/curved.md).
 
@@ -81,8 +81,8 @@ Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.
 lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of
 far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71, since detection alone costs
 a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5); the
-12.7 mm probe over curved parts at 10 dB (its lobes have a ring or two humps, for which
-there is no template yet).  Without a probe model (a recording, a rig) the
+12.7 mm probe over a rod at 10 dB (its lobe peaks off normal incidence in two humps,
+for which there is no template yet).  Without a probe model (a recording, a rig) the
 far search still spends the 1° lattice first (a fixed order cannot serve both a 10 dB near
 start and a 30 dB far one without knowing the SNR); ``fine_radius=1.0`` drops it when the
 SNR is known to be ≥ 20 dB.  When the start is known to be near the echo,

@@ -41,9 +41,10 @@ _TOP = 0.5
 """The lobe's top: where it is above this fraction of its peak (:meth:`LobeTemplate.on_top`)."""
 _KEEP = 9.0
 """[χ²] a previous fit's peak is kept unless another fits the data better by more than
-this (a 3σ preference).  A lobe with a ring fits a few points on the ring almost as well
-with its peak across the ring: at 10 dB the best fit flipped 1.6° there and back for
-single measurements, and the estimate with it (the 12.7 mm probe over a ball)."""
+this (for the peak's 2 coordinates a likelihood ratio of e^4.5 = 90, about 2.5σ).  A lobe
+with a ring fits a few points on the ring almost as well with its peak across the ring:
+at 10 dB the best fit flipped 1.6° there and back for single measurements, and the
+estimate with it (the 12.7 mm probe over a ball)."""
 _CANDIDATES = 4
 """Coarse candidates refined on the fine grid: the best few (often neighbours of one
 basin; the tail's mirror images are told apart by the measurement at the chosen peak)."""
@@ -96,17 +97,23 @@ class LobeTemplate:
         return first_crossing(self.angles, self.values.mean(axis=0), float(np.exp(-0.5)))
 
     @cached_property
-    def top_radius(self) -> float:
-        """[deg] the main lobe's extent: the largest misalignment, over directions, up to
-        which the lobe stays above half its peak (a ring beyond a dip is not the top)."""
-        return max(first_crossing(self.angles, row, _TOP) for row in self.values)
+    def _main_lobe(self) -> LobeTemplate:
+        """The template with each direction's values set to 0 beyond its first value below
+        half the peak (kept, so the edge interpolates as before): the main lobe alone, a
+        ring beyond a dip removed."""
+        fallen = np.minimum.accumulate(self.values, axis=1) < _TOP
+        beyond = np.zeros_like(fallen)
+        beyond[:, 1:] = fallen[:, :-1]
+        return LobeTemplate(self.angles, self.directions, np.where(beyond, 0.0, self.values))
 
     def on_top(self, offsets: FloatArray) -> np.ndarray:
         """True where ``offsets`` [deg] from the peak, shape ``(..., 2)``, lie on the main
-        lobe's top: above half the peak and within :attr:`top_radius` — not on a ring
-        around it (the 12.7 mm probe over a ball: a ring at 0.82 of the peak 1.6° out)."""
-        d = np.hypot(offsets[..., 0], offsets[..., 1])
-        return (self(offsets) >= _TOP) & (d <= self.top_radius)
+        lobe's top: above half the peak before the lobe first falls below half along each
+        direction (interpolated between directions as the values are) — not on a ring
+        around it (the 12.7 mm probe over a ball: a ring at about 0.8 of the peak 1.6° out,
+        beyond a dip to about 0.3).  A direction that never falls below half is top to the
+        end, and beyond (its last value holds)."""
+        return self._main_lobe(offsets) >= _TOP
 
     def __call__(self, offsets: FloatArray) -> FloatArray:
         """Relative metric at ``offsets`` [deg] from the peak, shape ``(..., 2)`` ->
@@ -164,8 +171,10 @@ def fit_template(
     units), a Gaussian prior on E₀ of relative σ :data:`_PEAK_PRIOR` — it breaks the
     tail's trade between the peak's energy and its distance (a lobe 10× stronger twice as
     far looks alike); None: no prior.  ``previous`` [deg] (2,): the peak of the previous
-    fit, kept (refined on the fine grid around it) unless the best peak fits better by
-    more than :data:`_KEEP` in χ².  None when no point carries weight or none of the
+    fit, kept — refined on the fine grid within the coarse step of it, so along a curve of
+    equally good peaks it moves at most that far per fit — unless the best peak fits
+    better by more than :data:`_KEEP` in χ²; ignored when farther than ``radius`` from
+    ``around``.  None when no point carries weight or none of the
     best coarse candidates gives a positive E₀.
     """
     ok = np.isfinite(values) & (sigmas > 0.0)
@@ -185,7 +194,7 @@ def fit_template(
     best = int(np.argmin(np.where(energy > 0.0, chi2, np.inf)))
     if not energy[best] > 0.0:
         return None
-    if previous is not None:
+    if previous is not None and np.hypot(*(previous - around)) <= radius:
         near = _disc_grid(np.asarray(previous, dtype=np.float64), step, _FINE)
         kept = _scores(template, near, x, y, w, prior)
         k = int(np.argmin(np.where(kept[1] > 0.0, kept[0], np.inf)))

@@ -29,22 +29,13 @@ Algorithm (one measurement per iteration after a 7-point initial design):
 5. ``recommend()`` returns x* (the model's maximum) when the model is
    concave and supported, else the incumbent.
 
-With the probe's lobe (``lobe_template``: the simulated probe's pseudo-energy versus
-misalignment, :mod:`echocal.calibrate.lobe_template`) the steps from the lobe's tail
-follow the lobe instead: a diffraction lobe's tail is not Gaussian (the 5 MHz probe's
-falls to 0.035 of the peak 0.9° out and then only slowly), so a quadratic fitted to it
-sees a lobe twice as broad.  The template is fitted to every measurement (the peak and
-its energy; for the simulator the peak's energy is known to 25 %, which breaks the
-tail's trade between a strong far peak and a weak near one) and, while no measurement
-lies on the lobe's top, the next point is its fitted peak; then, until 6 measurements
-lie on the top and the quadratic's maximum agrees with the template's, points go on the
-flanks around the template's peak and ``recommend()`` returns it.  Evidence
-(``benchmarks/bench_calibration.py``, 100 runs): from 1–3° at 30 dB, within 0.05° after
-15 measurements in 91 % of runs without, 100 % with it; from 5–20° at 30 dB the median
-to 0.1° went from 29 to 22 measurements and the 99th percentile from 50 to 31.  A warm
-start whose history the template already fits (a far detection handed on by the
-acquisition) steps to the fitted peak at once, without measuring the design hexagon
-around x0 first (same 40 far runs: median 22 → 19, 90th percentile 27 → 23).
+With the probe's lobe (``lobe_template``) the steps from the lobe's tail follow the lobe
+instead, and the recommendation is its fitted peak until the quadratic takes over (a
+diffraction lobe's tail is not Gaussian; :mod:`echocal.calibrate.template_steps` gives the
+rule and its evidence).  A warm start whose history
+the template already fits (a far detection handed on by the acquisition) steps to the
+fitted peak at once, without measuring the design hexagon around x0 first (same 40 far
+runs: median 22 → 19, 90th percentile 27 → 23).
 
 ``space="linear"`` fits f itself with equal weights instead (for objectives
 that can be negative).
@@ -202,7 +193,8 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
         already has 6 points within 2 × radius of x0, or that the lobe's template already
         fits (a far detection handed on by the acquisition: its fitted peak is the first
         step).  The template is fitted around x0 here and again around the refit's
-        incumbent by the first model update."""
+        incumbent by the first model update, which keeps this fit's peak unless the data
+        clearly prefer another."""
         if len(self._x):
             near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius
             if np.count_nonzero(near) >= 6:

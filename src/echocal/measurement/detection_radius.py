@@ -129,8 +129,8 @@ class LobeProfile:
         :class:`~echocal.calibrate.lobe_template.LobeTemplate` centred on the peak — or
         None when the peak is not at normal incidence (a large probe over a curved part:
         two humps), where the template's peak is not the echo's.  A ring around the peak
-        (the 12.7 mm probe's near field over a ball: a dip to 0.33 of the peak 0.8° out,
-        a ring at 0.82 at 1.6°) is part of the template: the fit tells the ring from the
+        (the 12.7 mm probe's near field over a ball: a dip to about 0.3 of the peak 0.8° out,
+        a ring at about 0.8 at 1.6°) is part of the template: the fit tells the ring from the
         peak, and ``model-based`` counts only the main lobe as the top.
         ``absolute``: the template's ``peak`` is normal incidence's noiseless
         pseudo-energy (for a source measured in this setup's own units).  The lobe ends
