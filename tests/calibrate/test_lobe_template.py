@@ -208,8 +208,9 @@ def _ring(angles: np.ndarray) -> np.ndarray:
 
 
 def test_no_template_for_a_lobe_that_does_not_peak_at_normal_incidence(plate):
-    """Two humps off normal incidence (a large probe over a rod) are not one peak; a ring
-    around the peak (its near field over a ball) is part of the template."""
+    """Two humps off normal incidence (a large probe over a rod) are not one peak, and a
+    side lobe below half the peak gets no template; a ring above half of it (the probe's
+    near field over a ball) is part of the template."""
     setup = plate[0]
     angles = np.arange(0.0, 3.0, 0.1)
     humps = np.exp(-0.5 * ((angles - 1.5) / 0.4) ** 2) + 0.8
@@ -218,6 +219,9 @@ def test_no_template_for_a_lobe_that_does_not_peak_at_normal_incidence(plate):
     ring = _ring(angles)
     ringed = LobeProfile(setup, angles, ring[None, :], np.zeros(4), ring[None, :])
     assert ringed.energy_template().values == pytest.approx(ring[None, :] / ring[0])
+    side = np.exp(-0.5 * (angles / 0.3) ** 2) + 0.21 * np.exp(-0.5 * ((angles - 1.6) / 0.3) ** 2)
+    side_lobed = LobeProfile(setup, angles, side[None, :], np.zeros(4), side[None, :])
+    assert side_lobed.energy_template() is None  # rises by 0.21, to 0.21 < half the peak
     single = np.exp(-0.5 * (angles / 0.4) ** 2)
     template = LobeProfile(setup, angles, single[None, :], np.zeros(4), 3.0 * single[None, :])
     assert template.energy_template().values == pytest.approx(single[None, :])
