@@ -97,13 +97,25 @@ class LobeTemplate:
         return first_crossing(self.angles, self.values.mean(axis=0), float(np.exp(-0.5)))
 
     @cached_property
+    def _fallen(self) -> np.ndarray:
+        """Shape ``(k, n)``: True from each direction's first value below half the peak on
+        (past the main lobe)."""
+        return np.minimum.accumulate(self.values, axis=1) < _TOP
+
+    @cached_property
+    def side_lobe(self) -> float:
+        """The highest relative value past the main lobe (from each direction's first value
+        below half the peak on): below half for a lobe without a ring, the ring's height
+        for one (0.82 for the 12.7 mm probe's near field over a ball)."""
+        return float(self.values[self._fallen].max(initial=0.0))
+
+    @cached_property
     def _main_lobe(self) -> LobeTemplate:
         """The template with each direction's values set to 0 beyond its first value below
         half the peak (kept, so the edge interpolates as before): the main lobe alone, a
         ring beyond a dip removed."""
-        fallen = np.minimum.accumulate(self.values, axis=1) < _TOP
-        beyond = np.zeros_like(fallen)
-        beyond[:, 1:] = fallen[:, :-1]
+        beyond = np.zeros_like(self._fallen)
+        beyond[:, 1:] = self._fallen[:, :-1]
         return LobeTemplate(self.angles, self.directions, np.where(beyond, 0.0, self.values))
 
     def on_top(self, offsets: FloatArray) -> np.ndarray:
@@ -195,7 +207,7 @@ def fit_template(
     if not energy[best] > 0.0:
         return None
     if previous is not None and np.hypot(*(previous - around)) <= radius:
-        near = _disc_grid(np.asarray(previous, dtype=np.float64), step, _FINE)
+        near = _disc_grid(previous, step, _FINE)
         kept = _scores(template, near, x, y, w, prior)
         k = int(np.argmin(np.where(kept[1] > 0.0, kept[0], np.inf)))
         if kept[1][k] > 0.0 and kept[0][k] <= chi2[best] + _KEEP:

@@ -89,7 +89,6 @@ class TemplateSteps:
         self._template: LobeTemplate | None = None
         self._template_asked = False
         self._tfit: TemplateFit | None = None
-        self._last_peak: FloatArray | None = None  # the last fit's peak, kept on ties
         self._n_top = 0  # measurements on the fitted template's top
         self._quadratic_on_top = False  # the log-quadratic has taken over from the template
 
@@ -103,6 +102,7 @@ class TemplateSteps:
         clearly prefer another (``fit_template``'s ``previous``).  Log space only, with a
         live noise model; the prior on the peak's energy only when the values keep the
         objective's units (``normalize="none"``)."""
+        previous = None if self._tfit is None else self._tfit.centre  # kept on ties
         self._tfit, self._n_top = None, 0
         if self._quadratic_on_top or self.space != "log" or not len(self._x):
             return
@@ -119,15 +119,14 @@ class TemplateSteps:
         known = template.peak is not None and self.normalize == "none"
         peak = template.peak / self._scale if known and template.peak is not None else None
         fit = fit_template(
-            template, self._x, y, sig, self._incumbent, self.max_radius, peak, self._last_peak
+            template, self._x, y, sig, self._incumbent, self.max_radius, peak, previous
         )
-        self._last_peak = None  # only an accepted fit's peak is kept: not one fitted to noise
         if fit is None or fit.measured < REFUTE * fit.energy_sigma:  # the data's own evidence
             return
         if len(y) >= 7 and fit.chi2 > _TEMPLATE_MISFIT * (len(y) - 3):
             self._template = None  # refuted: this lobe is not the probe's, for the whole run
             return
-        self._tfit, self._last_peak = fit, fit.centre
+        self._tfit = fit  # only an accepted fit's peak is kept next time: not one of noise
         self._n_top = int(np.count_nonzero(template.on_top(self._x - fit.centre)))
 
     def _template_step(self) -> FloatArray | None:

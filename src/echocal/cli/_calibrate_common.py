@@ -260,8 +260,8 @@ _API_ONLY = {
     "noise_model": "is the source objective's live noise estimate, supplied automatically; "
     "to replace it with another Python callable use the Python API",
     "lobe_template": "is the simulated probe's lobe, supplied automatically from the setup "
-    "(a lobe that peaks off normal incidence, in two humps, gives none); to replace or turn it off "
-    "(lobe_template=None) use the Python API",
+    "(none where the lobe peaks off normal incidence or has a side lobe below half its "
+    "peak); to replace or turn it off (lobe_template=None) use the Python API",
     "replan": "is the source objective's search plan for the echo it predicts against the "
     "measured noise, supplied automatically; to turn it off give --option fine_radius=3 "
     "(or set passes), to replace it use the Python API",

@@ -97,9 +97,8 @@ _PEAK_AT_NORMAL = 1.01
 """A lobe whose pseudo-energy exceeds normal incidence's by more than this factor
 somewhere does not peak at normal incidence (see :meth:`LobeProfile.energy_template`)."""
 _RING = 0.1
-_HALF = 0.5
-"""A lobe that rises again by more than ``_RING`` of its peak after falling has a ring;
-one whose ring stays below ``_HALF`` of the peak gets no template (see
+"""A lobe that rises again by more than this fraction of its peak after falling has a side
+lobe; one that stays below half the peak gets no template (see
 :meth:`LobeProfile.energy_template`)."""
 _CACHE_SIZE = 16
 """Lobe profiles kept per process (least recently used dropped first)."""
@@ -149,15 +148,14 @@ class LobeProfile:
         top = float(np.mean(self.energies[:, 0]))
         if not top > 0.0 or float(self.energies.max()) > _PEAK_AT_NORMAL * top:
             return None
-        rise = self.energies - np.minimum.accumulate(self.energies, axis=1)
-        past = np.minimum.accumulate(self.energies, axis=1) < _HALF * top  # the main lobe's
-        ring = float(self.energies[past].max(initial=0.0))  # highest value beyond it
-        if float(rise.max()) > _RING * top and ring < _HALF * top:
-            return None
         phi = np.linspace(0.0, 2.0 * np.pi, len(self.energies), endpoint=False)
-        return LobeTemplate(
+        template = LobeTemplate(
             self.angles.copy(), phi, self.energies / top, peak=top if absolute else None
         )
+        rise = template.values - np.minimum.accumulate(template.values, axis=1)
+        if float(rise.max()) > _RING and template.side_lobe < 0.5:
+            return None  # a side lobe that holds no climber
+        return template
 
     def detection_probability(self, snr_db: float, threshold: float = ECHO_THRESHOLD) -> np.ndarray:
         """P_detect(θ), shape ``(directions, n)``, for an echo whose best A-scan here has
