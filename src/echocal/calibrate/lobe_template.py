@@ -97,10 +97,21 @@ class LobeTemplate:
         return first_crossing(self.angles, self.values.mean(axis=0), float(np.exp(-0.5)))
 
     @cached_property
+    def _running_min(self) -> np.ndarray:
+        """Shape ``(k, n)``: each direction's lowest relative value so far, outward."""
+        return np.minimum.accumulate(self.values, axis=1)
+
+    @cached_property
     def _fallen(self) -> np.ndarray:
         """Shape ``(k, n)``: True from each direction's first value below half the peak on
         (past the main lobe)."""
-        return np.minimum.accumulate(self.values, axis=1) < _TOP
+        return self._running_min < _TOP
+
+    @cached_property
+    def rise(self) -> float:
+        """The most the lobe rises again, relative to its peak, after falling in any
+        direction (0 for a lobe that only falls)."""
+        return float((self.values - self._running_min).max())
 
     @cached_property
     def side_lobe(self) -> float:

@@ -152,8 +152,7 @@ class LobeProfile:
         template = LobeTemplate(
             self.angles.copy(), phi, self.energies / top, peak=top if absolute else None
         )
-        rise = template.values - np.minimum.accumulate(template.values, axis=1)
-        if float(rise.max()) > _RING and template.side_lobe < 0.5:
+        if template.rise > _RING and template.side_lobe < 0.5:
             return None  # a side lobe that holds no climber
         return template
 
