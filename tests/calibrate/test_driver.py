@@ -290,6 +290,22 @@ def test_the_recorded_options_are_the_effective_ones_and_plain_json(gauss_object
     json.dumps(res.to_dict())  # every entry serializable
 
 
+def test_the_objectives_resolution_reaches_the_local_method(gauss_objective, monkeypatch):
+    """A replay's grid step (:meth:`Objective.resolution`) reaches model-based however it
+    runs — alone, behind an acquisition phase, inside ``auto`` — unless given; a method
+    that has no such option never sees it."""
+    monkeypatch.setattr(FunctionObjective, "resolution", lambda self: 0.5)
+    run = {"max_iter": 2, "rng": 0}
+    assert calibrate(gauss_objective(), "model-based", x0=X0, **run).options["resolution"] == 0.5
+    wrapped = calibrate(gauss_objective(), "model-based", x0=X0, acquire=True, **run)
+    assert wrapped.options["resolution"] == 0.5
+    auto = calibrate(gauss_objective(), "auto", x0=X0, **run)
+    assert auto.options["local_options"]["resolution"] == 0.5
+    given = calibrate(gauss_objective(), "auto", x0=X0, local_options={"resolution": 2.0}, **run)
+    assert given.options["local_options"]["resolution"] == 2.0
+    assert "resolution" not in calibrate(gauss_objective(), "gradient", x0=X0, **run).options
+
+
 @pytest.mark.parametrize(
     ("method", "option"),
     [

@@ -294,3 +294,77 @@ def test_a_warm_start_is_fitted_before_the_first_step():
         proposals.append(opt.ask()[0])
     np.testing.assert_allclose(proposals, [proposals[0]] * 5)
     assert np.hypot(*(proposals[0] - peak)) < 0.6 * np.hypot(*(x0 - peak))
+
+
+def _two_hump_ridge(points: np.ndarray) -> np.ndarray:
+    """A rod's lobe under a 12.7 mm probe, in closed form: a ridge 0.35° wide (σ) across
+    (x), along which two equal Gaussian humps (σ 1.1°) stand 3° apart, the saddle between
+    them at 2·e^{−(1.5/1.1)²/2} ≈ 0.79 of a hump (the rod's: 0.79)."""
+    x, y = points.T
+    along = np.exp(-(y**2) / (2 * 1.1**2)) + np.exp(-((y - 3.0) ** 2) / (2 * 1.1**2))
+    return np.exp(-(x**2) / (2 * 0.35**2)) * along
+
+
+@pytest.mark.parametrize("two_humps", [True, False])
+def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkeypatch):
+    """Issue 19 (the rod with the 12.7 mm probe): a log-quadratic fitted 4° around one of
+    two equal humps spans both and the saddle; its maximum lies between them. The
+    residuals' χ² (each over its measurement's noise) exceeds the 99.9 % quantile, so
+    the neighbourhood halves until it fits, and the fitted maximum is a hump's (either is
+    the optimum). A single hump fits: the neighbourhood stays whole. Without the test (its
+    quantile at 1), the two-hump fit ends ≥ 0.25° along the ridge."""
+    from echocal.calibrate import model_based
+    from echocal.calibrate.evidence import energy_sigma
+
+    rng = np.random.default_rng(3)
+    floor, sigma = 0.05, 0.004  # the noise's mean energy and its σ [energy units]
+    pts = np.column_stack([rng.uniform(-0.6, 0.6, 120), rng.uniform(-2.0, 4.0, 120)])
+    one_hump = np.exp(-(pts[:, 0] ** 2) / (2 * 0.35**2) - pts[:, 1] ** 2 / (2 * 1.1**2))
+    clean = _two_hump_ridge(pts) if two_humps else one_hump
+    noisy = clean + floor + energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(120)
+
+    def fitted(quantile: float) -> ModelBased:
+        monkeypatch.setattr(model_based, "_LACK_OF_FIT", quantile)
+        return ModelBased(
+            np.array([0.05, 0.2]), history=(pts, noisy), noise_model=lambda: (floor, sigma)
+        )
+
+    opt = fitted(0.999)
+    peak = opt._supported_max()
+    assert peak is not None
+    replay = ModelBased(  # a replay's interpolated values: lack of fit is not tested
+        np.array([0.05, 0.2]),
+        history=(pts, noisy),
+        noise_model=lambda: (floor, sigma),
+        resolution=0.5,
+    )
+    assert replay._fit_radius() == pytest.approx(4.0)
+    if not two_humps:
+        assert opt._fit_radius() == pytest.approx(4.0)
+        assert np.hypot(*peak) < 0.05
+        return
+    line = np.column_stack([np.zeros(3001), np.linspace(-1.0, 1.5, 3001)])
+    first = line[np.argmax(_two_hump_ridge(line))]  # pulled 0.04° inward by the other
+    humps = np.array([first, [0.0, 3.0 - first[1]]])
+    assert opt._fit_radius() <= 1.0 + 1e-12
+    assert np.min(np.hypot(*(humps - peak).T)) < 0.05  # either hump is the optimum
+    blind = fitted(1.0)._supported_max()
+    assert blind is None or np.min(np.hypot(*(humps - blind).T)) > 0.25
+
+
+def test_a_neighbourhood_too_small_to_fit_widens_again():
+    """A neighbourhood shrunk to 0.5° around the incumbent with no measurement in it (the
+    steps went 1° out) left the model None for the rest of a run over the rod: the
+    incumbent became the luckiest raw sample and the steps circled it for 60
+    measurements. It now widens until a fit exists."""
+    rng = np.random.default_rng(1)
+    ang = rng.uniform(0.0, 2.0 * np.pi, 30)
+    pts = np.column_stack([np.cos(ang), np.sin(ang)]) * rng.uniform(1.0, 2.5, (30, 1))
+    vals = np.exp(-np.sum((pts - [0.3, 0.1]) ** 2, axis=1) / (2 * 1.2**2))
+    opt = ModelBased(np.zeros(2), history=(pts, vals), noise_model=lambda: (0.0, 0.01), rng=0)
+    opt._loc_scale = 0.125  # a fitting radius of 0.5°: no measurement inside
+    opt._incumbent = np.zeros(2)
+    opt._refit()
+    assert opt.model is not None
+    assert opt._fit_radius() >= 1.0
+    np.testing.assert_allclose(opt._supported_max(), [0.3, 0.1], atol=0.02)

@@ -170,6 +170,7 @@ def test_simulator_reaches_the_optimum(
     result, objective = calibrate_on(make_setup(3), x0, bounds)
     assert error(result, truth) < NOISE_TOL
     assert result.n_measurements == objective.n_measurements <= BUDGET
+    assert objective.resolution() is None and result.options["resolution"] is None
 
 
 @pytest.mark.parametrize("mode", ["interpolate", "nearest"])
@@ -177,7 +178,12 @@ def test_replay_reaches_the_optimum(
     recording: Path, truth: np.ndarray, x0: np.ndarray, bounds: np.ndarray, mode: str
 ) -> None:
     with ReplaySource.open(recording, mode=mode) as source:
-        result, _ = calibrate_on(source, x0, bounds)
+        result, objective = calibrate_on(source, x0, bounds)
+    # the method knows it runs on a grid: the largest step between neighbouring recorded
+    # beams in tilt angles: COEL_STEP along a meridian (shorter along a parallel), which
+    # tilt angles stretch by up to 2.5 % this far (27°) off the axis
+    resolution = objective.resolution()
+    assert result.options["resolution"] == resolution == pytest.approx(COEL_STEP, rel=0.04)
     # The replay knows the objective only on the grid: "nearest" is constant on each cell,
     # so its maximizer is known to half a cell diagonal; bilinear interpolation does no
     # worse.  In tilt space a cell is COEL_STEP by AZ_STEP * sin(coelevation) (<= 0.41 deg

@@ -162,6 +162,41 @@ def test_interpolated_energy_peaks_near_the_true_normal(clean_file: Path) -> Non
         assert np.unravel_index(np.argmax(grid), grid.shape) == (3, 3)
 
 
+def _great_circle(az0, co0, az1, co1) -> np.ndarray:
+    """[deg] the angle between the beams (az0, co0) and (az1, co1) (spherical law of
+    cosines, written here independently of echocal.geometry)."""
+    a0, c0, a1, c1 = np.deg2rad([az0, co0, az1, co1])
+    cos = np.cos(c0) * np.cos(c1) + np.sin(c0) * np.sin(c1) * np.cos(a1 - a0)
+    return np.rad2deg(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def test_grid_step_is_the_largest_step_between_neighbouring_beams(clean_file: Path) -> None:
+    """In (azimuth, co-elevation) the step is the larger axis step (10°); in tilt angles
+    — a gimbal's, close to the angle between beams — the largest angle between
+    neighbouring recorded beams: the 5° co-elevation step (an azimuth step of 10° at
+    |co-elevation| ≤ 10° is ≤ 1.74° apart).  2 % covers the tilt angles' departure from
+    arc length within 10° of the axis."""
+    with ReplaySource.open(clean_file) as replay:
+        assert replay.grid_step("azimuth-coelevation") == 10.0
+        az, co = np.meshgrid(replay.azimuths, replay.coelevations, indexing="ij")
+        along_az = _great_circle(az[:-1], co[:-1], az[1:], co[1:])
+        along_co = _great_circle(az[:, :-1], co[:, :-1], az[:, 1:], co[:, 1:])
+        widest = max(along_az.max(), along_co.max())
+        assert widest == pytest.approx(5.0)
+        assert replay.grid_step("tilt") == pytest.approx(widest, rel=0.02)
+        with pytest.raises(UnknownNameError, match="parameterization"):
+            replay.grid_step("polar")
+
+
+def test_a_single_orientation_has_no_grid_step(tmp_path: Path) -> None:
+    grid = RecordingGrid.regular(
+        azimuth=(0.0, 0.0, 1), coelevation=(5.0, 5.0, 1), positions=[(0, 0, 0.02)]
+    )
+    path = record(GaussianEchoSource(), grid, tmp_path / "one.nc", progress=False)
+    with ReplaySource.open(path) as replay:
+        assert replay.grid_step("tilt") is None
+
+
 def test_closed_source_refuses(clean_file: Path) -> None:
     replay = ReplaySource.open(clean_file)
     replay.close()

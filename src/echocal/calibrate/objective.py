@@ -206,6 +206,11 @@ class Objective:
         None (the base class: an analytic function has no probe)."""
         return None
 
+    def resolution(self) -> float | None:
+        """[deg] the finest detail the values resolve — a replay's recorded grid step in
+        this objective's angles — or None when they are continuous (the base class)."""
+        return None
+
     def cost(self, n_points: int) -> int:
         """Measurements needed to evaluate ``n_points`` points (``n_points * repeats``)."""
         return int(n_points) * self.repeats

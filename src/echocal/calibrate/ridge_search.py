@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.local_model import REFUTE, REFUTE_RELATIVE, QuadraticModel, hexagon
 
-__all__ = ["RidgeSearch"]
+__all__ = ["RidgeSearch", "is_ridge"]
 
 _RIDGE_RATIO = 1.6
 """A fitted peak whose widths differ by this factor is a ridge: search across it once."""
@@ -40,6 +40,13 @@ plate's lobe, fitted as a ridge from noisy data, fell to 0.08 of the top 0.9° o
 both sides and the search went on to 2.4° (12 measurements, far start at 30 dB)."""
 _BUMP_RADIUS = 0.35
 """[× radius] the hexagon measured around a bump of the search across a ridge."""
+
+
+def is_ridge(model: QuadraticModel) -> bool:
+    """Whether ``model`` is a concave peak whose widths differ by :data:`_RIDGE_RATIO` or
+    more: steep across, flat along."""
+    eig = np.linalg.eigvalsh(-model.H)  # ascending curvature
+    return bool(eig[0] > 0.0 and eig[1] / eig[0] >= _RIDGE_RATIO**2)
 
 
 class RidgeSearch:
@@ -95,9 +102,9 @@ class RidgeSearch:
         model started beyond the dip climbs the ring, on which it is a ridge — steep across
         (the radius), flat along it — and the centre lies across it.  The side where the
         data fall below the model (the dip) is searched first, alternating sides."""
-        eig, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
-        if eig[0] <= 0.0 or eig[1] / eig[0] < _RIDGE_RATIO**2:
+        if not is_ridge(m):
             return None
+        _, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
         e = vec[:, 1]
         s = (self._x - xs) @ e
         t = (self._x - xs) @ vec[:, 0]

@@ -63,6 +63,12 @@ class BaseSource:
     def close(self) -> None:
         """Nothing to release by default."""
 
+    def grid_step(self, parameterization: str) -> float | None:
+        """[deg] the finest detail this source's measurements resolve in the calibration's
+        angles (``parameterization``): a replay's recorded grid step.  None by default: a
+        simulator or a rig measures any pose as it is."""
+        return None
+
     def reseed(self, rng: RngLike) -> None:
         """Restart the source's random stream (simulated noise, random repeats) from
         ``rng`` — so a job can give each of its parts numbers of their own, the same when

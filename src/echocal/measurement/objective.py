@@ -306,6 +306,13 @@ class SourceObjective(Objective):
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
 
+    def resolution(self) -> float | None:
+        """[deg] the source's grid step in this objective's angles (a replay's,
+        :meth:`~echocal.measurement.replay.ReplaySource.grid_step`), None for a simulator
+        or a rig."""
+        grid_step = getattr(self.source, "grid_step", None)
+        return None if grid_step is None else grid_step(self.parameterization)
+
     def noise_estimate(self) -> tuple[float | None, float | None]:
         """Live ``(noise_floor, noise_sigma)`` of the metric, measured from the A-scans.
 

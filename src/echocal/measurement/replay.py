@@ -62,7 +62,7 @@ from echocal._rng import RngLike, as_generator
 from echocal._validate import one_of, positive_float
 from echocal.ascan import AScan
 from echocal.errors import DataFileError, LimitError
-from echocal.geometry import Pose
+from echocal.geometry import PARAMETERIZATIONS, Pose, orientation_to_tilt
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
 from echocal.netcdf import open_netcdf
@@ -328,6 +328,19 @@ class ReplaySource(BaseSource):
                     )
             self._metric_cache[key] = out
         return self._metric_cache[key]
+
+    def grid_step(self, parameterization: str) -> float | None:
+        """[deg] the largest step between neighbouring recorded orientations, in the angles
+        of ``parameterization`` (``"azimuth-coelevation"`` or ``"tilt"``): below it the
+        replay shows the recording's grid (facets, or steps in ``"nearest"`` mode), not the
+        lobe.  None for a recording of a single orientation."""
+        one_of("parameterization", parameterization, PARAMETERIZATIONS)
+        az, co = np.meshgrid(self.azimuths, self.coelevations, indexing="ij")
+        if parameterization == "tilt":
+            az, co = orientation_to_tilt(az, co)
+        angles = np.stack([az, co], axis=-1)  # (n_azimuth, n_coelevation, 2)
+        steps = [np.hypot(*np.diff(angles, axis=k).reshape(-1, 2).T) for k in (0, 1)]
+        return max((float(s.max()) for s in steps if s.size), default=None)
 
     def interpolated_metric(self, pose: Pose, metric: Callable[[AScan], float]) -> float:
         """Bilinear interpolation at ``pose`` of :meth:`metric_grid` (nearest position).
