@@ -308,7 +308,7 @@ class SourceObjective(Objective):
 
     def resolution(self) -> float | None:
         """[deg] the source's grid step in this objective's angles (a replay's,
-        :meth:`~echocal.measurement.replay.ReplaySource.grid_step`), None for a simulator
+        :meth:`~echocal.measurement.ReplaySource.grid_step`), None for a simulator
         or a rig."""
         grid_step = getattr(self.source, "grid_step", None)
         return None if grid_step is None else grid_step(self.parameterization)
