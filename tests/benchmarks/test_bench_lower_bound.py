@@ -40,6 +40,29 @@ def test_the_bound_is_the_annulus_over_the_seen_area(bench):
     assert bench.detection_bound((0.0, 1.0), math.pi * 4.0) == 1
 
 
+def test_the_best_lattice_covers_a_disc_of_radius_2_with_7_sure_discs_of_radius_1(bench):
+    """Hand-checked: 7 discs of radius 1 cover a disc of radius 2 (the centre and six at
+    √3, a hexagonal lattice) and 6 cannot (the classical covering result), so a measurement
+    that detects surely within 1° and never beyond needs 7 lattice points to detect 99 % of
+    optima within 2°; within 1°, one."""
+    angles = np.arange(0.0, 3.0 + 5e-4, 1e-3)
+    sure = (angles <= 1.0).astype(float)
+    n, spacing = bench.lattice_search((0.0, 2.0), angles, sure, samples=4000)
+    assert n == 7 and math.sqrt(3.0) * 0.95 <= spacing <= 2.0
+    assert bench.lattice_search((0.0, 1.0), angles, sure, samples=4000)[0] == 1
+
+
+@pytest.mark.parametrize("width", [0.7, 1.0, 1.5])
+def test_no_lattice_beats_the_union_bound(bench, width):
+    """The union bound holds for every placement, so the best lattice spends at least as
+    many measurements (soft Gaussian detection curves of three widths [deg])."""
+    angles = np.arange(0.0, 6.0 + 1e-3, 0.01)
+    prob = np.exp(-0.5 * (angles / width) ** 2)
+    band = (1.0, 4.0)
+    n, _ = bench.lattice_search(band, angles, prob, samples=4000)
+    assert bench.detection_bound(band, bench.seen_area(angles, prob)) <= n < math.inf
+
+
 def test_lower_bound_smoke_runs_and_reports(tmp_path):
     out_md = tmp_path / "lb.md"
     proc = subprocess.run(
