@@ -313,7 +313,7 @@ def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkey
     the neighbourhood halves until it fits, and the fitted maximum is a hump's (either is
     the optimum). A single hump fits: the neighbourhood stays whole. Without the test (its
     quantile at 1), the two-hump fit ends ≥ 0.25° along the ridge."""
-    from echocal.calibrate import model_based
+    from echocal.calibrate import fit_neighbourhood
     from echocal.calibrate.evidence import energy_sigma
 
     rng = np.random.default_rng(3)
@@ -324,7 +324,7 @@ def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkey
     noisy = clean + floor + energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(120)
 
     def fitted(quantile: float) -> ModelBased:
-        monkeypatch.setattr(model_based, "_LACK_OF_FIT", quantile)
+        monkeypatch.setattr(fit_neighbourhood, "_LACK_OF_FIT", quantile)
         return ModelBased(
             np.array([0.05, 0.2]), history=(pts, noisy), noise_model=lambda: (floor, sigma)
         )
@@ -368,3 +368,27 @@ def test_a_neighbourhood_too_small_to_fit_widens_again():
     assert opt.model is not None
     assert opt._fit_radius() >= 1.0
     np.testing.assert_allclose(opt._supported_max(), [0.3, 0.1], atol=0.02)
+
+
+def test_the_smallest_neighbourhood_follows_its_fitted_maximum():
+    """The rod with the 12.7 mm probe at 30 dB, run 18, in closed form: a neighbourhood
+    shrunk to its smallest (0.5°) around a point 0.36° down a hump fits the hump's top
+    near its edge; the incumbent (the next fit's centre) was chosen among the fitted
+    points only — here (0, −0.28), 0.28° from the top — so the refinement points
+    around the top, outside the neighbourhood, were never fitted.  It now moves to the
+    measured echo nearest the fitted maximum, (0.1, 0.15)."""
+
+    def hump(p: np.ndarray) -> np.ndarray:
+        return np.exp(-(p[:, 0] ** 2) / (2 * 0.35**2) - p[:, 1] ** 2 / (2 * 1.1**2))
+
+    flank = np.array([0.0, -0.36])
+    ang = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+    cluster = flank + 0.08 * np.column_stack([np.cos(ang), np.sin(ang)])
+    ring = np.array([[0.3, 0.0], [-0.3, 0.0], [0.0, -0.3], [0.0, 0.3]])
+    pts = np.vstack([flank, cluster, ring, [[0.1, 0.15]]])
+    opt = ModelBased(flank, history=(pts, hump(pts)), rng=0)
+    opt._loc_scale = 0.125  # 4 x 1 deg x 0.125: the smallest neighbourhood, 0.5 deg
+    opt._incumbent = flank.copy()
+    opt._refit()
+    np.testing.assert_allclose(opt.model.argmax(), [0.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(opt._incumbent, [0.1, 0.15])

@@ -14,8 +14,9 @@ Algorithm (one measurement per iteration after a 7-point initial design):
    second-order design; skipped where a warm-start ``history`` already covers x0).
 2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to the points so far within a
    neighbourhood of the incumbent (``locality``), which halves where a measurement
-   refutes the fit or a ridge's residuals lack fit (:meth:`ModelBased._lacks_fit`: a
-   rod's two humps) and widens again where too few points remain to fit.
+   refutes the fit or a ridge's residuals lack fit (a rod's two humps), widens again
+   where too few points remain to fit, and at its smallest follows its fitted maximum
+   (:mod:`~echocal.calibrate.fit_neighbourhood`).
 3. Approach: if the model's maximum x* is not yet inside the trust region
    around the incumbent (the measured point with the highest *model* value,
    never the luckiest raw sample), measure the maximizer of m in the ball of
@@ -50,7 +51,6 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
 
 from echocal._rng import RngLike
 from echocal._validate import one_of
@@ -58,6 +58,7 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
+from echocal.calibrate.fit_neighbourhood import MIN_FIT, FitNeighbourhood
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.local_model import (
     REFUTE,
@@ -69,7 +70,7 @@ from echocal.calibrate.local_model import (
 )
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
-from echocal.calibrate.ridge_search import RidgeSearch, is_ridge
+from echocal.calibrate.ridge_search import RidgeSearch
 from echocal.calibrate.template_steps import TemplateSteps
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
@@ -83,15 +84,8 @@ _SAME_POINT = 0.01
 """[× radius] proposals this close count as the same point (measured twice: look elsewhere)."""
 _MAX_SHRINK = 4
 """At most this many halvings of the fitting neighbourhood per refit."""
-_MIN_FIT = 0.5
-"""[× radius] the smallest fitting neighbourhood (the central peak over a ball is 0.3°
-wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
-_LACK_OF_FIT = 0.999
-"""A fit whose residuals' χ² exceeds this quantile lacks fit: its neighbourhood halves."""
 _LACK_OF_FIT_RADIUS = 1.0
 """[× radius] lack of fit shrinks the fitting neighbourhood down to this radius, no less."""
-_LACK_OF_FIT_MIN = 12
-"""Fewer fitted measurements than this are not tested for lack of fit (6 parameters)."""
 _RING_REACH = 0.7
 """[× the fitting neighbourhood] the farthest a refinement point goes from the fitted
 maximum: beyond the neighbourhood it would not be fitted."""
@@ -106,7 +100,7 @@ so the trust radius grows and the steps explore."""
 
 
 @register_method("model-based")
-class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
+class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     """Trust-region ascent on a log-quadratic model of all measurements (1 per iteration).
 
     Parameters
@@ -244,9 +238,9 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
 
     def _fit_radius(self) -> float:
         """[deg] the fitting neighbourhood's radius: ``locality`` × max(radius, trust),
-        shrunk (never below ``_MIN_FIT`` × radius) where the data refuted the model."""
+        shrunk (never below ``MIN_FIT`` × radius) where the data refuted the model."""
         return max(
-            self.locality * max(self.radius, self._trust) * self._loc_scale, _MIN_FIT * self.radius
+            self.locality * max(self.radius, self._trust) * self._loc_scale, MIN_FIT * self.radius
         )
 
     def _sigmas(self, values: FloatArray) -> FloatArray | None:
@@ -304,37 +298,6 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
         idx = np.flatnonzero(refuted)
         return int(idx[np.argmax(mean[group][idx])])
 
-    def _lacks_fit(self, model: QuadraticModel, y_all: FloatArray) -> bool:
-        """Whether a ridge's measurements in the fitted neighbourhood scatter about the
-        model by clearly more than their noise: χ² of the residuals (each over its
-        measurement's σ) above the ``_LACK_OF_FIT`` quantile of χ² with n − 6 degrees of
-        freedom (log space with a known noise, a ridge's fit only: a plate's round lobe
-        at 10 dB, whose diffraction tails a log-quadratic fits only roughly, lost runs to
-        the test — 7 of 100 slower, one 11 → 66 measurements).
-
-        Over a rod a 12.7 mm probe's lobe is a ridge with two humps 3° apart and a saddle
-        at 0.79 between; a quadratic fitted 4° around either hump spans all three, its
-        maximum drifts along the ridge (0.1–0.3° off for 60 measurements at 10 dB; traced:
-        residuals of 12 % of the fitted energy where the noise is 4.5 % of the peak).
-
-        Not on a replay (a ``resolution``): between its grid points the values are
-        interpolated, and their error, which the noise does not include, lacks fit at any
-        scale (the thesis block replayed from a 2° grid ended 1.09° off, not 0.30°)."""
-        if self.space != "log" or self.resolution is not None or not is_ridge(model):
-            return False
-        local = np.hypot(*(self._x - model.center).T) <= self._fit_radius()
-        n = int(np.count_nonzero(local))
-        sig = self._sigmas(np.maximum(y_all[local], 0.0))
-        if sig is None or n <= _LACK_OF_FIT_MIN:
-            return False
-        resid = (y_all[local] - model.energy(self._x[local])) / sig
-        return bool(np.sum(resid**2) > chi2.ppf(_LACK_OF_FIT, n - 6))
-
-    def _finest(self) -> float:
-        """[deg] the smallest neighbourhood whose shape the objective's values resolve:
-        two of its ``resolution`` steps (0 when continuous)."""
-        return 0.0 if self.resolution is None else 2.0 * self.resolution
-
     def _refit(self) -> None:
         center = self._incumbent
         y_all = self._y - self._floor()
@@ -359,7 +322,7 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
             # any measurement refutes the model's maximum, the far ones included: they may
             # lie on the stronger peak
             refuting = self._refuting_point(model, y_all, np.ones(len(y_all), dtype=bool))
-            if self._fit_radius() <= _MIN_FIT * self.radius:
+            if self._fit_radius() <= MIN_FIT * self.radius:
                 break
             if refuting is None:
                 if grown or self._fit_radius() <= _LACK_OF_FIT_RADIUS * self.radius:
@@ -405,6 +368,7 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
             if n > 6:
                 sig = float(np.sqrt(np.sum((y_all[idx] - pred[idx]) ** 2) / (n - 6)))
                 self._sigma_log = sig
+        self._follow_max(model, y_all)
         # re-centre the model on the incumbent (same function, better numbers)
         model = self._model
         if model is not None:
