@@ -120,7 +120,9 @@ def lattice_search(
     if not r90 > 0.0:
         return best
     for spacing in r90 * np.round(np.arange(0.6, 2.45, 0.1), 2):
-        rings = hex_spiral(np.zeros(2), spacing, math.ceil((hi + reach) / spacing / 0.86) + 1)
+        # ring k's nearest points are k · spacing · √3/2 out: enough rings to pass hi + reach
+        n_rings = math.ceil((hi + reach) / (spacing * math.sqrt(3.0) / 2.0)) + 1
+        rings = hex_spiral(np.zeros(2), spacing, n_rings)
         points = np.vstack(rings)
         points = points[np.hypot(*points.T) <= hi + reach]
         p = np.interp(

@@ -266,8 +266,9 @@ class Acquisition(Optimizer):
         estimates (either may be None), consulted at every decision when the fixed values
         above are None — e.g. a source objective that measures the noise in each A-scan.
     lobe_template : callable returning the probe's lobe template or None (e.g.
-        :meth:`~echocal.calibrate.Objective.lobe_template`), handed to a local method
-        that takes one.
+        :meth:`~echocal.calibrate.Objective.lobe_template`), and ``resolution`` [deg], a
+        replay's grid step (:meth:`~echocal.calibrate.Objective.resolution`; None:
+        continuous): both handed to a local method that takes them.
     detector : callable returning the detection significances of the points just
         measured, shape (k,), or None (then the values are tested) — e.g.
         :meth:`~echocal.calibrate.Objective.detections`.
@@ -307,6 +308,7 @@ class Acquisition(Optimizer):
         noise_floor: float | None = None,
         noise_model: NoiseModel | None = None,
         lobe_template: Callable[[], LobeTemplate | None] | None = None,
+        resolution: float | None = None,
         detector: Detector | None = None,
         batch: int = 1,
         fine_radius: float | None = None,
@@ -321,6 +323,7 @@ class Acquisition(Optimizer):
         super().__init__(x0, bounds=bounds, rng=rng, normalize="none")
         self.noise_model = noise_model
         self.lobe_template = lobe_template
+        self.resolution = None if resolution is None else positive_float("resolution", resolution)
         self.detector = detector
         self._use_significance = detector is not None
         if not isinstance(local, str):
@@ -503,7 +506,7 @@ class Acquisition(Optimizer):
         params = self._local_params
         if "history" in params and "radius" in params:
             opts.setdefault("radius", self.spacing)
-        for name in ("noise_model", "lobe_template"):
+        for name in ("noise_model", "lobe_template", "resolution"):
             if name in params and getattr(self, name) is not None:
                 opts.setdefault(name, getattr(self, name))
         if "noise_floor" in params and self.noise_floor is not None:

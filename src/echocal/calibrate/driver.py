@@ -28,7 +28,7 @@ from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import judge
 from echocal.calibrate.objective import Objective
 from echocal.calibrate.presets import method_options, presets
-from echocal.calibrate.registry import get_method, method_names
+from echocal.calibrate.registry import get_method
 from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, CalibrationResult
 from echocal.errors import BudgetExhaustedError, EchocalValueError
 from echocal.geometry import angle_between, convert_angles, orientation_normal
@@ -109,7 +109,6 @@ def build_optimizer(
             stacklevel=3,
         )
     if wrap:
-        known = _with_resolution(cls, known, objective)
         aknown = {**_search_inputs(objective), **aknown}
         opt: Optimizer = Acquisition(
             x0, local=method, local_options=known, bounds=objective.bounds, rng=rng, **aknown
@@ -121,32 +120,16 @@ def build_optimizer(
     if issubclass(cls, Acquisition):
         given = {**known, **acq_opts}
         known = {**_search_inputs(objective), **_search_plan(cls, objective, given), **given}
-        local = known.get("local", option_defaults(cls).get("local"))
-        if isinstance(local, str) and local in method_names():
-            local_options = dict(known.get("local_options") or {})
-            known["local_options"] = _with_resolution(get_method(local), local_options, objective)
     else:
-        known = _with_resolution(cls, known, objective)
         for name, value in (
             ("noise_model", objective.noise_estimate),
             ("lobe_template", objective.lobe_template),
+            ("resolution", objective.resolution()),
         ):
             if name in accepted_options(cls):
                 known.setdefault(name, value)
     opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
     return opt, _record(opt, known, objective)
-
-
-def _with_resolution(
-    cls: type[Optimizer], options: Mapping[str, Any], objective: Objective
-) -> dict[str, Any]:
-    """``options`` of the local method ``cls`` with the objective's resolution (a replay's
-    grid step, :meth:`~echocal.calibrate.Objective.resolution`) unless given or unknown
-    to the method."""
-    resolution = objective.resolution()
-    if resolution is None or "resolution" not in accepted_options(cls):
-        return dict(options)
-    return {"resolution": resolution, **options}
 
 
 def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> dict[str, Any]:
@@ -182,18 +165,26 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
     return out
 
 
-OBJECTIVE_INPUTS = ("noise_sigma", "noise_floor", "noise_model", "lobe_template", "detector")
+OBJECTIVE_INPUTS = (
+    "noise_sigma",
+    "noise_floor",
+    "noise_model",
+    "lobe_template",
+    "resolution",
+    "detector",
+)
 """Acquisition options the driver takes from the objective unless they are given."""
 
 
 def _search_inputs(objective: Objective) -> dict[str, Any]:
     """The :data:`OBJECTIVE_INPUTS` of ``objective``: its noise level and floor, the live
-    noise estimate, the probe's lobe and the echo detector."""
+    noise estimate, the probe's lobe, a replay's grid step and the echo detector."""
     values = (
         objective.noise_sigma,
         objective.noise_floor,
         objective.noise_estimate,
         objective.lobe_template,
+        objective.resolution(),
         objective.detections,
     )
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
