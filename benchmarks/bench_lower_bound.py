@@ -64,7 +64,7 @@ from _common import machine_info, markdown_table  # noqa: E402
 from bench_calibration import CASES, STARTS, measurements_to, run_one  # noqa: E402
 from detection_range import cover, detection_curves, radius  # noqa: E402
 
-from echocal.calibrate.acquisition import hex_spiral  # noqa: E402
+from echocal.calibrate.search_pattern import hex_spiral  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 
 DETECTOR = "matched-filter peak"

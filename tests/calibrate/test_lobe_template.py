@@ -193,6 +193,24 @@ def test_a_rigs_twin_gives_the_lobe_but_not_its_peak_energy(plate):
     assert template is not None and template.peak is None
 
 
+def test_the_simulators_normal_echo_is_its_pseudo_energy_at_normal_incidence(plate):
+    """``normal_echo`` against the simulator's own noiseless metric at the direction the
+    test finds for normal incidence over the plate (the true optimum there): within 1 %
+    (the profile's scans and the metric's are the same noiseless simulation; 1 % allows
+    the optimum search's tolerance).  A rig's twin and a gate give none."""
+    from tests.measurement.fake_sources import GaussianEchoSource
+
+    setup, pos = plate
+    objective = SourceObjective(setup, pos, parameterization="tilt")
+    truth = np.array(setup.true_optimum(pos, parameterization="tilt"))
+    peak = float(setup.metric_values(pos, truth[:1], truth[1:], parameterization="tilt")[0])
+    assert objective.normal_echo() == pytest.approx(peak, rel=0.01)
+    rig = SourceObjective(GaussianEchoSource(), pos, pulse=setup.pulse, twin=setup)
+    assert rig.normal_echo() is None
+    gate = resolve_gate("front-wall", pulse=setup.pulse)
+    assert SourceObjective(setup, pos, gate=gate).normal_echo() is None
+
+
 def test_no_template_for_a_gate_another_metric_or_other_angles(plate):
     setup, pos = plate
     gate = resolve_gate("front-wall", pulse=setup.pulse)

@@ -23,7 +23,7 @@ from echocal.calibrate._options import (
     positive_int,
     suggestion,
 )
-from echocal.calibrate.acquisition import Acquisition
+from echocal.calibrate.acquisition import LOCAL_INPUTS, Acquisition
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import judge
 from echocal.calibrate.objective import Objective
@@ -121,13 +121,10 @@ def build_optimizer(
         given = {**known, **acq_opts}
         known = {**_search_inputs(objective), **_search_plan(cls, objective, given), **given}
     else:
-        for name, value in (
-            ("noise_model", objective.noise_estimate),
-            ("lobe_template", objective.lobe_template),
-            ("resolution", objective.resolution()),
-        ):
+        inputs = _search_inputs(objective)
+        for name in LOCAL_INPUTS:
             if name in accepted_options(cls):
-                known.setdefault(name, value)
+                known.setdefault(name, inputs[name])
     opt = cls(x0, bounds=objective.bounds, rng=rng, **known)
     return opt, _record(opt, known, objective)
 
@@ -143,6 +140,7 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
         objective.detections: "objective",
         objective.passes_for_measured_noise: "objective",
         objective.lobe_template: "objective",
+        objective.normal_echo: "objective",
     }
 
     def name(value: Any) -> Any:
@@ -170,6 +168,7 @@ OBJECTIVE_INPUTS = (
     "noise_floor",
     "noise_model",
     "lobe_template",
+    "normal_echo",
     "resolution",
     "detector",
 )
@@ -184,6 +183,7 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
         objective.noise_floor,
         objective.noise_estimate,
         objective.lobe_template,
+        objective.normal_echo,
         objective.resolution(),
         objective.detections,
     )

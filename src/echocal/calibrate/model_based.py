@@ -126,6 +126,11 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
         needed.  Given one, the steps from the lobe's tail go to the peak of the template
         fitted to every measurement, until a measurement lies on the lobe's top
         (:meth:`_template_step`).
+    normal_echo : callable returning the echo at the probe's best direction of normal
+        incidence [objective units] or None, e.g.
+        :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when first needed.
+        The optimum's echo is at least that, so a peak settled far below it is a side lobe
+        and is searched across once (see :mod:`~echocal.calibrate.ridge_search`).
     resolution : [deg] the finest detail the objective's values resolve, e.g. a
         replay's recorded grid step (:meth:`~echocal.calibrate.Objective.resolution`);
         None: continuous.  Given one, lack of fit is not tested (the interpolation's
@@ -149,6 +154,7 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
         noise_floor: float | None = None,
         noise_model: Callable[[], tuple[float | None, float | None]] | None = None,
         lobe_template: Callable[[], LobeTemplate | None] | None = None,
+        normal_echo: Callable[[], float | None] | None = None,
         resolution: float | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
@@ -158,6 +164,7 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
         self.resolution = None if resolution is None else positive_float("resolution", resolution)
         self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
         self.noise_model = noise_model
+        self.normal_echo = normal_echo
         self._init_template_steps(lobe_template)
         self.radius = positive_float("radius", radius)
         self.max_radius = positive_float(

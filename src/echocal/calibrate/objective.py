@@ -206,6 +206,13 @@ class Objective:
         None (the base class: an analytic function has no probe)."""
         return None
 
+    def normal_echo(self) -> float | None:
+        """[objective units] the noiseless echo at the probe's best direction of normal
+        incidence, when the objective knows its probe and its units: the optimum's echo is
+        at least this strong, so a settled peak far below it is a side lobe.  None (the
+        base class: an analytic function has no probe)."""
+        return None
+
     def resolution(self) -> float | None:
         """[deg] the finest detail the values resolve — a replay's recorded grid step in
         this objective's angles — or None when they are continuous (the base class)."""

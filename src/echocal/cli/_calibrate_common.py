@@ -262,6 +262,9 @@ _API_ONLY = {
     "lobe_template": "is the simulated probe's lobe, supplied automatically from the setup "
     "(none where the lobe peaks off normal incidence or has a side lobe below half its "
     "peak); to replace or turn it off (lobe_template=None) use the Python API",
+    "normal_echo": "is the simulated probe's echo at normal incidence, supplied "
+    "automatically from the setup (for the simulator measured with its own pulse); to "
+    "replace or turn it off (normal_echo=None) use the Python API",
     "replan": "is the source objective's search plan for the echo it predicts against the "
     "measured noise, supplied automatically; to turn it off give --option fine_radius=3 "
     "(or set passes), to replace it use the Python API",

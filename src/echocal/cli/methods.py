@@ -47,13 +47,14 @@ def register(app: typer.Typer) -> None:
 
 def _note(key: str, searches: bool) -> str:
     """Where an option's value comes from when it is not the default or --option."""
+    from echocal.calibrate.acquisition import LOCAL_INPUTS
     from echocal.calibrate.driver import OBJECTIVE_INPUTS
 
-    if key in ("noise_model", "detector"):
+    if key in ("noise_model", "detector", "lobe_template", "normal_echo"):
         return "  (supplied by the objective; Python API only)"
     if key == "history":
         return "  (warm start from earlier measurements; Python API only)"
-    if key in OBJECTIVE_INPUTS and searches:
+    if key in OBJECTIVE_INPUTS and (searches or key in LOCAL_INPUTS):
         return "  (default: the objective's)"
     return ""
 

@@ -11,6 +11,7 @@ Counting, logging, budget, bounds and repeats are the base class's.
 from __future__ import annotations
 
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -27,6 +28,9 @@ from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import shared_detector as _detector
 from echocal.signal.gates import TimeGate, gated_metric
 from echocal.signal.processing import energy_to_db, pseudo_energy_with_peak
+
+if TYPE_CHECKING:
+    from echocal.measurement.detection_radius import LobeProfile
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
 
@@ -289,6 +293,29 @@ class SourceObjective(Objective):
         another matched-filter pulse).  None
         otherwise, without a simulated probe, where the probe cannot see the part, and
         where the lobe does not peak at normal incidence (a large probe over a curved part)."""
+        if self.parameterization != "tilt":
+            return None
+        profile = self._lobe_profile()
+        if profile is None:
+            return None
+        own = self.twin is self.source and self.pulse is self.twin.pulse
+        return profile.energy_template(absolute=own)
+
+    def normal_echo(self) -> float | None:
+        """[pseudo-energy units] the simulator's noiseless echo at its best direction of
+        normal incidence from this position (the mean over the lobe profile's directions
+        at 0°): for the simulator measured with its own pulse, in the default window, over
+        the whole recording — the units of its measurements.  None otherwise (a rig's twin
+        does not give the rig's units), where the probe cannot see the part."""
+        own = self.twin is self.source and self.pulse is self.source.pulse
+        profile = self._lobe_profile() if own else None
+        echo = 0.0 if profile is None else float(np.mean(profile.energies[:, 0]))
+        return echo if echo > 0.0 else None
+
+    def _lobe_profile(self) -> LobeProfile | None:
+        """The simulated probe's (cached) pseudo-energy lobe profile at this position, for
+        the default window over the whole recording; None without a simulated probe, for
+        another metric or window, or where the probe cannot see the part."""
         from echocal.measurement.detection_radius import cached_lobe_profile
 
         if (
@@ -296,13 +323,10 @@ class SourceObjective(Objective):
             or self.gate is not None
             or self.metric != "pseudo-energy"
             or self.window_length is not None
-            or self.parameterization != "tilt"
         ):
             return None
         try:
-            profile = cached_lobe_profile(self.twin, self.position)
-            own = self.twin is self.source and self.pulse is self.twin.pulse
-            return profile.energy_template(absolute=own)
+            return cached_lobe_profile(self.twin, self.position)
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
 

@@ -12,17 +12,24 @@ from echocal.calibrate.registry import get_method
 
 __all__ = ["point_options"]
 
+_FROM_LOBE_PROFILE = ("lobe_template", "normal_echo")
+"""A calibration's inputs computed from the probe's lobe profile at its position."""
+
 
 def point_options(method: str, options: Mapping[str, Any]) -> Mapping[str, Any]:
     """``options`` with a scan's defaults for what a calibration would otherwise compute
     from the probe's lobe at each position (a lobe profile: 2-8 s per position on the wave
     model, against ~1 s for a point's whole calibration): ``auto``'s default passes unless
-    the search geometry is given, and no lobe template (``lobe_template=None``) unless one
-    is given.  A scan point starts near its neighbour's optimum, where the template adds
-    little (:mod:`echocal.calibrate.lobe_template`: it is for steps from the lobe's tail)."""
+    the search geometry is given, and neither the lobe's template nor its echo at normal
+    incidence (``lobe_template=None``, ``normal_echo=None``) unless given.  A scan point
+    starts near its neighbour's optimum, where the template adds little
+    (:mod:`echocal.calibrate.lobe_template`: it is for steps from the lobe's tail) and
+    no side lobe lies between it and the optimum (:mod:`echocal.calibrate.ridge_search`)."""
     out = dict(options)
     if method == "auto" and not any(k in options for k in SEARCH_GEOMETRY):
         out["passes"] = AUTO_SEARCH["passes"]
-    if "lobe_template" in accepted_options(get_method(method)):
-        out.setdefault("lobe_template", None)
+    accepted = accepted_options(get_method(method))
+    for name in _FROM_LOBE_PROFILE:
+        if name in accepted:
+            out.setdefault(name, None)
     return out
