@@ -205,10 +205,30 @@ def test_the_simulators_normal_echo_is_its_pseudo_energy_at_normal_incidence(pla
     truth = np.array(setup.true_optimum(pos, parameterization="tilt"))
     peak = float(setup.metric_values(pos, truth[:1], truth[1:], parameterization="tilt")[0])
     assert objective.normal_echo() == pytest.approx(peak, rel=0.01)
-    rig = SourceObjective(GaussianEchoSource(), pos, pulse=setup.pulse, twin=setup)
+    rig = SourceObjective(
+        GaussianEchoSource(), pos, pulse=setup.pulse, twin=setup, parameterization="tilt"
+    )
     assert rig.normal_echo() is None
     gate = resolve_gate("front-wall", pulse=setup.pulse)
-    assert SourceObjective(setup, pos, gate=gate).normal_echo() is None
+    assert SourceObjective(setup, pos, gate=gate, parameterization="tilt").normal_echo() is None
+
+
+def test_no_normal_echo_where_the_optimum_may_be_weaker_or_the_units_differ(plate):
+    """A receiver that saturates measures less than the noiseless echo; bounds that
+    exclude normal incidence may hold a weaker optimum; other angles than tilts get none
+    (as the template: no lobe profile is computed for them)."""
+    import dataclasses
+
+    from echocal.measurement.receiver_settings import ReceiverSettings
+
+    setup, pos = plate
+    clipped = dataclasses.replace(setup, receiver=ReceiverSettings(snr_db=30.0, full_scale=2.0))
+    assert SourceObjective(clipped, pos, parameterization="tilt").normal_echo() is None
+    truth = np.array(setup.true_optimum(pos, parameterization="tilt"))
+    away = [(truth[0] + 5.0, truth[0] + 10.0), (truth[1] - 5.0, truth[1] + 5.0)]
+    beside = SourceObjective(setup, pos, parameterization="tilt", bounds=away)
+    assert beside.normal_echo() is None
+    assert SourceObjective(setup, pos).normal_echo() is None  # azimuth, co-elevation
 
 
 def test_no_template_for_a_gate_another_metric_or_other_angles(plate):

@@ -129,8 +129,9 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     normal_echo : callable returning the echo at the probe's best direction of normal
         incidence [objective units] or None, e.g.
         :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when first needed.
-        The optimum's echo is at least that, so a peak settled far below it is a side lobe
-        and is searched across once (see :mod:`~echocal.calibrate.ridge_search`).
+        The optimum's echo is at least that, so a peak settled below 0.4 of it that is an
+        echo (≥ 3 σ) is a side lobe, searched along both its axes once (see
+        :mod:`~echocal.calibrate.ridge_search`).  Only with ``normalize="none"``.
     resolution : [deg] the finest detail the objective's values resolve, e.g. a
         replay's recorded grid step (:meth:`~echocal.calibrate.Objective.resolution`);
         None: continuous.  Given one, lack of fit is not tested (the interpolation's

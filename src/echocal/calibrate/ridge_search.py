@@ -11,14 +11,18 @@ small hexagon of its own.
 
 The same search, along both axes, leaves a side lobe: a settled peak whose echo is far below
 the echo at normal incidence (``normal_echo``, which the optimum's is at least) is not
-the optimum.  The same 12.7 mm probe over a rod sees a side maximum 1.6° across the rod
+the optimum.  A 12.7 mm probe over a rod sees a side maximum 1.6° across the rod
 at 0.17 of normal incidence's echo (a dip to 0.07 between): a start beyond it climbs it,
 and the search along its axes reaches the main lobe (no bump hexagon: the main lobe is
 2.5x the side lobe's top or more, and refutes the model where the search passes it).
+
+A point of either search that clearly exceeds the top restarts the fit around it from the
+whole neighbourhood; after a search the next waits until the model has settled again.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -26,7 +30,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal.calibrate._fd import FloatArray
-from echocal.calibrate._options import positive_float
 from echocal.calibrate.local_model import REFUTE, REFUTE_RELATIVE, QuadraticModel, hexagon
 
 __all__ = ["RidgeSearch", "is_ridge"]
@@ -49,9 +52,9 @@ plate's lobe, fitted as a ridge from noisy data, fell to 0.08 of the top 0.9° o
 both sides and the search went on to 2.4° (12 measurements, far start at 30 dB)."""
 _SIDE_LOBE = 0.4
 """A settled peak whose fitted echo is below this fraction of the echo at normal incidence
-is a side lobe and is searched across once: over the rod the side maximum's echo is 0.17
-of normal incidence's, the optimum's at least 1 — 0.4 leaves a factor 2.4 either way (the
-fitted echo of a settled peak is within ±20 % at 10 dB)."""
+(and is an echo: :data:`_ECHO_SIGMAS`) is a side lobe, searched along both axes once:
+over the rod the side maximum's echo is 0.17 of normal incidence's, the optimum's at
+least 1 — 0.4 leaves a factor 2.4 either way."""
 _ECHO_SIGMAS = 3.0
 """A settled peak's fitted echo must stand this many σ of one measurement's noise above
 the floor to be a side lobe; below, the local method refines noise the acquisition
@@ -69,6 +72,23 @@ def is_ridge(model: QuadraticModel) -> bool:
     more: steep across, flat along."""
     eig = np.linalg.eigvalsh(-model.H)  # ascending curvature
     return bool(eig[0] > 0.0 and eig[1] / eig[0] >= _RIDGE_RATIO**2)
+
+
+def _usable_echo(echo: object) -> float | None:
+    """``normal_echo()``'s answer as a positive float, or None (with a warning naming it
+    when it is neither None nor one: the run goes on without it, nothing measured lost)."""
+    if echo is None:
+        return None
+    if isinstance(echo, int | float) and not isinstance(echo, bool) and echo > 0.0:
+        if np.isfinite(echo):
+            return float(echo)
+    warnings.warn(
+        f"normal_echo() returned {echo!r}, not a positive number: the side-lobe check "
+        "is off for this run (return the echo in the objective's units, or None)",
+        UserWarning,
+        stacklevel=2,
+    )
+    return None
 
 
 class RidgeSearch:
@@ -146,8 +166,7 @@ class RidgeSearch:
             return False  # noise, not a lobe: nothing to leave
         if not self._normal_echo_asked:
             self._normal_echo_asked = True
-            echo = self.normal_echo()
-            self._normal_echo = None if echo is None else positive_float("normal_echo()", echo)
+            self._normal_echo = _usable_echo(self.normal_echo())
         echo = self._normal_echo
         if echo is None:
             return False
@@ -181,7 +200,14 @@ class RidgeSearch:
             rays += [first * e, -first * e]
         steps = np.asarray(_ACROSS_STEPS) * self.radius
         offsets = steps[:, None, None] * np.asarray(rays)[None, :, :]
-        return self.clip(xs[None, :] + offsets.reshape(-1, 2))
+        points = self.clip(xs[None, :] + offsets.reshape(-1, 2))
+        # a ray that leaves the bounds folds onto them: each point once, none on xs
+        keep = [
+            k
+            for k, p in enumerate(points)
+            if np.hypot(*(p - xs)) > 1e-9 and not np.any(np.all(p == points[:k], axis=1))
+        ]
+        return points[keep]
 
     def _across_step(self, point: FloatArray, value: float) -> None:
         """After measuring a point of the search across a ridge: re-measure it (up to
@@ -204,6 +230,7 @@ class RidgeSearch:
                 self._across = np.zeros((0, 2))
                 self._incumbent = point.copy()
                 self._loc_scale = 1.0
+                self._streak = 0  # the next search waits until the model settles again
                 return
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
                 return  # measure it again
@@ -218,6 +245,8 @@ class RidgeSearch:
             bump = self._across_bump_point()
             if bump is not None:
                 self._across = self.clip(hexagon(bump, _BUMP_RADIUS * self.radius)[1:])
+        if not len(self._across):
+            self._streak = 0
 
     def _across_bump_point(self) -> FloatArray | None:
         """The line's strongest point beyond a dip on either side of the ridge: clearly

@@ -304,11 +304,23 @@ class SourceObjective(Objective):
     def normal_echo(self) -> float | None:
         """[pseudo-energy units] the simulator's noiseless echo at its best direction of
         normal incidence from this position (the mean over the lobe profile's directions
-        at 0°): for the simulator measured with its own pulse, in the default window, over
-        the whole recording — the units of its measurements.  None otherwise (a rig's twin
-        does not give the rig's units), where the probe cannot see the part."""
-        own = self.twin is self.source and self.pulse is self.source.pulse
-        profile = self._lobe_profile() if own else None
+        at 0°), which the optimum's echo is at least: for the simulator measured with its
+        own pulse, in the default window, over the whole recording, with tilt angles —
+        the units of its measurements.  None otherwise: a rig's twin does not give the
+        rig's units; a receiver that saturates (``full_scale``) measures less than the
+        noiseless echo; where no direction of normal incidence lies within the bounds the
+        bounded optimum may be weaker; where the probe cannot see the part."""
+        twin = self.twin
+        own = twin is not None and twin is self.source and self.pulse is twin.pulse
+        if twin is None or not own or self.parameterization != "tilt":
+            return None
+        if twin.receiver.full_scale is not None:
+            return None
+        normal = twin.normal_incidence_directions(self.position)
+        lo, hi = self.bounds[:, 0], self.bounds[:, 1]
+        if not np.any(np.all((normal >= lo) & (normal <= hi), axis=1)):
+            return None
+        profile = self._lobe_profile()
         echo = 0.0 if profile is None else float(np.mean(profile.energies[:, 0]))
         return echo if echo > 0.0 else None
 
