@@ -30,7 +30,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate._options import positive_float
 from echocal.calibrate.local_model import REFUTE, REFUTE_RELATIVE, QuadraticModel, hexagon
+from echocal.errors import EchocalValueError
 
 __all__ = ["RidgeSearch", "is_ridge"]
 
@@ -79,16 +81,16 @@ def _usable_echo(echo: object) -> float | None:
     when it is neither None nor one: the run goes on without it, nothing measured lost)."""
     if echo is None:
         return None
-    if isinstance(echo, int | float) and not isinstance(echo, bool) and echo > 0.0:
-        if np.isfinite(echo):
-            return float(echo)
-    warnings.warn(
-        f"normal_echo() returned {echo!r}, not a positive number: the side-lobe check "
-        "is off for this run (return the echo in the objective's units, or None)",
-        UserWarning,
-        stacklevel=2,
-    )
-    return None
+    try:
+        return positive_float("normal_echo()", echo)
+    except EchocalValueError:
+        warnings.warn(
+            f"normal_echo() returned {echo!r}, not a positive number: the side-lobe check "
+            "is off for this run (return the echo in the objective's units, or None)",
+            UserWarning,
+            stacklevel=2,
+        )
+        return None
 
 
 class RidgeSearch:

@@ -296,10 +296,7 @@ class SourceObjective(Objective):
         if self.parameterization != "tilt":
             return None
         profile = self._lobe_profile()
-        if profile is None:
-            return None
-        own = self.twin is self.source and self.pulse is self.twin.pulse
-        return profile.energy_template(absolute=own)
+        return None if profile is None else profile.energy_template(absolute=self._own_units())
 
     def normal_echo(self) -> float | None:
         """[pseudo-energy units] the simulator's noiseless echo at its best direction of
@@ -311,8 +308,7 @@ class SourceObjective(Objective):
         noiseless echo; where no direction of normal incidence lies within the bounds the
         bounded optimum may be weaker; where the probe cannot see the part."""
         twin = self.twin
-        own = twin is not None and twin is self.source and self.pulse is twin.pulse
-        if twin is None or not own or self.parameterization != "tilt":
+        if twin is None or not self._own_units() or self.parameterization != "tilt":
             return None
         if twin.receiver.full_scale is not None:
             return None
@@ -323,6 +319,11 @@ class SourceObjective(Objective):
         profile = self._lobe_profile()
         echo = 0.0 if profile is None else float(np.mean(profile.energies[:, 0]))
         return echo if echo > 0.0 else None
+
+    def _own_units(self) -> bool:
+        """Whether the measurements are the simulated twin's own, in its units: the
+        simulator itself (not a rig's twin) measured with its own pulse."""
+        return self.twin is not None and self.twin is self.source and self.pulse is self.twin.pulse
 
     def _lobe_profile(self) -> LobeProfile | None:
         """The simulated probe's (cached) pseudo-energy lobe profile at this position, for
