@@ -394,6 +394,73 @@ def test_the_smallest_neighbourhood_follows_its_fitted_maximum():
     np.testing.assert_allclose(opt._incumbent, [0.1, 0.15])
 
 
+def test_a_ridge_hump_is_fitted_around_its_own_maximum(monkeypatch):
+    """Issue 19, the rod with the 12.7 mm probe (30 dB run 19, 10 dB run 3): a hump 1.2°
+    wide along the rod whose log is not quadratic, fitted in a 1° neighbourhood centred
+    0.45° down a flank (the incumbent is a measured point; refinement points ring the
+    maximum, never on it), saw more of that flank and put the maximum towards it — the
+    run alternated between two flanks' fits 0.1° apart.  A symmetric hump whose top is at
+    0 by symmetry (log = −x²/2σₓ² − u²/2 − u⁴/2, u = y/1.2°), measured symmetrically:
+    fitted around its own maximum, either flank gives the top within 0.002°; fitted
+    around the flank (the rule off) the two lie ≥ 0.03° apart."""
+    from echocal.calibrate import fit_neighbourhood
+
+    def hump(p: np.ndarray) -> np.ndarray:
+        u = p[:, 1] / 1.2
+        return np.exp(-(p[:, 0] ** 2) / (2 * 0.35**2) - u**2 / 2 - u**4 / 2)
+
+    ang = np.arange(1, 31) * np.pi * (3.0 - np.sqrt(5.0))
+    ring = np.column_stack([0.3 * np.cos(ang), 0.7 * np.sin(ang)])
+    axis = np.array([[0.0, side * d] for d in (0.45, 0.9, 1.35) for side in (-1, 1)])
+    pts = np.vstack([ring, axis])
+
+    def tops() -> np.ndarray:
+        found = []
+        for side in (-1.0, 1.0):
+            opt = ModelBased(np.zeros(2), history=(pts, hump(pts)), rng=0)
+            opt._loc_scale = 0.25  # 4 x 1 deg x 0.25: lack of fit's smallest, 1 deg
+            opt._incumbent = np.array([0.0, 0.45 * side])
+            opt._refit()
+            assert opt._fit_radius() == pytest.approx(1.0)
+            found.append(opt._supported_max())
+        return np.array(found)
+
+    np.testing.assert_allclose(tops(), 0.0, atol=0.002)
+    monkeypatch.setattr(fit_neighbourhood, "_OFF_CENTRE", np.inf)
+    flanks = tops()
+    assert np.hypot(*(flanks[1] - flanks[0])) >= 0.03
+
+
+def test_a_shrunk_neighbourhood_that_shows_no_peak_widens_again():
+    """The rod at 10 dB, run 1: a neighbourhood shrunk to its smallest (0.5°) around a
+    point in a dip of the lobe fitted no concave model, and only a missing fit widened
+    it — the last 25 measurements went to the trust region's edge in every direction and
+    the run ended 0.75° off.  A peak at (0.6, 0.2)° with a dip of 30 % at the incumbent:
+    the 7 points within 0.5° fit no peak, so it widens until one shows (2°), and its
+    maximum is the peak's within 0.1° (the dip shifts it)."""
+    rng = np.random.default_rng(1)
+
+    def lobe(p: np.ndarray) -> np.ndarray:
+        peak = np.exp(-np.sum((p - [0.6, 0.2]) ** 2, axis=1) / (2 * 1.2**2))
+        return peak * (1.0 - 0.3 * np.exp(-np.sum(p**2, axis=1) / (2 * 0.25**2)))
+
+    ang = rng.uniform(0.0, 2.0 * np.pi, 40)
+    pts = np.column_stack([np.cos(ang), np.sin(ang)]) * rng.uniform(0.0, 2.5, (40, 1))
+    opt = ModelBased(np.zeros(2), history=(pts, lobe(pts)), noise_model=lambda: (0.0, 0.01))
+    opt._loc_scale = 0.125  # the smallest neighbourhood, 0.5 deg
+    opt._incumbent = np.zeros(2)
+    assert (
+        fit_quadratic(
+            pts, lobe(pts), np.zeros(2), space="log", scale=1.0, locality=0.5, floor=0.05
+        ).concave
+        is False
+    )
+    opt._refit()
+    assert opt.model is not None and opt.model.concave
+    assert opt._fit_radius() >= 1.0
+    np.testing.assert_allclose(opt._supported_max(), [0.6, 0.2], atol=0.1)
+
+
 def _rod_with_side_lobe(points: np.ndarray) -> np.ndarray:
     """:func:`_two_hump_ridge` with the side maximum of the rod under the 12.7 mm probe:
     0.136 of a hump, 1.6° across the ridge from its saddle, steeper along the rod (σ

@@ -15,7 +15,8 @@ Algorithm (one measurement per iteration after a 7-point initial design):
 2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to the points so far within a
    neighbourhood of the incumbent (``locality``), which halves where a measurement
    refutes the fit or a ridge's residuals lack fit (a rod's two humps), widens again
-   where too few points remain to fit, and at its smallest follows its fitted maximum
+   where too few points remain to fit or to show a peak, is fitted again around a
+   ridge hump's own maximum, and at its smallest follows its fitted maximum
    (:mod:`~echocal.calibrate.fit_neighbourhood`).
 3. Approach: if the model's maximum x* is not yet inside the trust region
    around the incumbent (the measured point with the highest *model* value,
@@ -58,7 +59,7 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
-from echocal.calibrate.fit_neighbourhood import MIN_FIT, FitNeighbourhood
+from echocal.calibrate.fit_neighbourhood import LACK_OF_FIT_RADIUS, MIN_FIT, FitNeighbourhood
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.local_model import (
     REFUTE,
@@ -84,8 +85,6 @@ _SAME_POINT = 0.01
 """[× radius] proposals this close count as the same point (measured twice: look elsewhere)."""
 _MAX_SHRINK = 4
 """At most this many halvings of the fitting neighbourhood per refit."""
-_LACK_OF_FIT_RADIUS = 1.0
-"""[× radius] lack of fit shrinks the fitting neighbourhood down to this radius, no less."""
 _RING_REACH = 0.7
 """[× the fitting neighbourhood] the farthest a refinement point goes from the fitted
 maximum: beyond the neighbourhood it would not be fitted."""
@@ -311,19 +310,12 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
         y_all = self._y - self._floor()
         grown = False
         for _ in range(_MAX_SHRINK + 1):
-            model = fit_quadratic(
-                self._x,
-                y_all,
-                center,
-                space=self.space,
-                scale=self.radius,
-                locality=self._fit_radius(),
-                floor=self.floor,
-            )
-            if model is None:
+            model = self._fit_around(center, y_all)
+            if model is None or not model.concave:
                 if self._loc_scale >= 1.0:
                     break
-                # too few measurements in a shrunk neighbourhood to fit: widen it again
+                # too few measurements in a shrunk neighbourhood to fit, or too few to
+                # show a peak (at 10 dB): widen it again
                 self._loc_scale = min(2.0 * self._loc_scale, 1.0)
                 grown = True
                 continue
@@ -333,7 +325,7 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             if self._fit_radius() <= MIN_FIT * self.radius:
                 break
             if refuting is None:
-                if grown or self._fit_radius() <= _LACK_OF_FIT_RADIUS * self.radius:
+                if grown or self._fit_radius() <= LACK_OF_FIT_RADIUS * self.radius:
                     break
                 if not self._lacks_fit(model, y_all):
                     break
@@ -376,6 +368,7 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             if n > 6:
                 sig = float(np.sqrt(np.sum((y_all[idx] - pred[idx]) ** 2) / (n - 6)))
                 self._sigma_log = sig
+        self._model = model = self._centred_on_max(model, y_all)
         self._follow_max(model, y_all)
         # re-centre the model on the incumbent (same function, better numbers)
         model = self._model
