@@ -29,9 +29,10 @@ From 1–3° ``auto`` needs a median 8, 9 and 12 measurements to 0.1° at 30, 20
 (10 runs per cell) needed 17.5 (Py-BOBYQA), 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's
 GP, 80 % of runs).  Over curved parts, probe off axis, 1–3° at 10 dB, within 0.1° after
 60: a ball 100 % with the 6.35 mm probe and with the 12.7 mm one (whose near-field lobe
-has a ring, which the lobe's template keeps), a rod 100 % and 85 % (12.7 mm: two equal
-humps 3° apart along the ridge with a dip to 0.79 between them, 5 % before a ridge's
-local fit that lacks fit shrank to one hump; 20 runs per cell);
+has a ring, which the lobe's template keeps), a rod 100 % and 92 % (12.7 mm, 60 runs:
+two equal humps 3° apart along the ridge with a dip to 0.79 between them, 5 % before a
+ridge's local fit that lacks fit shrank to one hump, 73 % before it was fitted around
+the hump's own maximum; 20 runs per cell otherwise);
 the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
 (docs/benchmarks/curved.md).
 
@@ -86,9 +87,9 @@ Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.
 lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of
 far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71, since detection alone costs
 a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5); the
-12.7 mm probe over a rod at 10 dB (85 %: its lobe peaks off normal incidence in two
-humps, flat along the rod, with no template; the fit's maximum wanders about 0.1° along
-a hump at 10 dB).  Without a probe model (a recording, a rig) the
+12.7 mm probe over a rod at 10 dB (92 %: its lobe peaks off normal incidence in two
+humps, flat along the rod, with no template; 4 of 60 runs reach 0.1° only after 62–78
+measurements, one ends 0.103° off).  Without a probe model (a recording, a rig) the
 far search still spends the 1° lattice first (a fixed order cannot serve both a 10 dB near
 start and a 30 dB far one without knowing the SNR); ``fine_radius=1.0`` drops it when the
 SNR is known to be ≥ 20 dB.  When the start is known to be near the echo,
