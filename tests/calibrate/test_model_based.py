@@ -449,15 +449,11 @@ def test_a_shrunk_neighbourhood_that_shows_no_peak_widens_again():
     opt = ModelBased(np.zeros(2), history=(pts, lobe(pts)), noise_model=lambda: (0.0, 0.01))
     opt._loc_scale = 0.125  # the smallest neighbourhood, 0.5 deg
     opt._incumbent = np.zeros(2)
-    assert (
-        fit_quadratic(
-            pts, lobe(pts), np.zeros(2), space="log", scale=1.0, locality=0.5, floor=0.05
-        ).concave
-        is False
-    )
+    small = opt._fit_around(np.zeros(2), opt._y - opt._floor())
+    assert small is not None and not small.concave
     opt._refit()
     assert opt.model is not None and opt.model.concave
-    assert opt._fit_radius() >= 1.0
+    assert opt._fit_radius() == pytest.approx(2.0)  # 0.5 deg and 1 deg show no peak
     np.testing.assert_allclose(opt._supported_max(), [0.6, 0.2], atol=0.1)
 
 

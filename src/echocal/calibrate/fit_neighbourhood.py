@@ -2,7 +2,7 @@
 :class:`~echocal.calibrate.model_based.ModelBased`).
 
 The log-quadratic is fitted to the measurements within a neighbourhood of the incumbent.
-Three rules keep that neighbourhood honest:
+Four rules keep that neighbourhood honest:
 
 * :meth:`FitNeighbourhood._lacks_fit` — a ridge whose residuals scatter clearly more than
   their noise spans more than one hump (a 12.7 mm probe over a rod: two equal humps 3°
@@ -108,8 +108,16 @@ class FitNeighbourhood:
         """``model`` fitted again, in a neighbourhood of the same radius, around its own
         maximum when that lies more than ``_OFF_CENTRE`` of the neighbourhood from its
         centre (at most ``_RECENTRE_STEPS`` times) — for a ridge (log space) whose
-        neighbourhood lack of fit has shrunk to :data:`LACK_OF_FIT_RADIUS` or less; the
-        model unchanged otherwise, or when a fit around the maximum is no ridge.
+        neighbourhood is :data:`LACK_OF_FIT_RADIUS` × radius or less (shrunk by lack of
+        fit or a refutation, or a ``locality`` that small); the model unchanged
+        otherwise, or when a fit around the maximum is no ridge.
+
+        Only the model moves: the incumbent (the next fit's centre) stays the measured
+        point the flank-centred fit ranked highest, and every refit re-centres again —
+        moving the incumbent too, to the point nearest the maximum, is what
+        :meth:`_follow_max` does at the smallest neighbourhood only (at any size the
+        noisy maximum dragged the centre about at 10 dB).  The re-centred fit is not
+        tested again for refutation or lack of fit.
 
         Along the rod a 12.7 mm probe's hump is 1.2–1.6° wide (1 σ) and not symmetric:
         it falls to the saddle slower than outwards.  A 1° neighbourhood centred 0.4–0.5°
