@@ -135,19 +135,12 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
     as that number); the objective's own callables named ``"objective"``; an
     acquisition's ``local_options`` expanded the same way (its warm-start ``history``
     named ``"acquisition"``)."""
-    supplied = {
-        objective.noise_estimate: "objective",
-        objective.detections: "objective",
-        objective.passes_for_measured_noise: "objective",
-        objective.lobe_template: "objective",
-        objective.normal_echo: "objective",
-    }
+    supplied = [v for v in _search_inputs(objective).values() if callable(v)]
+    supplied.append(objective.passes_for_measured_noise)
 
     def name(value: Any) -> Any:
-        if callable(value) and not isinstance(value, type):
-            for fn, label in supplied.items():
-                if value == fn:
-                    return label
+        if callable(value) and not isinstance(value, type) and any(value == f for f in supplied):
+            return "objective"
         return value
 
     out = {k: name(v) for k, v in {**option_defaults(type(opt)), **given}.items()}

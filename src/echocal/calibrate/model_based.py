@@ -368,19 +368,17 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             if n > 6:
                 sig = float(np.sqrt(np.sum((y_all[idx] - pred[idx]) ** 2) / (n - 6)))
                 self._sigma_log = sig
-        self._model = model = self._centred_on_max(model, y_all)
+        model = self._centred_on_max(model, y_all)
         self._follow_max(model, y_all)
         # re-centre the model on the incumbent (same function, better numbers)
-        model = self._model
-        if model is not None:
-            d = self._incumbent - model.center
-            self._model = QuadraticModel(
-                center=self._incumbent.copy(),
-                c=float(model(self._incumbent[None, :])[0]),
-                b=model.b + model.H @ d,
-                H=model.H,
-                space=model.space,
-            )
+        d = self._incumbent - model.center
+        self._model = QuadraticModel(
+            center=self._incumbent.copy(),
+            c=float(model(self._incumbent[None, :])[0]),
+            b=model.b + model.H @ d,
+            H=model.H,
+            space=model.space,
+        )
 
     def _supported_max(self) -> FloatArray | None:
         m = self._model
