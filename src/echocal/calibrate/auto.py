@@ -29,10 +29,11 @@ From 1–3° ``auto`` needs a median 8, 9 and 12 measurements to 0.1° at 30, 20
 (10 runs per cell) needed 17.5 (Py-BOBYQA), 21.5 (Py-BOBYQA) and 43.5 (scikit-optimize's
 GP, 80 % of runs).  Over curved parts, probe off axis, 1–3° at 10 dB, within 0.1° after
 60: a ball 100 % with the 6.35 mm probe and with the 12.7 mm one (whose near-field lobe
-has a ring, which the lobe's template keeps), a rod 100 % and 92 % (12.7 mm, 60 runs:
+has a ring, which the lobe's template keeps), a rod 100 % and 95 % (12.7 mm, 100 runs:
 two equal humps 3° apart along the ridge with a dip to 0.79 between them, 5 % before a
 ridge's local fit that lacks fit shrank to one hump, 73 % before it was fitted around
-the hump's own maximum; 20 runs per cell otherwise);
+the hump's own maximum, 92 % before a side lobe was tested after two refinement steps;
+20 runs per cell otherwise);
 the best peer 50 % and 10 % on the ball, 40 % and 40 % on the rod
 (docs/benchmarks/curved.md).
 
@@ -66,11 +67,13 @@ Why each part:
 5. the local model refutes itself when a measurement stands clearly above its maximum,
    or the strongest measurement stands twice above the model's own value there (a fit to
    a lobe's flat tail), and refits a smaller neighbourhood (a near-field ring over a
-   ball), and searches once across a ridge — and along both axes of a peak settled
-   below 0.4 of the echo at normal incidence, where the objective knows that echo
+   ball), and searches once across a ridge — and along both axes of a peak refined
+   twice below 0.4 of the echo at normal incidence, where the objective knows that echo
    (:meth:`~echocal.calibrate.Objective.normal_echo`, the simulator): the optimum's is
    at least as strong, so that peak is a side lobe (the 12.7 mm probe over a rod: 0.17
-   of it, 1.6° across; 30 dB, 20 runs, within 0.1° after 60: 90 → 95 %);
+   of it, 1.6° across; 30 dB, 20 runs, within 0.1° after 60: 90 → 95 %; tested after
+   two refinement steps instead of six, the 10 of 60 runs at 10 dB that climbed it
+   need a median 47 measurements to 0.1°, not 56);
 6. the local model's log-space noise, the tolerance of its trust-region test, is capped
    at a factor e once its incumbent is a significant echo: a refuted fit's residuals
    gave 40, every step passed, and a far run circled 4° out for 36 measurements;
@@ -86,14 +89,14 @@ Why each part:
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of
 far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71, since detection alone costs
-a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5); the
-12.7 mm probe over a rod at 10 dB (92 %: its lobe peaks off normal incidence in two
-humps, flat along the rod, with no template; 4 of 60 runs reach 0.1° only after 62–78
-measurements, one ends 0.103° off).  Without a probe model (a recording, a rig) the
-far search still spends the 1° lattice first (a fixed order cannot serve both a 10 dB near
-start and a 30 dB far one without knowing the SNR); ``fine_radius=1.0`` drops it when the
-SNR is known to be ≥ 20 dB.  When the start is known to be near the echo,
-``method="model-based"`` saves the acquisition.
+a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5).  The
+12.7 mm probe over a rod at 10 dB meets its target only just (95 of 100 runs; its lobe
+peaks off normal incidence in two humps, flat along the rod, with no template; 2 of 100
+runs reach 0.1° only after 68–71 measurements, three end 0.10–0.47° off).  Without a
+probe model (a recording, a rig) the far search still spends the 1° lattice first (a
+fixed order cannot serve both a 10 dB near start and a 30 dB far one without knowing the
+SNR); ``fine_radius=1.0`` drops it when the SNR is known to be ≥ 20 dB.  When the start
+is known to be near the echo, ``method="model-based"`` saves the acquisition.
 """
 
 from __future__ import annotations

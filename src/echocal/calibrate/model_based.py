@@ -128,8 +128,8 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     normal_echo : callable returning the echo at the probe's best direction of normal
         incidence [objective units] or None, e.g.
         :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when first needed.
-        The optimum's echo is at least that, so a peak settled below 0.4 of it that is an
-        echo (≥ 3 σ) is a side lobe, searched along both its axes once (see
+        The optimum's echo is at least that, so a peak refined twice below 0.4 of it that is
+        an echo (≥ 3 σ) is a side lobe, searched along both its axes (see
         :mod:`~echocal.calibrate.ridge_search`).  Only with ``normalize="none"``.
     resolution : [deg] the finest detail the objective's values resolve, e.g. a
         replay's recorded grid step (:meth:`~echocal.calibrate.Objective.resolution`);
@@ -518,7 +518,7 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             near = np.hypot(*(self._x - self._recentred).T) <= 0.75 * self.radius
             if np.count_nonzero(near) < 7 and self._tfit is None:
                 self._design = self._fresh_design(hexagon(self._recentred, 0.5 * self.radius)[1:])
-                self._across = np.zeros((0, 2))
+                self._drop_search()
         self._hand_over()
 
     def _fresh_design(self, points: FloatArray) -> FloatArray:

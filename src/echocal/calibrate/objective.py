@@ -209,7 +209,7 @@ class Objective:
     def normal_echo(self) -> float | None:
         """[objective units] the noiseless echo at the probe's best direction of normal
         incidence, when the objective knows its probe and its units: the optimum's echo is
-        at least this strong, so a settled peak far below it is a side lobe.  None (the
+        at least this strong, so a refined peak far below it is a side lobe.  None (the
         base class: an analytic function has no probe)."""
         return None
 

@@ -9,12 +9,13 @@ measured (:data:`_ACROSS_STEPS`), re-measured while they stand above the ridge's
 side ended where the lobe has fallen away, and a bump beyond a dip on the line gets a
 small hexagon of its own.
 
-The same search, along both axes, leaves a side lobe: a settled peak whose echo is far below
-the echo at normal incidence (``normal_echo``, which the optimum's is at least) is not
-the optimum.  A 12.7 mm probe over a rod sees a side maximum 1.6° across the rod
-at 0.17 of normal incidence's echo (a dip to 0.07 between): a start beyond it climbs it,
-and the search along its axes reaches the main lobe (no bump hexagon: the main lobe is
-2.5x the side lobe's top or more, and refutes the model where the search passes it).
+The same search, along both axes, leaves a side lobe: a peak refined for
+:data:`_SIDE_LOBE_AFTER` steps whose echo is far below the echo at normal incidence
+(``normal_echo``, which the optimum's is at least) is not the optimum.  A 12.7 mm probe
+over a rod sees a side maximum 1.6° across the rod at 0.17 of normal incidence's echo
+(a dip to 0.07 between): a start beyond it climbs it, and the search along its axes
+reaches the main lobe (no bump hexagon: the main lobe is 2.5x the side lobe's top or
+more, and refutes the model where the search passes it).
 
 A point of either search that clearly exceeds the top restarts the fit around it from the
 whole neighbourhood; after a search the next waits until the model has settled again.
@@ -53,12 +54,18 @@ the central peak over a ball is 0.4 of the ring's top, which the search must cro
 plate's lobe, fitted as a ridge from noisy data, fell to 0.08 of the top 0.9° out on
 both sides and the search went on to 2.4° (12 measurements, far start at 30 dB)."""
 _SIDE_LOBE = 0.4
-"""A settled peak whose fitted echo is below this fraction of the echo at normal incidence
-(and is an echo: :data:`_ECHO_SIGMAS`) is a side lobe, searched along both axes once:
-over the rod the side maximum's echo is 0.17 of normal incidence's, the optimum's at
-least 1 — 0.4 leaves a factor 2.4 either way."""
+"""A peak refined :data:`_SIDE_LOBE_AFTER` times whose fitted echo is below this fraction
+of the echo at normal incidence (and is an echo: :data:`_ECHO_SIGMAS`) is a side lobe,
+searched along both axes (again after a search that was dropped:
+:meth:`RidgeSearch._drop_search`): over the rod the side maximum's echo is 0.17 of
+normal incidence's, the optimum's at least 1 — 0.4 leaves a factor 2.4 either way."""
+_SIDE_LOBE_AFTER = 2
+"""Consecutive refinement steps before a peak is tested for a side lobe: the test needs
+the peak's echo, not its shape, and two steps pin it (over the rod at 10 dB the side
+maximum's fitted echo read 0.15–0.2 of normal incidence's from the first step on; waiting
+:data:`_ACROSS_AFTER` cost 4 measurements in each of the 10 of 60 runs that climbed it)."""
 _ECHO_SIGMAS = 3.0
-"""A settled peak's fitted echo must stand this many σ of one measurement's noise above
+"""A refined peak's fitted echo must stand this many σ of one measurement's noise above
 the floor to be a side lobe; below, the local method refines noise the acquisition
 handed it, and a search around it is no lobe's (over the plate, far start at 30 dB, run
 21: 0.3–0.7 σ, the search cost 14 measurements).  The rod's side maximum stands 5.2 σ
@@ -134,14 +141,17 @@ class RidgeSearch:
 
     def _start_ridge_search(self, m: QuadraticModel, xs: FloatArray) -> bool:
         """Queue the search across the peak through the model's maximum ``xs`` [deg] (2,)
-        once the model has settled (:data:`_ACROSS_AFTER` refinement steps) on a ridge or
-        on a side lobe (:meth:`_on_side_lobe`); True when queued (each once per run).  A
-        ridge is searched across, a side lobe along both its axes at once (a side lobe
-        fitted nearly round from noisy data has no telling direction; over the rod its
-        steepest is along the rod, the main lobe across)."""
-        if self._streak < _ACROSS_AFTER:
+        once the model has settled on a ridge (:data:`_ACROSS_AFTER` refinement steps) or
+        on a side lobe (:meth:`_on_side_lobe`, :data:`_SIDE_LOBE_AFTER` steps); True when
+        queued (each once per run, a side lobe's again after a dropped search: see
+        :meth:`_drop_search`).  Before :data:`_ACROSS_AFTER` steps only the side-lobe
+        test is made, so a ridge far below the echo at normal incidence is searched as a
+        side lobe, along both its axes.  A ridge is searched across, a side lobe along both
+        its axes at once (a side lobe fitted nearly round from noisy data has no telling
+        direction; over the rod its steepest is along the rod, the main lobe across)."""
+        if self._streak < _SIDE_LOBE_AFTER:
             return False
-        if not self._across_done and is_ridge(m):
+        if not self._across_done and self._streak >= _ACROSS_AFTER and is_ridge(m):
             self._across_done, self._across_side_lobe = True, False
         elif not self._side_lobe_done and self._on_side_lobe(m, xs):
             self._side_lobe_done, self._across_side_lobe = True, True
@@ -154,6 +164,24 @@ class RidgeSearch:
         self._across_from = xs.copy()
         self._across_bump = False
         return True
+
+    def _drop_search(self) -> None:
+        """Drop the queued points of a search under way: the fit moves to a new centre
+        (a point of the search found a stronger echo, or the data refuted the model).  The
+        next search waits until the model has settled there again; a side lobe's search
+        may then be made again — the peak it finds is tested afresh.  Tested after two
+        refinement steps, a side lobe's model may still be refuted by its own data (the
+        rod at 30 dB, run 53: the search dropped after 2 of its points, and with the
+        run's one side-lobe search spent the run refined the side maximum to its end,
+        2.19° off); and a point of the search may beat a top that two steps
+        underestimated while still on the side lobe.  Each new search needs an echo
+        clearly (4 σ and 5 %) above the last peak's, so they do not repeat without end."""
+        if not len(self._across):
+            return
+        if self._across_side_lobe:
+            self._side_lobe_done = False
+        self._across = np.zeros((0, 2))
+        self._streak = 0
 
     def _on_side_lobe(self, m: QuadraticModel, xs: FloatArray) -> bool:
         """Whether the fitted echo at ``xs`` is below :data:`_SIDE_LOBE` of the echo at
@@ -229,10 +257,9 @@ class RidgeSearch:
                 # found: the refit starts over around it, from the whole neighbourhood —
                 # one shrunk to its smallest around the side lobe would not see it (the
                 # rod at 30 dB, run 19: 2.3x the side lobe's top 1.2 deg out, ignored)
-                self._across = np.zeros((0, 2))
                 self._incumbent = point.copy()
                 self._loc_scale = 1.0
-                self._streak = 0  # the next search waits until the model settles again
+                self._drop_search()
                 return
             if excess > 2.0 * noise and len(y) < _ACROSS_REPEATS:
                 return  # measure it again
