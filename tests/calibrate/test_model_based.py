@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -468,12 +470,35 @@ def _rod_with_side_lobe(points: np.ndarray) -> np.ndarray:
     return _two_hump_ridge(points) + side
 
 
-def _run_beside_the_side_lobe(monkeypatch, known: bool) -> tuple[ModelBased, list]:
-    """60 measurements of :func:`_rod_with_side_lobe` at about 30 dB from beside its side
-    maximum, the echo at normal incidence (the saddle, 0.79 of a hump) known or not; the
-    method and its searches as queued: (side lobe's?, refinement steps before it)."""
-    from echocal.calibrate import ridge_search
+def _beside_the_side_lobe(known: bool = True) -> tuple[ModelBased, Callable[[], None]]:
+    """The method started beside the side maximum of :func:`_rod_with_side_lobe`, the echo
+    at normal incidence (the saddle, 0.79 of a hump) known or not, and a function that
+    makes its next measurement (about 30 dB, seeded noise)."""
     from echocal.calibrate.evidence import energy_sigma
+
+    rng = np.random.default_rng(4)
+    floor, sigma = 0.05, 0.002  # about 30 dB on a hump's pseudo-energy
+    saddle = float(_two_hump_ridge(np.array([[0.0, 1.5]]))[0])
+    opt = ModelBased(
+        np.array([-1.9, 1.2]),
+        noise_model=lambda: (floor, sigma),
+        normal_echo=(lambda: saddle) if known else None,
+        rng=0,
+    )
+
+    def measure() -> None:
+        points = opt.ask()
+        clean = _rod_with_side_lobe(points)
+        noise = energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(len(points))
+        opt.tell(clean + floor + noise)
+
+    return opt, measure
+
+
+def _run_beside_the_side_lobe(monkeypatch, known: bool) -> tuple[ModelBased, list]:
+    """60 measurements of :func:`_beside_the_side_lobe`; the method and its searches as
+    queued: (side lobe's?, refinement steps before it)."""
+    from echocal.calibrate import ridge_search
 
     started: list[tuple[bool, int]] = []
     start = ridge_search.RidgeSearch._start_ridge_search
@@ -485,20 +510,9 @@ def _run_beside_the_side_lobe(monkeypatch, known: bool) -> tuple[ModelBased, lis
         return queued
 
     monkeypatch.setattr(ridge_search.RidgeSearch, "_start_ridge_search", recording)
-    rng = np.random.default_rng(4)
-    floor, sigma = 0.05, 0.002  # about 30 dB on a hump's pseudo-energy
-    saddle = float(_two_hump_ridge(np.array([[0.0, 1.5]]))[0])
-    opt = ModelBased(
-        np.array([-1.9, 1.2]),
-        noise_model=lambda: (floor, sigma),
-        normal_echo=(lambda: saddle) if known else None,
-        rng=0,
-    )
+    opt, measure = _beside_the_side_lobe(known)
     for _ in range(60):
-        points = opt.ask()
-        clean = _rod_with_side_lobe(points)
-        noise = energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(len(points))
-        opt.tell(clean + floor + noise)
+        measure()
     return opt, started
 
 
@@ -544,19 +558,9 @@ def test_a_side_lobe_search_dropped_before_its_end_may_be_made_again():
     the run's one side-lobe search, so the run refined the side maximum to its end,
     2.19° off.  A search dropped before its end is allowed again; a search across a
     ridge stays made."""
-    from echocal.calibrate.evidence import energy_sigma
-
-    rng = np.random.default_rng(4)
-    floor, sigma = 0.05, 0.002
-    saddle = float(_two_hump_ridge(np.array([[0.0, 1.5]]))[0])
-    opt = ModelBased(
-        np.array([-1.9, 1.2]), noise_model=lambda: (floor, sigma), normal_echo=lambda: saddle, rng=0
-    )
+    opt, measure = _beside_the_side_lobe()
     while not (len(opt._across) and opt._across_side_lobe):
-        points = opt.ask()
-        clean = _rod_with_side_lobe(points)
-        noise = energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(len(points))
-        opt.tell(clean + floor + noise)
+        measure()
         assert len(opt._x) < 40, "the side-lobe search was never queued"
     assert opt._side_lobe_done
     # an echo 1.5x the side lobe's top, 0.6 deg off, where fewer than 7 points lie:
