@@ -32,7 +32,7 @@ test: lint typecheck
 # The documentation site (Sphinx): warnings are errors, every gallery example is executed.
 docs: setup
 	rm -rf docs/_build docs/api/generated docs/auto_examples
-	MPLBACKEND=Agg $(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+	MPLBACKEND=Agg $(BIN)/sphinx-build -j auto -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
 
 clean:
