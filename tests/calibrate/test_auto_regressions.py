@@ -90,10 +90,10 @@ def test_auto_from_a_far_start_on_the_wave_model() -> None:
 # seeded starts per SNR.
 # (position [mm], snr [dB], seed, start offset from the truth [deg]): the old code never
 # stayed within 0.1° within 60 measurements from the two 10 dB cases, nor from starts 1.8°
-# out on the ring above the ball's centre at 30 dB.  The 30 dB starts lie on the ring too
-# (its matched-filter peak, the largest of 4 directions, is 0.95–0.97 of the centre's 1.5–2°
-# out here), at the same off-axis position, so the test
-# computes one lobe profile of the ball (≈ 70 s: 460 noiseless A-scans), not two.
+# out on the ring above the ball's centre at 30 dB.  The 30 dB starts here lie on the ring
+# too (its matched-filter peak, the largest of 4 directions, is 0.95–0.97 of the centre's
+# 1.5–2° out), at the 10 dB cases' off-axis position: the test computes one lobe profile of
+# the ball (≈ 70 s: 460 noiseless A-scans), not two.
 SPHERE_CASES = (
     ((4.0, 2.0, 50.0), 30.0, 0, (1.8, 0.0)),
     ((4.0, 2.0, 50.0), 30.0, 2, (0.0, 1.8)),

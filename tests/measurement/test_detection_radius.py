@@ -143,10 +143,10 @@ def test_no_plan_for_a_gated_objective_or_a_position_off_the_part(monkeypatch):
     # only whether the objective asks for passes: how they are sized is tested above on
     # other probes (this plate's lobe profile alone takes 35 s)
     sized = []
-    monkeypatch.setattr(dr, "search_passes", lambda setup, at: sized.append(setup) or (4.0,))
-    assert SourceObjective(plate, pos, gate=gate).search_passes() is None and sized == []
-    assert SourceObjective(plate, pos).search_passes() == (4.0,) and sized == [plate]
-    monkeypatch.undo()
+    with monkeypatch.context() as patch:
+        patch.setattr(dr, "search_passes", lambda setup, at: sized.append(setup) or (4.0,))
+        assert SourceObjective(plate, pos, gate=gate).search_passes() is None and sized == []
+        assert SourceObjective(plate, pos).search_passes() == (4.0,) and sized == [plate]
     ball = dataclasses.replace(
         load_setup("immersion-5mhz", seed=0), specimen=builtin_specimen("sphere")
     )
