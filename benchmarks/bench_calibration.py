@@ -279,27 +279,29 @@ def start_point(truth: np.ndarray, start: str, seed: int, bounds: np.ndarray) ->
 
 
 # ----------------------------------------------------------------------------- one run
-def _estimates_ours(result: Any, x0: np.ndarray) -> np.ndarray:
-    """Estimate after n = 0..BUDGET measurements [deg], shape (BUDGET + 1, 2)."""
+def _estimates_ours(result: Any, x0: np.ndarray, budget: int) -> np.ndarray:
+    """Estimate after n = 0..budget measurements [deg], shape (budget + 1, 2)."""
     counts = np.asarray(result.iteration_measurements)
     its = np.asarray(result.iterates)
-    n = np.arange(BUDGET + 1)
+    n = np.arange(budget + 1)
     idx = np.searchsorted(counts, n, side="right") - 1
     est = its[np.clip(idx, 0, len(its) - 1)].copy()
     est[-1] = result.x  # the final recommendation at the end of the run
-    if result.n_measurements < BUDGET:
+    if result.n_measurements < budget:
         est[result.n_measurements :] = result.x
     return est
 
 
-def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
-    """One seeded run of one method; returns its error after each measurement."""
-    case, start, snr, run, method = task
+def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
+    """One seeded run of one method, ``(case, start, snr, run, method[, budget])`` (budget
+    default :data:`BUDGET`); returns its error after each measurement."""
+    case, start, snr, run, method, *rest = task
+    budget = int(rest[0]) if rest else BUDGET
     base, pos, truth, optima = _case(case)
     seed = run_seed(case, start, snr, run)
     setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
     objective = SourceObjective(
-        setup, pos, parameterization=PARAM, budget=BUDGET, bounds=tilt_bounds(setup)
+        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup)
     )
     x0 = start_point(truth, start, seed, objective.bounds)
     t0 = time.perf_counter()
@@ -312,12 +314,12 @@ def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
                 objective,
                 method=method,
                 x0=x0,
-                budget=BUDGET,
+                budget=budget,
                 max_iter=10_000,
                 rng=seed,
                 **OURS[method],
             )
-        est = _estimates_ours(res, x0)
+        est = _estimates_ours(res, x0, budget)
         status = str(res.status)
         acquisition = res.acquisition_measurements
     else:
@@ -328,9 +330,9 @@ def run_one(task: tuple[str, str, float, int, str]) -> dict[str, Any]:
         except _Stop:
             pass
         hist = tr.history_override or tr.history
-        est = np.empty((BUDGET + 1, 2))
+        est = np.empty((budget + 1, 2))
         est[0] = x0
-        for n in range(1, BUDGET + 1):
+        for n in range(1, budget + 1):
             est[n] = hist[min(n, len(hist)) - 1] if hist else x0
     errors = np.min([angular_error(est, t, PARAM) for t in optima], axis=0)
     return {

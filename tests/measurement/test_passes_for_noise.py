@@ -66,7 +66,11 @@ def test_passes_start_at_the_predicted_echo_and_keep_the_finer_ones(ray):
     assert strong[0] == pytest.approx(profile.lattice_spacing(40.0), abs=0.01)
     middle = passes(25.0)
     assert ladder[1] < middle[0] < ladder[0] and middle[1:] == ladder[1:]
-    assert passes(19.0) is None and passes(10.0) is None  # the fine lattice stays
+    weak = passes(10.0)  # one pass, finer than the ladder, which cannot see it
+    assert len(weak) == 1 and weak[0] == pytest.approx(profile.lattice_spacing(10.0), abs=0.01)
+    assert weak[0] < passes(19.0)[0] < ladder[1]
+    assert passes(-10.0) is None  # no pass of at least MIN_PASS_SPACING sees it: the plan stays
+    assert profile.lattice_spacing(-3.0) < dr.MIN_PASS_SPACING
 
 
 def test_the_source_objective_predicts_from_the_noise_its_a_scans_show(ray):
@@ -83,7 +87,11 @@ def test_the_source_objective_predicts_from_the_noise_its_a_scans_show(ray):
     weak = setup_with_overrides("immersion-5mhz-ray", snr_db=10.0, seed=4)
     objective = SourceObjective(weak, pos, parameterization="tilt")
     objective(np.array([[6.0, -4.0]]))
-    assert objective.passes_for_measured_noise() is None
+    passes = objective.passes_for_measured_noise()  # 0.7 dB is 0.02 deg of the 10 dB pass
+    assert passes is not None and len(passes) == 1
+    assert passes[0] == pytest.approx(
+        dr.cached_lobe_profile(setup, pos).lattice_spacing(10.0), abs=0.1
+    )
 
 
 def test_no_prediction_for_a_gated_metric_or_a_rigs_twin(ray):
@@ -106,14 +114,9 @@ def _no_echo(points: np.ndarray) -> np.ndarray:
     return np.zeros(len(points))
 
 
-def test_the_acquisition_replans_once_after_the_first_ring():
-    calls = []
-
-    def replan():
-        calls.append(1)
-        return (6.0, 3.0)
-
-    acq = Acquisition(
+def _planned(replan, max_radius: float) -> Acquisition:
+    """An acquisition planned as ``auto``'s: the 1° lattice to 3°, then 7° and 4° passes."""
+    return Acquisition(
         np.zeros(2),
         spacing=1.0,
         noise_sigma=1.0,
@@ -121,8 +124,18 @@ def test_the_acquisition_replans_once_after_the_first_ring():
         fine_radius=3.0,
         passes=(7.0, 4.0),
         replan=replan,
-        max_radius=15.0,
+        max_radius=max_radius,
     )
+
+
+def test_the_acquisition_replans_once_after_the_first_ring():
+    calls = []
+
+    def replan():
+        calls.append(1)
+        return (6.0, 3.0)
+
+    acq = _planned(replan, max_radius=15.0)
     acq.tell(_no_echo(acq.ask()))
     assert acq.replanned == (6.0, 3.0) and len(calls) == 1
     expected = np.vstack(search_rings(np.zeros(2), 1.0, 15.0, fine_radius=1.0, passes=(6.0, 3.0)))
@@ -132,6 +145,22 @@ def test_the_acquisition_replans_once_after_the_first_ring():
         acq.tell(_no_echo(acq.ask()))
     assert len(calls) == 1
     assert np.all(np.hypot(*acq._x[7:].T) > 3.0)  # no 1° lattice beyond x0's hexagon
+
+
+def test_a_replan_finer_than_every_planned_pass_keeps_the_fine_lattice():
+    """An echo weaker than the plan was sized for: the 1° lattice out to 3° stays, where a
+    near start's echo is, and beyond it the replanned pass takes the planned ones' place."""
+    acq = _planned(lambda: (1.5,), max_radius=10.0)
+    acq.tell(_no_echo(acq.ask()))
+    assert acq.replanned == (1.5,)
+    expected = np.vstack(search_rings(np.zeros(2), 1.0, 10.0, fine_radius=3.0, passes=(1.5,)))
+    assert len(acq._queue) == len(expected)  # the same points (a ring's order may differ)
+    np.testing.assert_allclose(np.sort(acq._queue, axis=0), np.sort(expected, axis=0), atol=1e-12)
+    # every point out to max_radius within 0.83 s of a search point (search_rings' bound)
+    g = np.mgrid[-10:10:0.25, -10:10:0.25].reshape(2, -1).T
+    g = g[np.hypot(*g.T) <= 10.0]
+    nearest = np.min(np.hypot(*(g[:, None, :] - acq._queue[None]).transpose(2, 0, 1)), axis=1)
+    assert nearest.max() <= 0.83 * 1.5
 
 
 def test_a_replan_of_none_keeps_the_plan_and_bad_ones_are_refused():

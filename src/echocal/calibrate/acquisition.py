@@ -178,9 +178,12 @@ class Acquisition(Optimizer):
         first ring saw no echo, or None to keep the plan — e.g.
         :meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, which sizes them
         for the echo the probe's model predicts against the noise those 7 A-scans
-        measured.  Passes returned replace ``passes`` and the fine lattice beyond the
-        first ring (an echo strong enough to be seen from far needs no fine lattice);
-        called once.
+        measured.  Passes returned replace ``passes``, and the fine lattice beyond the
+        first ring (an echo strong enough to be seen from far needs no fine lattice) —
+        unless their first pass is finer than every planned one: an echo weaker than the
+        plan was sized for keeps the fine lattice out to ``fine_radius``, where a near
+        start's echo is, and is searched beyond it by the passes returned, in place of
+        planned passes too coarse to see it.  Called once.
     """
 
     def __init__(
@@ -292,8 +295,9 @@ class Acquisition(Optimizer):
 
     def _replan(self) -> None:
         """Once x0's first ring has been searched in vain: ask ``replan`` for the passes of
-        the rest of the search; if it gives some, they replace the fine lattice beyond
-        the first ring and the planned passes (what was measured stays measured)."""
+        the rest of the search; if it gives some, they replace the planned passes, and
+        the fine lattice beyond the first ring unless their first is finer than every
+        planned pass (what was measured stays measured)."""
         first = self._first_ring_size()
         if self.replan is None or self._next < first:
             return
@@ -301,7 +305,8 @@ class Acquisition(Optimizer):
         if plan is None:
             return
         passes = _spacings("replan", plan)
-        queue, ring = self._search_queue(self.spacing, passes)
+        weaker = bool(self.passes) and passes[0] < min(self.passes)
+        queue, ring = self._search_queue(self.fine_radius if weaker else self.spacing, passes)
         if len(queue) < first or not np.allclose(queue[:first], self._queue[:first]):
             return  # the bounds clip the first ring differently: keep the plan
         self.replanned = passes

@@ -10,9 +10,18 @@ probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per 
 start band          1–3°              5–20°
 ==================  ================  ================
 30 dB               100/100/100/100   72/100/100/100 %
-20 dB               100/100/100/100   6/31/68/77 %
-10 dB               77/100/100/100    0/1/5/8 %
+20 dB               100/100/100/100   5/36/62/88 %
+10 dB               79/100/100/100    0/0/0/7 %
 ==================  ================  ================
+
+From 5–20° at 10 dB no search can be sure of the echo within 80 (any search needs 468
+measurements for 99 % of these starts, docs/benchmarks/lower-bound.md); with a budget
+of 1200 ``auto`` needs a median 262, p99 535: **1.14×** that bound.  Before the search
+below 20 dB was sized for the predicted echo (item 3) it gave up after about 146
+measurements whatever the budget; within 80 it had 0/1/5/8 % by lucky detections on
+passes too coarse for the echo, and at 20 dB 4/34/68/78 % (median 47.5 against 53 now:
+an echo predicted just below 20 dB is now searched on one pass sized for it, not on
+the 8.62° pass first; the same seeds, 2026-11-29).
 
 From 1–3° at 30 dB, 100 % of runs are within 0.05° after 15 measurements (median 9;
 91 % before the local method followed the probe's lobe from its tail, 64 % before it
@@ -52,8 +61,10 @@ Why each part:
    (:meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, the ``replan``
    option: a simulated probe's noiseless best echo against the A-scans' robust σ), which
    the passes alone detect from 99 % of the plane: then the 1° lattice is dropped and the
-   first pass is the coarsest for that SNR; beyond, two passes out to ``max_radius``,
-   coarse to fine, sized from the probe when the objective knows it
+   first pass is the coarsest for that SNR (below 20 dB the 1° lattice stays and one
+   pass sized for that SNR follows it, 1.33° at 10 dB, in place of the two below, which
+   cannot see such an echo: a 10 dB far start used to give up after them); beyond, two
+   passes out to ``max_radius``, coarse to fine, sized from the probe when the objective knows it
    (:meth:`~echocal.calibrate.Objective.search_passes`: the simulator, or a rig's setup):
    the coarsest hexagonal lattices that detect a 30 dB, then a 20 dB echo from 99 % of
    the plane, computed from the probe's noiseless diffraction lobe before anything is

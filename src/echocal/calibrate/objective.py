@@ -196,8 +196,8 @@ class Objective:
         """[deg] the spacings of a blind search's passes, coarse first, for the echo the
         objective predicts against the noise measured so far (see
         :func:`echocal.measurement.detection_radius.passes_for_noise`), or None when it
-        predicts none, or one too weak to be searched without the fine lattice (the base
-        class: an analytic function has no probe)."""
+        predicts none, or one too weak for any blind pass (the base class: an analytic
+        function has no probe)."""
         return None
 
     def lobe_template(self) -> LobeTemplate | None:

@@ -58,6 +58,7 @@ from echocal.signal.processing import pseudo_energy
 
 __all__ = [
     "DETECTION_PROBABILITY",
+    "MIN_PASS_SPACING",
     "SEARCH_SNRS",
     "LobeProfile",
     "cached_lobe_profile",
@@ -74,6 +75,11 @@ PASS_COVERAGE = 0.99
 """The share of the plane from which a search pass must detect the echo."""
 SEARCH_SNRS = (30.0, 20.0)
 """[dB] the peak SNRs a blind search is sized for, coarse pass first (see :func:`search_passes`)."""
+MIN_PASS_SPACING = 0.25
+"""[deg] the finest pass :func:`passes_for_noise` plans.  An echo that needs a finer one
+(ŝ below about 0 dB for the 12.7 mm 5 MHz probe, whose 0 dB pass is 0.46° on the ray
+model) is not searched blind: a 0.25° pass out to 180° is already 1.9 million points,
+and 17 times the measurements of the probe's 10 dB pass (1.04°)."""
 _STEP = 0.1
 """[deg] misalignment step of the lobe profile."""
 _BLOCK = 2.0
@@ -340,19 +346,24 @@ def passes_for_noise(
     a known peak SNR ŝ (its noiseless A-scan against σ); the first pass is the coarsest
     hexagonal lattice that detects it from :data:`PASS_COVERAGE` of the plane, the finer
     passes of :func:`search_passes` follow as a fall-back (should the echo be weaker than
-    the model says).
+    the model says).  For the 12.7 mm 5 MHz probe at 50 mm on the wave model: (8.61,
+    4.17)° at 30 dB, (4.17,)° at 20 dB, (1.33,)° at 10 dB.  An acquisition whose planned
+    passes (:func:`search_passes`, sized for 30 and 20 dB) are all coarser than the
+    first keeps its fine lattice around the start and searches on this one beyond it
+    (:class:`~echocal.calibrate.Acquisition`, ``replan``): a 10 dB echo is then found
+    beyond 3° too, where the 8.61° and 4.17° passes cannot see it.
 
-    None when ŝ is below the weakest of :data:`SEARCH_SNRS` (20 dB): the fine lattice
-    around the start, which such an echo needs, stays.  At or above it the passes alone
-    detect the echo from 99 % of the plane, the fine lattice adds nothing to that, and a
-    far search saves its 30 measurements (``auto``'s 1° lattice out to 3°).
+    None when no lattice of at least :data:`MIN_PASS_SPACING` detects the echo from that
+    share of the plane (ŝ near 0 dB): the plan stays.
     """
     pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
     profile = cached_lobe_profile(setup, pos)
     snr = snr_for_noise_sigma(profile.reference, noise_sigma, setup.window, setup.pulse)
-    if not snr >= min(SEARCH_SNRS):
+    if np.isnan(snr):
         return None
-    first = _floored(profile.lattice_spacing(min(snr, SNR_DB_RANGE[1])))
+    first = _floored(profile.lattice_spacing(float(np.clip(snr, *SNR_DB_RANGE))))
+    if first < MIN_PASS_SPACING:
+        return None
     return (first, *(p for p in search_passes(setup, pos) if p < first))
 
 
