@@ -26,7 +26,7 @@ typecheck: setup
 	$(BIN)/mypy
 
 test: lint typecheck
-	$(BIN)/python -m pytest -n 2 --timeout=600 --durations=25
+	$(BIN)/python -m pytest -n 2 --dist worksteal --timeout=600 --durations=25
 	$(MAKE) docs
 
 # The documentation site (Sphinx): warnings are errors, every gallery example is executed.

@@ -68,7 +68,7 @@ def test_lower_bound_smoke_runs_and_reports(tmp_path):
     out_md = tmp_path / "lb.md"
     proc = subprocess.run(
         [
-            *(sys.executable, str(SCRIPT), "--smoke", "--workers", "1", "--budget", "90"),
+            *(sys.executable, str(SCRIPT), "--smoke", "--workers", "1", "--budget", "60"),
             *("--out-md", str(out_md)),
         ],
         capture_output=True,
@@ -81,7 +81,7 @@ def test_lower_bound_smoke_runs_and_reports(tmp_path):
     text = out_md.read_text()
     assert text.startswith("# Lower bound on measurements vs `auto`")
     assert "N ≥ 0.99 · A / K" in text and "| 30 |" in text
-    assert "--budget 90`" in text  # the run line reruns it with the budget it had
+    assert "--budget 60`" in text  # the run line reruns it with the budget it had
 
 
 def test_a_budget_below_the_reading_point_is_refused(bench, capsys):
