@@ -186,6 +186,7 @@ def test_calibrate_on_the_back_wall_converges_and_counts_its_measurements(
     assert result["n_measurements"] == len(result["points"]) == len(result["values"])
     assert result["n_measurements"] <= BACK_WALL_LOCK
     assert result["acquisition_measurements"] is not None
+    assert result["search_passes"] is None  # a gated metric predicts no echo: plan kept
     assert float(np.hypot(*result["x"])) < 0.02
     assert "measurements" in stdout
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from echocal.calibrate import Acquisition, FunctionObjective, calibrate
+from echocal.calibrate import Acquisition, CalibrationResult, FunctionObjective, calibrate
 from echocal.calibrate.search_pattern import search_rings
 from echocal.errors import EchocalValueError
 from echocal.measurement import SourceObjective
@@ -192,10 +192,17 @@ def test_auto_takes_the_objectives_replan_unless_told_where_to_search(ray):
 
     res = run()
     assert res.options["replan"] == "objective"
+    # the result says what it searched: one pass sized for ~30 dB, then the 20 dB one
+    assert (
+        res.search_passes is not None and res.search_passes[-1] == dr.search_passes(noisy, pos)[-1]
+    )
+    assert CalibrationResult.from_dict(res.to_dict()).search_passes == res.search_passes
     assert res.acquisition_measurements is not None and res.acquisition_measurements < 37
     assert np.hypot(*(np.asarray(res.x) - truth)) < 0.1
-    assert run(fine_radius=3.0).options["replan"] is None
+    kept = run(fine_radius=3.0)
+    assert kept.options["replan"] is None and kept.search_passes is None
     assert run(passes=[5.0]).options["replan"] is None
     analytic = FunctionObjective(lambda x: np.exp(-np.sum(x**2, axis=1)), budget=12)
     res = calibrate(analytic, "auto", x0=[0.5, 0.5], budget=12, rng=1)
     assert res.options["replan"] == "objective"  # asked, and it predicts nothing
+    assert res.search_passes is None

@@ -64,8 +64,8 @@ Why each part:
    first pass is the coarsest for that SNR (below 20 dB the 1° lattice stays and one
    pass sized for that SNR follows it, 1.33° at 10 dB, in place of the two below, which
    cannot see such an echo: a 10 dB far start used to give up after them); beyond, two
-   passes out to ``max_radius``, coarse to fine, sized from the probe when the objective knows it
-   (:meth:`~echocal.calibrate.Objective.search_passes`: the simulator, or a rig's setup):
+   passes out to ``max_radius``, coarse to fine, sized from the probe when the objective
+   knows it (:meth:`~echocal.calibrate.Objective.search_passes`: the simulator, or a rig's setup):
    the coarsest hexagonal lattices that detect a 30 dB, then a 20 dB echo from 99 % of
    the plane, computed from the probe's noiseless diffraction lobe before anything is
    measured (:mod:`echocal.measurement.detection_radius`) — 8.62° and 4.17° for the

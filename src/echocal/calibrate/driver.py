@@ -457,5 +457,6 @@ def calibrate(
         names=objective.names,
         times=times,
         acquisition_measurements=_acquisition_cost(opt, objective),
+        search_passes=getattr(opt, "replanned", None),
         final_value=final_value,
     )

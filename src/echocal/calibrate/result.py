@@ -73,6 +73,10 @@ class CalibrationResult:
     times : [s], shape (n_measurements,) — wall-clock time of each measurement.
     acquisition_measurements : measurements the acquisition phase spent before it found
         the echo and handed over (None without an acquisition phase or if it never did).
+    search_passes : [deg] the spacings of the passes the acquisition searched beyond x0's
+        first ring, coarse first, when it sized them for the echo predicted against the
+        noise that ring measured (``replan``; e.g. (1.33,) for a 10 dB echo of the 12.7 mm
+        5 MHz probe); None when it kept its plan or had none.
     final_value : [energy units] the mean of the final measurements at ``x`` (counted in
         ``n_measurements``; ``final_check`` of them), None when the run did not measure
         its estimate.
@@ -97,6 +101,7 @@ class CalibrationResult:
     names: tuple[str, str] = ("azimuth", "coelevation")
     times: FloatArray = field(default_factory=lambda: np.zeros(0))
     acquisition_measurements: int | None = None
+    search_passes: tuple[float, ...] | None = None
     final_value: float | None = None
 
     @property
@@ -145,6 +150,8 @@ class CalibrationResult:
                     kw[name] = arr
         if "names" in kw:
             kw["names"] = tuple(kw["names"])
+        if kw.get("search_passes") is not None:
+            kw["search_passes"] = tuple(float(v) for v in kw["search_passes"])
         return cls(**kw)
 
     def save_json(

@@ -177,6 +177,7 @@ def _calibrate_measured(
         **done.extra,
         "n_measurements": result.n_measurements,
         "acquisition_measurements": result.acquisition_measurements,
+        "search_passes_deg": result.search_passes,
         "final_value": result.final_value,
         "n_iterations": result.n_iterations,
         "status": result.status,

@@ -325,6 +325,7 @@ def _calibrate_simulated(
         "error_deg": evaluation.error if found else None,
         "n_measurements": result.n_measurements,
         "acquisition_measurements": result.acquisition_measurements,
+        "search_passes_deg": result.search_passes,
         "final_value": result.final_value,
         "n_iterations": result.n_iterations,
         "status": result.status,

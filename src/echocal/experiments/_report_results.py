@@ -71,6 +71,7 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
         ("parameterization", result.get("parameterization")),
         ("measurements", result.get("n_measurements")),
         ("of which acquisition", result.get("acquisition_measurements")),
+        ("search passes sized for the measured noise", _passes(result.get("search_passes"))),
         ("iterations", result.get("n_iterations")),
         ("metric at the estimate", result.get("final_value")),
         ("wall time [s]", result.get("wall_time")),
@@ -218,3 +219,10 @@ def _scan_figures(scan: Any) -> dict[str, Any]:
     if "normal_error" in scan.dataset:
         figures["errors"] = lambda: surface.error_maps_figure(scan)
     return figures
+
+
+def _passes(spacings: list[float] | None) -> str:
+    """The acquisition's replanned pass spacings [deg], or why there are none."""
+    if not spacings:
+        return "– (the planned search was kept)"
+    return ", ".join(f"{float(v):.2f}°" for v in spacings)
