@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -15,7 +17,7 @@ from echocal.calibrate import (
     preset_names,
     presets,
 )
-from echocal.errors import EchocalValueError, LimitError, UnknownNameError
+from echocal.errors import DataFileError, EchocalValueError, LimitError, UnknownNameError
 
 X0 = (1.5, 1.0)
 
@@ -123,6 +125,19 @@ def test_result_json_round_trip(tmp_path, gauss_objective):
     assert back.to_dict() == res.to_dict()
     assert back.message == res.message and back.names == res.names
     assert not list(tmp_path.glob("sub/.*partial*"))
+
+
+@pytest.mark.parametrize(
+    "damage", [{"search_passes": ["wide"]}, {"values": ["nan-ish"]}, {"search_passes": 4.2}]
+)
+def test_a_damaged_result_file_is_one_clear_error(tmp_path, damage):
+    res = calibrate(FunctionObjective(gaussian), "auto", x0=X0, max_iter=3, rng=3)
+    path = tmp_path / "result.json"
+    res.save_json(path)
+    data = json.loads(path.read_text())
+    path.write_text(json.dumps({**data, **damage}))
+    with pytest.raises(DataFileError, match="cannot read calibration result"):
+        CalibrationResult.load_json(path)
 
 
 def test_presets_hold_the_thesis_tables():

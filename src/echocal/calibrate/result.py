@@ -170,7 +170,7 @@ class CalibrationResult:
         try:
             with open(path, encoding="utf-8") as fh:
                 return cls.from_dict(json.load(fh))
-        except (OSError, json.JSONDecodeError, TypeError) as exc:
+        except (OSError, TypeError, ValueError) as exc:  # ValueError: bad JSON or numbers
             raise DataFileError(f"cannot read calibration result {str(path)!r}: {exc}") from exc
 
 
