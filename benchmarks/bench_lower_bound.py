@@ -31,8 +31,8 @@ radius) that detects 99 % of the optima in the band, + 3: what an optimized
 non-adaptive covering spends — a design again, the union bound's counterpart from above.
 
 ``auto`` runs through :mod:`bench_calibration` (the same seeds, starts and budget of 80 as
-the calibration benchmark — ``--budget`` allows more, for a cell whose bound is beyond 80:
-uniform distance in the band, uniform direction).  Reported: the
+the calibration benchmark: uniform distance in the band, uniform direction; ``--budget``
+allows more, for a cell whose bound is beyond 80).  Reported: the
 fraction within 0.1° after 60 measurements, the median / 90th / 99th percentile of the
 measurements after which the estimate stays within 0.1° (``>80`` where runs never got
 there), the median measurements the acquisition phase spent before handing over, and the
