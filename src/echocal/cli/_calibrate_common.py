@@ -184,6 +184,43 @@ def exit_code(result: Any) -> int:
     return EXIT_AT_LIMIT if result.status == 8 else EXIT_NOT_CONVERGED
 
 
+def calibration_summary(
+    result: Any,
+    out: Path,
+    *,
+    context: dict[str, Any],
+    parameterization: str,
+    truth_deg: list[float] | None = None,
+    error_deg: float | None = None,
+    figures: dict[str, str] | None = None,
+) -> dict[str, Any]:
+    """The ``--json`` summary of a calibration: ``context`` (what was calibrated: setup,
+    seed, source, position, ...) first, then what every source reports alike — the
+    estimate [deg] (None without an echo), the truth and error [deg] (a simulation's;
+    None otherwise), the measurement counts, the searched passes, status, exit code and
+    the files written under ``out`` (``result.json`` and ``figures``)."""
+    found = found_echo(result)
+    return {
+        **context,
+        "method": result.method,
+        "parameterization": parameterization,
+        "names": list(result.names),
+        "success": result.success,
+        "estimate_deg": [float(v) for v in result.x] if found else None,
+        "truth_deg": truth_deg,
+        "error_deg": error_deg if found else None,
+        "n_measurements": result.n_measurements,
+        "acquisition_measurements": result.acquisition_measurements,
+        "search_passes_deg": result.search_passes,
+        "final_value": result.final_value,
+        "n_iterations": result.n_iterations,
+        "status": result.status,
+        "message": result.message,
+        "exit_code": exit_code(result),
+        "files": {"result": str(out / "result.json"), **(figures or {})},
+    }
+
+
 def _report(
     summary: dict[str, Any],
     result: Any,

@@ -20,8 +20,7 @@ from echocal.cli._calibrate_common import (
     _parse_position,
     _report,
     _Run,
-    exit_code,
-    found_echo,
+    calibration_summary,
     prepare_out,
     save_final_ascan,
     save_pngs,
@@ -156,35 +155,24 @@ def _calibrate_measured(
             **common,
         )
     result, pulse = done.result, done.pulse
-    found = found_echo(result)
-    summary = {
-        "setup": setup,
-        "seed": seed,
-        "source": done.source,
-        "pulse": {
-            "name": pulse.name,
-            "center_frequency_hz": float(pulse.center_frequency),
-            "from": done.pulse_from,
+    summary = calibration_summary(
+        result,
+        out,
+        context={
+            "setup": setup,
+            "seed": seed,
+            "source": done.source,
+            "pulse": {
+                "name": pulse.name,
+                "center_frequency_hz": float(pulse.center_frequency),
+                "from": done.pulse_from,
+            },
+            "position_m": [float(v) for v in done.where],
+            **done.extra,
         },
-        "position_m": [float(v) for v in done.where],
-        "method": result.method,
-        "parameterization": parameterization,
-        "names": list(result.names),
-        "success": result.success,
-        "estimate_deg": [float(v) for v in result.x] if found else None,
-        "truth_deg": None,  # only a simulation knows its optimum
-        "error_deg": None,
-        **done.extra,
-        "n_measurements": result.n_measurements,
-        "acquisition_measurements": result.acquisition_measurements,
-        "search_passes_deg": result.search_passes,
-        "final_value": result.final_value,
-        "n_iterations": result.n_iterations,
-        "status": result.status,
-        "message": result.message,
-        "exit_code": exit_code(result),
-        "files": {"result": str(out / "result.json"), **done.figures},
-    }
+        parameterization=parameterization,
+        figures=done.figures,
+    )
     _report(summary, result, out, json_output, lambda: _print_measured_estimate(done, out))
 
 

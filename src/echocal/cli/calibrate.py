@@ -21,8 +21,7 @@ from echocal.cli._calibrate_common import (
     _print_estimate,
     _report,
     _Run,
-    exit_code,
-    found_echo,
+    calibration_summary,
     prepare_out,
     save_final_ascan,
     save_pngs,
@@ -309,30 +308,25 @@ def _calibrate_simulated(
     )
     figures = _save_plots(virtual, where, evaluation, out, chosen) if plots else {}
     figures.update(save_final_ascan(objective, result, out, plots))
-    found = found_echo(result)
-    summary = {
-        "setup": virtual.name,
-        "seed": virtual.rng if isinstance(virtual.rng, int) else None,
-        "source": {"kind": "setup", "name": virtual.name, "description": virtual.description},
-        "position_m": [float(v) for v in np.asarray(where, dtype=np.float64)],
-        "method": result.method,
-        "parameterization": parameterization,
-        "gate": None if chosen is None else chosen.describe(),
-        "names": list(result.names),
-        "success": result.success,
-        "estimate_deg": [float(v) for v in result.x] if found else None,
-        "truth_deg": [float(v) for v in evaluation.truth],
-        "error_deg": evaluation.error if found else None,
-        "n_measurements": result.n_measurements,
-        "acquisition_measurements": result.acquisition_measurements,
-        "search_passes_deg": result.search_passes,
-        "final_value": result.final_value,
-        "n_iterations": result.n_iterations,
-        "status": result.status,
-        "message": result.message,
-        "exit_code": exit_code(result),
-        "files": {"result": str(out / "result.json"), **figures},
-    }
+    summary = calibration_summary(
+        result,
+        out,
+        context={
+            "setup": virtual.name,
+            "seed": virtual.rng if isinstance(virtual.rng, int) else None,
+            "source": {
+                "kind": "setup",
+                "name": virtual.name,
+                "description": virtual.description,
+            },
+            "position_m": [float(v) for v in np.asarray(where, dtype=np.float64)],
+            "gate": None if chosen is None else chosen.describe(),
+        },
+        parameterization=parameterization,
+        truth_deg=[float(v) for v in evaluation.truth],
+        error_deg=evaluation.error,
+        figures=figures,
+    )
     _report(
         summary, result, out, json_output, lambda: _print_estimate(result, evaluation, virtual, out)
     )
