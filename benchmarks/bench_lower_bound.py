@@ -1,25 +1,34 @@
-"""How many measurements must any blind search spend — and how many ``auto`` spends.
+"""How many measurements must a blind search spend — and how many ``auto`` spends.
 
 For a probe, an SNR and a band of start distances, this benchmark prints a **lower bound**
-on the measurements any search needs to reach 0.1° from the optimum in 99 % of the runs,
+on the measurements a search needs to reach 0.1° from the optimum in 99 % of the runs,
 beside what ``auto`` achieves on the same starts; their ratio is the figure of merit.
 
-The bound, and why it holds for every search:
+The bound, and the searches it holds for:
 
 1. The detection probability p(θ) of one measurement θ from the optimum is *measured*
    (``detection_range.detection_curves``: noise draws in 8 directions, the acquisition
    phase's matched-filter detector at g > 4.5).
 2. The optimum lies anywhere in the annulus of area A = π(R₂² − R₁²) around the start (the
-   band [R₁, R₂]).  A search of N measurements at points mᵢ detects an optimum at x with
-   probability ≤ Σᵢ p(|x − mᵢ|) (the union bound; noise is independent).  Requiring
-   ≥ 0.99 for every x and integrating over the annulus:
+   band [R₁, R₂]).  A search that chooses each point from the detections so far (whether
+   a measurement had g > 4.5) measures a fixed sequence m₁, m₂, … until its first
+   detection, so within N measurements it detects an optimum at x with probability
+   ≤ Σᵢ p(|x − mᵢ|) (the union bound; noise is independent).  Requiring ≥ 0.99 for every
+   x and integrating over the annulus:
 
        N ≥ 0.99 · A / K,    K = 2π ∫₀^∞ p(θ) θ dθ        (the area one measurement "sees")
 
-   whatever the order or adaptivity of the search.  p is taken as measured up to
+   whatever the order of the points and whatever the search does after a detection.  A
+   search that also reads the values below the threshold (``auto``'s sequential test
+   adds neighbours' significances) may place later points better than a fixed sequence
+   can: for it the bound is a reference, not a proof.  "For every x" is the worst case;
+   the benchmark draws the distance uniformly in the band, and 99 % of its runs still
+   need the band covered to R₁ + 0.99 (R₂ − R₁).  p is taken as measured up to
    ``--max-angle`` and 0 beyond (choose it where p has fallen to the false-alarm level).
 3. Once detected, reaching 0.1° needs at least 3 more measurements: a lobe of known
-   shape still has three unknowns (two angles and the amplitude).
+   shape still has three unknowns (two angles and the amplitude).  This is the count of
+   the unknowns, a convention rather than a proof: the detecting value is one equation
+   of the three, and a noisy climb from the lobe's tail needs more.
 
 So N_bound = ⌈0.99 A/K⌉ + 3.  It is a bound, not a design.  Beside it: the hexagonal
 lattice whose every point lies within the 90 % (and the 99 %) detection radius of a

@@ -128,7 +128,13 @@ def test_result_json_round_trip(tmp_path, gauss_objective):
 
 
 @pytest.mark.parametrize(
-    "damage", [{"search_passes": ["wide"]}, {"values": ["nan-ish"]}, {"search_passes": 4.2}]
+    "damage",
+    [
+        {"search_passes": ["wide"]},
+        {"values": ["nan-ish"]},
+        {"search_passes": 4.2},
+        {"search_snr_db": "loud"},
+    ],
 )
 def test_a_damaged_result_file_is_one_clear_error(tmp_path, damage):
     res = calibrate(FunctionObjective(gaussian), "auto", x0=X0, max_iter=3, rng=3)

@@ -106,3 +106,11 @@ def test_tables_have_human_headers_one_never_and_percentages():
     assert 'class="table-wrap"' in html  # a scroll container: never off the page
     assert header("normal_error_deg") == "normal error [°]" and header("snr_db") == "SNR [dB]"
     assert fmt(None, "iterations_to_90pct") == "never" and fmt(float("inf")) == "never"
+
+
+def test_the_searched_passes_say_what_echo_they_were_sized_for():
+    from echocal.experiments._report_results import _passes
+
+    assert _passes([1.333], 10.04) == "1.33° (for an echo predicted at 10.0 dB)"
+    assert _passes([8.614, 4.17]) == "8.61°, 4.17°"  # a result written before ŝ was kept
+    assert _passes(None, None).startswith("– (the planned search was kept)")

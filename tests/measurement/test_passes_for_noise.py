@@ -52,6 +52,17 @@ def test_a_noiseless_receiver_has_infinite_snr_and_bad_sigmas_are_refused(ray):
             snr_for_noise_sigma(profile.reference, bad, setup.window, setup.pulse)
 
 
+@pytest.mark.parametrize("snr", [10.0, 23.5])
+def test_the_predicted_echo_snr_is_the_snr_whose_noise_was_measured(ray, snr):
+    """ŝ inverts the noise level of an SNR (the definition, P / σ²), and the passes are
+    those of that SNR."""
+    setup, pos, profile = ray
+    sigma = _sigma(setup, profile, snr)
+    assert dr.echo_snr_for_noise(setup, pos, sigma) == pytest.approx(snr, abs=1e-9)
+    assert dr.passes_for_noise(setup, pos, sigma) == dr.passes_for_snr(setup, pos, snr)
+    assert dr.passes_for_snr(setup, pos, float("nan")) is None
+
+
 def test_passes_start_at_the_predicted_echo_and_keep_the_finer_ones(ray):
     setup, pos, profile = ray
     ladder = dr.search_passes(setup, pos)  # sized for 30 then 20 dB
@@ -196,13 +207,18 @@ def test_auto_takes_the_objectives_replan_unless_told_where_to_search(ray):
     assert (
         res.search_passes is not None and res.search_passes[-1] == dr.search_passes(noisy, pos)[-1]
     )
-    assert CalibrationResult.from_dict(res.to_dict()).search_passes == res.search_passes
+    # ... and the SNR it sized them for: the 30 dB setup's, from the first ring's σ
+    # (7 A-scans; 8 % in σ is 0.7 dB)
+    assert res.search_snr_db == pytest.approx(30.0, abs=1.0)
+    back = CalibrationResult.from_dict(res.to_dict())
+    assert back.search_passes == res.search_passes and back.search_snr_db == res.search_snr_db
     assert res.acquisition_measurements is not None and res.acquisition_measurements < 37
     assert np.hypot(*(np.asarray(res.x) - truth)) < 0.1
     kept = run(fine_radius=3.0)
     assert kept.options["replan"] is None and kept.search_passes is None
+    assert kept.search_snr_db is None
     assert run(passes=[5.0]).options["replan"] is None
     analytic = FunctionObjective(lambda x: np.exp(-np.sum(x**2, axis=1)), budget=12)
     res = calibrate(analytic, "auto", x0=[0.5, 0.5], budget=12, rng=1)
     assert res.options["replan"] == "objective"  # asked, and it predicts nothing
-    assert res.search_passes is None
+    assert res.search_passes is None and res.search_snr_db is None

@@ -369,6 +369,7 @@ def calibrate(
         )
 
     start = objective.n_measurements
+    objective.search_snr_db = None  # set by the objective's replan, should this run make one
     iterates = [x0.copy()]
     counts = [0]
     status = 1
@@ -435,6 +436,7 @@ def calibrate(
     status, detail = judge(status, x, opt, objective, searched, final)
     n_nan = int(np.count_nonzero(np.isnan(vals_all)))
     message = STATUS_MESSAGES[status] + detail
+    replanned = getattr(opt, "replanned", None)
     if n_nan:
         message += f"; {n_nan} measurement(s) returned NaN (treated as the worst value seen)"
     return CalibrationResult(
@@ -457,6 +459,7 @@ def calibrate(
         names=objective.names,
         times=times,
         acquisition_measurements=_acquisition_cost(opt, objective),
-        search_passes=getattr(opt, "replanned", None),
+        search_passes=replanned,
+        search_snr_db=None if replanned is None else objective.search_snr_db,
         final_value=final_value,
     )

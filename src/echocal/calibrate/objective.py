@@ -140,6 +140,9 @@ class Objective:
         self.n_measurements = 0
         self.n_nan = 0
         self._last_significance: FloatArray | None = None
+        self.search_snr_db: float | None = None
+        """[dB] the echo's peak SNR that the last :meth:`passes_for_measured_noise` sized
+        its passes for; None before, or when it gave none."""
 
     # -- to override -------------------------------------------------------------------
     def _evaluate(self, points: FloatArray) -> ArrayLike:
@@ -195,9 +198,10 @@ class Objective:
     def passes_for_measured_noise(self) -> tuple[float, ...] | None:
         """[deg] the spacings of a blind search's passes, coarse first, for the echo the
         objective predicts against the noise measured so far (see
-        :func:`echocal.measurement.detection_radius.passes_for_noise`), or None when it
-        predicts none, or one too weak for any blind pass (the base class: an analytic
-        function has no probe)."""
+        :func:`echocal.measurement.detection_radius.passes_for_noise`; the SNR they are
+        sized for is kept in :attr:`search_snr_db`), or None when it predicts none, or
+        one too weak for any blind pass (the base class: an analytic function has no
+        probe)."""
         return None
 
     def lobe_template(self) -> LobeTemplate | None:

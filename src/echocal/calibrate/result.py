@@ -44,6 +44,8 @@ NO_ECHO_STATUSES = frozenset({4, 6, 9})
 """Statuses of a run that found no echo: ``x`` is not an estimate of anything."""
 
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
+_OPTIONAL_NUMBERS = ("fun", "final_value", "search_snr_db")
+"""Fields that are a number or None; a non-finite one is stored as None."""
 
 
 @dataclass(frozen=True)
@@ -77,6 +79,8 @@ class CalibrationResult:
         first ring, coarse first, when it sized them for the echo predicted against the
         noise that ring measured (``replan``; e.g. (1.33,) for a 10 dB echo of the 12.7 mm
         5 MHz probe); None when it kept its plan or had none.
+    search_snr_db : [dB] the echo's peak SNR ŝ the objective predicted against that noise,
+        for which ``search_passes`` are sized; None when ``search_passes`` is.
     final_value : [energy units] the mean of the final measurements at ``x`` (counted in
         ``n_measurements``; ``final_check`` of them), None when the run did not measure
         its estimate.
@@ -102,6 +106,7 @@ class CalibrationResult:
     times: FloatArray = field(default_factory=lambda: np.zeros(0))
     acquisition_measurements: int | None = None
     search_passes: tuple[float, ...] | None = None
+    search_snr_db: float | None = None
     final_value: float | None = None
 
     @property
@@ -127,7 +132,7 @@ class CalibrationResult:
                 v = arr.tolist()
             elif f.name == "names":
                 v = list(v)
-            elif f.name in ("fun", "final_value") and v is not None and not math.isfinite(v):
+            elif f.name in _OPTIONAL_NUMBERS and v is not None and not math.isfinite(v):
                 v = None
             elif f.name == "options":
                 v = _jsonable(v)
@@ -152,6 +157,8 @@ class CalibrationResult:
             kw["names"] = tuple(kw["names"])
         if kw.get("search_passes") is not None:
             kw["search_passes"] = tuple(float(v) for v in kw["search_passes"])
+        if kw.get("search_snr_db") is not None:
+            kw["search_snr_db"] = float(kw["search_snr_db"])
         return cls(**kw)
 
     def save_json(

@@ -212,6 +212,7 @@ def calibration_summary(
         "n_measurements": result.n_measurements,
         "acquisition_measurements": result.acquisition_measurements,
         "search_passes_deg": result.search_passes,
+        "search_snr_db": result.search_snr_db,
         "final_value": result.final_value,
         "n_iterations": result.n_iterations,
         "status": result.status,

@@ -71,7 +71,10 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
         ("parameterization", result.get("parameterization")),
         ("measurements", result.get("n_measurements")),
         ("of which acquisition", result.get("acquisition_measurements")),
-        ("search passes sized for the measured noise", _passes(result.get("search_passes"))),
+        (
+            "search passes sized for the measured noise",
+            _passes(result.get("search_passes"), result.get("search_snr_db")),
+        ),
         ("iterations", result.get("n_iterations")),
         ("metric at the estimate", result.get("final_value")),
         ("wall time [s]", result.get("wall_time")),
@@ -221,8 +224,10 @@ def _scan_figures(scan: Any) -> dict[str, Any]:
     return figures
 
 
-def _passes(spacings: list[float] | None) -> str:
-    """The acquisition's replanned pass spacings [deg], or why there are none."""
+def _passes(spacings: list[float] | None, snr_db: float | None = None) -> str:
+    """The acquisition's replanned pass spacings [deg] and the echo SNR [dB] they were
+    sized for, or why there are none."""
     if not spacings:
         return "– (the planned search was kept)"
-    return ", ".join(f"{float(v):.2f}°" for v in spacings)
+    passes = ", ".join(f"{float(v):.2f}°" for v in spacings)
+    return passes if snr_db is None else f"{passes} (for an echo predicted at {snr_db:.1f} dB)"

@@ -63,9 +63,11 @@ __all__ = [
     "LobeProfile",
     "cached_lobe_profile",
     "detection_radius",
+    "echo_snr_for_noise",
     "first_crossing",
     "lobe_profile",
     "passes_for_noise",
+    "passes_for_snr",
     "search_passes",
 ]
 
@@ -338,33 +340,54 @@ def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -
     return tuple(passes)
 
 
+def echo_snr_for_noise(
+    setup: VirtualSetup, position: Sequence[float] | np.ndarray, noise_sigma: float
+) -> float:
+    """[dB] ŝ, the peak SNR of the best echo of ``setup``'s probe at ``position`` [m]
+    against a receiver noise σ [a.u. per sample]: its noiseless A-scan (the lobe
+    profile's reference) through the matched filter, against σ.  NaN where neither has
+    power (σ = 0 and no echo)."""
+    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
+    profile = cached_lobe_profile(setup, pos)
+    return float(snr_for_noise_sigma(profile.reference, noise_sigma, setup.window, setup.pulse))
+
+
+def passes_for_snr(
+    setup: VirtualSetup, position: Sequence[float] | np.ndarray, snr_db: float
+) -> tuple[float, ...] | None:
+    """[deg] a blind search's passes for an echo of peak SNR ``snr_db`` (ŝ) of
+    ``setup``'s probe at ``position`` [m]: the first pass is the coarsest hexagonal
+    lattice that detects it from :data:`PASS_COVERAGE` of the plane, the finer passes of
+    :func:`search_passes` follow as a fall-back (should the echo be weaker than the
+    model says).  For the 12.7 mm 5 MHz probe at 50 mm on the wave model: (8.61, 4.17)°
+    at 30 dB, (4.17,)° at 20 dB, (1.33,)° at 10 dB.
+
+    None when ŝ is NaN or no lattice of at least :data:`MIN_PASS_SPACING` detects the
+    echo from that share of the plane (ŝ near 0 dB): the plan stays.
+    """
+    if np.isnan(snr_db):
+        return None
+    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
+    profile = cached_lobe_profile(setup, pos)
+    first = _floored(profile.lattice_spacing(float(np.clip(snr_db, *SNR_DB_RANGE))))
+    if first < MIN_PASS_SPACING:
+        return None
+    return (first, *(p for p in search_passes(setup, pos) if p < first))
+
+
 def passes_for_noise(
     setup: VirtualSetup, position: Sequence[float] | np.ndarray, noise_sigma: float
 ) -> tuple[float, ...] | None:
     """[deg] a blind search's passes for ``setup``'s probe at ``position`` [m] once the
-    receiver's noise σ [a.u. per sample] has been measured: the best echo here then has
-    a known peak SNR ŝ (its noiseless A-scan against σ); the first pass is the coarsest
-    hexagonal lattice that detects it from :data:`PASS_COVERAGE` of the plane, the finer
-    passes of :func:`search_passes` follow as a fall-back (should the echo be weaker than
-    the model says).  For the 12.7 mm 5 MHz probe at 50 mm on the wave model: (8.61,
-    4.17)° at 30 dB, (4.17,)° at 20 dB, (1.33,)° at 10 dB.  An acquisition whose planned
-    passes (:func:`search_passes`, sized for 30 and 20 dB) are all coarser than the
-    first keeps its fine lattice around the start and searches on this one beyond it
+    receiver's noise σ [a.u. per sample] has been measured: those of
+    :func:`passes_for_snr` for the SNR the best echo then has
+    (:func:`echo_snr_for_noise`).  An acquisition whose planned passes
+    (:func:`search_passes`, sized for 30 and 20 dB) are all coarser than the first keeps
+    its fine lattice around the start and searches on this one beyond it
     (:class:`~echocal.calibrate.Acquisition`, ``replan``): a 10 dB echo is then found
     beyond 3° too, where the 8.61° and 4.17° passes cannot see it.
-
-    None when no lattice of at least :data:`MIN_PASS_SPACING` detects the echo from that
-    share of the plane (ŝ near 0 dB): the plan stays.
     """
-    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
-    profile = cached_lobe_profile(setup, pos)
-    snr = snr_for_noise_sigma(profile.reference, noise_sigma, setup.window, setup.pulse)
-    if np.isnan(snr):
-        return None
-    first = _floored(profile.lattice_spacing(float(np.clip(snr, *SNR_DB_RANGE))))
-    if first < MIN_PASS_SPACING:
-        return None
-    return (first, *(p for p in search_passes(setup, pos) if p < first))
+    return passes_for_snr(setup, position, echo_snr_for_noise(setup, position, noise_sigma))
 
 
 def _floored(spacing: float) -> float:

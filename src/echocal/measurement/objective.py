@@ -266,12 +266,16 @@ class SourceObjective(Objective):
     def passes_for_measured_noise(self) -> tuple[float, ...] | None:
         """[deg] the passes for the echo the simulated source predicts at this position
         against the noise σ measured in its A-scans so far (median of the per-scan robust
-        estimates; :func:`~echocal.measurement.detection_radius.passes_for_noise`).  None
-        before a noisy A-scan, for a gated metric, where the probe cannot see the part,
-        and for a rig's ``twin``: a setup file does not give the rig's echo amplitude in
-        the rig's units, so it cannot say how far above the rig's noise the echo stands."""
-        from echocal.measurement.detection_radius import passes_for_noise
+        estimates): those of :func:`~echocal.measurement.detection_radius.passes_for_snr`
+        for the echo's predicted peak SNR ŝ
+        (:func:`~echocal.measurement.detection_radius.echo_snr_for_noise`), which
+        :attr:`search_snr_db` keeps.  None before a noisy A-scan, for a gated metric,
+        where the probe cannot see the part, and for a rig's ``twin``: a setup file does
+        not give the rig's echo amplitude in the rig's units, so it cannot say how far
+        above the rig's noise the echo stands."""
+        from echocal.measurement.detection_radius import echo_snr_for_noise, passes_for_snr
 
+        self.search_snr_db = None
         twin = self.twin
         if twin is None or twin is not self.source or self.gate is not None:
             return None
@@ -279,9 +283,13 @@ class SourceObjective(Objective):
         if not sigma > 0.0:  # no noise measured yet
             return None
         try:
-            return passes_for_noise(twin, self.position, sigma)
+            snr = echo_snr_for_noise(twin, self.position, sigma)
+            passes = passes_for_snr(twin, self.position, snr)
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
+        if passes is not None:
+            self.search_snr_db = snr
+        return passes
 
     def lobe_template(self) -> LobeTemplate | None:
         """The simulated probe's pseudo-energy lobe at this position (the source, or the
