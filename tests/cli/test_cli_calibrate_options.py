@@ -167,3 +167,10 @@ def test_the_setup_files_seed_is_used_unless_seed_is_given(tmp_path):
 def test_methods_names_where_an_option_comes_from():
     text = CliRunner().invoke(app, ["methods", "model-based"]).output
     assert "history" in text and "Python API only" in text
+    lines = {
+        line.split()[0]: line
+        for line in CliRunner().invoke(app, ["methods", "auto"]).output.splitlines()[1:]
+    }
+    assert "Python API only" in lines["replan"]  # the objective's search for its noise
+    assert "objective's probe" in lines["passes"] and "objective's)" in lines["noise_sigma"]
+    assert "objective" not in lines["spacing"]

@@ -183,6 +183,11 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
 
 
+CALLABLE_INPUTS = ("noise_model", "lobe_template", "normal_echo", "detector", "replan")
+"""Options the objective supplies as callables (the live noise estimate, the probe's lobe
+and best echo, the echo detector, the search replanned for the measured noise): set only
+through the Python API."""
+
 SEARCH_GEOMETRY = ("passes", "growth", "max_spacing")
 """Options that set where a blind search looks beyond the fine lattice."""
 

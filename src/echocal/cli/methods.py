@@ -22,7 +22,7 @@ def register(app: typer.Typer) -> None:
         json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     ) -> None:
         """List the calibration methods, or one method's options (for --option KEY=VALUE)."""
-        from echocal.calibrate import Acquisition, get_method, method_names
+        from echocal.calibrate import get_method, method_names
         from echocal.calibrate._options import accepted_options
 
         if name is None:
@@ -41,21 +41,27 @@ def register(app: typer.Typer) -> None:
             return
         output.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
         for key, default in options.items():
-            note = _note(key, issubclass(cls, Acquisition))
+            note = _note(key, cls)
             output.print(f"  {key:18s} default {escape(repr(default))}{note}")
 
 
-def _note(key: str, searches: bool) -> str:
-    """Where an option's value comes from when it is not the default or --option."""
+def _note(key: str, cls: type) -> str:
+    """Where an option of method ``cls`` takes its value from when it is neither the
+    default nor set by --option (the driver's rules: :func:`echocal.calibrate.calibrate`)."""
+    from echocal.calibrate import Acquisition
+    from echocal.calibrate._options import option_defaults
     from echocal.calibrate.acquisition import LOCAL_INPUTS
-    from echocal.calibrate.driver import OBJECTIVE_INPUTS
+    from echocal.calibrate.driver import CALLABLE_INPUTS, OBJECTIVE_INPUTS
 
-    if key in ("noise_model", "detector", "lobe_template", "normal_echo"):
+    searches = issubclass(cls, Acquisition)
+    if key in CALLABLE_INPUTS:
         return "  (supplied by the objective; Python API only)"
     if key == "history":
         return "  (warm start from earlier measurements; Python API only)"
     if key in OBJECTIVE_INPUTS and (searches or key in LOCAL_INPUTS):
         return "  (default: the objective's)"
+    if key == "passes" and searches and option_defaults(cls).get("passes"):
+        return "  (sized from the objective's probe when it has one)"
     return ""
 
 
