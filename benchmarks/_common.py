@@ -66,7 +66,11 @@ def _cpu_model() -> str:
 
 
 def machine_info(packages: Sequence[str] = ()) -> dict[str, Any]:
-    """Cores, CPU, Python and package versions, BLAS threads and the load when started."""
+    """echocal's git commit (``-dirty`` when its source differs from it; None outside a
+    checkout), cores, CPU, Python and package versions, BLAS threads and the load when
+    started."""
+    from echocal.provenance import git_commit
+
     try:
         usable = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
@@ -76,6 +80,7 @@ def machine_info(packages: Sequence[str] = ()) -> dict[str, Any]:
     except OSError:
         load = []
     return {
+        "echocal_git": git_commit(),
         "cpu": _cpu_model(),
         "cores": os.cpu_count(),
         "usable_cores": usable,

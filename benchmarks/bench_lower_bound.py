@@ -193,6 +193,7 @@ def main(argv: list[str] | None = None) -> int:
     band = STARTS[args.start]
     setup_name = CASES[args.case]["setup"]
     angles = np.round(np.arange(0.0, args.max_angle + step / 2, step), 3)
+    machine = machine_info()
     t0 = time.perf_counter()
     rows: list[list[str]] = []
     for snr in (float(v) for v in args.snr.split(",")):
@@ -263,7 +264,7 @@ def main(argv: list[str] | None = None) -> int:
             "",
             f"Run: `python benchmarks/bench_lower_bound.py --case {args.case} --snr {args.snr} "
             f"--runs {runs} --start {args.start} --budget {args.budget}` "
-            f"({elapsed:.0f} s; {machine_info()['cpu']}).",
+            f"({elapsed:.0f} s; {machine['cpu']}; echocal {machine['echocal_git']}).",
             "",
             "\n\n".join(__doc__.split("\n\n")[1:6]).strip().rstrip(":"),
             "",
