@@ -80,5 +80,9 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
         assert math.isclose(s["success_0.1"], sum(e <= 0.1 for e in finals) / len(finals))
     md = out_md.read_text(encoding="utf-8")
     assert md.startswith("# Calibration benchmark")
+    # the page can be rerun: the exact command and the commit that made it
+    commit = data["machine"]["echocal_git"]
+    assert "`python benchmarks/bench_calibration.py --quick --cases thesis" in md
+    assert commit is None or f"at echocal {commit} " in md
     assert "## thesis" in md and "| method |" in md
     assert out_png.stat().st_size > 1000
