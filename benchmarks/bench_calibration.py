@@ -113,7 +113,7 @@ import time  # noqa: E402
 import warnings  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
-from typing import Any  # noqa: E402
+from typing import Any, NamedTuple  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _common import machine_info, markdown_table  # noqa: E402
@@ -136,6 +136,7 @@ from echocal.measurement.truth import search_optimum  # noqa: E402
 from echocal.plots import save_figure  # noqa: E402
 from echocal.plots._style import MARKERS  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
+from echocal.signal.gates import TimeGate, resolve_gate  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
 from echocal.specimen.normals import perpendicular_start  # noqa: E402
 
@@ -185,9 +186,18 @@ CASES: dict[str, dict[str, Any]] = {
         "position": (0.004, 0.002, 0.05),
         "lobe": "rod r 20 mm, 6.35 mm probe: anisotropic lobe (wave)",
     },
+    # the back-wall echo through the interface-triggered gate, as a flaw detector (issue 19)
+    "plate-back-wall": {
+        "setup": "immersion-steel-plate",
+        "gate": "back-wall",
+        "position": None,
+        "lobe": "20 mm steel plate's back wall in its triggered gate, 12.7 mm probe (wave)",
+    },
 }
 CURVED_CASES = ("sphere-12.7", "sphere-6.35", "rod-12.7", "rod-6.35")
 """Selectable with ``--cases``; not in a default run (each costs minutes)."""
+GATED_CASES = ("plate-back-wall",)
+"""Cases whose metric is read in a gate (the ``gate`` of the case); ``--cases`` only."""
 TWIN_RATIO = 0.98
 """A second maximum within this fraction of the first counts as the optimum too."""
 DEFAULT_CASES = ("immersion-5mhz", "immersion-5mhz-ray", "thesis")
@@ -209,13 +219,25 @@ OURS: dict[str, dict[str, Any]] = {
 
 
 # ----------------------------------------------------------------------------- cases
-_SETUPS: dict[str, Any] = {}
+class Case(NamedTuple):
+    """A case made ready to run (cached per process)."""
+
+    setup: Any
+    position: np.ndarray
+    """[m] (3,)"""
+    truth: np.ndarray
+    """[deg] (2,) the true optimum in tilts (inside ``gate`` when there is one)"""
+    optima: np.ndarray
+    """[deg] (k, 2) every equal optimum"""
+    gate: TimeGate | None
 
 
-def _case(case: str) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
-    """(base setup, position [m] (3,), true optimum [deg] (2,) in tilts, every equal
-    optimum [deg] (k, 2)), cached per process."""
-    if case not in _SETUPS:
+_CASES_READY: dict[str, Case] = {}
+
+
+def _case(case: str) -> Case:
+    """``case`` of :data:`CASES` made ready: its setup, position, truth and gate."""
+    if case not in _CASES_READY:
         spec = CASES[case]
         setup = load_setup(spec["setup"], seed=0)
         if "specimen" in spec:
@@ -227,9 +249,19 @@ def _case(case: str) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
         pos = np.asarray(
             setup.reference_position if spec["position"] is None else spec["position"], float
         )
-        truth = np.array(setup.true_optimum(pos, parameterization=PARAM))
-        _SETUPS[case] = (setup, pos, truth, _equal_optima(setup, pos, truth))
-    return _SETUPS[case]
+        gate = (
+            resolve_gate(
+                spec["gate"],
+                pulse=setup.pulse,
+                thickness=setup.thickness,
+                material=setup.material,
+            )
+            if "gate" in spec
+            else None
+        )
+        truth = np.array(setup.true_optimum(pos, parameterization=PARAM, gate=gate))
+        _CASES_READY[case] = Case(setup, pos, truth, _equal_optima(setup, pos, truth), gate)
+    return _CASES_READY[case]
 
 
 def _equal_optima(setup: Any, pos: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -299,11 +331,11 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     default :data:`BUDGET`); returns its error after each measurement."""
     case, start, snr, run, method, *rest = task
     budget = int(rest[0]) if rest else BUDGET
-    base, pos, truth, optima = _case(case)
+    base, pos, truth, optima, gate = _case(case)
     seed = run_seed(case, start, snr, run)
     setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
     objective = SourceObjective(
-        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup)
+        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup), gate=gate
     )
     x0 = start_point(truth, start, seed, objective.bounds)
     t0 = time.perf_counter()
