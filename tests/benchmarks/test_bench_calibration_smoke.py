@@ -87,7 +87,32 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
     assert "`python benchmarks/bench_calibration.py --quick --cases thesis" in md
     assert commit is None or f"at echocal {commit} " in md
     assert "## thesis" in md and "| method |" in md
+    assert "| thesis, start 1–3°, 30 dB | " in md  # the best of echocal and the best peer
     assert out_png.stat().st_size > 1000
+    # the page again from the JSON alone, identical but for the figure's name
+    again, again_png = tmp_path / "again.md", tmp_path / "again.png"
+    render = [sys.executable, str(SCRIPT), "--render", str(out_json)]
+    done = subprocess.run(
+        [*render, "--out-md", str(again), "--plot", str(again_png)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert again.read_text(encoding="utf-8") == md.replace("(c.png)", "(again.png)")
+    assert again_png.stat().st_size > 1000
+    damaged = tmp_path / "damaged.json"
+    damaged.write_text('{"mode": "quick"', encoding="utf-8")
+    done = subprocess.run(
+        [*render[:3], str(damaged), "--out-md", str(tmp_path / "x.md")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert done.returncode == 2 and done.stdout.startswith(f"error: --render {damaged}")
+    assert not (tmp_path / "x.md").exists()
 
 
 def test_the_back_wall_case_calibrates_in_its_gate():
