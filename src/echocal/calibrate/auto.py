@@ -14,9 +14,9 @@ start band          1–3°              5–20°
 10 dB               79/100/100/100    0/0/0/7 %
 ==================  ================  ================
 
-From 5–20° at 10 dB no search can be sure of the echo within 80 (any search needs 468
-measurements for 99 % of these starts, docs/benchmarks/lower-bound.md); with a budget
-of 1200 ``auto`` needs a median 262, p99 535: **1.14×** that bound.  Before the search
+From 5–20° at 10 dB no search that acts on detections can be sure of the echo within 80
+(it needs 468 measurements for 99 % of these starts, docs/benchmarks/lower-bound.md);
+with a budget of 1200 ``auto`` needs a median 262, p99 535: **1.14×** that bound.  Before the search
 below 20 dB was sized for the predicted echo (item 3) it gave up after about 146
 measurements whatever the budget; within 80 it had 0/1/5/8 % by lucky detections on
 passes too coarse for the echo, and at 20 dB 4/34/68/78 % (median 47.5 against 53 now:
@@ -98,8 +98,8 @@ Why each part:
    measurement.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
-lower-bound.md): the lower-bound ratio (any search needs ≥ 17 measurements for 99 % of
-far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71, since detection alone costs
+lower-bound.md): the lower-bound ratio (a search that acts on detections needs ≥ 17
+measurements for 99 % of far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71, since detection alone costs
 a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5).  The
 12.7 mm probe over a rod at 10 dB meets its target only just (95 of 100 runs; its lobe
 peaks off normal incidence in two humps, flat along the rod, with no template; 2 of 100
