@@ -100,14 +100,15 @@ Why each part:
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the lower-bound ratio (a search that acts on detections needs ≥ 17
 measurements for 99 % of far starts at 30 dB; ``auto``'s p99 is 29, a ratio of 1.71,
-since detection alone costs a median 13 (p99 19) and the climb from a detection in the lobe's tail a median 5).  The
-12.7 mm probe over a rod at 10 dB meets its target only just (95 of 100 runs; its lobe
-peaks off normal incidence in two humps, flat along the rod, with no template; 2 of 100
-runs reach 0.1° only after 68–71 measurements, three end 0.10–0.47° off).  Without a
-probe model (a recording, a rig) the far search still spends the 1° lattice first (a
-fixed order cannot serve both a 10 dB near start and a 30 dB far one without knowing the
-SNR); ``fine_radius=1.0`` drops it when the SNR is known to be ≥ 20 dB.  When the start
-is known to be near the echo, ``method="model-based"`` saves the acquisition.
+since detection alone costs a median 13 (p99 19) and the climb from a detection in the
+lobe's tail a median 5). The 12.7 mm probe over a rod at 10 dB meets its target only
+just (95 of 100 runs; its lobe peaks off normal incidence in two humps, flat along the
+rod, with no template; 2 of 100 runs reach 0.1° only after 68–71 measurements, three end
+0.10–0.47° off). Without a probe model (a recording, a rig) the far search still spends
+the 1° lattice first (a fixed order cannot serve both a 10 dB near start and a 30 dB far
+one without knowing the SNR); ``fine_radius=1.0`` drops it when the SNR is known to be ≥
+20 dB. When the start is known to be near the echo, ``method="model-based"`` saves the
+acquisition.
 """
 
 from __future__ import annotations
