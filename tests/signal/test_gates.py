@@ -183,3 +183,39 @@ def test_plot_draws_every_gate():
     # the back-wall span is drawn where the gate is on this A-scan [µs]
     lo = float(gates[1].starts(x, WINDOW)) * 1e6
     assert spans[1].get_x() == pytest.approx(lo)
+
+
+def test_the_interface_trigger_does_not_fire_on_noise():
+    """Pure Gaussian noise (seeded, 2,000 A-scans of 4,096 samples) triggers only where a
+    sample reaches TRIGGER_NOISE_LEVEL σ: expected rate 1 − (1 − erfc(5/√2))^4096 ≈ 0.23 %
+    (the closed form); allowed: 1 %, far above the binomial spread (≈ 0.1 %) and the
+    robust σ's few-% error, far below the old rule's 100 % (half of its own peak)."""
+    from scipy.special import erfc
+
+    from echocal.signal.gates import TRIGGER_NOISE_LEVEL
+
+    noise = np.random.default_rng(7).normal(0.0, 0.3, (2000, WINDOW.n_samples))
+    fired = np.isfinite(interface_trigger(noise, WINDOW))
+    expected = 1.0 - (1.0 - erfc(TRIGGER_NOISE_LEVEL / math.sqrt(2.0))) ** WINDOW.n_samples
+    assert expected < 0.003
+    assert fired.mean() < 0.01
+    gate = resolve_gate("back-wall", pulse=PULSE, thickness=T, material=STEEL)
+    untriggered = noise[~fired][:5]
+    assert np.all(gated_metric("pseudo-energy", untriggered, WINDOW, PULSE, gate) == 0.0)
+
+
+@pytest.mark.parametrize("snr_sigmas", [30.0, 8.0])
+def test_an_interface_echo_above_the_noise_triggers_at_half_its_peak(snr_sigmas):
+    """With noise, an echo of 8 or 30 σ still triggers where it alone reaches half its peak
+    (within a sample: the noise moves the crossing); one of 3 σ does not trigger."""
+    rng = np.random.default_rng(3)
+    tof = 2 * 0.05 / C_WATER
+    clean = echo(tof)
+    sigma = np.max(np.abs(clean)) / snr_sigmas
+    noisy = clean + rng.normal(0.0, sigma, clean.shape)
+    t = WINDOW.times
+    truth = t[np.argmax(np.abs(clean) >= 0.5 * np.max(np.abs(clean)))]
+    got = float(interface_trigger(noisy[None, :], WINDOW)[0])
+    assert abs(got - truth) <= 1.5 / WINDOW.fs
+    weak = clean / snr_sigmas * 3.0 + rng.normal(0.0, sigma, clean.shape)
+    assert np.isnan(interface_trigger(weak[None, :], WINDOW)[0])

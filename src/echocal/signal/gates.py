@@ -7,7 +7,9 @@ the A-scan, so the metric inside the gate *is* the metric of the gated trace.
 - An **absolute** gate has a fixed ``start`` [s] on the recording's time axis.
 - An **interface-triggered** gate (a flaw detector's IF gate) starts ``delay`` [s] after
   the interface trigger: the first time |x| reaches ``threshold`` × the A-scan's own peak
-  |x| in the whole recording (the front-wall echo).  When the water path changes, the
+  |x| in the whole recording (the front-wall echo), and 5 × the A-scan's noise σ: an
+  A-scan without an interface echo above the noise does not trigger, and the gate then
+  holds nothing.  When the water path changes, the
   front wall moves and the gate moves with it, so a back-wall gate stays on the back wall.
 
 Named gates (:func:`resolve_gate`):
@@ -40,6 +42,7 @@ from echocal.signal.window import RecordingWindow
 __all__ = [
     "BUILTIN_GATES",
     "INTERFACE_THRESHOLD",
+    "TRIGGER_NOISE_LEVEL",
     "TimeGate",
     "check_gate",
     "gated_metric",
@@ -62,14 +65,29 @@ _SEES_ECHO = 1e-3
 (−60 dB) of the reference's peak |x|, and the receiver's noise σ."""
 
 
+TRIGGER_NOISE_LEVEL = 5.0
+"""The interface trigger also needs |x| ≥ this × the A-scan's noise σ (robust: 1.4826 ×
+the median absolute deviation of its samples, which are mostly noise), as a flaw
+detector's interface gate is set above the noise: a sample of Gaussian noise reaches 5 σ
+with probability 5.7·10⁻⁷, so a trace of 4,000 noise samples triggers in about 0.2 % of
+A-scans.  Without it, an A-scan whose interface echo is lost (the probe tilted beyond
+the front wall's lobe) triggers at half its own peak — on noise — and its gate holds a
+random stretch of the trace, which can be the front wall itself."""
+
+
 def interface_trigger(
     samples: ArrayLike, window: RecordingWindow, threshold: float = INTERFACE_THRESHOLD
 ) -> _F64:
     """[s] the interface trigger of each A-scan, shape ``(...,)``: the first time |x|
-    reaches ``threshold`` × its own peak |x| in the whole recording (linearly interpolated
-    between samples); NaN for an all-zero A-scan."""
+    reaches ``threshold`` × its own peak |x| in the whole recording, and at least
+    :data:`TRIGGER_NOISE_LEVEL` × its noise σ (linearly interpolated between samples);
+    NaN where no sample does (no interface echo above the noise, or an all-zero A-scan):
+    a triggered gate then holds nothing."""
+    x = np.asarray(samples, dtype=np.float64)
+    centred = x - np.median(x, axis=-1, keepdims=True)
+    sigma = 1.4826 * np.median(np.abs(centred), axis=-1)
     whole = Gate(start=window.start, width=window.duration, threshold=threshold)
-    return whole.first_crossing(samples, window)
+    return whole.first_crossing(x, window, floor=TRIGGER_NOISE_LEVEL * sigma)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -213,12 +213,22 @@ class Gate:
         return self.threshold * ref
 
     def first_crossing(
-        self, samples: ArrayLike, window: RecordingWindow, *, full_scale: float | None = None
+        self,
+        samples: ArrayLike,
+        window: RecordingWindow,
+        *,
+        full_scale: float | None = None,
+        floor: ArrayLike | None = None,
     ) -> _F64:
         """[s] first time inside the gate where |x| reaches the threshold (linearly
-        interpolated between samples), shape ``(...,)``; NaN where it never does."""
+        interpolated between samples), shape ``(...,)``; NaN where it never does.
+        ``floor`` [a.u.], shape ``(...,)`` or scalar: the least level that counts (e.g.
+        above the noise), when the threshold lies below it."""
         x = np.abs(_samples(samples, window))
-        level = self.level(x, full_scale)[..., None]
+        level = self.level(x, full_scale)
+        if floor is not None:
+            level = np.maximum(level, np.asarray(floor, dtype=np.float64))
+        level = level[..., None]
         above = (x >= level) & self.mask(window) & (x > 0)
         hit = np.any(above, axis=-1)
         k = np.argmax(above, axis=-1)
