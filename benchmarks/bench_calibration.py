@@ -117,7 +117,29 @@ from pathlib import Path  # noqa: E402
 from typing import Any, NamedTuple  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _common import machine_info, markdown_table  # noqa: E402
+from _calibration_cases import (  # noqa: E402
+    AUTO_TARGETS,
+    BUDGET,
+    CASES,
+    DEFAULT_CASES,
+    FIXED_BUDGETS,
+    FRONT_FIRST,
+    OURS,
+    PARAM,
+    SETTLE,
+    SNRS,
+    STARTS,
+    TOLERANCES,
+    TWIN_RATIO,
+)
+from _calibration_report import (  # noqa: E402
+    _winner_sentence,
+    case_table,
+    plot_ecdf,
+    report_markdown,
+    winner,
+)
+from _common import machine_info  # noqa: E402
 from _peers import (  # noqa: E402
     _PEER_FUNCS,
     INSTALL_HINT,
@@ -134,8 +156,6 @@ from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
 from echocal.measurement.objective import default_bounds  # noqa: E402
 from echocal.measurement.truth import search_optimum  # noqa: E402
-from echocal.plots import save_figure  # noqa: E402
-from echocal.plots._style import MARKERS  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
 from echocal.signal.gates import TimeGate, resolve_gate  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
@@ -143,86 +163,6 @@ from echocal.specimen.normals import perpendicular_start  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs" / "benchmarks"
-BUDGET = 80
-FIXED_BUDGETS = (15, 20, 40, 60, 80)
-TOLERANCES = (0.05, 0.1)
-PARAM = "tilt"
-
-CASES: dict[str, dict[str, Any]] = {
-    "immersion-5mhz": {
-        "setup": "immersion-5mhz",
-        "position": None,
-        "lobe": "narrow (~1°), diffraction tails (the wave model)",
-    },
-    "immersion-5mhz-ray": {
-        "setup": "immersion-5mhz-ray",
-        "position": None,
-        "lobe": "narrow (~1°), the ray model",
-    },
-    "thesis": {"setup": "thesis", "position": (0.010, 0.0, 0.022), "lobe": "broad (~±8°)"},
-    # curved parts, probe 4 mm across / 2 mm along off the axis of the part (issue 19)
-    "sphere-12.7": {
-        "setup": "immersion-5mhz",
-        "specimen": "sphere",
-        "position": (0.004, 0.002, 0.05),
-        "lobe": "ball r 25 mm, 12.7 mm probe: central peak, dip, near-field ring (wave)",
-    },
-    "sphere-6.35": {
-        "setup": "immersion-5mhz",
-        "specimen": "sphere",
-        "probe_width": 0.00635,
-        "position": (0.004, 0.002, 0.05),
-        "lobe": "ball r 25 mm, 6.35 mm probe: one broad lobe (wave)",
-    },
-    "rod-12.7": {
-        "setup": "immersion-5mhz",
-        "specimen": "cylinder",
-        "position": (0.004, 0.002, 0.05),
-        "lobe": "rod r 20 mm, 12.7 mm probe: two equal humps across the rod (wave)",
-    },
-    "rod-6.35": {
-        "setup": "immersion-5mhz",
-        "specimen": "cylinder",
-        "probe_width": 0.00635,
-        "position": (0.004, 0.002, 0.05),
-        "lobe": "rod r 20 mm, 6.35 mm probe: anisotropic lobe (wave)",
-    },
-    # the back-wall echo through the interface-triggered gate, as a flaw detector (issue 19)
-    "plate-back-wall": {
-        "setup": "immersion-steel-plate",
-        "gate": "back-wall",
-        "position": None,
-        "lobe": "20 mm steel plate's back wall in its triggered gate, 12.7 mm probe (wave)",
-    },
-}
-CURVED_CASES = ("sphere-12.7", "sphere-6.35", "rod-12.7", "rod-6.35")
-"""Selectable with ``--cases``; not in a default run (each costs minutes)."""
-GATED_CASES = ("plate-back-wall",)
-"""Cases whose metric is read in a gate (the ``gate`` of the case); ``--cases`` only."""
-TWIN_RATIO = 0.98
-"""A second maximum within this fraction of the first counts as the optimum too."""
-DEFAULT_CASES = ("immersion-5mhz", "immersion-5mhz-ray", "thesis")
-"""The cases of a run without ``--cases``: the same rig on both physics models, and the
-thesis's block."""
-STARTS: dict[str, tuple[float, float]] = {"near": (1.0, 3.0), "far": (5.0, 20.0)}
-SNRS = (30.0, 20.0, 10.0)
-
-FRONT_FIRST = "auto-front-first"
-"""A workflow, not a method, for a gated case: ``auto`` on the whole recording (the
-interface echo, which keeps the gate's trigger) until it settles (the CLI's default
-0.01°, 8), then ``auto`` in the case's gate from that estimate, on one budget."""
-SETTLE = (0.01, 8)
-
-OURS: dict[str, dict[str, Any]] = {
-    "auto": {},
-    "model-based": {},
-    "newton": {},
-    "quasi-newton": {},
-    "spsa": {},
-    "gradient": {},
-    "momentum": {},
-    "nesterov": {},
-}
 
 
 # ----------------------------------------------------------------------------- cases
@@ -454,225 +394,6 @@ def summarize(runs: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def _fmt_n(v: float) -> str:
-    return f">{BUDGET}" if not np.isfinite(v) else f"{v:g}"
-
-
-def case_table(summary: dict[str, dict[str, Any]]) -> str:
-    header = [
-        "method",
-        "runs",
-        "ok 0.05°",
-        "ok 0.1°",
-        "n to 0.05° med / p90",
-        "n to 0.1° med / p90",
-        "≤0.1° at 20 / 40 / 80",
-        "median error [°] at 20 / 40 / 80",
-    ]
-    order = sorted(summary, key=lambda m: (summary[m]["median_n_0.1"], -summary[m]["success_0.1"]))
-    rows = []
-    for m in order:
-        s = summary[m]
-        rows.append(
-            [
-                m,
-                s["runs"],
-                f"{100 * s['success_0.05']:.0f} %",
-                f"{100 * s['success_0.1']:.0f} %",
-                f"{_fmt_n(s['median_n_0.05'])} / {_fmt_n(s['p90_n_0.05'])}",
-                f"{_fmt_n(s['median_n_0.1'])} / {_fmt_n(s['p90_n_0.1'])}",
-                " / ".join(f"{100 * s[f'within_0.1_at_{b}']:.0f} %" for b in (20, 40, 80)),
-                " / ".join(f"{s[f'median_error_at_{b}']:.3g}" for b in (20, 40, 80)),
-            ]
-        )
-    return markdown_table(header, rows)
-
-
-def winner(summary: dict[str, dict[str, Any]], peers: list[str]) -> dict[str, Any]:
-    """The method with the fewest median measurements to 0.1° (ties: higher success), and
-    its margin over the best peer."""
-
-    def key(m: str) -> tuple[float, float, float]:
-        s = summary[m]
-        return (s["median_n_0.1"], -s["success_0.1"], s["p90_n_0.1"])
-
-    best = min(summary, key=key)
-    present = [p for p in peers if p in summary]
-    out = {"method": best, "median_n_0.1": summary[best]["median_n_0.1"]}
-    if present:
-        bp = min(present, key=key)
-        out.update(best_peer=bp, best_peer_median_n_0_1=summary[bp]["median_n_0.1"])
-    return out
-
-
-def plot_ecdf(per_case: dict[str, dict[str, dict[str, Any]]], path: Path) -> None:
-    """Fraction of runs within 0.1° (and staying there) vs measurements, per method."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(per_case), figsize=(6.5 * len(per_case), 4.6), squeeze=False)
-    n = np.arange(BUDGET + 1)
-    for ax, (case, summary) in zip(axes[0], per_case.items(), strict=True):
-        for i, (m, s) in enumerate(sorted(summary.items())):
-            reach = np.array([np.inf if v is None else v for v in s["n_to_0.1"]])
-            frac = (reach[None, :] <= n[:, None]).mean(axis=1)
-            # every series its own colour, line style and marker, for colour-blind readers
-            # too: 20 colours (tab20, dark shades first), 4 styles and 8 markers cycling (no
-            # two of 32 series share a style and a marker); markers staggered along x
-            ax.step(
-                n,
-                100 * frac,
-                where="post",
-                color=plt.get_cmap("tab20")((2 * i) % 20 + (2 * i) // 20),
-                ls=("-", "--", ":", "-.")[i % 4],
-                marker=MARKERS[i % len(MARKERS)],
-                ms=4.5,
-                mfc="none",
-                markevery=(i % 10, 10),
-                lw=2.2 if m == "auto" else 1.3,
-                label=m if m in OURS else f"{m} (peer)",
-            )
-        ax.set_title(f"{case}: all cells pooled")
-        ax.set_xlabel("measurements")
-        ax.set_ylabel("runs within 0.1° (and staying) [%]")
-        ax.set_xlim(0, BUDGET)
-        ax.set_ylim(0, 100)
-        ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    fig.tight_layout()
-    save_figure(fig, path, formats=("png",), dpi=110)
-    plt.close(fig)
-
-
-AUTO_TARGETS: dict[str, tuple[tuple[str, float, float, int, float], ...]] = {
-    "immersion-5mhz": (
-        ("near", 30.0, 0.05, 15, 0.99),
-        ("near", 10.0, 0.1, 40, 0.99),
-        ("far", 30.0, 0.1, 60, 0.99),
-    ),
-    "immersion-5mhz-ray": (
-        ("near", 30.0, 0.05, 20, 0.99),
-        ("near", 10.0, 0.1, 60, 0.95),
-        ("far", 30.0, 0.1, 60, 0.99),
-    ),
-}
-"""Targets for auto per case: (start, SNR [dB], tolerance [deg], measurements, fraction of
-runs) — issue 19's on the wave model (``immersion-5mhz``), issue 5's on the ray model."""
-
-
-def _best_cell_entry(cell: dict[str, dict[str, Any]], among: list[str]) -> str:
-    """'method: success %, median n' of the best of ``among`` in ``cell`` (most runs within
-    0.1° at the budget, then the fewest median measurements to it), or 'none: 0 %'."""
-    present = [m for m in among if m in cell]
-    if not present:
-        return "–"
-    best = min(present, key=lambda m: (-cell[m]["success_0.1"], cell[m]["median_n_0.1"]))
-    s = cell[best]
-    if s["success_0.1"] == 0.0:
-        return "none: 0 %"
-    return f"{best}: {100 * s['success_0.1']:.0f} %, {_fmt_n(s['median_n_0.1'])}"
-
-
-def best_per_cell_table(per_cell: dict[str, dict[str, dict[str, Any]]]) -> str:
-    """A Markdown table, one row per cell: the best of echocal's methods (and ``auto``'s
-    figures when another is best) against the best peer."""
-    rows = []
-    for key, cell in per_cell.items():
-        case, start, snr = key.split("|")
-        ours = _best_cell_entry(cell, [*OURS, FRONT_FIRST])
-        if "auto" in cell and not ours.startswith(("auto:", "none")):
-            ours += f" (auto: {_best_cell_entry(cell, ['auto']).split(': ', 1)[1]})"
-        band = STARTS[start]
-        rows.append(
-            [
-                f"{case}, start {band[0]:g}–{band[1]:g}°, {snr} dB",
-                ours,
-                _best_cell_entry(cell, list(PEERS)),
-            ]
-        )
-    return markdown_table(["cell", "best of echocal", "best peer"], rows)
-
-
-def _winner_sentence(w: dict[str, Any]) -> str:
-    text = f"fewest measurements to 0.1 deg (median): {w['method']} ({_fmt_n(w['median_n_0.1'])})"
-    if "best_peer" in w:
-        bp = w["best_peer_median_n_0_1"]
-        text += f"; best peer {w['best_peer']} ({_fmt_n(bp)})"
-        if np.isfinite(bp) and w["median_n_0.1"] > 0:
-            text += f": {bp / w['median_n_0.1']:.1f}x fewer"
-        elif not np.isfinite(bp):
-            text += f": the best peer's median run is not within 0.1 deg after {BUDGET}"
-    return text
-
-
-def report_markdown(data: dict[str, Any], png_name: str) -> str:
-    """The Markdown report of a run's ``data`` (what :func:`main` writes as JSON): how it
-    was made, the method, winners, the best method per cell, auto's targets, the plot
-    ``png_name`` and the tables."""
-    doc = (__doc__ or "").split("Cases (the simulator", 1)[1].split("Output:", 1)[0]
-    command = data.get("command", "python benchmarks/bench_calibration.py (options not recorded)")
-    commit = data["machine"].get("echocal_git") or "(commit not recorded)"
-    skipped, winners, auto_targets = data["skipped_peers"], data["winners"], data["auto_targets"]
-    per_case, per_cell = data["cases"], data["cells"]
-    md = [
-        "# Calibration benchmark",
-        "",
-        f"Generated by `{command}` at echocal {commit} "
-        f"(mode `{data['mode']}`: {data['runs_per_cell']} seeded runs per cell and method; "
-        f"budget {data['budget']} measurements; {data['elapsed_s'] / 60:.1f} min on "
-        f"{data.get('workers', '?')} worker(s)).",
-        "",
-        "## Method",
-        "",
-        "Cases (the simulator" + doc.rstrip(),
-        "",
-    ]
-    if skipped:
-        md += ["Skipped peers: " + "; ".join(f"{k} ({v})" for k, v in skipped.items()), ""]
-    md += ["## Results", ""]
-    for c, w in winners.items():
-        md.append(f"* **{c}** ({CASES[c]['lobe']} lobe, all cells pooled): {_winner_sentence(w)}.")
-    md += [
-        "",
-        "Per cell, the method of echocal with the most runs within 0.1° at the budget (ties: "
-        "the fewer median measurements until it stays within 0.1°) against the best peer:",
-        "",
-        best_per_cell_table(per_cell),
-        "",
-    ]
-    if auto_targets:
-        md += ["Targets for `auto` (issue 19's on the wave model, issue 5's on the ray model):", ""]
-        md += [
-            markdown_table(
-                ["target", "runs meeting it", "goal", "met"],
-                [
-                    [k, f"{100 * v['got']:.0f} %", f"≥ {100 * v['goal']:.0f} %", v["met"]]
-                    for k, v in auto_targets.items()
-                ],
-            ),
-            "",
-        ]
-    md += [
-        f"![fraction of runs within 0.1° vs measurements]({png_name})",
-        "",
-        "Columns: *ok* = estimate within the tolerance at the budget; *n to* = measurements "
-        "after which the estimate stays within the tolerance (median / 90th percentile; "
-        f"`>{BUDGET}` = not within the budget); *≤0.1° at* = fraction within 0.1° after "
-        "20 / 40 / 80 measurements; median error after 20 / 40 / 80.",
-        "",
-    ]
-    for c, summary in per_case.items():
-        md += [f"## {c} — {CASES[c]['lobe']} lobe, all cells pooled", "", case_table(summary), ""]
-        for key, cell in per_cell.items():
-            cc, s, snr = key.split("|")
-            if cc == c:
-                md += [f"### {c}, start {s} ({STARTS[s][0]:g}–{STARTS[s][1]:g}°), {snr} dB", ""]
-                md += [case_table(cell), ""]
-    return "\n".join(md) + "\n"
-
-
 # ----------------------------------------------------------------------------- main
 def _plan(
     mode: str, runs: int | None, cases: tuple[str, ...] = DEFAULT_CASES
@@ -830,7 +551,9 @@ def _write_report(data: dict[str, Any], md_path: Path | None, png_path: Path | N
     """Write the Markdown page and the figure of a run's ``data`` (where asked)."""
     if md_path:
         name = png_path.name if png_path else "calibration.png"
-        atomic_write_text(md_path, report_markdown(data, name))
+        method = "Cases (the simulator" + (__doc__ or "").split("Cases (the simulator", 1)[1]
+        method = method.split("Output:", 1)[0]
+        atomic_write_text(md_path, report_markdown(data, name, method))
     if png_path:
         plot_ecdf(data["cases"], png_path)
 

@@ -70,15 +70,9 @@ from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _calibration_cases import BUDGET, CASES, GATED_CASES, STARTS  # noqa: E402
 from _common import machine_info, markdown_table  # noqa: E402
-from bench_calibration import (  # noqa: E402
-    BUDGET,
-    CASES,
-    GATED_CASES,
-    STARTS,
-    measurements_to,
-    run_one,
-)
+from bench_calibration import measurements_to, run_one  # noqa: E402
 from detection_range import cover, detection_curves, radius  # noqa: E402
 
 from echocal.calibrate.search_pattern import hex_spiral  # noqa: E402
