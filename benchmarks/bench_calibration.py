@@ -273,6 +273,11 @@ def _estimates_ours(result: Any, x0: np.ndarray, budget: int) -> np.ndarray:
     return est
 
 
+AUTO_MIN_BUDGET = 8
+"""The least budget ``auto`` accepts: x0 and its first ring of 6, and the final
+measurement at the estimate."""
+
+
 def _front_first(
     setup: Any, pos: np.ndarray, gate: TimeGate | None, x0: np.ndarray, budget: int
 ) -> tuple[np.ndarray, str, int | None, int]:
@@ -282,8 +287,8 @@ def _front_first(
     stages: list[tuple[Any, np.ndarray, int]] = []
     start, left = x0, budget
     for stage_gate, settle in ((None, SETTLE), (gate, None)):
-        if left <= 0:
-            break
+        if left < AUTO_MIN_BUDGET:
+            break  # no room for another stage: the estimate stays
         stage_setup = dataclasses.replace(setup, rng=seed + len(stages))  # fresh noise
         objective = SourceObjective(
             stage_setup, pos, parameterization=PARAM, budget=left, bounds=tilt_bounds(setup),
