@@ -461,8 +461,8 @@ def _energy_gate(samples: Any, window: Any, objective: Any, gated: Any = None) -
     one — ``window_length`` or 2 pulse durations wide), its bar drawn at the detector's
     threshold (:data:`~echocal.constants.ECHO_THRESHOLD` σ) over the noise σ."""
     from echocal.constants import ECHO_THRESHOLD
-    from echocal.measurement.objective import scan_noise_sigma
     from echocal.signal.detection import shared_detector
+    from echocal.signal.noise import scan_noise_sigma
     from echocal.signal.processing import Gate, time_of_flight
 
     pulse = objective.pulse

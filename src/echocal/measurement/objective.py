@@ -27,38 +27,13 @@ from echocal.measurement.virtual import VirtualSetup
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.detection import shared_detector as _detector
 from echocal.signal.gates import TimeGate, gated_metric
+from echocal.signal.noise import scan_noise_sigma
 from echocal.signal.processing import energy_to_db, pseudo_energy_with_peak
 
 if TYPE_CHECKING:
     from echocal.measurement.detection_radius import LobeProfile
 
 __all__ = ["SourceObjective", "ascan_metric", "default_bounds", "scan_noise_sigma"]
-
-
-def scan_noise_sigma(samples: np.ndarray) -> tuple[float | None, bool]:
-    """[a.u.] the receiver's per-sample noise σ estimated from one A-scan (None if it
-    cannot tell), and whether the noise is below the ADC step.
-
-    The echo fills a small part of a recording, so 1.4826 · MAD of the samples is a robust
-    estimate.  When the noise is below the ADC step Δ most samples share one level and the
-    MAD is 0; then the RMS deviation of the samples within ±3 Δ of that level measures the
-    quantized noise the receiver actually delivers (the echo's large samples excluded).
-    σ is None for a constant trace (nothing to tell).  "Below the ADC step" means the
-    MAD is 0 and the sample values lie on a grid (an ADC's levels).
-    """
-    centre = np.median(samples)
-    dev = samples - centre
-    mad = float(np.median(np.abs(dev)))
-    if mad > 0.0:
-        return 1.4826 * mad, False
-    levels = np.unique(samples)
-    if levels.size < 2:
-        return None, False
-    step = float(np.min(np.diff(levels)))
-    near = np.abs(dev) <= 3.0 * step
-    # an ADC's levels lie on a grid of its step; a noiseless float trace's do not
-    on_grid = np.allclose(levels / step, np.round(levels / step), rtol=0.0, atol=1e-6)
-    return float(np.sqrt(np.mean(dev[near] ** 2))), bool(on_grid)
 
 
 def default_bounds(source: MeasurementSource, parameterization: str) -> np.ndarray:

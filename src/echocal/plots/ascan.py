@@ -153,7 +153,7 @@ def _draw_gates(ax, gates: Sequence[TimeGate], x: np.ndarray, window: RecordingW
 
 def _noise_sigma(x: np.ndarray) -> float:
     """[a.u.] robust per-sample noise σ (1.4826 · MAD); 0 for a constant trace."""
-    from echocal.measurement.objective import scan_noise_sigma
+    from echocal.signal.noise import scan_noise_sigma
 
     sigma, _ = scan_noise_sigma(x)
     return 0.0 if sigma is None else float(sigma)

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_float
 from echocal.errors import EchocalValueError, UnknownNameError
+from echocal.signal.noise import mad_sigma
 from echocal.signal.processing import Gate, get_metric
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
@@ -66,8 +67,9 @@ _SEES_ECHO = 1e-3
 
 
 TRIGGER_NOISE_LEVEL = 5.0
-"""The interface trigger also needs |x| ≥ this × the A-scan's noise σ (robust: 1.4826 ×
-the median absolute deviation of its samples, which are mostly noise), as a flaw
+"""The interface trigger also needs |x| ≥ this × the A-scan's noise σ
+(:func:`~echocal.signal.noise.mad_sigma`: 1.4826 × the median absolute deviation of its
+samples, which are mostly noise), as a flaw
 detector's interface gate is set above the noise: a sample of Gaussian noise reaches 5 σ
 with probability 5.7·10⁻⁷, so a trace of 4,000 noise samples triggers in about 0.2 % of
 A-scans.  Without it, an A-scan whose interface echo is lost (the probe tilted beyond
@@ -83,11 +85,8 @@ def interface_trigger(
     :data:`TRIGGER_NOISE_LEVEL` × its noise σ (linearly interpolated between samples);
     NaN where no sample does (no interface echo above the noise, or an all-zero A-scan):
     a triggered gate then holds nothing."""
-    x = np.asarray(samples, dtype=np.float64)
-    centred = x - np.median(x, axis=-1, keepdims=True)
-    sigma = 1.4826 * np.median(np.abs(centred), axis=-1)
     whole = Gate(start=window.start, width=window.duration, threshold=threshold)
-    return whole.first_crossing(x, window, floor=TRIGGER_NOISE_LEVEL * sigma)
+    return whole.first_crossing(samples, window, floor=TRIGGER_NOISE_LEVEL * mad_sigma(samples))
 
 
 @dataclass(frozen=True, kw_only=True)

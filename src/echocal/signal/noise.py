@@ -33,7 +33,9 @@ __all__ = [
     "SNR_DB_RANGE",
     "Receiver",
     "check_snr_db",
+    "mad_sigma",
     "noise_sigma_for_snr",
+    "scan_noise_sigma",
     "signal_power",
     "snr_for_noise_sigma",
 ]
@@ -202,3 +204,37 @@ class Receiver:
             top = 2 ** (self.adc_bits - 1)  # type: ignore[operator]
             y = np.clip(np.round(y / step), -top, top - 1) * step
         return y
+
+
+def mad_sigma(samples: ArrayLike) -> NDArray[np.float64]:
+    """[a.u.] the robust noise σ of each A-scan, shape ``(...,)``: 1.4826 × the median
+    absolute deviation of its samples (last axis) — the σ of Gaussian noise, unmoved by
+    an echo that fills a small part of the recording; 0 when most samples share one
+    value (noise below the ADC step, or none)."""
+    x = np.asarray(samples, dtype=np.float64)
+    return 1.4826 * np.median(np.abs(x - np.median(x, axis=-1, keepdims=True)), axis=-1)
+
+
+def scan_noise_sigma(samples: np.ndarray) -> tuple[float | None, bool]:
+    """[a.u.] the receiver's per-sample noise σ estimated from one A-scan (None if it
+    cannot tell), and whether the noise is below the ADC step.
+
+    The echo fills a small part of a recording, so 1.4826 · MAD of the samples is a robust
+    estimate.  When the noise is below the ADC step Δ most samples share one level and the
+    MAD is 0; then the RMS deviation of the samples within ±3 Δ of that level measures the
+    quantized noise the receiver actually delivers (the echo's large samples excluded).
+    σ is None for a constant trace (nothing to tell).  "Below the ADC step" means the
+    MAD is 0 and the sample values lie on a grid (an ADC's levels).
+    """
+    sigma = float(mad_sigma(samples))
+    if sigma > 0.0:
+        return sigma, False
+    dev = samples - np.median(samples)
+    levels = np.unique(samples)
+    if levels.size < 2:
+        return None, False
+    step = float(np.min(np.diff(levels)))
+    near = np.abs(dev) <= 3.0 * step
+    # an ADC's levels lie on a grid of its step; a noiseless float trace's do not
+    on_grid = np.allclose(levels / step, np.round(levels / step), rtol=0.0, atol=1e-6)
+    return float(np.sqrt(np.mean(dev[near] ** 2))), bool(on_grid)
