@@ -282,10 +282,11 @@ def _front_first(
     setup: Any, pos: np.ndarray, gate: TimeGate | None, x0: np.ndarray, budget: int
 ) -> tuple[np.ndarray, str, int | None, int]:
     """:data:`FRONT_FIRST`: (estimate after n = 0..budget measurements [deg] (budget + 1,
-    2), the two stages' statuses, the first's acquisition measurements, measurements)."""
+    2), the two stages' statuses, the first's acquisition measurements, the measurements
+    the stages made)."""
     seed = int(setup.rng)
     stages: list[tuple[Any, np.ndarray, int]] = []
-    start, left = x0, budget
+    start, left, measured = x0, budget, 0
     for stage_gate, settle in ((None, SETTLE), (gate, None)):
         if left < AUTO_MIN_BUDGET:
             break  # no room for another stage: the estimate stays
@@ -299,13 +300,14 @@ def _front_first(
             res = calibrate(
                 objective, "auto", x0=start, budget=left, max_iter=10_000, rng=seed, settle=settle
             )
-        spent = res.n_measurements if settle is not None else left
+        measured += res.n_measurements
+        spent = res.n_measurements if settle is not None else left  # the last runs to the end
         stages.append((res, _estimates_ours(res, start, spent), spent))
         start, left = res.x, left - spent
     est = np.vstack([stages[0][1], *(e[1:] for _, e, _ in stages[1:])])
     est = np.vstack([est, np.repeat(est[-1:], budget + 1 - len(est), axis=0)])
     status = "/".join(str(res.status) for res, _, _ in stages)
-    return est, status, stages[0][0].acquisition_measurements, budget - left
+    return est, status, stages[0][0].acquisition_measurements, measured
 
 
 def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
