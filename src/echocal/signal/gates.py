@@ -68,7 +68,7 @@ _SEES_ECHO = 1e-3
 
 TRIGGER_NOISE_LEVEL = 5.0
 """The interface trigger also needs |x| ≥ this × the A-scan's noise σ
-(:func:`~echocal.signal.noise.mad_sigma`: 1.4826 × the median absolute deviation of its
+(``echocal.signal.noise.mad_sigma``: 1.4826 × the median absolute deviation of its
 samples, which are mostly noise), as a flaw
 detector's interface gate is set above the noise: a sample of Gaussian noise reaches 5 σ
 with probability 5.7·10⁻⁷, so a trace of 4,000 noise samples triggers in about 0.2 % of
