@@ -88,3 +88,50 @@ def test_a_budget_below_the_reading_point_is_refused(bench, capsys):
     with pytest.raises(SystemExit):
         bench.main(["--budget", "50"])
     assert "--budget must be at least 60" in capsys.readouterr().err
+
+
+def _sure(r: float, step: float = 1e-3, out_to: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """A detection curve [deg] that detects surely up to r and never beyond."""
+    angles = np.arange(0.0, out_to + step / 2, step)
+    return angles, (angles <= r).astype(float)
+
+
+def test_the_ring_kernel_is_the_arc_a_sure_disc_covers(bench):
+    """Hand-checked: a sure disc of radius r centred on the circle of radius ρ covers the
+    arc 2·2·asin(r / 2ρ) of it, so P̄(ρ, ρ) = (2/π)·asin(r / 2ρ); a measurement at the start
+    (s = 0) sees an optimum at ρ < r surely and one at ρ > r never."""
+    angles, sure = _sure(1.0)
+    kernel = bench.ring_kernel(np.array([10.0, 0.5, 1.5]), np.array([10.0, 0.0]), angles, sure)
+    assert kernel[0, 0] == pytest.approx(2.0 / math.pi * math.asin(1.0 / 20.0), rel=2e-3)
+    assert kernel[1, 1] == 1.0 and kernel[2, 1] == 0.0
+
+
+def test_the_covering_programme_on_hand_checked_cases(bench):
+    """A disc of radius 1 inside a sure disc of radius 2: one measurement at the start, and no
+    fraction of one less (every optimum near the start needs Σ w ≥ y), so 0.99.  A curve that
+    detects with 0.25 anywhere within 3°: 0.99 / 0.25 = 3.96 on a band within 1°.  A thin
+    band at 10° and a sure 1° disc: the circle needs 0.99 · π / (2 asin(1/20)) = 31.09 (its
+    circumference over the arc each disc covers) — the cells' maxima may only lower it."""
+    angles, sure = _sure(2.0, out_to=4.0)
+    assert bench.covering_bound((0.0, 1.0), angles, sure, cell=0.05) == pytest.approx(0.99)
+    quarter = 0.25 * (angles <= 3.0)
+    assert bench.covering_bound((0.0, 1.0), angles, quarter, cell=0.05) == pytest.approx(3.96)
+    angles, sure = _sure(1.0)
+    ring = bench.covering_bound((10.0, 10.02), angles, sure, cell=0.01)
+    assert 0.98 * 31.09 <= ring <= 31.09 + 1e-6
+
+
+@pytest.mark.parametrize("width", [0.7, 1.5])
+def test_no_lattice_beats_the_covering_programme(bench, width):
+    """The programme bounds every fixed sequence, so the best lattice (which samples the same
+    start distribution) spends at least its rounded-up value (20.3 ≤ 56 and 5.9 ≤ 15 here:
+    the union bound Σp is loose where soft curves overlap); and on this band, narrow
+    against the curves, the edges waste more than the start distribution's weight on the
+    inner edge saves, so the programme is above the area bound (15.2 and 3.3)."""
+    angles = np.arange(0.0, 4.0 * width + 1e-3, 0.01)
+    prob = np.exp(-0.5 * (angles / width) ** 2)
+    band = (1.0, 4.0)
+    programme = bench.covering_bound(band, angles, prob)
+    n, _ = bench.lattice_search(band, angles, prob, samples=4000)
+    assert math.ceil(programme) <= n < math.inf
+    assert programme > 0.99 * math.pi * (4.0**2 - 1.0**2) / bench.seen_area(angles, prob)
