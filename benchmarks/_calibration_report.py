@@ -168,6 +168,13 @@ def report_markdown(data: dict[str, Any], png_name: str, method: str) -> str:
         f"(mode `{data['mode']}`: {data['runs_per_cell']} seeded runs per cell and method; "
         f"budget {data['budget']} measurements; {data['elapsed_s'] / 60:.1f} min on "
         f"{data.get('workers', '?')} worker(s)).",
+        *(
+            f"Then `{u['command']}` at echocal {u['echocal_git']} ran "
+            f"{', '.join(f'`{m}`' for m in u['methods'])} again on the same cells and seeds "
+            f"({u['elapsed_s'] / 60:.1f} min); the tables hold those runs for "
+            f"{'that method' if len(u['methods']) == 1 else 'those methods'}."
+            for u in data.get("updates", [])
+        ),
         "",
         "## Method",
         "",

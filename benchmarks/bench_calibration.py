@@ -92,7 +92,11 @@ installed or fails to import is skipped with a message.
 
 Output: a Markdown table per case on stdout (headline lines start with ``HEADLINE``);
 ``--json OUT`` / ``--out-md OUT`` / ``--plot OUT``; ``--render JSON`` writes the page and
-figure again from a run's JSON.  A full run (every case, start, SNR and
+figure again from a run's JSON; ``--update JSON --methods auto`` runs ``auto`` again on
+that JSON's cells and seeds, keeps every other method's runs and rewrites the JSON (and the
+docs' page, when it is the docs' JSON), which records the rerun's command and commit (the
+full benchmark takes hours at 50 runs per cell; a change to one method needs only its own
+runs again).  A full run (every case, start, SNR and
 method; ``--runs`` may change the count) writes ``docs/benchmarks/calibration.{md,json,png}``,
 the page headed by the command that made it.  Two worker processes by default
 (``--workers``); BLAS is pinned to one thread per worker.
@@ -402,6 +406,50 @@ def summarize(runs: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 # ----------------------------------------------------------------------------- main
+def _summaries(
+    results: list[dict[str, Any]],
+    cells: list[tuple[str, str, float]],
+    methods: list[str],
+    peers: list[str],
+) -> dict[str, Any]:
+    """The runs ``results`` summarized per cell and per case (:func:`summarize`), the
+    winner per case against ``peers``, and ``auto``'s targets where its cells were run."""
+    per_cell: dict[str, dict[str, Any]] = {}
+    per_case: dict[str, dict[str, Any]] = {}
+    for c, s, snr in cells:
+        per_cell[f"{c}|{s}|{snr:g}"] = {
+            m: summarize(
+                [
+                    r
+                    for r in results
+                    if (r["case"], r["start"], r["snr"], r["method"]) == (c, s, snr, m)
+                ]
+            )
+            for m in methods
+        }
+    for c in dict.fromkeys(cell[0] for cell in cells):
+        per_case[c] = {
+            m: summarize([r for r in results if r["case"] == c and r["method"] == m])
+            for m in methods
+        }
+    auto_targets = {}
+    if "auto" in methods:
+        for case, targets in AUTO_TARGETS.items():
+            for s, snr, tol, b, goal in targets:
+                key = f"{case}|{s}|{snr:g}"
+                if key not in per_cell:
+                    continue
+                got = per_cell[key]["auto"][f"within_{tol:g}_at_{b}"]
+                name = f"{case}, {s} start, {snr:g} dB: within {tol:g} deg after {b} measurements"
+                auto_targets[name] = {"got": got, "goal": goal, "met": got >= goal}
+    return {
+        "cells": per_cell,
+        "cases": per_case,
+        "winners": {c: winner(summary, peers) for c, summary in per_case.items()},
+        "auto_targets": auto_targets,
+    }
+
+
 def _plan(
     mode: str, runs: int | None, cases: tuple[str, ...] = DEFAULT_CASES
 ) -> tuple[list[tuple[str, str, float]], int]:
@@ -412,6 +460,64 @@ def _plan(
         quick = [c for c in cells if c[2] in (30.0, 10.0)]
         return quick, runs or 10
     return cells, runs or 50
+
+
+def _run_tasks(tasks: list[tuple[Any, ...]], workers: int, t0: float) -> list[dict[str, Any]]:
+    """:func:`run_one` on every task, on ``workers`` processes, with progress every 5 %."""
+    if workers <= 1:
+        return [run_one(t) for t in tasks]
+    results: list[dict[str, Any]] = []
+    with ProcessPoolExecutor(workers) as pool:
+        for i, r in enumerate(pool.map(run_one, tasks, chunksize=4)):
+            results.append(r)
+            if (i + 1) % max(1, len(tasks) // 20) == 0:
+                el = time.perf_counter() - t0
+                print(f"  {i + 1}/{len(tasks)} runs, {el:.0f} s", flush=True)
+    return results
+
+
+def _command(argv: list[str] | None) -> str:
+    """The command line that reruns this invocation."""
+    args = sys.argv[1:] if argv is None else argv
+    return " ".join(["python", "benchmarks/bench_calibration.py", *map(shlex.quote, args)])
+
+
+def _update(path: Path, rerun: list[str], workers: int, argv: list[str] | None) -> int:
+    """``--update JSON --methods M``: run the methods ``rerun`` again on the cells and run
+    count of a run's JSON, keep the other methods' runs, summarize again and write the JSON
+    back (the docs' page and figure with it when it is the docs' ``calibration.json``).  The
+    JSON's ``updates`` records each such rerun: its methods, command, commit and time."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        methods, n_runs, raw = list(data["methods"]), int(data["runs_per_cell"]), data["raw"]
+        cells = [(c, s, float(snr)) for c, s, snr in (k.split("|") for k in data["cells"])]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        print(f"error: --update {path}: not a calibration benchmark's JSON ({exc!r})")
+        return 2
+    unknown = sorted(set(rerun) - set(methods))
+    if unknown:
+        print(f"error: --methods {unknown}: not in {path}'s methods {methods}")
+        return 2
+    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in rerun]
+    print(f"calibration benchmark (update {path}): {len(tasks)} runs of {rerun}", flush=True)
+    machine = machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize", "botorch", "torch"])
+    t0 = time.perf_counter()
+    results = _run_tasks(tasks, workers, t0)
+    kept = [r for r in raw if r["method"] not in rerun]
+    data.update(_summaries(kept + results, cells, methods, [m for m in methods if m in PEERS]))
+    data["raw"] = kept + results
+    data.setdefault("updates", []).append(
+        {
+            "methods": rerun,
+            "command": _command(argv),
+            "echocal_git": machine["echocal_git"],
+            "elapsed_s": time.perf_counter() - t0,
+        }
+    )
+    atomic_write_text(path, json.dumps(data, indent=None))
+    if path.resolve() == (DOCS / "calibration.json").resolve():
+        _write_report(data, DOCS / "calibration.md", DOCS / "calibration.png")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -435,7 +541,21 @@ def main(argv: list[str] | None = None) -> int:
         metavar="JSON",
         help="write --out-md / --plot again from a run's --json, without running",
     )
+    ap.add_argument(
+        "--update",
+        type=Path,
+        default=None,
+        metavar="JSON",
+        help="run --methods again on a run's JSON (its cells and runs), keep the rest, rewrite it",
+    )
     args = ap.parse_args(argv)
+    if args.update is not None:
+        chosen = (args.cases, args.snr, args.starts, args.runs, args.json, args.out_md, args.plot)
+        if not args.methods or args.quick or args.smoke or any(v is not None for v in chosen):
+            ap.error(
+                "--update JSON takes --methods (and --workers) only: the JSON's cells and runs"
+            )
+        return _update(args.update, args.methods.split(","), args.workers, argv)
     if args.render is not None:
         if not (args.out_md or args.plot):
             ap.error("--render needs --out-md and/or --plot: what to write")
@@ -467,55 +587,18 @@ def main(argv: list[str] | None = None) -> int:
     )
     machine = machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize", "botorch", "torch"])
     t0 = time.perf_counter()
-    results: list[dict[str, Any]] = []
-    if args.workers > 1:
-        with ProcessPoolExecutor(args.workers) as pool:
-            for i, r in enumerate(pool.map(run_one, tasks, chunksize=4)):
-                results.append(r)
-                if (i + 1) % max(1, len(tasks) // 20) == 0:
-                    el = time.perf_counter() - t0
-                    print(f"  {i + 1}/{len(tasks)} runs, {el:.0f} s", flush=True)
-    else:
-        results = [run_one(t) for t in tasks]
+    results = _run_tasks(tasks, args.workers, t0)
     elapsed = time.perf_counter() - t0
 
-    per_cell: dict[str, dict[str, Any]] = {}
-    per_case: dict[str, dict[str, Any]] = {}
-    for c, s, snr in cells:
-        key = f"{c}|{s}|{snr:g}"
-        per_cell[key] = {
-            m: summarize(
-                [
-                    r
-                    for r in results
-                    if (r["case"], r["start"], r["snr"], r["method"]) == (c, s, snr, m)
-                ]
-            )
-            for m in methods
-        }
-    for c in dict.fromkeys(cell[0] for cell in cells):
-        per_case[c] = {
-            m: summarize([r for r in results if r["case"] == c and r["method"] == m])
-            for m in methods
-        }
-
-    winners = {c: winner(summary, peers) for c, summary in per_case.items()}
-    for c, w in winners.items():
+    summaries = _summaries(results, cells, methods, peers)
+    per_case, auto_targets = summaries["cases"], summaries["auto_targets"]
+    for c, w in summaries["winners"].items():
         print(f"HEADLINE {c}: {_winner_sentence(w)}")
-    auto_targets = {}
-    if "auto" in methods:
-        for case, targets in AUTO_TARGETS.items():
-            for s, snr, tol, b, goal in targets:
-                key = f"{case}|{s}|{snr:g}"
-                if key not in per_cell:
-                    continue
-                got = per_cell[key]["auto"][f"within_{tol:g}_at_{b}"]
-                name = f"{case}, {s} start, {snr:g} dB: within {tol:g} deg after {b} measurements"
-                auto_targets[name] = {"got": got, "goal": goal, "met": got >= goal}
-                print(
-                    f"HEADLINE auto target ({name}): {100 * got:.0f} % "
-                    f"(goal >= {100 * goal:.0f} %) {'met' if got >= goal else 'NOT met'}"
-                )
+    for name, t in auto_targets.items():
+        print(
+            f"HEADLINE auto target ({name}): {100 * t['got']:.0f} % "
+            f"(goal >= {100 * t['goal']:.0f} %) {'met' if t['met'] else 'NOT met'}"
+        )
     for c, summary in per_case.items():
         print()
         print(f"## {c}")
@@ -523,20 +606,14 @@ def main(argv: list[str] | None = None) -> int:
     print(f"HEADLINE total time {elapsed:.0f} s")
 
     data = {
-        "command": " ".join(
-            ["python", "benchmarks/bench_calibration.py"]
-            + [shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv)]
-        ),
+        "command": _command(argv),
         "mode": mode,
         "budget": BUDGET,
         "runs_per_cell": n_runs,
         "workers": args.workers,
         "methods": methods,
         "skipped_peers": skipped,
-        "cells": per_cell,
-        "cases": per_case,
-        "winners": winners,
-        "auto_targets": auto_targets,
+        **summaries,
         "elapsed_s": elapsed,
         "machine": machine,
         "raw": results,

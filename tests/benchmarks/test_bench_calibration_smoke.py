@@ -114,6 +114,30 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
     assert done.returncode == 2 and done.stdout.startswith(f"error: --render {damaged}")
     assert not (tmp_path / "x.md").exists()
 
+    # one method run again on the JSON's cells and seeds: the others' runs kept as they were
+    others = [r for r in data["raw"] if r["method"] != "auto"]
+    update = [sys.executable, str(SCRIPT), "--update", str(out_json), "--workers", "1"]
+    done = subprocess.run(
+        [*update, "--methods", "auto"], capture_output=True, text=True, timeout=300, cwd=ROOT
+    )
+    assert done.returncode == 0, done.stdout + done.stderr[-3000:]
+    updated = json.loads(out_json.read_text(encoding="utf-8"))
+    assert [r for r in updated["raw"] if r["method"] != "auto"] == others
+    reruns = [r for r in updated["raw"] if r["method"] == "auto"]
+    assert len(reruns) == data["runs_per_cell"] and updated["methods"] == data["methods"]
+    assert updated["updates"][0]["methods"] == ["auto"]
+    assert updated["updates"][0]["echocal_git"] == commit
+    done = subprocess.run(
+        [*render, "--out-md", str(again)], capture_output=True, text=True, timeout=120, cwd=ROOT
+    )
+    assert "--update" in again.read_text(encoding="utf-8").split("## Method")[0]
+    for wrong, message in (
+        (["--methods", "simplex"], "not in"),  # a method the JSON never ran
+        (["--methods", "auto", "--runs", "3"], "--update JSON takes --methods"),
+    ):
+        done = subprocess.run([*update, *wrong], capture_output=True, text=True, cwd=ROOT)
+        assert done.returncode == 2 and message in done.stdout + done.stderr
+
 
 def test_the_back_wall_case_and_the_front_first_workflow():
     """The gated case is judged against the truth inside its gate: a flat, level plate's

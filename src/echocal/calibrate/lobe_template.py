@@ -26,14 +26,22 @@ import numpy as np
 from echocal._curves import first_crossing
 from echocal.calibrate._fd import FloatArray
 
-__all__ = ["LobeTemplate", "TemplateFit", "fit_template"]
+__all__ = [
+    "COARSE_STEP",
+    "LobeTemplate",
+    "TemplateFit",
+    "disc_grid",
+    "energy_prior",
+    "fit_template",
+    "peak_scores",
+]
 
-_COARSE = 0.2
+COARSE_STEP = 0.2
 """[deg] the first grid of candidate peaks (the 5 MHz probe's lobe falls to e^(−1/2) of its
 peak 0.3° out: a candidate within 0.14° of the true peak is on its top)."""
 _FINE = 0.01
 """[deg] the second grid, around the best coarse candidates."""
-_PEAK_PRIOR = 0.25
+PEAK_PRIOR = 0.25
 """Relative σ of the prior on the peak's metric when it is known (a simulated source:
 its receiver's noise, the metric's floor subtraction and the lobe's spread between
 directions keep it within a few % of the noiseless value)."""
@@ -191,7 +199,7 @@ def fit_template(
 
     ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed),
     ``sigmas`` (n,) their noise σ (> 0).  ``peak``: the metric expected at the peak (same
-    units), a Gaussian prior on E₀ of relative σ :data:`_PEAK_PRIOR` — it breaks the
+    units), a Gaussian prior on E₀ of relative σ :data:`PEAK_PRIOR` — it breaks the
     tail's trade between the peak's energy and its distance (a lobe 10× stronger twice as
     far looks alike); None: no prior.  ``previous`` [deg] (2,): the peak of the previous
     fit, kept — refined on the fine grid within the coarse step of it, so along a curve of
@@ -204,22 +212,22 @@ def fit_template(
     if not ok.any():
         return None
     x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
-    prior = None if peak is None or not peak > 0.0 else (peak, 1.0 / (_PEAK_PRIOR * peak) ** 2)
-    step = min(_COARSE, template.width)  # a narrower lobe than 0.2° gets a finer grid
-    coarse = _disc_grid(around, radius, step)
-    chi2, energy, *_ = _scores(template, coarse, x, y, w, prior)
+    prior = None if peak is None or not peak > 0.0 else energy_prior(peak)
+    step = min(COARSE_STEP, template.width)  # a narrower lobe than 0.2° gets a finer grid
+    coarse = disc_grid(around, radius, step)
+    chi2, energy, *_ = peak_scores(template, coarse, x, y, w, prior)
     order = np.argsort(chi2)[:_CANDIDATES]
     order = order[energy[order] > 0.0]
     if not order.size:
         return None
-    fine = np.concatenate([_disc_grid(c, step, _FINE) for c in coarse[order]])
-    chi2, energy, measured, info = _scores(template, fine, x, y, w, prior)
+    fine = np.concatenate([disc_grid(c, step, _FINE) for c in coarse[order]])
+    chi2, energy, measured, info = peak_scores(template, fine, x, y, w, prior)
     best = int(np.argmin(np.where(energy > 0.0, chi2, np.inf)))
     if not energy[best] > 0.0:
         return None
     if previous is not None and np.hypot(*(previous - around)) <= radius:
-        near = _disc_grid(previous, step, _FINE)
-        kept = _scores(template, near, x, y, w, prior)
+        near = disc_grid(previous, step, _FINE)
+        kept = peak_scores(template, near, x, y, w, prior)
         k = int(np.argmin(np.where(kept[1] > 0.0, kept[0], np.inf)))
         if kept[1][k] > 0.0 and kept[0][k] <= chi2[best] + _KEEP:
             fine, (chi2, energy, measured, info), best = near, kept, k
@@ -232,7 +240,13 @@ def fit_template(
     )
 
 
-def _disc_grid(centre: FloatArray, radius: float, step: float) -> FloatArray:
+def energy_prior(peak: float) -> tuple[float, float]:
+    """The Gaussian prior on a fit's peak metric E₀ when the metric at the peak is known to
+    be ``peak`` (> 0): ``(mean, weight)`` = (peak, 1 / (:data:`PEAK_PRIOR` · peak)²)."""
+    return peak, 1.0 / (PEAK_PRIOR * peak) ** 2
+
+
+def disc_grid(centre: FloatArray, radius: float, step: float) -> FloatArray:
     """Points of a square grid of ``step`` [deg] within ``radius`` of ``centre``, (m, 2)."""
     k = int(np.ceil(radius / step))
     u = np.arange(-k, k + 1) * step
@@ -241,7 +255,7 @@ def _disc_grid(centre: FloatArray, radius: float, step: float) -> FloatArray:
     return centre[None, :] + np.stack([gx[inside], gy[inside]], axis=1)
 
 
-def _scores(
+def peak_scores(
     template: LobeTemplate,
     centres: FloatArray,
     x: FloatArray,

@@ -40,7 +40,10 @@ diffraction lobe's tail is not Gaussian; :mod:`echocal.calibrate.template_steps`
 rule and its evidence).  A warm start whose history
 the template already fits (a far detection handed on by the acquisition) steps to the
 fitted peak at once, without measuring the design hexagon around x0 first (same 40 far
-runs: median 22 → 19, 90th percentile 27 → 23).
+runs: median 22 → 19, 90th percentile 27 → 23).  One it does not fit yet — a detection
+deep in the tail, 4–7° out — seeks the peak instead, measuring where the peaks that fit
+the measurements disagree most (:mod:`echocal.calibrate.template_seek`; 100 far starts at
+30 dB: 99th percentile to 0.1° 29 → 26, 90th 23 → 21; 100 other seeds: 30 → 26, 25 → 21).
 
 ``space="linear"`` fits f itself with equal weights instead (for objectives
 that can be negative).
@@ -220,7 +223,7 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             if np.count_nonzero(near) >= 6:
                 return np.zeros((0, 2))
             self._fit_template()
-            if self._tfit is not None:
+            if self._tfit is not None or self._start_seek():
                 return np.zeros((0, 2))
         return self.clip(hexagon(self.x0, self.radius))
 
@@ -409,7 +412,9 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             self._mode = "across"
             self._pred = None
             return self._across[:1].copy()
-        target = self._template_step()
+        target = self._seek_step()
+        if target is None:
+            target = self._template_step()
         if target is not None:
             self._mode = "approach"
             self._streak = 0

@@ -36,8 +36,13 @@ from numpy.typing import ArrayLike
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.lobe_template import LobeTemplate, TemplateFit, fit_template
 from echocal.calibrate.local_model import REFUTE, QuadraticModel
+from echocal.calibrate.template_seek import seek_point, tail_reach
 
 __all__ = ["TemplateSteps"]
+
+_SEEK_MAX = 8
+"""Seek measurements (:mod:`~echocal.calibrate.template_seek`) at most, after a warm start
+the template does not fit yet, before the usual steps take over."""
 
 _TEMPLATE_MISFIT = 25.0
 """A template fit whose χ² per degree of freedom (against the measurement noise) exceeds
@@ -61,6 +66,7 @@ class TemplateSteps:
     [deg], and provides ``_floor()``, ``_sigmas(values)``, ``clip(points)``,
     ``_times_measured(point)`` and ``_supported_max()``."""
 
+    x0: FloatArray
     _x: FloatArray
     _y: FloatArray
     _incumbent: FloatArray
@@ -91,6 +97,7 @@ class TemplateSteps:
         self._tfit: TemplateFit | None = None
         self._n_top = 0  # measurements on the fitted template's top
         self._quadratic_on_top = False  # the log-quadratic has taken over from the template
+        self._seeks_left = 0  # seek measurements still allowed (:meth:`_start_seek`)
 
     def _fit_template(self) -> None:
         """Fit the probe's lobe template to every measurement
@@ -128,6 +135,40 @@ class TemplateSteps:
             return
         self._tfit = fit  # only an accepted fit's peak is kept next time: not one of noise
         self._n_top = int(np.count_nonzero(template.on_top(self._x - fit.centre)))
+
+    def _start_seek(self) -> bool:
+        """For a warm start the template does not fit yet (a detection in the lobe's tail):
+        seek the peak (:meth:`_seek_step`, up to :data:`_SEEK_MAX` measurements) instead of
+        measuring a design around x0 — True — when the template, the peak's metric in the
+        objective's units and the noise are known; else False."""
+        template = self._template
+        if template is None or template.peak is None or self.normalize != "none":
+            return False
+        if self.space != "log" or self._sigmas(np.zeros(1)) is None:
+            return False
+        self._seeks_left = _SEEK_MAX
+        return True
+
+    def _seek_step(self) -> FloatArray | None:
+        """While seeking and no template fit is accepted: the point [deg] (2,) where the
+        candidate peaks' predicted echoes disagree most
+        (:func:`~echocal.calibrate.template_seek.seek_point`, candidates out to where the
+        lobe's tail is still 3 σ above the noise, at least ``max_radius`` from x0); else
+        None, and the seek is over for the run."""
+        template = self._template
+        if self._tfit is not None or template is None or template.peak is None:
+            self._seeks_left = 0
+        if self._seeks_left <= 0 or template is None or template.peak is None:
+            return None
+        y = self._y - self._floor()
+        sig, noise = self._sigmas(np.maximum(y, 0.0)), self._sigmas(np.zeros(1))
+        if sig is None or noise is None:
+            return None
+        peak = template.peak / self._scale
+        reach = max(self.max_radius, tail_reach(template, peak, float(noise[0])))
+        point = seek_point(template, self._x, y, sig, float(noise[0]), peak, self.x0, reach)
+        self._seeks_left = 0 if point is None else self._seeks_left - 1
+        return None if point is None else self.clip(point)
 
     def _template_step(self) -> FloatArray | None:
         """While no measurement lies on the lobe's top: the fitted template's peak [deg]
