@@ -271,15 +271,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-angle", type=float, default=10.0, help="p(θ) measured up to [deg]")
     ap.add_argument(
         "--budget",
-        type=int,
-        default=BUDGET,
-        help=f"measurements per auto run (default {BUDGET}, the calibration benchmark's)",
+        default=str(BUDGET),
+        help=f"measurements per auto run (default {BUDGET}, the calibration benchmark's); "
+        "comma-separated: one per SNR",
     )
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--smoke", action="store_true", help="2 runs, 40 draws, coarse angles")
     ap.add_argument("--out-md", type=Path, default=None)
     args = ap.parse_args(argv)
-    if args.budget < AT:
+    snrs = [float(v) for v in args.snr.split(",")]
+    try:
+        budgets = [int(v) for v in args.budget.split(",")]
+    except ValueError:
+        ap.error(f"--budget must be whole numbers of measurements; got {args.budget!r}")
+    budgets = budgets * len(snrs) if len(budgets) == 1 else budgets
+    if len(budgets) != len(snrs):
+        ap.error(f"--budget gives {len(budgets)} budgets for {len(snrs)} SNRs: one, or one per SNR")
+    if min(budgets) < AT:
         ap.error(
             f"--budget must be at least {AT}: the fraction within {TOLERANCE:g} deg "
             f"is read after {AT} measurements"
@@ -293,7 +301,7 @@ def main(argv: list[str] | None = None) -> int:
     machine = machine_info()
     t0 = time.perf_counter()
     rows: list[list[str]] = []
-    for snr in (float(v) for v in args.snr.split(",")):
+    for snr, budget in zip(snrs, budgets, strict=True):
         prob = detection_curves(setup_name, snr, angles, draws)[DETECTOR]
         k = seen_area(angles, prob)
         bound = math.ceil(covering_bound(band, angles, prob)) + REFINE_UNKNOWNS
@@ -304,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
             lattice_search(band, angles, prob) if lattice <= MAX_LATTICE else (math.inf, math.nan)
         )
         best += REFINE_UNKNOWNS
-        tasks = [(args.case, args.start, snr, r, "auto", args.budget) for r in range(runs)]
+        tasks = [(args.case, args.start, snr, r, "auto", budget) for r in range(runs)]
         # spawn, not fork: the wave model's kernels run threads, which a fork can deadlock
         with ProcessPoolExecutor(args.workers, mp_context=get_context("spawn")) as pool:
             results: list[dict[str, Any]] = list(pool.map(run_one, tasks))
@@ -316,6 +324,7 @@ def main(argv: list[str] | None = None) -> int:
         rows.append(
             [
                 f"{snr:g}",
+                f"{budget}",
                 f"{k:.1f}",
                 f"{lattice:.0f}",
                 f"{bound}",
@@ -323,7 +332,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{lattice99:.0f}",
                 f"{best} ({spacing:.2f}°)" if math.isfinite(best) else "–",
                 f"{100 * within:.0f} %",
-                " / ".join(_n(_percentile(to_tol, q), args.budget) for q in (50, 90, 99)),
+                " / ".join(_n(_percentile(to_tol, q), budget) for q in (50, 90, 99)),
                 f"{np.median(found_n):.0f}" if found_n else "–",
                 f"{p99 / bound:.2f}" if math.isfinite(p99) else "∞",
                 f"{p99 / lattice99:.2f}" if math.isfinite(p99) else "∞",
@@ -332,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         print(
             f"HEADLINE {args.case} {args.start} {snr:g} dB: bound {bound} measurements, auto "
-            f"p99 {_n(p99, args.budget)} (ratio {rows[-1][-3]}; {rows[-1][-2]} of the r99 lattice, "
+            f"p99 {_n(p99, budget)} (ratio {rows[-1][-3]}; {rows[-1][-2]} of the r99 lattice, "
             f"{rows[-1][-1]} of the best lattice), "
             f"{100 * within:.0f} % within "
             f"{TOLERANCE:g}° at {AT}",
@@ -340,6 +349,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     header = [
         "SNR [dB]",
+        "auto's budget",
         "K: area one measurement sees [deg²]",
         "hexagonal lattice at r90 (a design)",
         f"lower bound to {TOLERANCE:g}° in {100 * SUCCESS:.0f} % (the covering programme + 3)",
@@ -366,7 +376,7 @@ def main(argv: list[str] | None = None) -> int:
             f"--runs {runs} --start {args.start} --budget {args.budget}` "
             f"({elapsed:.0f} s; {machine['cpu']}; echocal {machine['echocal_git']}).",
             "",
-            "\n\n".join(__doc__.split("\n\n")[1:6]).strip().rstrip(":"),
+            "\n\n".join(__doc__.split("\n\n")[1:7]).strip().rstrip(":"),
             "",
             f"{runs} auto runs per SNR; p(θ) from {draws} noise draws per angle, 0–"
             f"{args.max_angle:g}° in {step:g}° steps.",

@@ -84,10 +84,18 @@ def test_lower_bound_smoke_runs_and_reports(tmp_path):
     assert "--budget 60`" in text  # the run line reruns it with the budget it had
 
 
-def test_a_budget_below_the_reading_point_is_refused(bench, capsys):
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--budget", "50"], "--budget must be at least 60"),
+        (["--snr", "30,20", "--budget", "80,400,1200"], "3 budgets for 2 SNRs"),
+        (["--budget", "eighty"], "--budget must be whole numbers"),
+    ],
+)
+def test_a_budget_that_cannot_serve_is_refused(bench, capsys, options, message):
     with pytest.raises(SystemExit):
-        bench.main(["--budget", "50"])
-    assert "--budget must be at least 60" in capsys.readouterr().err
+        bench.main(options)
+    assert message in capsys.readouterr().err
 
 
 def _sure(r: float, step: float = 1e-3, out_to: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
