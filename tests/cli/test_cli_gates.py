@@ -50,7 +50,11 @@ def refused(args, capsys, monkeypatch, *fragments):
 @pytest.mark.parametrize(
     ("gate", "recorded"),
     [
-        ("front-wall", {"name": "front-wall", "trigger": "interface", "threshold": 0.5}),
+        (
+            "front-wall",
+            {"name": "front-wall", "trigger": "interface", "threshold": 0.5}
+            | {"trigger_noise_level": 5.0},  # the trigger fires only 5 σ above the noise
+        ),
         ("surface", {"name": "surface", "start_s": pytest.approx(21e-6)}),
         ("follow", {"name": "follow", "delay_s": pytest.approx(-0.5e-6), "threshold": 0.4}),
         ("21us,1.5us", {"start_s": pytest.approx(21e-6), "width_s": pytest.approx(1.5e-6)}),

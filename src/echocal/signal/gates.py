@@ -181,6 +181,7 @@ class TimeGate:
             "delay_s": self.delay,
             "width_s": self.width,
             "threshold": self.threshold,
+            "trigger_noise_level": TRIGGER_NOISE_LEVEL,  # × the A-scan's robust noise σ
         }
 
     def label(self) -> str:
