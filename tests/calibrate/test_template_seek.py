@@ -100,3 +100,28 @@ def test_the_seek_climbs_from_deep_in_the_tail_faster_than_the_design(template, 
     assert None not in counts[True] and None not in counts[False], counts
     assert max(counts[True]) <= 5, counts  # type: ignore[type-var]  # measured 4, +1
     assert np.median(counts[True]) + 3 <= np.median(counts[False]), counts  # type: ignore[arg-type]
+
+
+def test_a_seek_on_noise_ends_after_its_eight_measurements(template):
+    """A false alarm handed on (every value pure noise): the seek measures at most
+    ``_SEEK_MAX`` points, then the usual steps go on; each seek point lies within the
+    candidates' reach of the detection."""
+    from echocal.calibrate.model_based import ModelBased
+    from echocal.calibrate.template_steps import _SEEK_MAX
+
+    rng = np.random.default_rng(7)
+    history = np.vstack([np.zeros(2), 3.0 * np.eye(2), -3.0 * np.eye(2)])
+    opt = ModelBased(
+        np.zeros(2),
+        history=(history, 1.0 + SIGMA * rng.standard_normal(len(history))),
+        noise_model=lambda: (1.0, SIGMA),
+        lobe_template=lambda: template,
+        rng=0,
+    )
+    assert opt._seeks_left == _SEEK_MAX
+    reach = max(opt.max_radius, tail_reach(template, PEAK, SIGMA))  # 4°: the design's 4 × 1°
+    for n in range(_SEEK_MAX + 4):
+        point = opt.ask()
+        assert n >= _SEEK_MAX or np.hypot(*point[0]) <= reach + 1e-9
+        opt.tell(1.0 + SIGMA * rng.standard_normal(1))
+    assert opt._seeks_left == 0
