@@ -25,9 +25,11 @@ from echocal.measurement import ReceiverSettings, SourceObjective, VirtualSetup
 from echocal.setups import load_setup, setup_with_overrides
 
 SEEDS = range(12)
-LOCKED_MEDIAN = 18.5
-"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 16.5 since the lobe
-template's fit keeps its previous peak unless the data clearly prefer another (13, 22,
+LOCKED_MEDIAN = 15
+"""Median measurements to stay within 0.1° over :data:`SEEDS` (measured 13 since a
+detection the lobe template does not fit yet seeks the peak where the candidate peaks
+disagree, not with a 1° hexagon (13, 18, 11, 13, 11, 10, 14, 13, 14, 15, 11, 14); 16.5
+since the lobe template's fit keeps its previous peak unless the data clearly prefer another (13, 22,
 11, 21, 18, 10, 20, 20, 13, 15, 11, 19); 17 since a warm
 start whose history the lobe template already fits steps to its peak without a hexagon
 (13, 22, 11, 21, 20, 10, 20, 20, 12, 15, 11, 19); 19.5 since the local method follows
@@ -141,8 +143,9 @@ def test_auto_does_not_circle_the_trust_circle_after_a_refuted_fit() -> None:
     never stayed within 0.1°.  With the noise capped (a factor e) once the incumbent is a
     significant echo, and the search across a ridge ended where the lobe has fallen
     away, it stayed within 0.1° after 35, and after 21 since the local method follows the
-    probe's lobe from its tail; locked at 31 (the far cell's 99th percentile: one seed's
-    count jitters between installs, see the module doc)."""
+    probe's lobe from its tail, after 15 since a detection the template does not fit yet
+    seeks the peak; locked at 26 (the far cell's 99th percentile: one seed's count
+    jitters between installs, see the module doc)."""
     seed = 887101703  # bench_calibration.run_seed("immersion-5mhz", "far", 30.0, 16)
     base = load_setup("immersion-5mhz", seed=0)
     setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=30.0), rng=seed)
@@ -162,4 +165,4 @@ def test_auto_does_not_circle_the_trust_circle_after_a_refuted_fit() -> None:
     assert result.n_measurements == objective.n_measurements <= BUDGET  # every one counted
     reached = measurements_to_stay_within(result, tilt_errors(result, truth), 0.1)
     assert reached is not None, "never stayed within 0.1°"
-    assert reached <= 31, f"within 0.1° after {reached}"
+    assert reached <= 26, f"within 0.1° after {reached}"
