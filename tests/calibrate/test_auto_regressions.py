@@ -30,12 +30,13 @@ LOCKED_MEDIAN = 15
 detection the lobe template does not fit yet seeks the peak where the candidate peaks
 disagree, not with a 1° hexagon (13, 18, 11, 13, 11, 10, 14, 13, 14, 15, 11, 14); 16.5
 since the lobe template's fit keeps its previous peak unless the data clearly prefer
-another (13, 22, 11, 21, 18, 10, 20, 20, 13, 15, 11, 19); 17 since a warm start whose history the lobe template already fits steps to its peak without a hexagon
-(13, 22, 11, 21, 20, 10, 20, 20, 12, 15, 11, 19); 19.5 since the local method follows
-the probe's lobe from its tail (18, 22, 16, 21, 20, 15, 20, 20, 17, 19, 15, 20), 25
-since the search is sized for the echo predicted against the measured noise — no 1°
-lattice out to 3° at 30 dB —, 54.5 with the search in passes before, 56
-before that; 2 of margin for the fresh-install jitter above; must not grow)."""
+another (13, 22, 11, 21, 18, 10, 20, 20, 13, 15, 11, 19); 17 since a warm start whose
+history the lobe template already fits steps to its peak without a hexagon (13, 22, 11,
+21, 20, 10, 20, 20, 12, 15, 11, 19); 19.5 since the local method follows the probe's
+lobe from its tail (18, 22, 16, 21, 20, 15, 20, 20, 17, 19, 15, 20), 25 since the search
+is sized for the echo predicted against the measured noise — no 1° lattice out to 3° at
+30 dB —, 54.5 with the search in passes before, 56 before that; 2 of margin for the
+fresh-install jitter above; must not grow)."""
 BUDGET = 80
 
 
