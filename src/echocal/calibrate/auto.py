@@ -15,8 +15,9 @@ start band          1–3°              5–20°
 ==================  ================  ================
 
 From 5–20° at 10 dB no search that acts on detections can be sure of the echo within 80
-(it needs 468 measurements for 99 % of these starts, docs/benchmarks/lower-bound.md);
-with a budget of 1200 ``auto`` needs a median 262, p99 535: **1.14×** that bound.  Before the search
+(it needs 457 measurements to reach 0.1° from 99 % of these starts,
+docs/benchmarks/lower-bound.md); with a budget of 1200 ``auto`` needs a median 262, p99
+535: **1.17×** that bound.  Before the search
 below 20 dB was sized for the predicted echo (item 3) it gave up after about 146
 measurements whatever the budget; within 80 it had 0/1/5/8 % by lucky detections on
 passes too coarse for the echo, and at 20 dB 4/34/68/78 % (median 47.5 against 53 now:
