@@ -25,8 +25,8 @@ The bound, and the searches it holds for:
    after a detection.  The fewest such N is bounded below by a linear programme
    (:func:`covering_bound`: counts per cell of s — 0.1°, or 1/50 of the 90 % detection
    radius where that is less — relaxed to real numbers, P̄ taken at its largest over
-   each cell and each bin of ρ, so any real search is a feasible point) — the covering optimized over the band the benchmark draws from, edges
-   included.  It replaces the area bound N ≥ 0.99 · A / K (A = π(R₂² − R₁²), K = 2π ∫ p(θ)
+   each cell and each bin of ρ, so any real search is a feasible point) — the covering
+   optimized over the band the benchmark draws from, edges included.  It replaces the area bound N ≥ 0.99 · A / K (A = π(R₂² − R₁²), K = 2π ∫ p(θ)
    θ dθ, the area one measurement "sees"), still printed: that one integrates p over the
    whole plane, so it ignores what the band's edges waste, and it asks 0.99 at every
    point of the annulus, not on average over the benchmark's starts (whose distance, not
