@@ -22,20 +22,21 @@ The bound, and the searches it holds for:
        (1 / (R₂ − R₁)) ∫ min(1, Σᵢ P̄(ρ, sᵢ)) dρ ≥ 0.99          (ρ from R₁ to R₂)
 
    for some s₁ … s_N — whatever the order of the points and whatever the search does
-   after a detection.  The fewest such N is bounded below by a linear programme
+   after a detection. The fewest such N is bounded below by a linear programme
    (:func:`covering_bound`: counts per cell of s — 0.1°, or 1/50 of the 90 % detection
    radius where that is less — relaxed to real numbers, P̄ taken at its largest over
    each cell and each bin of ρ, so any real search is a feasible point) — the covering
-   optimized over the band the benchmark draws from, edges included.  It replaces the area bound N ≥ 0.99 · A / K (A = π(R₂² − R₁²), K = 2π ∫ p(θ)
-   θ dθ, the area one measurement "sees"), still printed: that one integrates p over the
-   whole plane, so it ignores what the band's edges waste, and it asks 0.99 at every
-   point of the annulus, not on average over the benchmark's starts (whose distance, not
-   area, is uniform) — at 10 dB it was *above* the programme's bound, so it did not hold
-   for the benchmark's 99 %.  A search that also reads the values below the threshold
-   (``auto``'s sequential test adds neighbours' significances) may place later points
-   better than a fixed sequence can: for it the bound is a reference, not a proof.  p is
-   taken as measured up to ``--max-angle`` and 0 beyond (choose it where p has fallen to
-   the false-alarm level).
+   optimized over the band the benchmark draws from, edges included. It replaces the
+   area bound N ≥ 0.99 · A / K (A = π(R₂² − R₁²), K = 2π ∫ p(θ) θ dθ, the area one
+   measurement "sees"), still printed: that one integrates p over the whole plane, so it
+   ignores what the band's edges waste, and it asks 0.99 at every point of the annulus,
+   not on average over the benchmark's starts (whose distance, not area, is uniform) —
+   at 10 dB it was *above* the programme's bound, so it did not hold for the benchmark's
+   99 %. A search that also reads the values below the threshold (``auto``'s sequential
+   test adds neighbours' significances) may place later points better than a fixed
+   sequence can: for it the bound is a reference, not a proof. p is taken as measured up
+   to ``--max-angle`` and 0 beyond (choose it where p has fallen to the false-alarm
+   level).
 3. Once detected, reaching 0.1° needs at least 3 more measurements: a lobe of known
    shape still has three unknowns (two angles and the amplitude).  This is the count of
    the unknowns, a convention rather than a proof: the detecting value is one equation
