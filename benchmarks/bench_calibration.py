@@ -494,6 +494,9 @@ def _update(path: Path, rerun: list[str], workers: int, argv: list[str] | None) 
     except (OSError, ValueError, KeyError, TypeError) as exc:
         print(f"error: --update {path}: not a calibration benchmark's JSON ({exc!r})")
         return 2
+    if data.get("budget") != BUDGET:
+        print(f"error: --update {path}: its budget {data.get('budget')} is not this run's {BUDGET}")
+        return 2
     unknown = sorted(set(rerun) - set(methods))
     if unknown:
         print(f"error: --methods {unknown}: not in {path}'s methods {methods}")
@@ -555,7 +558,9 @@ def main(argv: list[str] | None = None) -> int:
             ap.error(
                 "--update JSON takes --methods (and --workers) only: the JSON's cells and runs"
             )
-        return _update(args.update, args.methods.split(","), args.workers, argv)
+        return _update(
+            args.update, list(dict.fromkeys(args.methods.split(","))), args.workers, argv
+        )
     if args.render is not None:
         if not (args.out_md or args.plot):
             ap.error("--render needs --out-md and/or --plot: what to write")

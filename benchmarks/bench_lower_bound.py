@@ -172,10 +172,13 @@ def covering_bound(
     angle; y_j ∈ [0, 1], the detection probability in bin j of ρ (same width).  Minimize
     Σ w subject to y_j ≤ Σ_k P̄⁺_jk w_k and mean(y) ≥ ``success``, where P̄⁺_jk is the
     largest :func:`ring_kernel` value over bin j × cell k (sampled ``fine`` times per side,
-    edges included).  Solved by HiGHS (``scipy.optimize.linprog``)."""
+    edges included).  Solved by HiGHS (``scipy.optimize.linprog``).  Numerically: at 30 dB
+    the value, 16.0146, moves in the fifth digit with 513 or 2049 arc angles instead of
+    129 and with 4 samples per side instead of 2; it is as exact as the measured p."""
     lo, hi = band
     if cell is None:
-        cell = min(BOUND_CELL, radius(angles, prob, 0.9) / 50.0)
+        r90 = radius(angles, prob, 0.9)
+        cell = min(BOUND_CELL, r90 / 50.0) if r90 > 0.0 else BOUND_CELL
     n_rho = max(1, math.ceil((hi - lo) / cell))
     n_s = math.ceil((hi + float(angles[-1])) / cell)
     rho = np.linspace(lo, hi, n_rho * fine + 1)

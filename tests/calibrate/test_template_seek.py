@@ -125,3 +125,23 @@ def test_a_seek_on_noise_ends_after_its_eight_measurements(template):
         assert n >= _SEEK_MAX or np.hypot(*point[0]) <= reach + 1e-9
         opt.tell(1.0 + SIGMA * rng.standard_normal(1))
     assert opt._seeks_left == 0
+
+
+def test_no_seek_without_a_noise_or_a_peak(template):
+    """A noise σ or a peak of 0 is refused in one line (the spread would be NaN, the
+    prior infinite); a template whose peak is 0 starts no seek."""
+    from echocal.calibrate.model_based import ModelBased
+    from echocal.errors import EchocalValueError
+
+    points, values = np.zeros((1, 2)), np.array([0.2])
+    for sigma, peak in ((0.0, PEAK), (SIGMA, 0.0)):
+        with pytest.raises(EchocalValueError, match="sigma > 0 and a peak metric > 0"):
+            seek_point(template, points, values, np.ones(1), sigma, peak, np.zeros(2), 4.0)
+    flat = LobeTemplate(template.angles, template.directions, template.values, peak=0.0)
+    opt = ModelBased(
+        np.zeros(2),
+        history=(points, 1.0 + values),
+        noise_model=lambda: (1.0, SIGMA),
+        lobe_template=lambda: flat,
+    )
+    assert opt._seeks_left == 0

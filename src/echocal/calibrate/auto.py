@@ -110,17 +110,17 @@ Why each part:
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the lower-bound ratio at 20 dB (a search that acts on detections needs
-≥ 62 measurements to reach 0.1° from 99 % of far starts — the covering optimized over the
-start band; ``auto``'s p99 is 99, a ratio of 1.60 and 1.16× the best hexagonal lattice:
-detection alone costs up to about 95 there, the climb a median 4).  At 30 dB the ratio is
-1.30 (p99 26 against 20), met just. The 12.7 mm probe over a rod at 10 dB meets its target only
-just (95 of 100 runs; its lobe peaks off normal incidence in two humps, flat along the
-rod, with no template; 2 of 100 runs reach 0.1° only after 68–71 measurements, three end
-0.10–0.47° off). Without a probe model (a recording, a rig) the far search still spends
-the 1° lattice first (a fixed order cannot serve both a 10 dB near start and a 30 dB far
-one without knowing the SNR); ``fine_radius=1.0`` drops it when the SNR is known to be ≥
-20 dB. When the start is known to be near the echo, ``method="model-based"`` saves the
-acquisition.
+≥ 62 measurements to reach 0.1° from 99 % of far starts — the covering optimized over
+the start band; ``auto``'s p99 is 99, a ratio of 1.60 and 1.16× the best hexagonal
+lattice: detection alone costs up to about 95 there, the climb a median 4). At 30 dB the
+ratio is 1.30 (p99 26 against 20), met at the edge (the programme's 16.01 rounded up to
+17). The 12.7 mm probe over a rod at 10 dB meets its target only just (95 of 100 runs;
+its lobe peaks off normal incidence in two humps, flat along the rod, with no template;
+2 of 100 runs reach 0.1° only after 68–71 measurements, three end 0.10–0.47° off).
+Without a probe model (a recording, a rig) the far search still spends the 1° lattice
+first (a fixed order cannot serve both a 10 dB near start and a 30 dB far one without
+knowing the SNR); ``fine_radius=1.0`` drops it when the SNR is known to be ≥ 20 dB. When
+the start is known to be near the echo, ``method="model-based"`` saves the acquisition.
 """
 
 from __future__ import annotations

@@ -13,10 +13,10 @@ exp(−χ²(c)/2) (the template fit's χ², the prior on the peak's energy inclu
 measures next where the echo predicted by those candidates varies most — in units of the
 noise σ, capped at :data:`SEEK_CAP` σ (a predicted echo that far above the noise is
 unmistakable, whatever its size).  On an arc of candidates that is a point on the arc,
-where half of them predict a clear echo and half predict noise; at the detection itself
-(all candidates predict the same value) it is never.  Each measurement there either
-finds the echo (the fit becomes significant and the template's steps take over) or
-removes the candidates near it.
+where half of them predict a clear echo and half predict noise; at the detection itself,
+where the candidates predict about the value measured there, it is least.  Each
+measurement there either finds the echo (the fit becomes significant and the template's
+steps take over) or removes the candidates near it.
 """
 
 from __future__ import annotations
@@ -67,6 +67,12 @@ def seek_point(
     measurement of no echo and ``peak`` the metric at the lobe's peak (same units).  The
     candidate peaks are a 0.2° grid within ``radius`` of ``around``, the candidate points
     a 0.4° grid.  None when no candidate peak gives a positive energy."""
+    if not (sigma > 0.0 and peak > 0.0):
+        from echocal.errors import EchocalValueError
+
+        raise EchocalValueError(
+            f"seek_point needs a noise sigma > 0 and a peak metric > 0; got {sigma!r}, {peak!r}"
+        )
     ok = np.isfinite(values) & (sigmas > 0.0)
     x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
     centres = disc_grid(around, radius, COARSE_STEP)

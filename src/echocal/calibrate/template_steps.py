@@ -137,12 +137,13 @@ class TemplateSteps:
         self._n_top = int(np.count_nonzero(template.on_top(self._x - fit.centre)))
 
     def _start_seek(self) -> bool:
-        """For a warm start the template does not fit yet (a detection in the lobe's tail):
-        seek the peak (:meth:`_seek_step`, up to :data:`_SEEK_MAX` measurements) instead of
-        measuring a design around x0 — True — when the template, the peak's metric in the
-        objective's units and the noise are known; else False."""
+        """For a warm start the template does not fit yet (typically a detection in the
+        lobe's tail; also a false alarm handed on): seek the peak (:meth:`_seek_step`, up
+        to :data:`_SEEK_MAX` measurements) instead of measuring a design around x0 — True —
+        when the template, the peak's metric in the objective's units (> 0) and the noise
+        are known; else False."""
         template = self._template
-        if template is None or template.peak is None or self.normalize != "none":
+        if template is None or not (template.peak or 0.0) > 0.0 or self.normalize != "none":
             return False
         if self.space != "log" or self._sigmas(np.zeros(1)) is None:
             return False
@@ -154,11 +155,14 @@ class TemplateSteps:
         candidate peaks' predicted echoes disagree most
         (:func:`~echocal.calibrate.template_seek.seek_point`, candidates out to where the
         lobe's tail is still 3 σ above the noise, at least ``max_radius`` from x0); else
-        None, and the seek is over for the run."""
+        None, and the seek is over for the run — also when that point, as the positioner
+        reaches it, was measured already (clipped onto a limit, or a NaN there: it would
+        teach nothing new)."""
         template = self._template
         if self._tfit is not None or template is None or template.peak is None:
             self._seeks_left = 0
-        if self._seeks_left <= 0 or template is None or template.peak is None:
+            return None
+        if self._seeks_left <= 0:
             return None
         y = self._y - self._floor()
         sig, noise = self._sigmas(np.maximum(y, 0.0)), self._sigmas(np.zeros(1))
@@ -167,8 +171,11 @@ class TemplateSteps:
         peak = template.peak / self._scale
         reach = max(self.max_radius, tail_reach(template, peak, float(noise[0])))
         point = seek_point(template, self._x, y, sig, float(noise[0]), peak, self.x0, reach)
-        self._seeks_left = 0 if point is None else self._seeks_left - 1
-        return None if point is None else self.clip(point)
+        if point is None or self._times_measured(point):
+            self._seeks_left = 0
+            return None
+        self._seeks_left -= 1
+        return self.clip(point)
 
     def _template_step(self) -> FloatArray | None:
         """While no measurement lies on the lobe's top: the fitted template's peak [deg]
