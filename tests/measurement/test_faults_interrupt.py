@@ -140,6 +140,8 @@ def test_sweep_killed_and_resumed_equals_the_uninterrupted_sweep(name, sweep_ref
     parts = out / "parts"
     wait_for(lambda: parts.is_dir() and any(parts.glob("runs-*.parquet")), process)
     workers = _children(process.pid)
+    if process.poll() is not None:  # a loaded machine: the whole tiny sweep was done first
+        pytest.skip("the sweep finished before the signal could reach it; nothing to resume")
     code, _, err = interrupt(process, name)
     assert code == SIGNALS[name], err
     assert "Traceback" not in err
