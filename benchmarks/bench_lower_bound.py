@@ -111,13 +111,19 @@ def seen_area(angles: np.ndarray, prob: np.ndarray) -> float:
     return float(2.0 * np.pi * np.trapezoid(prob * angles, angles))
 
 
-def detection_bound(band: tuple[float, float], k: float, success: float = SUCCESS) -> int:
+def area_bound(band: tuple[float, float], k: float, success: float = SUCCESS) -> int:
     """The area bound (the module docstring's item 2): measurements a search that acts on
     detections needs to detect the echo with probability ``success`` at every point of the
     annulus ``band`` [deg], each seeing ``k`` [deg²] of the whole plane.  Printed beside
     :func:`covering_bound`, which replaces it."""
     lo, hi = band
     return math.ceil(success * math.pi * (hi**2 - lo**2) / k)
+
+
+def bound_cell(r90: float) -> float:
+    """[deg] the programme's cell: 1/50 of the 90 % detection radius ``r90``, at most
+    :data:`BOUND_CELL` (which is also the cell when ``r90`` is 0)."""
+    return min(BOUND_CELL, r90 / 50.0) if r90 > 0.0 else BOUND_CELL
 
 
 def ring_kernel(
@@ -128,16 +134,16 @@ def ring_kernel(
     them — p(θ) (``prob`` at ``angles`` [deg], linear between, 0 beyond) on the distance
     θ = √(ρ² + s² − 2ρs cos φ), by the trapezoid over ``n_phi`` angles φ from 0 to where θ
     passes the last angle.  Returns shape (len(rho), len(s))."""
-    reach = float(angles[-1])
+    far = float(angles[-1])  # p = 0 beyond the last measured angle
     rho, s = np.asarray(rho, float), np.asarray(s, float)
     out = np.zeros((len(rho), len(s)))
     t = np.linspace(0.0, 1.0, n_phi)
     for start in range(0, len(rho), 32):  # rows in chunks: (32, len(s), n_phi) at a time
         r = rho[start : start + 32, None, None]
-        near = np.flatnonzero(np.abs(s - rho[start : start + 32, None]).min(axis=0) <= reach)
+        near = np.flatnonzero(np.abs(s - rho[start : start + 32, None]).min(axis=0) <= far)
         d = s[None, near, None]
         with np.errstate(divide="ignore", invalid="ignore"):
-            cos_edge = np.where(r * d > 0.0, (r**2 + d**2 - reach**2) / (2.0 * r * d), -1.0)
+            cos_edge = np.where(r * d > 0.0, (r**2 + d**2 - far**2) / (2.0 * r * d), -1.0)
         phi_edge = np.arccos(np.clip(cos_edge, -1.0, 1.0))  # p = 0 beyond: the arc that sees
         theta = np.sqrt(np.maximum(r**2 + d**2 - 2.0 * r * d * np.cos(phi_edge * t), 0.0))
         seen = np.trapezoid(np.interp(theta, angles, prob, right=0.0), axis=-1)
@@ -177,8 +183,7 @@ def covering_bound(
     129 and with 4 samples per side instead of 2; it is as exact as the measured p."""
     lo, hi = band
     if cell is None:
-        r90 = radius(angles, prob, 0.9)
-        cell = min(BOUND_CELL, r90 / 50.0) if r90 > 0.0 else BOUND_CELL
+        cell = bound_cell(radius(angles, prob, 0.9))
     n_rho = max(1, math.ceil((hi - lo) / cell))
     n_s = math.ceil((hi + float(angles[-1])) / cell)
     rho = np.linspace(lo, hi, n_rho * fine + 1)
@@ -206,6 +211,7 @@ def lattice_search(
     *,
     samples: int = 10_000,
     seed: int = 0,
+    r90: float | None = None,
 ) -> tuple[int, float]:
     """The fewest measurements of a hexagonal lattice around x0 that detect the echo with
     probability ≥ ``success`` for an optimum at a distance uniform in ``band`` [deg] and a
@@ -214,25 +220,25 @@ def lattice_search(
     chosen greedily, each the one that adds most to the mean detection probability
     (1 − Π(1 − p(|x − mᵢ|)): every measurement detects independently with the measured
     ``prob`` at ``angles`` [deg], 0 beyond).  The mean is over ``samples`` optima drawn
-    with ``seed``.  A design — what an optimized non-adaptive covering spends — not a
-    bound.  Returns (measurements, spacing [deg]); (∞, NaN) when no spacing gets there."""
+    with ``seed``; ``r90`` [deg], the 90 % radius, when the caller has it.  A design —
+    what an optimized non-adaptive covering spends — not a bound.  Returns (measurements,
+    spacing [deg]); (∞, NaN) when no spacing gets there."""
     lo, hi = band
     rng = np.random.default_rng(seed)
     dist = rng.uniform(lo, hi, samples)  # as the benchmark's starts: distance uniform
     phi = rng.uniform(0.0, 2.0 * np.pi, samples)
     optima = np.column_stack([dist * np.cos(phi), dist * np.sin(phi)])
-    seen = angles[np.flatnonzero(prob > 0.0)]
-    reach = float(seen.max()) if seen.size else 0.0  # p = 0 beyond: farther points see nothing
+    far = float(angles[-1])  # p = 0 beyond the last measured angle: farther points see nothing
     best: tuple[int, float] = (math.inf, math.nan)  # type: ignore[assignment]
-    r90 = radius(angles, prob, 0.9)
+    r90 = radius(angles, prob, 0.9) if r90 is None else r90
     if not r90 > 0.0:
         return best
     for spacing in r90 * np.round(np.arange(0.6, 2.45, 0.1), 2):
         # ring k's nearest points are k · spacing · √3/2 out: enough rings to pass hi + reach
-        n_rings = math.ceil((hi + reach) / (spacing * math.sqrt(3.0) / 2.0)) + 1
+        n_rings = math.ceil((hi + far) / (spacing * math.sqrt(3.0) / 2.0)) + 1
         rings = hex_spiral(np.zeros(2), spacing, n_rings)
         points = np.vstack(rings)
-        points = points[np.hypot(*points.T) <= hi + reach]
+        points = points[np.hypot(*points.T) <= hi + far]
         p = np.interp(
             np.hypot(*(optima[:, None, :] - points[None]).transpose(2, 0, 1)),
             angles,
@@ -308,12 +314,16 @@ def main(argv: list[str] | None = None) -> int:
     for snr, budget in zip(snrs, budgets, strict=True):
         prob = detection_curves(setup_name, snr, angles, draws)[DETECTOR]
         k = seen_area(angles, prob)
-        bound = math.ceil(covering_bound(band, angles, prob)) + REFINE_UNKNOWNS
-        area_bound = detection_bound(band, k) + REFINE_UNKNOWNS
-        lattice = cover(band, radius(angles, prob, 0.9))
+        r90 = radius(angles, prob, 0.9)
+        bound = math.ceil(covering_bound(band, angles, prob, cell=bound_cell(r90)))
+        bound += REFINE_UNKNOWNS
+        area = area_bound(band, k) + REFINE_UNKNOWNS
+        lattice = cover(band, r90)
         lattice99 = cover(band, radius(angles, prob, SUCCESS)) + REFINE_UNKNOWNS
         best, spacing = (
-            lattice_search(band, angles, prob) if lattice <= MAX_LATTICE else (math.inf, math.nan)
+            lattice_search(band, angles, prob, r90=r90)
+            if lattice <= MAX_LATTICE
+            else (math.inf, math.nan)
         )
         best += REFINE_UNKNOWNS
         tasks = [(args.case, args.start, snr, r, "auto", budget) for r in range(runs)]
@@ -332,7 +342,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{k:.1f}",
                 f"{lattice:.0f}",
                 f"{bound}",
-                f"{area_bound}",
+                f"{area}",
                 f"{lattice99:.0f}",
                 f"{best} ({spacing:.2f}°)" if math.isfinite(best) else "–",
                 f"{100 * within:.0f} %",

@@ -35,9 +35,9 @@ def test_a_sure_disc_of_radius_r_sees_pi_r_squared(bench):
 
 def test_the_bound_is_the_annulus_over_the_seen_area(bench):
     # 5–20° with K = π·4² (a sure 4° disc): 0.99 · (400 − 25)/16 = 23.2 → 24 measurements
-    assert bench.detection_bound((5.0, 20.0), math.pi * 16.0) == 24
+    assert bench.area_bound((5.0, 20.0), math.pi * 16.0) == 24
     # a disc is covered by one measurement that sees all of it
-    assert bench.detection_bound((0.0, 1.0), math.pi * 4.0) == 1
+    assert bench.area_bound((0.0, 1.0), math.pi * 4.0) == 1
 
 
 def test_the_best_lattice_covers_a_disc_of_radius_2_with_7_sure_discs_of_radius_1(bench):
@@ -61,7 +61,7 @@ def test_no_lattice_beats_the_union_bound(bench, width):
     prob = np.exp(-0.5 * (angles / width) ** 2)
     band = (1.0, 4.0)
     n, _ = bench.lattice_search(band, angles, prob, samples=4000)
-    assert bench.detection_bound(band, bench.seen_area(angles, prob)) <= n < math.inf
+    assert bench.area_bound(band, bench.seen_area(angles, prob)) <= n < math.inf
 
 
 def test_lower_bound_smoke_runs_and_reports(tmp_path):

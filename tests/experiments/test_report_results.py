@@ -54,7 +54,7 @@ def test_cli_report_renders_a_calibration_and_a_scan_folder(folders, tmp_path):
     assert "setup immersion-5mhz, replay" not in cal_part  # options not given are left out
     assert "setup immersion-5mhz, method auto, x0 0.5,-0.3," in cal_part
     assert "immersion-5mhz (sha256 " in cal_part and "provenance" in cal_part
-    assert "search passes sized for the measured noise" in cal_part  # found near x0: none
+    assert "search beyond the first ring" in cal_part  # found near x0: none
     # the scan: its maps and its 3-D view
     images = _images(scan_part)
     for name in ("height", "normals", "errors", "measurements", "surface-3d"):

@@ -57,6 +57,7 @@ from echocal.calibrate._options import (
 )
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.lobe_template import LobeTemplate
+from echocal.calibrate.posterior_search import GIVE_UP_EVIDENCE, EchoLikelihood, PosteriorSearch
 from echocal.calibrate.registry import get_method, register_method
 from echocal.calibrate.search_pattern import search_rings
 from echocal.constants import ECHO_THRESHOLD
@@ -184,6 +185,18 @@ class Acquisition(Optimizer):
         plan was sized for keeps the fine lattice out to ``fine_radius``, where a near
         start's echo is, and is searched beyond it by the passes returned, in place of
         planned passes too coarse to see it.  Called once.
+    echo_likelihood : callable returning how the detector's significance is distributed
+        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`)
+        or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`, which the
+        simulator gives.
+    posterior : (true or false) once x0 and its first ring saw no echo, and given a
+        ``detector``, an ``echo_likelihood`` (asked then, once) and ``batch`` 1, search
+        by the posterior over the optimum instead of the lattice
+        (:mod:`echocal.calibrate.posterior_search`): every significance, below the
+        threshold too, updates it, and the next point is where a detection is most
+        likely.  The detection test and its confirmation are the lattice's; the search
+        gives up (status 4) once the measurements are 1,000 times likelier with no echo
+        within ``max_radius`` than with one.  ``replan`` is then not asked.
     """
 
     def __init__(
@@ -210,6 +223,8 @@ class Acquisition(Optimizer):
         max_spacing: float | None = None,
         passes: Sequence[float] = (),
         replan: Callable[[], Sequence[float] | None] | None = None,
+        echo_likelihood: Callable[[], EchoLikelihood | None] | None = None,
+        posterior: bool = False,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -259,6 +274,15 @@ class Acquisition(Optimizer):
         if replan is not None and not callable(replan):
             raise EchocalValueError(f"replan must be a callable or None; got {replan!r}")
         self.replan = replan
+        if echo_likelihood is not None and not callable(echo_likelihood):
+            raise EchocalValueError(
+                f"echo_likelihood must be a callable or None; got {echo_likelihood!r}"
+            )
+        self.echo_likelihood = echo_likelihood
+        self.posterior = strict_bool("posterior", posterior)
+        self.search: PosteriorSearch | None = None
+        """The Bayesian search once it has taken over from the lattice (None: the lattice)."""
+        self._search_asked = False
         self.replanned: tuple[float, ...] | None = None
         """The passes ``replan`` returned (None: the plan was kept, or not yet asked)."""
         self._queue, self._ring = self._search_queue(self.fine_radius, self.passes)
@@ -312,6 +336,32 @@ class Acquisition(Optimizer):
         self.replanned = passes
         self._queue = np.vstack([self._queue[: self._next], queue[first:]])
         self._ring = np.concatenate([self._ring[: self._next], ring[first:]])
+
+    def _start_search(self) -> None:
+        """Once x0's first ring has seen no echo: hand the search to the posterior
+        (``posterior``), if the objective gives the echo's likelihood then (asked once),
+        the significances are the detector's and points are asked one at a time."""
+        if (
+            not self.posterior
+            or self._search_asked
+            or self._next < self._first_ring_size()
+            or self.batch != 1
+            or not self._use_significance
+            or self.echo_likelihood is None
+        ):
+            return
+        self._search_asked = True
+        likelihood = self.echo_likelihood()
+        if likelihood is None:
+            return
+        self.search = PosteriorSearch(self.x0, self.max_radius, likelihood, self.bounds)
+        self.search.update(self._x, self._g)
+
+    def _search_exhausted(self) -> bool:
+        """Whether the posterior search has given up: the measurements are
+        1 / :data:`~echocal.calibrate.posterior_search.GIVE_UP_EVIDENCE` times likelier
+        with no echo within ``max_radius`` than with one."""
+        return self.search is not None and self.search.log_evidence() < np.log(GIVE_UP_EVIDENCE)
 
     @property
     def batch_size(self) -> int:  # type: ignore[override]
@@ -426,6 +476,8 @@ class Acquisition(Optimizer):
             return self.local.ask()
         if self._confirming is not None:
             return self._confirming[None, :]
+        if self.search is not None:
+            return self.search.next_point()[None, :]
         n = self.batch
         if self._next == 0:
             n = max(n, self._first_ring_size())
@@ -447,6 +499,8 @@ class Acquisition(Optimizer):
         ok = ~self.last_nan
         sig = self._significances(len(points))
         self._add(points[ok], values[ok], np.zeros(len(points))[ok] if sig is None else sig[ok])
+        if self.search is not None and sig is not None:
+            self.search.update(points[ok], sig[ok])
         if confirming:
             if not ok.any():
                 return False  # the repeat failed (NaN): search on; a detection asks again
@@ -459,8 +513,10 @@ class Acquisition(Optimizer):
                 return False
         detected = self._detected()
         if not confirming and not detected:
-            self._replan()
-        if len(self._y) and self._next < len(self._queue):
+            self._start_search()
+            if self.search is None:
+                self._replan()
+        if self.search is None and len(self._y) and self._next < len(self._queue):
             # search first where the echo is strongest so far: within each ring, the points
             # nearest to the best value come first
             best = self._x[int(np.argmax(self._g if self._use_significance else self._y))]
@@ -474,7 +530,7 @@ class Acquisition(Optimizer):
                 self._confirming = self._x[int(np.argmax(self.scores()))].copy()
             else:
                 self._start_local()
-        elif self._next >= len(self._queue):
+        elif self._search_exhausted() or (self.search is None and self._next >= len(self._queue)):
             self.finished, self.finish_status = True, 4
             if len(self._y):
                 self._iterate = self._x[int(np.argmax(self._y))]

@@ -147,6 +147,7 @@ thirds."""
 AUTO_SEARCH: dict[str, Any] = {
     "fine_radius": 3.0,
     "passes": (STRONG_ECHO_SPACING, WEAK_ECHO_SPACING),
+    "posterior": True,
 }
 """auto's search geometry [deg] — its only difference from ``acquisition``: the 1° lattice
 within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the

@@ -164,6 +164,7 @@ OBJECTIVE_INPUTS = (
     "normal_echo",
     "resolution",
     "detector",
+    "echo_likelihood",
 )
 """Acquisition options the driver takes from the objective unless they are given."""
 
@@ -179,11 +180,19 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
         objective.normal_echo,
         objective.resolution(),
         objective.detections,
+        objective.echo_likelihood,
     )
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
 
 
-CALLABLE_INPUTS = ("noise_model", "lobe_template", "normal_echo", "detector", "replan")
+CALLABLE_INPUTS = (
+    "noise_model",
+    "lobe_template",
+    "normal_echo",
+    "detector",
+    "replan",
+    "echo_likelihood",
+)
 """Options the objective supplies as callables (the live noise estimate, the probe's lobe
 and best echo, the echo detector, the search replanned for the measured noise): set only
 through the Python API."""
@@ -465,6 +474,7 @@ def calibrate(
         times=times,
         acquisition_measurements=_acquisition_cost(opt, objective),
         search_passes=replanned,
+        posterior_search=getattr(opt, "search", None) is not None,
         search_snr_db=None if replanned is None else objective.search_snr_db,
         final_value=final_value,
     )

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, finite_float, nonnegative_float, one_of, positive_int
 from echocal.calibrate.lobe_template import LobeTemplate
+from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
 
 __all__ = [
@@ -202,6 +203,14 @@ class Objective:
         sized for is kept in :attr:`search_snr_db`), or None when it predicts none, or
         one too weak for any blind pass (the base class: an analytic function has no
         probe)."""
+        return None
+
+    def echo_likelihood(self) -> EchoLikelihood | None:
+        """How each measurement's echo significance is distributed versus misalignment
+        (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`), against the noise
+        measured so far, when the objective knows its probe and its units — for a
+        Bayesian search of a lost echo — else None (the base class: an analytic function
+        has no probe)."""
         return None
 
     def lobe_template(self) -> LobeTemplate | None:

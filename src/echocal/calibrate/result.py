@@ -81,6 +81,9 @@ class CalibrationResult:
         5 MHz probe); None when it kept its plan or had none.
     search_snr_db : [dB] the echo's peak SNR ŝ the objective predicted against that noise,
         for which ``search_passes`` are sized; None when ``search_passes`` is.
+    posterior_search : the acquisition searched beyond x0's first ring by the posterior
+        over the optimum (:mod:`echocal.calibrate.posterior_search`: ``auto`` on a
+        simulated probe), not on passes.
     final_value : [energy units] the mean of the final measurements at ``x`` (counted in
         ``n_measurements``; ``final_check`` of them), None when the run did not measure
         its estimate.
@@ -107,6 +110,7 @@ class CalibrationResult:
     acquisition_measurements: int | None = None
     search_passes: tuple[float, ...] | None = None
     search_snr_db: float | None = None
+    posterior_search: bool = False
     final_value: float | None = None
 
     @property

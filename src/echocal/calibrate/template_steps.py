@@ -136,16 +136,23 @@ class TemplateSteps:
         self._tfit = fit  # only an accepted fit's peak is kept next time: not one of noise
         self._n_top = int(np.count_nonzero(template.on_top(self._x - fit.centre)))
 
+    def _seek_template(self) -> LobeTemplate | None:
+        """The template when a seek can use it — the peak's metric known in the objective's
+        units (> 0), the values not normalized, the model in log space, the noise known —
+        else None."""
+        template = self._template
+        if template is None or not (template.peak or 0.0) > 0.0 or self.normalize != "none":
+            return None
+        if self.space != "log" or self._sigmas(np.zeros(1)) is None:
+            return None
+        return template
+
     def _start_seek(self) -> bool:
         """For a warm start the template does not fit yet (typically a detection in the
         lobe's tail; also a false alarm handed on): seek the peak (:meth:`_seek_step`, up
         to :data:`_SEEK_MAX` measurements) instead of measuring a design around x0 — True —
-        when the template, the peak's metric in the objective's units (> 0) and the noise
-        are known; else False."""
-        template = self._template
-        if template is None or not (template.peak or 0.0) > 0.0 or self.normalize != "none":
-            return False
-        if self.space != "log" or self._sigmas(np.zeros(1)) is None:
+        when :meth:`_seek_template` gives the template; else False."""
+        if self._seek_template() is None:
             return False
         self._seeks_left = _SEEK_MAX
         return True
@@ -158,7 +165,7 @@ class TemplateSteps:
         None, and the seek is over for the run — also when that point, as the positioner
         reaches it, was measured already (clipped onto a limit, or a NaN there: it would
         teach nothing new)."""
-        template = self._template
+        template = self._seek_template()
         if self._tfit is not None or template is None or template.peak is None:
             self._seeks_left = 0
             return None

@@ -213,6 +213,7 @@ def calibration_summary(
         "acquisition_measurements": result.acquisition_measurements,
         "search_passes_deg": result.search_passes,
         "search_snr_db": result.search_snr_db,
+        "posterior_search": result.posterior_search,
         "final_value": result.final_value,
         "n_iterations": result.n_iterations,
         "status": result.status,

@@ -72,8 +72,10 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
         ("measurements", result.get("n_measurements")),
         ("of which acquisition", result.get("acquisition_measurements")),
         (
-            "search passes sized for the measured noise",
-            _passes(result.get("search_passes"), result.get("search_snr_db")),
+            "search beyond the first ring",
+            _POSTERIOR
+            if result.get("posterior_search")
+            else _passes(result.get("search_passes"), result.get("search_snr_db")),
         ),
         ("iterations", result.get("n_iterations")),
         ("metric at the estimate", result.get("final_value")),
@@ -222,6 +224,10 @@ def _scan_figures(scan: Any) -> dict[str, Any]:
     if "normal_error" in scan.dataset:
         figures["errors"] = lambda: surface.error_maps_figure(scan)
     return figures
+
+
+_POSTERIOR = "Bayesian: by the posterior over the optimum, every significance counted"
+"""How the report names a posterior search (:mod:`echocal.calibrate.posterior_search`)."""
 
 
 def _passes(spacings: list[float] | None, snr_db: float | None = None) -> str:

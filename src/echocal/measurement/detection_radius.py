@@ -48,6 +48,7 @@ from scipy.stats import rice
 from echocal._curves import first_crossing
 from echocal._validate import finite_array, finite_float, in_range, positive_float, positive_int
 from echocal.calibrate.lobe_template import LobeTemplate
+from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
@@ -173,6 +174,30 @@ class LobeProfile:
         level = detector.threshold_peak(sigma, threshold)
         scale = sigma * detector.noise_gain
         return rice.sf(level / scale, self.peaks / scale)
+
+    def echo_likelihood(
+        self, noise_sigma: float, threshold: float = ECHO_THRESHOLD
+    ) -> EchoLikelihood | None:
+        """How one A-scan's matched-filter peak is distributed versus misalignment against
+        white noise of per-sample σ ``noise_sigma`` [a.u.], for a Bayesian search
+        (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`): the profile's peaks
+        averaged over its directions, in units of σ · the detector's noise gain, and the
+        detection threshold ``threshold`` [σ of significance] on the same scale.  None when
+        the lobe does not peak at normal incidence (a large probe over a curved part: the
+        optimum is not where the profile is centred)."""
+        top = float(np.mean(self.peaks[:, 0]))
+        if not top > 0.0 or float(self.peaks.max()) > _PEAK_AT_NORMAL * top:
+            return None
+        setup = self.setup
+        detector = shared_detector(setup.pulse, setup.window.fs, setup.window.n_samples)
+        sigma = positive_float("noise_sigma", noise_sigma)
+        scale = sigma * detector.noise_gain
+        return EchoLikelihood(
+            angles=self.angles,
+            echo=self.peaks.mean(axis=0) / scale,
+            n_cells=detector.n_cells,
+            threshold=detector.threshold_peak(sigma, threshold) / scale,
+        )
 
     def radius(
         self,

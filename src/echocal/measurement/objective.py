@@ -20,6 +20,7 @@ from echocal._validate import finite_array
 from echocal.ascan import AScan
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.objective import Objective
+from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.errors import EchocalError, EchocalValueError
 from echocal.geometry import Pose, pose_from_angles
 from echocal.measurement.base import MeasurementSource
@@ -265,6 +266,34 @@ class SourceObjective(Objective):
         if passes is not None:
             self.search_snr_db = snr
         return passes
+
+    def echo_likelihood(self) -> EchoLikelihood | None:
+        """The simulated probe's matched-filter peak versus misalignment at this position,
+        against the receiver noise σ measured so far
+        (:meth:`~echocal.measurement.detection_radius.LobeProfile.echo_likelihood`):
+        what a Bayesian search of a lost echo weighs each significance with.  Only for
+        the simulator measured with its own pulse, one A-scan per point, with tilt
+        angles (the profile's misalignments), ungated; None otherwise — a rig's twin
+        does not give the echo's amplitude in the rig's units — before a noisy A-scan,
+        and where the probe cannot see the part."""
+        from echocal.measurement.detection_radius import cached_lobe_profile
+
+        twin = self.twin
+        if (
+            twin is None
+            or not self._own_units()
+            or self.gate is not None
+            or self.repeats != 1
+            or self.parameterization != "tilt"
+        ):
+            return None
+        sigma = self._receiver_sigma()
+        if not sigma > 0.0:  # no noise measured yet
+            return None
+        try:
+            return cached_lobe_profile(twin, self.position).echo_likelihood(sigma)
+        except EchocalError:  # no normal incidence, no echo in the window, ...
+            return None
 
     def lobe_template(self) -> LobeTemplate | None:
         """The simulated probe's pseudo-energy lobe at this position (the source, or the
