@@ -69,6 +69,12 @@ def test_the_peak_is_recovered_from_the_detectors_significance():
         assert like.peak_of_significance(g) == pytest.approx(t, rel=1e-3)
 
 
+def test_a_significance_beyond_double_precision_is_the_tables_largest_peak():
+    like = _likelihood()
+    assert like.peak_of_significance(45.0) == like.peak_of_significance(np.inf) == 64.0
+    assert like.peak_of_significance(-30.0) == 1.0  # below the least peak of Rice's law (t = 1)
+
+
 @pytest.mark.parametrize("t", [2.5, 3.5, 5.0, 7.0])
 @pytest.mark.parametrize("nu", [0.5, 2.0, 4.0, 7.0])
 def test_the_log_ratio_is_the_derivative_of_the_max_of_echo_and_noise(t, nu):

@@ -117,8 +117,10 @@ class EchoLikelihood:
         """The normalized peak t whose significance is ``significance`` [σ]: the inverse of
         g = Φ⁻¹(exp(−M t e^{−t²/2}))
         (:meth:`~echocal.signal.detection.EchoDetector.significance_of_peak`), by
-        interpolation on t ∈ [1, 64] (1 for every g of a peak below 1)."""
-        log_tail = float(np.log(-log_ndtr(significance))) - np.log(self.n_cells)
+        interpolation on t ∈ [1, 64] (1 for every g of a peak below 1, 64 for every g
+        beyond double precision's tail, about 38)."""
+        with np.errstate(divide="ignore"):  # log_ndtr(g) = 0 for g beyond ~38: t = 64
+            log_tail = float(np.log(-log_ndtr(significance))) - np.log(self.n_cells)
         h = np.log(_PEAK_TABLE) - 0.5 * _PEAK_TABLE**2  # decreasing in t >= 1
         return float(np.interp(-log_tail, -h, _PEAK_TABLE))
 
