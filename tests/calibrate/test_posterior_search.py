@@ -182,6 +182,26 @@ def test_the_next_point_is_the_direct_sum_of_posterior_times_detection():
     np.testing.assert_allclose(search.next_point(), [xs[j], ys[i]])
 
 
+def test_the_prior_lies_inside_the_bounds_so_quiet_values_end_the_search():
+    # the disc of 20° around x0 = (0, 0) half beyond tilt_x = 0: no mass there, and quiet
+    # values on a 2° lattice of the other half bring the evidence below 1e-3 (before, the
+    # mass beyond the bounds stayed, and a search with no echo in reach never gave up)
+    search = _search(bounds=((0.0, 30.0), (-30.0, 30.0)))
+    post = np.exp(search.log_posterior())
+    assert post[:, search._x[0] < 0.0].sum() == 0.0
+    grid = np.arange(0.0, 21.0, 2.0)
+    for x in grid:
+        for y in np.arange(-20.0, 21.0, 2.0):
+            if np.hypot(x, y) <= 21.0:
+                search.update(np.array([[x, y]]), np.array([0.0]))
+    assert search.log_evidence() < np.log(1e-3)
+
+
+def test_a_start_whose_disc_misses_the_bounds_is_refused():
+    with pytest.raises(EchocalValueError, match="move the start inside"):
+        _search(bounds=((25.0, 30.0), (-30.0, 30.0)))
+
+
 def test_the_next_point_stays_inside_the_bounds():
     search = _search(bounds=((2.0, 30.0), (-30.0, 30.0)))
     search.update(np.array([[-10.0, 0.0]]), np.array([6.0]))  # the echo is out of bounds

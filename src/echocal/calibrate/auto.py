@@ -106,7 +106,20 @@ Why each part:
    directions the search already measured empty — instead of a 1° hexagon around the
    detection, whose 6 values lie within a few noise σ of each other.  Far 30 dB, 100
    runs: p90 to 0.1° 23 → 21, p99 29 → 26, no run slower; 100 other seeds: 25 → 21 and
-   30 → 26.
+   30 → 26;
+9. beyond x0's first ring, on a simulated probe, the search follows the posterior over
+   the optimum (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): how
+   each A-scan's matched-filter peak is distributed wherever the optimum is comes from the
+   probe's noiseless lobe and the detector's own noise model
+   (:meth:`~echocal.calibrate.Objective.echo_likelihood`), every significance — below the
+   threshold too — updates the posterior, and the next point is where a detection is most
+   likely (among near-ties, the one nearest to x0), instead of the passes of item 3, which
+   act only on detections.  Far starts, 100 runs: at 20 dB (budget 400) p99 to 0.1°
+   99 → 59, median 50 → 28.5 — below the 62 that any search acting on detections needs
+   (docs/benchmarks/lower-bound.md); at 30 dB p99 26 → 24 (100 other seeds: 26 → 26,
+   median 16 → 15); the ray model's far 30 dB cell, 30 runs, 27 faster, 3 slower (p99 61
+   → 39); near starts 30 dB 19 faster, none slower, 10 dB 13 faster, 4 slower (40 runs
+   each).  Without a probe model (a recording, a rig) the passes stay.
 
 Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
 lower-bound.md): the lower-bound ratio at 20 dB (a search that acts on detections needs

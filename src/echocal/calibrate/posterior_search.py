@@ -9,7 +9,8 @@ echo fades with misalignment and how the detector's peak is distributed around i
 is, and the next one goes where a detection is most likely.
 
 Model (:class:`PosteriorSearch`).  The optimum c lies within ``max_radius`` of the start
-x0, a priori at a uniform *distance* (a density ∝ 1/ρ per area: as likely 2° away as
+x0 and inside the bounds (one beyond them cannot be measured), a priori at a uniform
+*distance* (a density ∝ 1/ρ per area: as likely 2° away as
 15°) in a uniform direction, on a square grid of cells.  A measurement at x observes the
 matched-filter envelope's peak t over the window (in units of the noise's Rayleigh
 scale σ·gain; recovered from the significance g the detector reports, which is a
@@ -150,7 +151,7 @@ class PosteriorSearch:
     centre : [deg] x0, shape ``(2,)``.
     max_radius : [deg] the optimum lies within this distance of ``centre`` (the prior).
     likelihood : the echo's :class:`EchoLikelihood`.
-    bounds : [deg] shape ``(2, 2)``: the next point stays inside.
+    bounds : [deg] shape ``(2, 2)``: the optimum (the prior) and the next point lie inside.
     """
 
     def __init__(
@@ -173,12 +174,20 @@ class PosteriorSearch:
         self._y = centre[1] + axis[:, None]
         rho = np.hypot(*np.meshgrid(axis, axis))
         self._rho = rho  # [deg] each cell's distance from the centre
-        log_prior = np.where(rho <= max_radius, -np.log(np.maximum(rho, cell)), -np.inf)
-        self._log_prior = log_prior - _logsumexp(log_prior)
-        self._log_like = np.zeros_like(rho)
         inside_x = (self._x >= bounds[0, 0]) & (self._x <= bounds[0, 1])
         inside_y = (self._y >= bounds[1, 0]) & (self._y <= bounds[1, 1])
         self._candidate = inside_x & inside_y
+        # the optimum within max_radius and within the bounds: one beyond them cannot be
+        # measured, and mass there would neither deplete nor let the search give up
+        support = (rho <= max_radius) & self._candidate
+        if not support.any():
+            raise EchocalValueError(
+                f"no point within max_radius {max_radius:g} deg of the start lies inside the "
+                "bounds: move the start inside them"
+            )
+        log_prior = np.where(support, -np.log(np.maximum(rho, cell)), -np.inf)
+        self._log_prior = log_prior - _logsumexp(log_prior)
+        self._log_like = np.zeros_like(rho)
         reach = likelihood.angles[detect > _KERNEL_FLOOR]
         k = int(np.ceil((float(reach[-1]) if reach.size else cell) / cell))
         offsets = np.arange(-k, k + 1) * cell
