@@ -190,9 +190,10 @@ def test_a_replan_of_none_keeps_the_plan_and_bad_ones_are_refused():
 
 
 def test_auto_takes_the_objectives_replan_unless_told_where_to_search(ray):
-    """Through the driver: recorded as the objective's; off when the caller sets
-    ``fine_radius`` or the passes; a far start on the ray model at 30 dB searches without
-    the 1° lattice out to 3° (30 measurements) and finds the echo."""
+    """Through the driver, with the passes (``posterior=False``; by default a simulated
+    probe is searched by the posterior, which asks no replan): recorded as the objective's;
+    off when the caller sets ``fine_radius`` or the passes; a far start on the ray model at
+    30 dB searches without the 1° lattice out to 3° (30 measurements) and finds the echo."""
     _, pos, _ = ray
     noisy = setup_with_overrides("immersion-5mhz-ray", snr_db=30.0, seed=2)
     truth = np.array(noisy.true_optimum(pos, parameterization="tilt"))
@@ -201,8 +202,11 @@ def test_auto_takes_the_objectives_replan_unless_told_where_to_search(ray):
         obj = SourceObjective(noisy, pos, parameterization="tilt", budget=60)
         return calibrate(obj, "auto", x0=truth + np.array([6.0, 4.0]), budget=60, rng=2, **options)
 
-    res = run()
-    assert res.options["replan"] == "objective"
+    default = run()
+    assert default.posterior_search and default.search_passes is None
+    assert np.hypot(*(np.asarray(default.x) - truth)) < 0.1
+    res = run(posterior=False)
+    assert res.options["replan"] == "objective" and not res.posterior_search
     # the result says what it searched: one pass sized for ~30 dB, then the 20 dB one
     assert (
         res.search_passes is not None and res.search_passes[-1] == dr.search_passes(noisy, pos)[-1]
@@ -214,7 +218,7 @@ def test_auto_takes_the_objectives_replan_unless_told_where_to_search(ray):
     assert back.search_passes == res.search_passes and back.search_snr_db == res.search_snr_db
     assert res.acquisition_measurements is not None and res.acquisition_measurements < 37
     assert np.hypot(*(np.asarray(res.x) - truth)) < 0.1
-    kept = run(fine_radius=3.0)
+    kept = run(fine_radius=3.0, posterior=False)
     assert kept.options["replan"] is None and kept.search_passes is None
     assert kept.search_snr_db is None
     assert run(passes=[5.0]).options["replan"] is None
