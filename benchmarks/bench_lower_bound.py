@@ -32,9 +32,11 @@ The bound, and the searches it holds for:
    ignores what the band's edges waste, and it asks 0.99 at every point of the annulus,
    not on average over the benchmark's starts (whose distance, not area, is uniform) —
    at 10 dB it was *above* the programme's bound, so it did not hold for the benchmark's
-   99 %. A search that also reads the values below the threshold (``auto``'s sequential
-   test adds neighbours' significances) may place later points better than a fixed
-   sequence can: for it the bound is a reference, not a proof. p is taken as measured up
+   99 %. A search that also reads the values below the threshold places later points
+   better than a fixed sequence can: for it the bound is a reference, not a proof, and a
+   ratio below 1 is no contradiction. ``auto`` is one since 2026-11-29: beyond x0's first
+   ring it follows the posterior over the optimum, which every significance updates
+   (``echocal.calibrate.posterior_search``). p is taken as measured up
    to ``--max-angle`` and 0 beyond (choose it where p has fallen to the false-alarm
    level).
 3. Once detected, reaching 0.1° needs at least 3 more measurements: a lobe of known

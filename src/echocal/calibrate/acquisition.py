@@ -29,6 +29,15 @@ model-based method does) it receives every acquisition measurement, so none is
 wasted.  If the search passes ``max_radius`` without finding the echo, the
 run stops with status 4 ("acquisition failed").
 
+With ``posterior`` (``auto``'s default) and an objective that knows how its echo's
+significance is distributed versus misalignment (``echo_likelihood``: a simulated
+probe), the search beyond x0's first ring is Bayesian instead
+(:mod:`echocal.calibrate.posterior_search`): every significance — below the threshold
+too — updates a posterior over where the optimum is, the next point is where a detection
+is most likely, and the search gives up once the measurements are 1,000 times likelier
+with no echo within ``max_radius`` than with one.  The detection test, its confirmation
+and the hand-over are the same.
+
 Acquisition batches are not counted as iterations.
 """
 

@@ -9,8 +9,7 @@ echo fades with misalignment and how the detector's peak is distributed around i
 is, and the next one goes where a detection is most likely.
 
 Model (:class:`PosteriorSearch`).  The optimum c lies within ``max_radius`` of the start
-x0 and inside the bounds (one beyond them cannot be measured), a priori at a uniform
-*distance* (a density ∝ 1/ρ per area: as likely 2° away as
+x0, a priori at a uniform *distance* (a density ∝ 1/ρ per area: as likely 2° away as
 15°) in a uniform direction, on a square grid of cells.  A measurement at x observes the
 matched-filter envelope's peak t over the window (in units of the noise's Rayleigh
 scale σ·gain; recovered from the significance g the detector reports, which is a
@@ -33,7 +32,7 @@ within 5 % from 9° to 13° out), and a search that goes out first leaves gaps i
 the slowest runs pay for (far starts at 30 dB, 100 runs: p99 32 measurements to 0.1°
 without the tie rule, 24 with it).  The log Bayes factor "an optimum within
 ``max_radius``" against "no echo within reach", log Σ_c π(c) Π LR, says when to give up
-(:meth:`log_evidence`).
+(:meth:`log_evidence`; over the optima inside the bounds, which alone can be measured).
 
 Evidence (a synthetic sensor drawn from this model, checked against the measured
 detection curve of the 5 MHz probe on the wave model: 0.99 / 0.07 against 0.988 / 0.092
@@ -151,7 +150,8 @@ class PosteriorSearch:
     centre : [deg] x0, shape ``(2,)``.
     max_radius : [deg] the optimum lies within this distance of ``centre`` (the prior).
     likelihood : the echo's :class:`EchoLikelihood`.
-    bounds : [deg] shape ``(2, 2)``: the optimum (the prior) and the next point lie inside.
+    bounds : [deg] shape ``(2, 2)``: the next point lies inside, and the evidence counts
+        the optima inside (:meth:`log_evidence`).
     """
 
     def __init__(
@@ -177,17 +177,18 @@ class PosteriorSearch:
         inside_x = (self._x >= bounds[0, 0]) & (self._x <= bounds[0, 1])
         inside_y = (self._y >= bounds[1, 0]) & (self._y <= bounds[1, 1])
         self._candidate = inside_x & inside_y
-        # the optimum within max_radius and within the bounds: one beyond them cannot be
-        # measured, and mass there would neither deplete nor let the search give up
-        support = (rho <= max_radius) & self._candidate
-        if not support.any():
+        log_prior = np.where(rho <= max_radius, -np.log(np.maximum(rho, cell)), -np.inf)
+        self._log_prior = log_prior - _logsumexp(log_prior)
+        self._log_like = np.zeros_like(rho)
+        # the evidence counts the optima inside the bounds: mass beyond them is never
+        # measured, so it would neither deplete nor let the search give up
+        self._measurable = np.where(self._candidate, self._log_prior, -np.inf)
+        if not np.isfinite(self._measurable).any():
             raise EchocalValueError(
                 f"no point within max_radius {max_radius:g} deg of the start lies inside the "
                 "bounds: move the start inside them"
             )
-        log_prior = np.where(support, -np.log(np.maximum(rho, cell)), -np.inf)
-        self._log_prior = log_prior - _logsumexp(log_prior)
-        self._log_like = np.zeros_like(rho)
+        self._measurable -= _logsumexp(self._measurable)
         reach = likelihood.angles[detect > _KERNEL_FLOOR]
         k = int(np.ceil((float(reach[-1]) if reach.size else cell) / cell))
         offsets = np.arange(-k, k + 1) * cell
@@ -217,9 +218,10 @@ class PosteriorSearch:
         return np.asarray(log_post - _logsumexp(log_post), dtype=np.float64)
 
     def log_evidence(self) -> float:
-        """ln Σ_c π(c) Π LR(c): the log Bayes factor of an optimum drawn from the prior
-        against no echo within reach of any measurement."""
-        return _logsumexp(self._log_prior + self._log_like)
+        """ln Σ_c π(c) Π LR(c) over the cells inside the bounds (π the prior restricted
+        to them): the log Bayes factor of a measurable optimum drawn from the prior against
+        no echo within reach of any measurement."""
+        return _logsumexp(self._measurable + self._log_like)
 
     def detection_chances(self) -> FloatArray:
         """P(detect) of a measurement at each cell under the posterior, shape ``(m, m)``
