@@ -67,6 +67,15 @@ def test_with_no_echo_within_reach_the_search_gives_up_on_the_evidence(plate):
         assert 7 < res.n_measurements < 120
 
 
+def test_a_weak_echo_keeps_the_passes_with_the_fine_lattice(plate):
+    """At 10 dB (below MIN_SNR_DB) the search after a quiet first ring is the passes':
+    the 1° lattice out to 3°, which a near start needs, then the pass sized for the echo."""
+    res, err = _run(plate, 0, offset=(2.5, 0.0), snr=10.0)
+    assert not res.posterior_search and res.options["posterior"] is True
+    assert res.search_passes is not None and res.search_snr_db == pytest.approx(10.0, abs=1.0)
+    assert err < 0.1
+
+
 def test_an_objective_without_a_probe_keeps_the_lattice():
     obj = FunctionObjective(lambda p: np.exp(-np.sum((p - 5.0) ** 2, axis=1)), noise_sigma=0.01)
     res = calibrate(obj, "auto", x0=(0.0, 0.0), budget=300, rng=0)

@@ -66,7 +66,12 @@ from echocal.calibrate._options import (
 )
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.posterior_search import GIVE_UP_EVIDENCE, EchoLikelihood, PosteriorSearch
+from echocal.calibrate.posterior_search import (
+    GIVE_UP_EVIDENCE,
+    MIN_SNR_DB,
+    EchoLikelihood,
+    PosteriorSearch,
+)
 from echocal.calibrate.registry import get_method, register_method
 from echocal.calibrate.search_pattern import search_rings
 from echocal.constants import ECHO_THRESHOLD
@@ -199,8 +204,9 @@ class Acquisition(Optimizer):
         or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`, which the
         simulator gives.
     posterior : (true or false) once x0 and its first ring saw no echo, and given a
-        ``detector``, an ``echo_likelihood`` (asked then, once) and ``batch`` 1, search
-        by the posterior over the optimum instead of the lattice
+        ``detector``, an ``echo_likelihood`` (asked then, once) whose echo's predicted SNR
+        is at least :data:`~echocal.calibrate.posterior_search.MIN_SNR_DB` (15 dB) and
+        ``batch`` 1, search by the posterior over the optimum instead of the lattice
         (:mod:`echocal.calibrate.posterior_search`): every significance, below the
         threshold too, updates it, and the next point is where a detection is most
         likely.  The detection test and its confirmation are the lattice's; the search
@@ -361,8 +367,8 @@ class Acquisition(Optimizer):
             return
         self._search_asked = True
         likelihood = self.echo_likelihood()
-        if likelihood is None:
-            return
+        if likelihood is None or (likelihood.snr_db is not None and likelihood.snr_db < MIN_SNR_DB):
+            return  # a weak echo: the passes, with the fine lattice around x0 (MIN_SNR_DB)
         self.search = PosteriorSearch(self.x0, self.max_radius, likelihood, self.bounds)
         self.search.update(self._x, self._g)
 

@@ -55,11 +55,16 @@ from scipy.stats import rice
 from echocal.calibrate._fd import FloatArray
 from echocal.errors import EchocalValueError
 
-__all__ = ["GIVE_UP_EVIDENCE", "TIE", "EchoLikelihood", "PosteriorSearch"]
+__all__ = ["GIVE_UP_EVIDENCE", "MIN_SNR_DB", "TIE", "EchoLikelihood", "PosteriorSearch"]
 
 GIVE_UP_EVIDENCE = 1e-3
 """The search gives up once the measurements are this much likelier with no echo within
 reach than with one from the prior (:meth:`PosteriorSearch.log_evidence`)."""
+MIN_SNR_DB = 15.0
+"""[dB] below this predicted peak SNR of the echo the acquisition keeps its passes (a 10 dB
+echo is seen only 0.55–0.7° away, and a prior uniform in distance out to 20° puts 90 % of
+its mass beyond 3°: near starts at 10 dB, 100 runs, 97 % within 0.1° after 40 with the
+posterior search against 100 % with the 1° lattice out to 3°)."""
 TIE = 0.05
 """Cells whose detection chance is within this fraction of the best are equally good: the
 one nearest to x0 is measured next (module docstring)."""
@@ -87,12 +92,15 @@ class EchoLikelihood:
     n_cells : M of Rice's formula for the window (:class:`~echocal.signal.detection.EchoDetector`).
     threshold : the detection threshold on the same normalized peak (the significance
         threshold through the detector).
+    snr_db : [dB] the peak SNR ŝ of the best echo against this noise, when known (the
+        acquisition searches by the posterior only from :data:`MIN_SNR_DB`).
     """
 
     angles: FloatArray
     echo: FloatArray
     n_cells: float
     threshold: float
+    snr_db: float | None = None
 
     def __post_init__(self) -> None:
         angles = np.asarray(self.angles, dtype=np.float64)

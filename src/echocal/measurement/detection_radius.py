@@ -182,7 +182,8 @@ class LobeProfile:
         white noise of per-sample σ ``noise_sigma`` [a.u.], for a Bayesian search
         (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`): the profile's peaks
         averaged over its directions, in units of σ · the detector's noise gain, and the
-        detection threshold ``threshold`` [σ of significance] on the same scale.  None when
+        detection threshold ``threshold`` [σ of significance] on the same scale, and the
+        echo's peak SNR ŝ against that noise.  None when
         the lobe does not peak at normal incidence (a large probe over a curved part: the
         optimum is not where the profile is centred)."""
         top = float(np.mean(self.peaks[:, 0]))
@@ -197,6 +198,7 @@ class LobeProfile:
             echo=self.peaks.mean(axis=0) / scale,
             n_cells=detector.n_cells,
             threshold=detector.threshold_peak(sigma, threshold) / scale,
+            snr_db=float(snr_for_noise_sigma(self.reference, sigma, setup.window, setup.pulse)),
         )
 
     def radius(
