@@ -230,7 +230,8 @@ def lattice_search(
     dist = rng.uniform(lo, hi, samples)  # as the benchmark's starts: distance uniform
     phi = rng.uniform(0.0, 2.0 * np.pi, samples)
     optima = np.column_stack([dist * np.cos(phi), dist * np.sin(phi)])
-    far = float(angles[-1])  # p = 0 beyond the last measured angle: farther points see nothing
+    seen = angles[np.flatnonzero(prob > 0.0)]
+    far = float(seen.max()) if seen.size else 0.0  # p = 0 beyond: farther points see nothing
     best: tuple[int, float] = (math.inf, math.nan)  # type: ignore[assignment]
     r90 = radius(angles, prob, 0.9) if r90 is None else r90
     if not r90 > 0.0:
