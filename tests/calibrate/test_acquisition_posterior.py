@@ -76,6 +76,22 @@ def test_a_weak_echo_keeps_the_passes_with_the_fine_lattice(plate):
     assert err < 0.1
 
 
+@pytest.mark.parametrize(
+    ("given", "posterior"),
+    [({"passes": [5.0]}, False), ({"fine_radius": 1.0}, False), ({"passes": [], "growth": 0.5}, False),
+     ({"passes": [5.0], "posterior": True}, True), ({}, True)],
+)  # fmt: skip
+def test_where_the_caller_places_the_search_the_posterior_stays_off(plate, given, posterior):
+    """The passes, their growth or the fine lattice's radius set by the caller: the
+    posterior search, which would ignore them, is off unless asked for too."""
+    from echocal.calibrate.driver import build_optimizer
+
+    base, pos, truth = plate
+    objective = SourceObjective(base, pos, parameterization="tilt", budget=20)
+    opt, used = build_optimizer(objective, "auto", truth + 10.0, rng=0, options=given)
+    assert opt.posterior is posterior and used["posterior"] is posterior
+
+
 def test_an_objective_without_a_probe_keeps_the_lattice():
     obj = FunctionObjective(lambda p: np.exp(-np.sum((p - 5.0) ** 2, axis=1)), noise_sigma=0.01)
     res = calibrate(obj, "auto", x0=(0.0, 0.0), budget=300, rng=0)

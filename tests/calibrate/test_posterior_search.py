@@ -222,3 +222,64 @@ def test_bad_likelihoods_are_refused(field, value, match):
     kw[field] = value
     with pytest.raises(EchocalValueError, match=match):
         EchoLikelihood(**kw)
+
+
+def test_a_cell_that_measured_nan_is_not_proposed_again():
+    search = _search()
+    first = search.next_point()
+    search.exclude(first)
+    assert not np.allclose(search.next_point(), first)
+
+
+class _Scripted:
+    """A detector whose significances the test sets before each tell."""
+
+    def __init__(self) -> None:
+        self.next: np.ndarray | None = None
+
+    def __call__(self) -> np.ndarray | None:
+        return self.next
+
+
+def _acquisition(detector: _Scripted):
+    from echocal.calibrate import Acquisition
+
+    like = _likelihood()
+    return Acquisition(
+        np.zeros(2), detector=detector, echo_likelihood=lambda: like, posterior=True,
+        noise_sigma=1.0, max_radius=10.0,
+    )  # fmt: skip
+
+
+def _tell(acq, detector: _Scripted, sig, values=None) -> np.ndarray:
+    points = acq.ask()
+    if sig is None or isinstance(sig, np.ndarray):
+        detector.next = sig  # as given: None, or an array of any shape
+    else:
+        detector.next = np.full(len(points), sig, dtype=float)
+    acq.tell(np.zeros(len(points)) if values is None else values(len(points)))
+    return points
+
+
+def test_the_acquisition_hands_a_quiet_first_ring_to_the_posterior_and_nan_is_no_evidence():
+    detector = _Scripted()
+    acq = _acquisition(detector)
+    _tell(acq, detector, 0.0)  # x0 and its first ring: quiet
+    assert acq.search is not None
+    evidence = acq.search.log_evidence()
+    _tell(acq, detector, np.nan)  # no noise estimate: no evidence either way
+    assert acq.search.log_evidence() == pytest.approx(evidence)
+    measured = _tell(acq, detector, 0.0, values=lambda k: np.full(k, np.nan))[0]
+    assert not np.allclose(acq.ask()[0], measured)  # a NaN point is not asked again
+
+
+def test_when_the_detector_stops_the_search_goes_back_to_the_lattice():
+    detector = _Scripted()
+    acq = _acquisition(detector)
+    _tell(acq, detector, 0.0)
+    assert acq.search is not None
+    with pytest.warns(UserWarning, match="tests the values instead"):
+        _tell(acq, detector, np.zeros(3))  # a wrong shape: the detector is dropped
+    assert acq.search is None
+    lattice = acq.ask()[0]
+    np.testing.assert_allclose(lattice, acq._queue[acq._next])  # the lattice's next point

@@ -31,7 +31,8 @@ run stops with status 4 ("acquisition failed").
 
 With ``posterior`` (``auto``'s default) and an objective that knows how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
-probe), the search beyond x0's first ring is Bayesian instead
+probe), for an echo predicted at 15 dB or more, the search beyond x0's first ring is
+Bayesian instead
 (:mod:`echocal.calibrate.posterior_search`): every significance — below the threshold
 too — updates a posterior over where the optimum is, the next point is where a detection
 is most likely, and the search gives up once the measurements are 1,000 times likelier
@@ -302,6 +303,7 @@ class Acquisition(Optimizer):
         """The passes ``replan`` returned (None: the plan was kept, or not yet asked)."""
         self._queue, self._ring = self._search_queue(self.fine_radius, self.passes)
         self._next = 0
+        self._raw_significance = np.zeros(0)  # the detector's last significances, NaN kept
         self._x = np.zeros((0, 2))
         self._y = np.zeros(0)
         self._g = np.zeros(0)  # detection significance per point (when a detector is used)
@@ -372,6 +374,22 @@ class Acquisition(Optimizer):
         self.search = PosteriorSearch(self.x0, self.max_radius, likelihood, self.bounds)
         self.search.update(self._x, self._g)
 
+    def _update_search(self, points: FloatArray, ok: np.ndarray, sig: FloatArray | None) -> None:
+        """Fold the points just measured into the posterior (their raw significances: NaN
+        is no evidence); a point that measured NaN is not asked again; once the detector
+        stops giving significances the posterior can learn nothing more, and the search
+        goes back to the lattice where it left it (the replan asked then)."""
+        search = self.search
+        if search is None:
+            return
+        if sig is None:
+            self.search = None
+            self._replan()
+            return
+        search.update(points[ok], self._raw_significance[ok])
+        for point in points[~ok]:
+            search.exclude(point)
+
     def _search_exhausted(self) -> bool:
         """Whether the posterior search has given up: the measurements are
         1 / :data:`~echocal.calibrate.posterior_search.GIVE_UP_EVIDENCE` times likelier
@@ -417,6 +435,7 @@ class Acquisition(Optimizer):
             self._use_significance = False
             return None
         sig = np.asarray(sig, dtype=np.float64)
+        self._raw_significance = sig  # NaN kept: the posterior skips it (no evidence)
         return np.where(np.isnan(sig), 0.0, sig)  # NaN (e.g. no noise estimate yet): no evidence
 
     def scores(self) -> FloatArray:
@@ -509,13 +528,13 @@ class Acquisition(Optimizer):
         confirming = self._confirming is not None
         if confirming:
             self._confirming = None
-        else:
+        elif self.search is None:  # the lattice's next points (the posterior asks its own)
             self._next += len(points)
         ok = ~self.last_nan
         sig = self._significances(len(points))
         self._add(points[ok], values[ok], np.zeros(len(points))[ok] if sig is None else sig[ok])
-        if self.search is not None and sig is not None:
-            self.search.update(points[ok], sig[ok])
+        if self.search is not None:
+            self._update_search(points, ok, sig)
         if confirming:
             if not ok.any():
                 return False  # the repeat failed (NaN): search on; a detection asks again

@@ -4,30 +4,29 @@ Evidence (``benchmarks/bench_calibration.py``; the tables are in README.md and
 docs/benchmarks/): every method through the same SourceObjective and counter, budget 80,
 tilt parameterization, common random numbers.  On ``immersion-5mhz`` (12.7 mm 5 MHz
 probe, 50 mm water path, tilted plate, the **wave** model), 100 seeded runs per cell for
-``auto`` alone, share of runs within 0.1° after 20 / 40 / 60 / 80 measurements:
+``auto`` alone: from 1–3°, the share of runs within 0.1° after 20 / 40 / 60 / 80
+measurements; from 5–20°, the measurements to 0.1° (median / p90 / p99;
+docs/benchmarks/lower-bound.md, budget 80 at 30 dB, 400 at 20 dB, 1200 at 10 dB):
 
-==================  ================  ================
+==================  ================  ======================
 start band          1–3°              5–20°
-==================  ================  ================
-30 dB               100/100/100/100   87/100/100/100 %
-20 dB               100/100/100/100   7/38/62/88 %
-10 dB               79/100/100/100    0/0/0/7 %
-==================  ================  ================
+==================  ================  ======================
+30 dB               100/100/100/100   17 / 20 / 24
+20 dB               100/100/100/100   27 / 40 / 59
+10 dB               79/100/100/100    262 / 441 / 535
+==================  ================  ======================
 
 From 5–20° at 10 dB no search that acts on detections can be sure of the echo within 80
 (it needs 457 measurements to reach 0.1° from 99 % of these starts,
 docs/benchmarks/lower-bound.md); with a budget of 1200 ``auto`` needs a median 262, p99
-535: **1.17×** that bound.  Before the search
-below 20 dB was sized for the predicted echo (item 3) it gave up after about 146
-measurements whatever the budget; within 80 it had 0/1/5/8 % by lucky detections on
-passes too coarse for the echo, and at 20 dB 4/34/68/78 % (median 47.5 against 53 now:
-an echo predicted just below 20 dB is now searched on one pass sized for it, not on
-the 8.62° pass first; the same seeds, 2026-11-29).
+535: **1.17×** that bound.  Before the search below 20 dB was sized for the predicted
+echo (item 3) it gave up after about 146 measurements whatever the budget.
 
 From 1–3° at 30 dB, 100 % of runs are within 0.05° after 15 measurements (median 9;
 91 % before the local method followed the probe's lobe from its tail, 64 % before it
 fitted its warm start before its first step).  From 5–20° at 30 dB the median is 17
-measurements to 0.1° (p90 21, p99 26; every run gets there; 18, 23 and 29 before the seek
+measurements to 0.1° (p90 20, p99 24 with the posterior search of item 9; 21 and 26 with
+the passes; every run gets there; 18, 23 and 29 before the seek
 of item 8, 22, 25 and 31 before a warm
 start that the template fits skipped its hexagon, 29, 35 and 50 before the lobe's
 template) since the search is sized for the echo the probe's model predicts
@@ -107,32 +106,33 @@ Why each part:
    detection, whose 6 values lie within a few noise σ of each other.  Far 30 dB, 100
    runs: p90 to 0.1° 23 → 21, p99 29 → 26, no run slower; 100 other seeds: 25 → 21 and
    30 → 26;
-9. beyond x0's first ring, on a simulated probe, the search follows the posterior over
-   the optimum (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): how
-   each A-scan's matched-filter peak is distributed wherever the optimum is comes from the
+9. beyond x0's first ring, on a simulated probe whose echo the first ring's noise puts
+   at 15 dB or more, the search follows the posterior over the optimum
+   (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): how each
+   A-scan's matched-filter peak is distributed wherever the optimum is comes from the
    probe's noiseless lobe and the detector's own noise model
    (:meth:`~echocal.calibrate.Objective.echo_likelihood`), every significance — below the
    threshold too — updates the posterior, and the next point is where a detection is most
    likely (among near-ties, the one nearest to x0), instead of the passes of item 3, which
    act only on detections.  Far starts, 100 runs: at 20 dB (budget 400) p99 to 0.1°
-   99 → 59, median 50 → 28.5 — below the 62 that any search acting on detections needs
+   99 → 59, median 50 → 27 — below the 62 that any search acting on detections needs
    (docs/benchmarks/lower-bound.md); at 30 dB p99 26 → 24 (100 other seeds: 26 → 26,
-   median 16 → 15); the ray model's far 30 dB cell, 30 runs, 27 faster, 3 slower (p99 61
-   → 39); near starts 30 dB 19 faster, none slower, 10 dB 13 faster, 4 slower (40 runs
-   each).  Without a probe model (a recording, a rig) the passes stay.
+   median 16 → 15).  Below 15 dB the passes stay (with the posterior, near starts at
+   10 dB reached 0.1° within 40 in 97 % of runs instead of 100 %: a prior uniform in
+   distance out to 20° sends a search with a 0.6° kernel outward before it has covered
+   the 1–3° around x0); without a probe model (a recording, a rig) too.
 
-Targets of issue 19 not met, and why (README.md, docs/benchmarks/detection-wave.md,
-lower-bound.md): the lower-bound ratio at 20 dB (a search that acts on detections needs
-≥ 62 measurements to reach 0.1° from 99 % of far starts — the covering optimized over
-the start band; ``auto``'s p99 is 99, a ratio of 1.60 and 1.16× the best hexagonal
-lattice: detection alone costs up to about 95 there, the climb a median 4). At 30 dB the
-ratio is 1.30 (p99 26 against 20), met at the edge (the programme's 16.01 rounded up to
-17). The 12.7 mm probe over a rod at 10 dB meets its target only just (95 of 100 runs;
-its lobe peaks off normal incidence in two humps, flat along the rod, with no template;
-2 of 100 runs reach 0.1° only after 68–71 measurements, three end 0.10–0.47° off).
-Without a probe model (a recording, a rig) the far search still spends the 1° lattice
-first (a fixed order cannot serve both a 10 dB near start and a 30 dB far one without
-knowing the SNR); ``fine_radius=1.0`` drops it when the SNR is known to be ≥ 20 dB. When
+Issue 19's targets (README.md, docs/benchmarks/lower-bound.md, curved.md): the
+lower-bound ratio is met in every far cell — 30 dB 1.20 (p99 24 against 20), 20 dB
+0.95 (p99 59 against 62: below a bound that holds only for searches acting on
+detections, which the posterior search is not), 10 dB 1.17 (p99 535 against 457, the
+passes).  The 12.7 mm probe over a rod at 10 dB meets its target only just (95 of 100
+runs; its lobe peaks off normal incidence in two humps, flat along the rod, with no
+template; 2 of 100 runs reach 0.1° only after 68–71 measurements, three end 0.10–0.47°
+off).  Without a probe model (a recording, a rig) the far search still spends the 1°
+lattice first (a fixed order cannot serve both a 10 dB near start and a 30 dB far one
+without knowing the SNR); ``fine_radius=1.0`` drops it when the SNR is known to be
+≥ 20 dB. When
 the start is known to be near the echo, ``method="model-based"`` saves the acquisition.
 """
 
@@ -162,9 +162,12 @@ AUTO_SEARCH: dict[str, Any] = {
     "passes": (STRONG_ECHO_SPACING, WEAK_ECHO_SPACING),
     "posterior": True,
 }
-"""auto's search geometry [deg] — its only difference from ``acquisition``: the 1° lattice
+"""auto's search [deg] — its only difference from ``acquisition``: the 1° lattice
 within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the
-evidence above and :func:`~echocal.calibrate.search_pattern.search_rings`).  The passes are
+evidence above and :func:`~echocal.calibrate.search_pattern.search_rings`), or, on a
+simulated probe with an echo of 15 dB or more, the posterior search (item 9), unless the
+caller sets where to search (``passes``, ``growth``, ``max_spacing`` or ``fine_radius``
+without ``posterior=True``).  The passes are
 the default for an objective that cannot size them from its probe
 (:meth:`~echocal.calibrate.Objective.search_passes` returns None); the driver puts the
 probe's own in their place unless the caller sets ``passes``, ``growth`` or

@@ -209,11 +209,17 @@ def _search_plan(
     (:meth:`Objective.search_passes`), and ``replan``, the objective's passes for the echo
     it predicts against the noise the first ring measures
     (:meth:`Objective.passes_for_measured_noise`), unless the caller set ``fine_radius``;
-    else ``{}``."""
-    if not option_defaults(cls).get("passes") or any(k in given for k in SEARCH_GEOMETRY):
+    else ``{}``.  When the caller set where to search (the geometry or ``fine_radius``)
+    and not ``posterior``, ``posterior`` is off: the posterior search would ignore it."""
+    if not option_defaults(cls).get("passes"):
         return {}
+    placed = any(k in given for k in (*SEARCH_GEOMETRY, "fine_radius"))
+    plan: dict[str, Any] = {"posterior": False} if placed and "posterior" not in given else {}
+    if any(k in given for k in SEARCH_GEOMETRY):
+        return plan
     passes = objective.search_passes()
-    plan: dict[str, Any] = {} if passes is None else {"passes": passes}
+    if passes is not None:
+        plan["passes"] = passes
     if "fine_radius" not in given and "replan" not in given:
         plan["replan"] = objective.passes_for_measured_noise
     return plan

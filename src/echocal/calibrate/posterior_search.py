@@ -69,7 +69,8 @@ TIE = 0.05
 """Cells whose detection chance is within this fraction of the best are equally good: the
 one nearest to x0 is measured next (module docstring)."""
 _MAX_CELLS = 401
-"""Cells per side of the posterior's grid at most (161,000 cells: an FFT of a few ms)."""
+"""Cells per side of the posterior's grid at most (161,000 cells: 10–18 ms per point, the
+FFT about 6 ms; 2–3 ms at ``max_radius`` 20° and a 0.2° cell)."""
 _CELL = 0.25
 """[deg] the grid's cell at most; finer for a narrow detection kernel (a quarter of the
 distance at which half of the A-scans detect the echo)."""
@@ -79,7 +80,7 @@ _PEAK_TABLE = np.linspace(1.0, 64.0, 4096)
 """Normalized peaks t tabulated to recover t from a significance (t ≥ 1, as Rice's law)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class EchoLikelihood:
     """How one A-scan's matched-filter peak is distributed at a given misalignment.
 
@@ -125,8 +126,9 @@ class EchoLikelihood:
         """The normalized peak t whose significance is ``significance`` [σ]: the inverse of
         g = Φ⁻¹(exp(−M t e^{−t²/2}))
         (:meth:`~echocal.signal.detection.EchoDetector.significance_of_peak`), by
-        interpolation on t ∈ [1, 64] (1 for every g of a peak below 1, 64 for every g
-        beyond double precision's tail, about 38)."""
+        interpolation on t ∈ [1, 64] (exact to about 1e-5 for t in [2, 37]; the detector
+        floors every peak below about 1.7 at g = −8.2, which maps back to 1.7, and every
+        g beyond double precision's tail, about 38, maps to 64)."""
         with np.errstate(divide="ignore"):  # log_ndtr(g) = 0 for g beyond ~38: t = 64
             log_tail = float(np.log(-log_ndtr(significance))) - np.log(self.n_cells)
         h = np.log(_PEAK_TABLE) - 0.5 * _PEAK_TABLE**2  # decreasing in t >= 1
@@ -219,6 +221,13 @@ class PosteriorSearch:
             dist = np.hypot(self._x[0, cols][None, :] - px, self._y[rows, 0][:, None] - py)
             block = np.ix_(rows, cols)
             self._log_like[block] += np.interp(dist, like.angles, ratio, right=0.0)
+
+    def exclude(self, point: FloatArray) -> None:
+        """Never propose the cell of ``point`` [deg] (2,) again (it measured NaN: out of
+        the positioner's reach, a dead A-scan)."""
+        col = int(np.argmin(np.abs(self._x[0] - point[0])))
+        row = int(np.argmin(np.abs(self._y[:, 0] - point[1])))
+        self._candidate[row, col] = False
 
     def log_posterior(self) -> FloatArray:
         """ln of the posterior over the grid's cells (normalized), shape ``(m, m)``."""
