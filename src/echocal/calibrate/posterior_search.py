@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.signal import fftconvolve
-from scipy.special import i0e, log_ndtr
+from scipy.special import i0e, log_ndtr, logsumexp
 from scipy.stats import rice
 
 from echocal.calibrate._fd import FloatArray
@@ -259,7 +259,5 @@ class PosteriorSearch:
 
 
 def _logsumexp(a: FloatArray) -> float:
-    top = float(np.max(a))
-    if not np.isfinite(top):
-        return top
-    return top + float(np.log(np.sum(np.exp(a - top))))
+    """ln Σ exp(a) over every element, as a float (scipy's, which keeps −∞ out of sums)."""
+    return float(logsumexp(a))
