@@ -78,9 +78,14 @@ def test_a_weak_echo_keeps_the_passes_with_the_fine_lattice(plate):
 
 @pytest.mark.parametrize(
     ("given", "posterior"),
-    [({"passes": [5.0]}, False), ({"fine_radius": 1.0}, False), ({"passes": [], "growth": 0.5}, False),
-     ({"passes": [5.0], "posterior": True}, True), ({}, True)],
-)  # fmt: skip
+    [
+        ({"passes": [5.0]}, False),
+        ({"fine_radius": 1.0}, False),
+        ({"passes": [], "growth": 0.5}, False),
+        ({"passes": [5.0], "posterior": True}, True),
+        ({}, True),
+    ],
+)
 def test_where_the_caller_places_the_search_the_posterior_stays_off(plate, given, posterior):
     """The passes, their growth or the fine lattice's radius set by the caller: the
     posterior search, which would ignore them, is off unless asked for too."""
