@@ -118,8 +118,11 @@ def test_iterations_to_matches_the_iterate_errors(thesis):
 
 def test_calibrate_command_search_radius_bounds_the_search(tmp_path):
     # a start 16.6° from the realistic setup's optimum with a gradient method: a 2° search
-    # radius puts an acquisition phase in front that gives up (status 4) after the 1°
-    # lattice to 2° (1 + 6 + 12 = 19 measurements) when the echo is not within it
+    # radius puts an acquisition phase in front (auto's search) that gives up (status 4)
+    # when the echo is not within it — after x0 and its first ring (7 measurements): at
+    # 30 dB an echo anywhere within 2° would have shown in them, so the posterior search
+    # finds the measurements over 1,000 times likelier without one (the 1° lattice to 2°
+    # of the passes took 19)
     args = [
         "calibrate",
         "--setup",
@@ -138,7 +141,7 @@ def test_calibrate_command_search_radius_bounds_the_search(tmp_path):
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 1, result.output  # no echo found: exit status 1
     summary = json.loads(result.stdout)
-    assert summary["status"] == 4 and summary["n_measurements"] == 19
+    assert summary["status"] == 4 and summary["n_measurements"] == 7
     assert summary["acquisition_measurements"] is None
     bad = CliRunner().invoke(app, [a if a != "2" else "nan" for a in args])
     assert bad.exit_code != 0 and "--search-radius" in (bad.output + str(bad.exception))
