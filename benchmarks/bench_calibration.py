@@ -159,11 +159,9 @@ from echocal.evaluation import angular_error  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
 from echocal.measurement.objective import default_bounds  # noqa: E402
-from echocal.measurement.truth import search_optimum  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
 from echocal.signal.gates import TimeGate, resolve_gate  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
-from echocal.specimen.normals import perpendicular_start  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs" / "benchmarks"
@@ -210,28 +208,9 @@ def _case(case: str) -> Case:
             if "gate" in spec
             else None
         )
-        truth = np.array(setup.true_optimum(pos, parameterization=PARAM, gate=gate))
-        _CASES_READY[case] = Case(setup, pos, truth, _equal_optima(setup, pos, truth), gate)
+        optima = setup.true_optima(pos, parameterization=PARAM, gate=gate, ratio=TWIN_RATIO)
+        _CASES_READY[case] = Case(setup, pos, optima[0], optima, gate)
     return _CASES_READY[case]
-
-
-def _equal_optima(setup: Any, pos: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """``truth`` and, over a curved part, its mirror image across the surface normal when
-    that is a maximum as high (within :data:`TWIN_RATIO`): a 12.7 mm probe over the rod
-    has two equal humps either side of the normal, and a run that ends on either has
-    found the optimum."""
-    if all(shape.kind == "plane" for shape in setup.specimen) or setup.reflection != "wave":
-        return truth[None, :]
-
-    def metric(a: Any, b: Any) -> np.ndarray:
-        return setup.metric_values(pos, a, b, parameterization=PARAM)
-
-    normal = perpendicular_start(setup.specimen, pos)
-    mirror = np.array(search_optimum(metric, (2.0 * normal - truth)[None, :]))
-    best, other = (float(metric(*t[:, None])[0]) for t in (truth, mirror))
-    if other >= TWIN_RATIO * best and angular_error(mirror[None, :], truth, PARAM)[0] > 0.1:
-        return np.stack([truth, mirror])
-    return truth[None, :]
 
 
 def tilt_bounds(setup: Any) -> np.ndarray:

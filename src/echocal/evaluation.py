@@ -74,6 +74,9 @@ class RunEvaluation:
     iterate_errors : [deg] the same for x0 and every iterate, shape (n_iterations + 1,).
     iterate_values : noiseless metric at x0 and every iterate, shape (n_iterations + 1,).
     optimum_value : noiseless metric at the true optimum.
+    optima : [deg] every maximum within :data:`~echocal.measurement.truth.EQUAL_OPTIMUM_RATIO`
+        of the global one, shape ``(k, 2)``, the global one first; ``truth`` is the one
+        nearest the estimate, and every error is measured to the nearest of them.
     """
 
     result: CalibrationResult
@@ -82,6 +85,18 @@ class RunEvaluation:
     iterate_errors: FloatArray
     iterate_values: FloatArray
     optimum_value: float
+    optima: FloatArray
+
+    @property
+    def unique(self) -> bool:
+        """Whether the optimum is unique (else the run is graded by the echo it reached:
+        any of :attr:`optima` counts as found)."""
+        return len(self.optima) == 1
+
+    @property
+    def echo_fraction(self) -> float:
+        """Noiseless metric at the estimate over the global maximum's."""
+        return float(self.iterate_values[-1] / self.optimum_value)
 
     def _first_inside(self, tolerance: float) -> int | None:
         """Index of the iterate from which all stay within ``tolerance`` [deg] (None: the
@@ -136,27 +151,34 @@ def evaluate_run(
     gate: TimeGate | None = None,
 ) -> RunEvaluation:
     """Judge ``result`` (measured at ``position`` [m]) against ``setup``'s truth: the
-    optimum of ``metric`` inside ``gate`` (the whole recording without one)."""
+    optimum of ``metric`` inside ``gate`` (the whole recording without one).
+
+    Where the optimum is not unique (:meth:`VirtualSetup.true_optima`: maxima within
+    2 % of each other, a rod's two humps) every error is the distance to the nearest of
+    them, so a run is graded by the echo it reached, not by which hump it chose.
+    """
     param = result.parameterization
-    truth = nearest_equivalent(
-        setup.true_optimum(position, parameterization=param, metric=metric, gate=gate),
-        result.x,
-        param,
-    )
+    optima = setup.true_optima(position, parameterization=param, metric=metric, gate=gate)
+    optima = np.array([nearest_equivalent(o, result.x, param) for o in optima])
     iterates = np.asarray(result.iterates, dtype=np.float64)
 
     def metric_at(a: ArrayLike, b: ArrayLike) -> FloatArray:
         return setup.metric_values(position, a, b, parameterization=param, metric=metric, gate=gate)
 
+    def error_to_nearest(points: FloatArray) -> FloatArray:
+        return np.min([angular_error(points, o, param) for o in optima], axis=0)
+
+    nearest = int(np.argmin([angular_error(result.x, o, param) for o in optima]))
     values = metric_at(iterates[:, 0], iterates[:, 1])
-    optimum = float(metric_at(truth[0], truth[1]))
+    optimum = float(metric_at(optima[0, 0], optima[0, 1]))
     return RunEvaluation(
         result=result,
-        truth=truth,
-        error=float(angular_error(result.x, truth, param)),
-        iterate_errors=angular_error(iterates, truth, param),
+        truth=optima[nearest],
+        error=float(error_to_nearest(np.asarray(result.x, dtype=np.float64))),
+        iterate_errors=error_to_nearest(iterates),
         iterate_values=values,
         optimum_value=optimum,
+        optima=optima,
     )
 
 

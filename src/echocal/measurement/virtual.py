@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
-from echocal._validate import finite_array, lookup, one_of, positive_float
+from echocal._validate import finite_array, in_range, lookup, one_of, positive_float
 from echocal.ascan import AScan
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.echo import (
@@ -56,7 +56,7 @@ from echocal.measurement.receiver_settings import (
     _raise_malloc_threshold,
     check_sample_count,
 )
-from echocal.measurement.truth import pose_arrays, search_optimum
+from echocal.measurement.truth import EQUAL_OPTIMUM_RATIO, pose_arrays, search_optima
 from echocal.signal import (
     SYNTHESIS_METHODS,
     Pulse,
@@ -153,7 +153,9 @@ class VirtualSetup(BaseSource):
     # set by __post_init__, never by the caller
     _generator: np.random.Generator = field(init=False, repr=False)
     _closed: bool = field(init=False, repr=False)
-    _truth_cache: dict[tuple[Any, ...], tuple[float, float]] = field(init=False, repr=False)
+    _truth_cache: dict[tuple[Any, ...], tuple[FloatArray, FloatArray]] = field(
+        init=False, repr=False
+    )
     _closed_top: float = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -557,32 +559,54 @@ class VirtualSetup(BaseSource):
         metric: str = "pseudo-energy",
         gate: TimeGate | None = None,
     ) -> tuple[float, float]:
-        """Orientation (a, b) [deg] of maximum noiseless ``metric`` at ``position`` [m]
-        (inside ``gate`` when one is given: the truth of a gated calibration).
+        """Orientation (a, b) [deg] of the global maximum of the noiseless ``metric`` at
+        ``position`` [m] (inside ``gate`` when one is given: the truth of a gated
+        calibration): the first of :meth:`true_optima`.
 
-        Found by a dense local search (Nelder–Mead to 1e-5°) started from the
-        surface normal below the position — the analytic optimum for a plane.
         Kept apart from :meth:`measure`: an algorithm cannot peek.
         """
+        optima = self.true_optima(
+            position, parameterization=parameterization, metric=metric, gate=gate, ratio=1.0
+        )
+        return float(optima[0, 0]), float(optima[0, 1])
+
+    def true_optima(
+        self,
+        position: ArrayLike,
+        *,
+        parameterization: str = "azimuth-coelevation",
+        metric: str = "pseudo-energy",
+        gate: TimeGate | None = None,
+        ratio: float = EQUAL_OPTIMUM_RATIO,
+    ) -> FloatArray:
+        """Orientations [deg] ``(k, 2)`` of every maximum of the noiseless ``metric`` at
+        ``position`` [m] that reaches ``ratio`` of the global one, best first (``k`` = 1
+        unless the optimum is not unique: a 12.7 mm probe over a rod sees two humps of
+        nearly equal echo).
+
+        Found by :func:`echocal.measurement.truth.search_optima`: the directions of
+        normal incidence on the surface (the analytic optimum for a plane) and rings
+        1–3° around them, each distinct hump refined by Nelder–Mead to 1e-5°.
+        """
+        ratio = in_range("ratio", ratio, 0.0, 1.0)
         position = finite_array("position", position, shape_tail=(3,)).reshape(3)
         key = (*position.round(12), metric, gate)
         if key not in self._truth_cache:
-            self._truth_cache[key] = self._search_optimum(position, metric, gate)
-        az, coel = self._truth_cache[key]
-        a, b = convert_angles(az, coel, "azimuth-coelevation", parameterization)
-        return float(a), float(b)
+            self._truth_cache[key] = self._search_optima(position, metric, gate)
+        tilts, values = self._truth_cache[key]
+        keep = tilts[values >= ratio * values[0]]
+        a, b = convert_angles(keep[:, 0], keep[:, 1], "tilt", parameterization)
+        return np.stack([np.asarray(a, float), np.asarray(b, float)], axis=1)
 
-    def _search_optimum(
+    def _search_optima(
         self, position: FloatArray, metric: str, gate: TimeGate | None = None
-    ) -> tuple[float, float]:
+    ) -> tuple[FloatArray, FloatArray]:
         def in_tilts(a: FloatArray, b: FloatArray) -> FloatArray:
             return self.metric_values(
                 position, a, b, parameterization="tilt", metric=metric, gate=gate
             )
 
-        tx, ty = search_optimum(in_tilts, self.normal_incidence_directions(position))
-        az, coel = convert_angles(tx, ty, "tilt", "azimuth-coelevation")
-        return float(az), float(coel)
+        return search_optima(in_tilts, self.normal_incidence_directions(position))
 
     def normal_incidence_directions(self, position: FloatArray, *, limit: int = 6) -> FloatArray:
         """Tilts [deg] ``(n, 2)`` of the beam from ``position`` [m] at normal incidence on
