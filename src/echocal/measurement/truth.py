@@ -60,16 +60,19 @@ def _scores(
 ) -> FloatArray:
     """``metric`` at ``points`` ``(n, 2)`` [deg] in one call; where the batch is refused (a
     scouted direction whose echo misses the recording window), point by point, a refused
-    point scoring −inf."""
+    point scoring −inf; when every point is refused (a position inside the part), the batch's
+    refusal is raised."""
     try:
         return np.asarray(metric(points[:, 0], points[:, 1]), dtype=np.float64)
-    except EchocalValueError:
+    except EchocalValueError as refused:
         out = np.full(len(points), -np.inf)
         for i, (a, b) in enumerate(points):
             try:
                 out[i] = float(metric(np.asarray(a), np.asarray(b)))
             except EchocalValueError:
                 continue
+        if not np.isfinite(out).any():
+            raise refused from None
         return out
 
 
