@@ -31,9 +31,12 @@ def test_the_global_maximum_wins_over_the_hump_the_candidate_points_at():
     # a climb from it alone ends on the weaker hump (the fault the audit found over a rod)
     candidate = np.array([[0.0, 2.6]])
     optima, values = search_optima(two_humps, candidate)
-    np.testing.assert_allclose(optima, [STRONG, WEAK], atol=2e-3)  # Nelder–Mead to 1e-5°
-    # each hump's value is its height plus the other's tail, computed here exactly
-    np.testing.assert_allclose(values, two_humps(*np.stack([STRONG, WEAK]).T), rtol=1e-9)
+    # the global maximum is refined to 1e-5°, the weaker hump (0.9 of it) to 0.01° only
+    np.testing.assert_allclose(optima[0], STRONG, atol=2e-3)
+    np.testing.assert_allclose(optima[1], WEAK, atol=2e-2)
+    # each hump's value is its height plus the other's tail, computed here exactly; 0.02°
+    # off a 0.6°-wide top costs at most (0.02 / 0.6)² / 2 = 6e-4 of it
+    np.testing.assert_allclose(values, two_humps(*np.stack([STRONG, WEAK]).T), rtol=6e-4)
     assert values[0] > values[1]
     np.testing.assert_allclose(search_optimum(two_humps, candidate), STRONG, atol=2e-3)
 

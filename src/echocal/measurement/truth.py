@@ -40,6 +40,11 @@ _WORTH_CLIMBING = 0.5
 """A start below this fraction of the best optimum found is not refined."""
 _MAX_CLIMBS = 4
 """At most this many Nelder–Mead refinements."""
+_SCOUT_XATOL = 0.01
+"""[deg] the short climb's tolerance on a side hump (a ring, a second hump)."""
+_SCOUT_EVALUATIONS = 60
+"""The short climb's metric calls: a side hump below :data:`EQUAL_OPTIMUM_RATIO` of the
+best costs no more; one above it is refined to :data:`_XATOL`."""
 _SAME_OPTIMUM = 0.01
 """[deg] two refinements ending closer than this found the same optimum."""
 
@@ -77,9 +82,13 @@ def _scores(
 
 
 def _climb(
-    metric: Callable[[FloatArray, FloatArray], FloatArray], start: FloatArray
+    metric: Callable[[FloatArray, FloatArray], FloatArray],
+    start: FloatArray,
+    xatol: float = _XATOL,
+    max_evaluations: int | None = None,
 ) -> tuple[FloatArray, float]:
-    """Nelder–Mead from ``start`` [deg] to :data:`_XATOL`: (optimum [deg] (2,), its value)."""
+    """Nelder–Mead from ``start`` [deg] to ``xatol`` [deg] (within ``max_evaluations``
+    metric calls, if given): (top [deg] (2,), its value)."""
 
     def negative(v: FloatArray) -> float:
         return -float(metric(np.asarray(v[0]), np.asarray(v[1])))
@@ -89,8 +98,9 @@ def _climb(
         start,
         method="Nelder-Mead",
         options={
-            "xatol": _XATOL,
+            "xatol": xatol,
             "fatol": 0.0,
+            "maxfev": max_evaluations,
             "initial_simplex": start
             + np.array([[0.0, 0.0], [_SIMPLEX_SIZE, 0.0], [0.0, _SIMPLEX_SIZE]]),
         },
@@ -110,7 +120,9 @@ def search_optima(
     start not within :data:`_BASIN` of a hump already climbed is refined by Nelder–Mead
     to 1e-5° in gimbal tilts (smooth at the pole), while it is worth
     :data:`_WORTH_CLIMBING` of the best maximum found (at most :data:`_MAX_CLIMBS`
-    times). A part with two humps near one normal (a rod under an off-axis probe) so
+    times); a hump after the first is climbed to 0.01° only, unless it reaches
+    :data:`EQUAL_OPTIMUM_RATIO` of the best (a ring around a ball's central peak costs a
+    short climb). A part with two humps near one normal (a rod under an off-axis probe) so
     yields both, and the global maximum is the first, whichever the candidate pointed at.
     """
     starts = _scout_points(np.asarray(candidates, dtype=np.float64).reshape(-1, 2))
@@ -130,7 +142,12 @@ def search_optima(
         i = int(np.argmax(far))  # the best start outside every climbed basin
         if not np.isfinite(scores[i]) or (values and scores[i] < _WORTH_CLIMBING * max(values)):
             break
-        top, value = _climb(metric, starts[i])
+        if values:  # a side hump: a short climb tells whether it rivals the best one
+            top, value = _climb(metric, starts[i], _SCOUT_XATOL, _SCOUT_EVALUATIONS)
+            if value >= EQUAL_OPTIMUM_RATIO * max(values):
+                top, value = _climb(metric, top)
+        else:
+            top, value = _climb(metric, starts[i])
         climbed.append(starts[i])
         if all(np.hypot(*(top - o)) > _SAME_OPTIMUM for o in optima):
             optima.append(top)
