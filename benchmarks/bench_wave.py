@@ -36,18 +36,20 @@ import json  # noqa: E402
 import math  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy.signal  # noqa: E402
-from _common import fmt_time, machine_info, measure  # noqa: E402
+from _common import fmt_time, machine_info, markdown_table, measure  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "physics"))
 import references as ref  # noqa: E402
 
 from echocal import load_setup  # noqa: E402
-from echocal.geometry import tilt_frame  # noqa: E402
+from echocal.geometry import normal_to_orientation, orientation_frame, tilt_frame  # noqa: E402
 from echocal.setups import setup_with_overrides  # noqa: E402
 from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
@@ -146,6 +148,135 @@ def square_probe(repeats: int) -> dict[str, float]:
         out[f"{label}_wave_s"] = t_wave.median
         out[f"{label}_ratio"] = t_wave.median / t_ray.median
     return out
+
+
+TILTS_DEG = (0.0, 2.0, 5.0, 10.0, 20.0, 30.0)
+
+
+def _cpu_per_call(fn: Callable[[], object], min_seconds: float) -> float:
+    """[s] CPU time (``time.process_time``, every thread of the process) per call of
+    ``fn``: one untimed call, then calls until ``min_seconds`` of CPU time have passed."""
+    fn()
+    calls = 0
+    start = time.process_time()
+    while True:
+        fn()
+        calls += 1
+        spent = time.process_time() - start
+        if spent >= min_seconds:
+            return spent / calls
+
+
+def tilt_table(min_seconds: float, n_freq: int) -> list[dict[str, float | str]]:
+    """CPU time per noiseless A-scan of the wave and ray models at :data:`TILTS_DEG` off
+    the normal, on ``immersion-5mhz`` (the plate: tilted from its normal, along the
+    azimuth of its tilt, at the setup's reference position) and with the same 12.7 mm
+    5 MHz probe 50 mm above the top of a 25 mm ball (the beam tilted from the vertical;
+    the Kirchhoff sum), and on the plate the compiled direct double Rayleigh sum
+    (``_rayleigh_compiled``) over ``n_freq`` frequencies of the pulse's band at the same
+    distance and incidence, with the agreement of |V| at 5 MHz."""
+    import _rayleigh_compiled as direct
+
+    rows: list[dict[str, float | str]] = []
+    plate_ray = load_setup("immersion-5mhz-ray")
+    sphere_ray = setup_with_overrides("immersion-5mhz-ray", specimen="sphere")
+    cases = (
+        ("immersion-5mhz", plate_ray, plate_ray.reference_position),
+        ("12.7 mm over a sphere", sphere_ray, np.array([0.0, 0.0, 0.05])),
+    )
+    for label, ray, position in cases:
+        wave = dataclasses.replace(ray, reflection="wave")
+        model, shapes = wave.wave_model, _as_shapes(wave.specimen)
+        pos = position[None]
+        if label == "immersion-5mhz":
+            level = tilt_frame(np.array([0.0]), np.array([0.0]))[0]
+            normal_plane = model.image_plane(shapes, position, level)
+            assert normal_plane is not None, "the plate fills the beam"
+            basis = np.stack([level[:, 0], level[:, 1], -level[:, 2]])  # world → aperture
+            normal = basis.T @ normal_plane.normal  # towards the probe, in the world frame
+            azimuth, coelevation = (float(v) for v in normal_to_orientation(normal))
+        else:
+            azimuth, coelevation = 0.0, 0.0
+        for tilt in TILTS_DEG:
+            frames = orientation_frame(np.array([azimuth]), np.array([coelevation + tilt]))
+            t_ray = _cpu_per_call(lambda r=ray, p=pos, f=frames: r.ideal_samples(p, f), min_seconds)
+            t_wave = _cpu_per_call(
+                lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
+            )
+            row: dict[str, float | str] = {
+                "setup": label,
+                "tilt_deg": tilt,
+                "ray_s": t_ray,
+                "wave_s": t_wave,
+                "wave_over_ray": t_wave / t_ray,
+            }
+            plane = model.image_plane(shapes, position, frames[0])
+            if plane is not None:
+                row["incidence_deg"] = math.degrees(math.asin(plane.sin_incidence))
+                row["face_nodes"] = float(_face_nodes(model, plane))
+                row.update(_direct_sum(model, plane, n_freq, direct))
+            rows.append(row)
+    return rows
+
+
+def _direct_sum(
+    model: WaveEchoModel, plane: image.ImagePlane, n_freq: int, direct: Any
+) -> dict[str, float]:
+    """CPU time [s] of the compiled direct double Rayleigh sum at ``plane``'s distance and
+    incidence over ``n_freq`` frequencies (the pulse's band, through 5 MHz), and |V(5 MHz)|
+    from it and from the wave model's image form."""
+    a, d, c = model.probe.radius, plane.axis_distance, model.sound_speed
+    tilt = math.degrees(math.asin(plane.sin_incidence))
+    lo, hi = model.pulse.bandwidth_6db
+    step = max(5e6 - 0.7 * lo, 1.3 * hi - 5e6) / max(1, n_freq // 2)
+    freqs = 5e6 + step * (np.arange(n_freq) - n_freq // 2)
+    start = time.process_time()
+    v = direct.pulse_echo(a, freqs, d, tilt, c)
+    t_direct = time.process_time() - start
+    spectrum, _ = model.image_spectrum(plane)
+    f = model.frequencies
+    i = int(np.argmin(np.abs(f - 5e6)))
+    v_wave = abs(spectrum[i] * model._grid[1] / model.pulse.spectrum(f[i : i + 1])[0])
+    v_direct = abs(v[n_freq // 2])
+    return {
+        "direct_s": t_direct,
+        "direct_frequencies": float(n_freq),
+        "v5_wave": float(v_wave),
+        "v5_direct": float(v_direct),
+    }
+
+
+def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
+    """The tilt table as Markdown."""
+    body = []
+    for r in rows:
+        direct = r.get("direct_s")
+        agree = (
+            "—" if direct is None else f"{float(r['v5_wave']):.4g} / {float(r['v5_direct']):.4g}"
+        )
+        body.append(
+            [
+                r["setup"],
+                f"{float(r['tilt_deg']):.0f}",
+                fmt_time(float(r["ray_s"])),
+                fmt_time(float(r["wave_s"])),
+                f"{float(r['wave_over_ray']):.1f}x",
+                "—" if direct is None else fmt_time(float(direct)),
+                "—" if direct is None else f"{float(direct) / float(r['wave_s']):.0f}x",
+                agree,
+            ]
+        )
+    header = [
+        "setup",
+        "tilt [°]",
+        "ray (CPU)",
+        "wave (CPU)",
+        "wave / ray",
+        "direct sum (CPU)",
+        "direct / wave",
+        "|V(5 MHz)| wave / direct",
+    ]
+    return markdown_table(header, body)
 
 
 def _envelope(x: np.ndarray) -> float:
@@ -257,10 +388,20 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="fewer repeats, cheaper reference")
     parser.add_argument("--smoke", action="store_true", help="one repeat of everything cheap")
     parser.add_argument("--json", type=Path, help="write every number to this file")
+    parser.add_argument("--tilts-only", action="store_true", help="only the tilt table")
     args = parser.parse_args()
     cheap = args.quick or args.smoke
     repeats = 1 if args.smoke else (3 if args.quick else 7)
     result: dict[str, object] = {"machine": machine_info(("numpy", "scipy", "numba"))}
+    table = tilt_table(0.05 if cheap else 0.5, 8 if args.smoke else (12 if args.quick else 32))
+    result["tilt_table"] = table
+    print(tilt_markdown(table))
+    worst = max(float(r["wave_over_ray"]) for r in table)
+    print(f"HEADLINE wave / ray CPU time at 0-30 deg, both setups: at most {worst:.1f}x")
+    if args.tilts_only:
+        if args.json:
+            args.json.write_text(json.dumps(result, indent=2, default=float), encoding="utf-8")
+        return
     speed = ray_vs_wave(repeats)
     result["ray_vs_wave"] = speed
     print(
