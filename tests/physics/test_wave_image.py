@@ -24,6 +24,7 @@ from echocal.signal.window import RecordingWindow
 from echocal.specimen import FinitePlane, Sphere
 from echocal.specimen.builtins import builtin_specimen
 from echocal.wave import PistonProbe, RectangularProbe, WaveEchoModel, image, sir
+from echocal.wave.model import _IMAGE_NYQUIST_FRACTION
 
 sys.path.insert(0, str(Path(__file__).parent))
 import references as ref
@@ -155,7 +156,7 @@ def test_symmetric_half_of_the_face_rule_gives_the_full_rule_sum(
     assert plane is not None
     points, weights = model.image_nodes(plane)
     lam = model._shortest_wavelength
-    spacing = image.node_spacing(lam, plane.sin_incidence, 0.7)
+    spacing = image.node_spacing(lam, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION)
     face, full_weights = image.face_quadrature(model.probe, plane.axis_distance, lam, spacing)
     if probe.kind != sir.RECT:  # the same rule with its angles starting at the tilt direction
         psi = math.atan2(plane.normal[1], plane.normal[0])
