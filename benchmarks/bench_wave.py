@@ -1,25 +1,30 @@
-"""Wave-model benchmark: its cost against the thesis ray model and a brute-force reference.
+"""Wave-model benchmark: its cost against the thesis ray model and a compiled direct sum.
 
 Run from the repository root::
 
-    python benchmarks/bench_wave.py            # full run (a few minutes on 2 cores)
-    python benchmarks/bench_wave.py --quick    # fewer repeats, cheaper reference (CI: --smoke)
+    python benchmarks/bench_wave.py               # full run (minutes on 2 cores)
+    python benchmarks/bench_wave.py --quick       # fewer repeats and frequencies
+    python benchmarks/bench_wave.py --tilts-only  # only the tilt table (1.)
 
-Measured in one process, as ratios (issue 13):
+Measured in one process, as ratios: 1. and 3. in CPU time (``time.process_time``, every
+thread), the others as wall-clock medians (``_common.measure``):
 
-1. one noiseless A-scan at the ``immersion-5mhz`` defaults (12.7 mm 5 MHz probe, 50 mm
-   water path, 4096 samples at 100 MHz) on the wave model against the same setup on the
-   thesis's lambertian ray model;
-2. the wave model against a brute-force double Rayleigh integral over the probe's face and
-   its mirror image (tests/physics/references.py, written independently of echocal) for a
-   piston over a plane tilted 0.5° at 10 mm, the broadband echo's envelope peak from both
-   (their agreement and the speed ratio);
-3. the thesis's 4 mm square probe on the wave model (a rectangle's closed-form SIR) against
+1. the tilt table: one noiseless A-scan of the wave and the ray model at 0, 2, 5, 10, 20
+   and 30° off the normal, on ``immersion-5mhz`` (12.7 mm 5 MHz probe, 50 mm water path,
+   4096 samples at 100 MHz) and with the same probe 50 mm above a 25 mm ball; on the plate
+   also the compiled direct double Rayleigh sum (``_rayleigh_compiled``, numba) at the
+   same distance and incidence, and |V(5 MHz)| from both;
+2. one noiseless A-scan of ``immersion-5mhz`` near the optimum on the wave model against
+   the ray model, its stages, and the Kirchhoff sum over the lit surface;
+3. the wave model against the compiled direct double Rayleigh sum for a piston over a
+   plane tilted 0.5° at 10 mm, the broadband echo's envelope peak from both (their
+   agreement and the CPU-time ratio);
+4. the thesis's 4 mm square probe on the wave model (a rectangle's closed-form SIR) against
    the ray model of the same setup, over a plate and over the thesis block;
-4. the wave model's cost against its number of points (the slope of a log–log fit: 1 is
+5. the wave model's cost against its number of points (the slope of a log–log fit: 1 is
    linear): the Kirchhoff sum's surface samples (varying their spacing) and the image
    form's face nodes (varying the number of rings);
-5. the figure of the README's physics section: the lobe of both models beside the piston's
+6. the figure of the README's physics section: the lobe of both models beside the piston's
    analytic limits (docs/physics-lobe.png, full runs only).
 """
 
@@ -36,18 +41,20 @@ import json  # noqa: E402
 import math  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy.signal  # noqa: E402
-from _common import fmt_time, machine_info, measure  # noqa: E402
+from _common import fmt_time, machine_info, markdown_table, measure  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "physics"))
 import references as ref  # noqa: E402
 
 from echocal import load_setup  # noqa: E402
-from echocal.geometry import tilt_frame  # noqa: E402
+from echocal.geometry import normal_to_orientation, orientation_frame, tilt_frame  # noqa: E402
 from echocal.setups import setup_with_overrides  # noqa: E402
 from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
@@ -148,12 +155,149 @@ def square_probe(repeats: int) -> dict[str, float]:
     return out
 
 
+TILTS_DEG = (0.0, 2.0, 5.0, 10.0, 20.0, 30.0)
+
+
+def _cpu_per_call(fn: Callable[[], object], min_seconds: float) -> float:
+    """[s] CPU time (``time.process_time``, every thread of the process) per call of
+    ``fn``: one untimed call, then calls until ``min_seconds`` of CPU time have passed."""
+    fn()
+    calls = 0
+    start = time.process_time()
+    while True:
+        fn()
+        calls += 1
+        spent = time.process_time() - start
+        if spent >= min_seconds:
+            return spent / calls
+
+
+def tilt_table(
+    min_seconds: float, n_freq: int, max_direct_tilt: float = 90.0
+) -> list[dict[str, float | str]]:
+    """CPU time per noiseless A-scan of the wave and ray models at :data:`TILTS_DEG` off
+    the normal, on ``immersion-5mhz`` (the plate: tilted from its normal, along the
+    azimuth of its tilt, at the setup's reference position) and with the same 12.7 mm
+    5 MHz probe 50 mm above the top of a 25 mm ball (the beam tilted from the vertical;
+    the Kirchhoff sum), and on the plate the compiled direct double Rayleigh sum
+    (``_rayleigh_compiled``) over ``n_freq`` frequencies of the pulse's band at the same
+    distance and incidence (up to ``max_direct_tilt`` [deg]), with the agreement of |V| at
+    5 MHz."""
+    import _rayleigh_compiled as direct
+
+    rows: list[dict[str, float | str]] = []
+    plate_ray = load_setup("immersion-5mhz-ray")
+    sphere_ray = setup_with_overrides("immersion-5mhz-ray", specimen="sphere")
+    cases = (
+        ("immersion-5mhz", plate_ray, plate_ray.reference_position),
+        ("12.7 mm over a sphere", sphere_ray, np.array([0.0, 0.0, 0.05])),
+    )
+    for label, ray, position in cases:
+        wave = dataclasses.replace(ray, reflection="wave")
+        model, shapes = wave.wave_model, _as_shapes(wave.specimen)
+        pos = position[None]
+        if label == "immersion-5mhz":
+            level = tilt_frame(np.array([0.0]), np.array([0.0]))[0]
+            normal_plane = model.image_plane(shapes, position, level)
+            assert normal_plane is not None, "the plate fills the beam"
+            basis = np.stack([level[:, 0], level[:, 1], -level[:, 2]])  # world → aperture
+            normal = basis.T @ normal_plane.normal  # towards the probe, in the world frame
+            azimuth, coelevation = (float(v) for v in normal_to_orientation(normal))
+        else:
+            azimuth, coelevation = 0.0, 0.0
+        for tilt in TILTS_DEG:
+            frames = orientation_frame(np.array([azimuth]), np.array([coelevation + tilt]))
+            t_ray = _cpu_per_call(lambda r=ray, p=pos, f=frames: r.ideal_samples(p, f), min_seconds)
+            t_wave = _cpu_per_call(
+                lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
+            )
+            row: dict[str, float | str] = {
+                "setup": label,
+                "tilt_deg": tilt,
+                "ray_s": t_ray,
+                "wave_s": t_wave,
+                "wave_over_ray": t_wave / t_ray,
+            }
+            plane = model.image_plane(shapes, position, frames[0])
+            if plane is not None and tilt <= max_direct_tilt:
+                row["incidence_deg"] = math.degrees(math.asin(plane.sin_incidence))
+                row["face_nodes"] = float(_face_nodes(model, plane))
+                row.update(_direct_sum(model, plane, n_freq, direct))
+            rows.append(row)
+    return rows
+
+
+def _direct_sum(
+    model: WaveEchoModel, plane: image.ImagePlane, n_freq: int, direct: Any
+) -> dict[str, float]:
+    """CPU time [s] of the compiled direct double Rayleigh sum at ``plane``'s distance and
+    incidence over ``n_freq`` frequencies (the pulse's band, through 5 MHz), and |V(5 MHz)|
+    from it and from the wave model's image form."""
+    a, d, c = model.probe.radius, plane.axis_distance, model.sound_speed
+    tilt = math.degrees(math.asin(plane.sin_incidence))
+    lo, hi = model.pulse.bandwidth_6db
+    step = max(5e6 - 0.7 * lo, 1.3 * hi - 5e6) / max(1, n_freq // 2)
+    freqs = 5e6 + step * (np.arange(n_freq) - n_freq // 2)
+    start = time.process_time()
+    v = direct.pulse_echo(a, freqs, d, tilt, c)
+    t_direct = time.process_time() - start
+    spectrum, _ = model.image_spectrum(plane)
+    f = model.frequencies
+    i = int(np.argmin(np.abs(f - 5e6)))
+    v_wave = abs(spectrum[i] * model._grid[1] / model.pulse.spectrum(f[i : i + 1])[0])
+    v_direct = abs(v[n_freq // 2])
+    return {
+        "direct_s": t_direct,
+        "direct_frequencies": float(n_freq),
+        "v5_wave": float(v_wave),
+        "v5_direct": float(v_direct),
+    }
+
+
+def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
+    """The tilt table as Markdown."""
+    body = []
+    for r in rows:
+        direct = r.get("direct_s")
+        agree = (
+            "—" if direct is None else f"{float(r['v5_wave']):.4g} / {float(r['v5_direct']):.4g}"
+        )
+        body.append(
+            [
+                r["setup"],
+                f"{float(r['tilt_deg']):.0f}",
+                fmt_time(float(r["ray_s"])),
+                fmt_time(float(r["wave_s"])),
+                f"{float(r['wave_over_ray']):.1f}x",
+                "—" if direct is None else fmt_time(float(direct)),
+                "—" if direct is None else f"{float(direct) / float(r['wave_s']):.0f}x",
+                agree,
+            ]
+        )
+    header = [
+        "setup",
+        "tilt [°]",
+        "ray (CPU)",
+        "wave (CPU)",
+        "wave / ray",
+        "direct sum (CPU)",
+        "direct / wave",
+        "|V(5 MHz)| wave / direct",
+    ]
+    return markdown_table(header, body)
+
+
 def _envelope(x: np.ndarray) -> float:
     return float(np.abs(scipy.signal.hilbert(x)).max())
 
 
 def wave_vs_rayleigh(accuracy: float, n_freq: int) -> dict[str, float]:
-    """The broadband echo of a 12.7 mm probe over a plane tilted 0.5° at 10 mm."""
+    """The broadband echo of a 12.7 mm probe over a plane tilted 0.5° at 10 mm, relative to
+    normal incidence, from the wave model and from the compiled direct double Rayleigh sum
+    (``_rayleigh_compiled``) over ``n_freq`` frequencies: CPU time of both (each computes
+    the tilted and the normal echo) and their agreement."""
+    import _rayleigh_compiled as direct
+
     a, d, tilt = 6.35e-3, 0.010, 0.5
     pulse = GaborPulse(center_frequency=5e6, bandwidth=60)
     sigma_t = 1.0 / math.sqrt(2.0 * pulse.alpha)
@@ -167,28 +311,26 @@ def wave_vs_rayleigh(accuracy: float, n_freq: int) -> dict[str, float]:
         normal = model.ascans(plane, pos, tilt_frame(np.array([0.0]), np.array([0.0])))[0]
         return _envelope(tilted) / _envelope(normal)
 
-    t_wave = measure(wave_ratio, repeats=3, warmup=1)
+    t_wave = _cpu_per_call(wave_ratio, 0.2)
     freqs = np.linspace(1.5e6, 8.5e6, n_freq)
     spectrum = ref.gabor_spectrum(freqs, 5e6, sigma_t)
 
     def rayleigh_ratio() -> float:
         v = np.array(
-            [
-                ref.pulse_echo_plane_rayleigh(a, f, d, [tilt, 0.0], C, accuracy=accuracy)
-                for f in freqs
-            ]
-        )
+            [direct.pulse_echo(a, freqs, d, t, C, accuracy=accuracy) for t in (tilt, 0.0)]
+        ).T
         peaks = ref.pulse_echo_envelope_peak(v, freqs, spectrum)
         return float(peaks[0] / peaks[1])
 
-    start = time.perf_counter()
+    rayleigh_ratio()  # compiles the reference
+    start = time.process_time()
     brute = rayleigh_ratio()
-    t_brute = time.perf_counter() - start
+    t_brute = time.process_time() - start
     got = wave_ratio()
     return {
-        "wave_s": t_wave.median,
+        "wave_s": t_wave,
         "rayleigh_s": t_brute,
-        "speedup": t_brute / t_wave.median,
+        "speedup": t_brute / t_wave,
         "wave_relative_echo": got,
         "rayleigh_relative_echo": brute,
         "relative_difference": got / brute - 1.0,
@@ -257,10 +399,24 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="fewer repeats, cheaper reference")
     parser.add_argument("--smoke", action="store_true", help="one repeat of everything cheap")
     parser.add_argument("--json", type=Path, help="write every number to this file")
+    parser.add_argument("--tilts-only", action="store_true", help="only the tilt table")
     args = parser.parse_args()
     cheap = args.quick or args.smoke
     repeats = 1 if args.smoke else (3 if args.quick else 7)
     result: dict[str, object] = {"machine": machine_info(("numpy", "scipy", "numba"))}
+    table = tilt_table(
+        0.05 if cheap else 0.5,
+        8 if args.smoke else (12 if args.quick else 32),
+        max_direct_tilt=10.0 if args.smoke else 90.0,  # the direct sum at 20°: ~10 s
+    )
+    result["tilt_table"] = table
+    print(tilt_markdown(table))
+    worst = max(float(r["wave_over_ray"]) for r in table)
+    print(f"HEADLINE wave / ray CPU time at 0-30 deg, both setups: at most {worst:.1f}x")
+    if args.tilts_only:
+        if args.json:
+            args.json.write_text(json.dumps(result, indent=2, default=float), encoding="utf-8")
+        return
     speed = ray_vs_wave(repeats)
     result["ray_vs_wave"] = speed
     print(
@@ -296,8 +452,9 @@ def main() -> None:
     brute = wave_vs_rayleigh(accuracy=0.5 if cheap else 1.0, n_freq=8 if args.smoke else 24)
     result["wave_vs_rayleigh"] = brute
     print(
-        f"HEADLINE 0.5 deg tilt at 10 mm: wave {fmt_time(brute['wave_s'])}, brute-force "
-        f"Rayleigh {fmt_time(brute['rayleigh_s'])} ({brute['speedup']:.0f}x); relative echo "
+        f"HEADLINE 0.5 deg tilt at 10 mm (CPU): wave {fmt_time(brute['wave_s'])}, compiled "
+        f"direct Rayleigh sum {fmt_time(brute['rayleigh_s'])} ({brute['speedup']:.0f}x); "
+        f"relative echo "
         f"{brute['wave_relative_echo']:.4f} vs {brute['rayleigh_relative_echo']:.4f} "
         f"({100 * brute['relative_difference']:+.2f} %)"
     )

@@ -23,9 +23,16 @@ plane first: the plane is then, for the beam, infinite and unobstructed.  Anythi
 **Sampling.** Across the image face the two-way delay changes by sin 2α per unit length
 (α the beam axis's incidence on the plane), so the nodes lie at most
 ``nyquist_fraction`` · λ_hi/(2 sin 2α) apart (λ_hi at the pulse's highest frequency), and at
-most ``spacing`` apart at normal incidence.  The angular nodes start at φ = 0 and come in
-multiples of four, so the rule is symmetric under x → −x and y → −y: a level plane's echo
-is exactly symmetric in tilt, and its maximum lies exactly at the normal.
+most ``spacing`` apart at normal incidence.  The angular nodes start at the plane's tilt
+direction and come in multiples of four, so the rule is symmetric under the reflection
+across the plane through the axis and the tilt direction, and under a half turn: a level
+plane's echo is symmetric in tilt to round-off, and its maximum lies at the normal.
+
+**Symmetry.** The probe is symmetric under that reflection and the plane's normal lies in
+its mirror plane, so the integrand is even under it: the rule keeps the nodes on one side
+(φ ∈ [0, π] from the tilt direction) and weights those off the mirror twice, half the
+nodes for the same sum; at normal incidence a disc's or a bowl's integrand is axially
+symmetric and one node per ring carries the ring's weight.
 """
 
 from __future__ import annotations
@@ -144,7 +151,12 @@ def ring_count(probe: Aperture, distance: float, shortest_wavelength: float, spa
     return max(MIN_RINGS_BOWL, math.ceil(along), math.ceil(BOWL_RINGS_PER_ZONE * zones))
 
 
-def face_samples(probe: Aperture, n_rings: int, spacing: float) -> tuple[FloatArray, FloatArray]:
+def face_samples(
+    probe: Aperture,
+    n_rings: int,
+    spacing: float,
+    symmetry: tuple[float, float] | None = None,
+) -> tuple[FloatArray, FloatArray]:
     """Gauss–Legendre product nodes on the probe's face: ``n_rings`` rings, nodes at most
     about ``spacing`` [m] apart along each ring.
 
@@ -155,18 +167,29 @@ def face_samples(probe: Aperture, n_rings: int, spacing: float) -> tuple[FloatAr
     ring has its own number of angular nodes (a multiple of four, at least eight), about
     ``spacing`` apart along the ring (eight at normal incidence, ``spacing`` = inf).
 
+    ``symmetry``: None, every node.  A unit vector (u_x, u_y) in the face's plane: the
+    integrand is even under the reflection across the plane through the axis and u (a
+    plane tilted along u), so each ring's angles start at u and only φ ∈ [0, π] are kept,
+    the nodes strictly inside weighted twice: half the nodes, the same sum.  (0, 0): the
+    integrand is axially symmetric (normal incidence), one node per ring on the x axis
+    with the ring's whole weight.
+
     Returns
     -------
     points : [m] ``(3, n)`` in the aperture frame (face centre or bowl apex at the origin).
     weights : [m²] ``(n,)``.
     """
-    points, weights = _face_samples(probe.radius, probe.curvature, n_rings, spacing)
+    points, weights = _face_samples(probe.radius, probe.curvature, n_rings, spacing, symmetry)
     return points.copy(), weights.copy()
 
 
 @functools.lru_cache(maxsize=64)
 def _face_samples(
-    a: float, curvature: float | None, n_rings: int, spacing: float
+    a: float,
+    curvature: float | None,
+    n_rings: int,
+    spacing: float,
+    symmetry: tuple[float, float] | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     x, w = np.polynomial.legendre.leggauss(n_rings)  # on [−1, 1]
     if curvature is None:
@@ -181,14 +204,24 @@ def _face_samples(
         rho = rf * np.sqrt(np.maximum(0.0, 1.0 - u * u))
         ring_area = rf * rf * (0.5 * (1.0 - u_min) * w)
         z = rf * (1.0 - u)
+    axial = symmetry is not None and symmetry[0] == 0.0 and symmetry[1] == 0.0
+    start = 0.0 if symmetry is None or axial else math.atan2(symmetry[1], symmetry[0])
     columns: list[FloatArray] = []
     weights: list[FloatArray] = []
     for rho_i, z_i, area_i in zip(rho, z, ring_area, strict=True):
+        if axial:
+            columns.append(np.array([[rho_i], [0.0], [z_i]]))
+            weights.append(np.array([area_i * 2.0 * math.pi]))
+            continue
         along = 2.0 * math.pi * rho_i / (4.0 * spacing) if math.isfinite(spacing) else 0.0
         n_phi = 4 * max(2, math.ceil(along))
-        phi = 2.0 * math.pi * np.arange(n_phi) / n_phi
-        columns.append(np.stack([rho_i * np.cos(phi), rho_i * np.sin(phi), np.full(n_phi, z_i)]))
-        weights.append(np.full(n_phi, area_i * 2.0 * math.pi / n_phi))
+        j = np.arange(n_phi if symmetry is None else n_phi // 2 + 1)
+        ring_w = np.full(j.size, area_i * 2.0 * math.pi / n_phi)
+        if symmetry is not None:
+            ring_w[1:-1] *= 2.0  # 0 < φ < π stands for its mirror image too
+        phi = start + 2.0 * math.pi * j / n_phi
+        columns.append(np.stack([rho_i * np.cos(phi), rho_i * np.sin(phi), np.full(j.size, z_i)]))
+        weights.append(ring_w)
     return np.concatenate(columns, axis=1), np.concatenate(weights)
 
 
@@ -244,20 +277,44 @@ def rectangle_samples(
 
 
 def face_quadrature(
-    probe: Aperture, distance: float, shortest_wavelength: float, spacing: float
+    probe: Aperture,
+    distance: float,
+    shortest_wavelength: float,
+    spacing: float,
+    symmetry: tuple[float, float] | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """The image form's nodes on the probe's face for a plane ``distance`` [m] away along
     the axis, nodes at most about ``spacing`` [m] apart (from :func:`node_spacing`):
     :func:`face_samples` with :func:`ring_count` rings on a disc or a bowl,
     :func:`rectangle_samples` with :func:`side_counts` on a rectangle.
 
+    ``symmetry`` (see :func:`face_samples`): the plane's tilt direction (u_x, u_y) in the
+    face's plane, or (0, 0) at normal incidence; the rule then keeps one node of each set
+    of nodes the symmetry maps onto each other, with their summed weight (a rectangle:
+    where u lies along a side or is zero).  None: every node.
+
     Returns points [m] ``(3, n)`` in the aperture frame and weights [m²] ``(n,)``."""
     if probe.kind == sir.RECT:
         half_width, half_height = (float(v) for v in probe.parameters[1:3])
         nx, ny = side_counts(half_width, half_height, distance, shortest_wavelength, spacing)
-        return rectangle_samples(half_width, half_height, nx, ny)
+        points, weights = rectangle_samples(half_width, half_height, nx, ny)
+        if symmetry is not None:
+            for axis, half in ((0, half_width), (1, half_height)):
+                if symmetry[axis] == 0.0:  # even under this coordinate's sign
+                    points, weights = _fold(points, weights, axis, 1e-12 * half)
+        return points, weights
     n_rings = ring_count(probe, distance, shortest_wavelength, spacing)
-    return face_samples(probe, n_rings, spacing)
+    return face_samples(probe, n_rings, spacing, symmetry)
+
+
+def _fold(
+    points: FloatArray, weights: FloatArray, axis: int, tolerance: float
+) -> tuple[FloatArray, FloatArray]:
+    """The nodes with ``points[axis]`` ≥ 0 of a rule symmetric under that coordinate's
+    sign, those off the axis (beyond ``tolerance`` [m]) weighted twice."""
+    keep = points[axis] >= -tolerance
+    doubled = np.where(points[axis] > tolerance, 2.0, 1.0)
+    return points[:, keep], (weights * doubled)[keep]
 
 
 def find_plane(

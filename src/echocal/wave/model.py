@@ -95,6 +95,21 @@ _FOOTPRINT_RAYS = 32
 same plane for the image form."""
 
 
+def _tilt_direction(plane: image.ImagePlane) -> tuple[float, float]:
+    """The unit vector in the face's plane along which ``plane`` is tilted, (0, 0) at
+    normal incidence (below 10⁻¹² rad, where the echo differs from the normal one by
+    10⁻²⁴).  The image form's integrand is even under the reflection across the plane
+    through the probe's axis and this vector: the probe is symmetric under it, and the
+    plane's normal lies in it (:func:`echocal.wave.image.face_quadrature`)."""
+    nx, ny = float(plane.normal[0]), float(plane.normal[1])
+    tilt = math.hypot(nx, ny)
+    if tilt < 1e-12:
+        return (0.0, 0.0)
+    ux, uy = nx / tilt, ny / tilt
+    # exactly along a side when it nearly is, so a rectangle's rule folds there too
+    return (0.0 if abs(ux) < 1e-12 else ux, 0.0 if abs(uy) < 1e-12 else uy)
+
+
 @dataclass(frozen=True, kw_only=True)
 class WaveEchoModel:
     """Noiseless A-scans of a piston probe over a specimen, from diffraction theory.
@@ -315,7 +330,11 @@ class WaveEchoModel:
             self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
         )
         face, weights = image.face_quadrature(
-            self.probe, plane.axis_distance, self._shortest_wavelength, spacing
+            self.probe,
+            plane.axis_distance,
+            self._shortest_wavelength,
+            spacing,
+            _tilt_direction(plane),
         )
         return plane.mirror(face), weights
 
