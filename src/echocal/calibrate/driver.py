@@ -389,6 +389,7 @@ def calibrate(
         )
 
     start = objective.n_measurements
+    bench_start = objective.bench_time
     objective.search_snr_db = None  # set by the objective's replan, should this run make one
     iterates = [x0.copy()]
     counts = [0]
@@ -483,4 +484,12 @@ def calibrate(
         posterior_search=getattr(opt, "search", None) is not None,
         search_snr_db=None if replanned is None else objective.search_snr_db,
         final_value=final_value,
+        bench_time=_bench_time(objective, bench_start),
     )
+
+
+def _bench_time(objective: Objective, start: float | None) -> float | None:
+    """[s] the bench time the objective spent since it stood at ``start`` (None when
+    its source reports none)."""
+    total = objective.bench_time
+    return None if total is None else total - (start or 0.0)

@@ -144,6 +144,9 @@ class Objective:
         self.search_snr_db: float | None = None
         """[dB] the echo's peak SNR that the last :meth:`passes_for_measured_noise` sized
         its passes for; None before, or when it gave none."""
+        self.bench_time: float | None = None
+        """[s] the bench time of every measurement so far (motion, settling, acquisition)
+        as its source reported it; None while the source reports none."""
 
     # -- to override -------------------------------------------------------------------
     def _evaluate(self, points: FloatArray) -> ArrayLike:
@@ -153,6 +156,11 @@ class Objective:
     def _significance(self) -> FloatArray | None:
         """Detection significance of each point of the last :meth:`_evaluate`, shape (k,),
         or None when this objective cannot tell (the default)."""
+        return None
+
+    def _bench_spent(self) -> float | None:
+        """[s] the bench time the last :meth:`_evaluate` cost, or None when its source
+        does not report one (the default)."""
         return None
 
     # -- public ------------------------------------------------------------------------
@@ -288,6 +296,9 @@ class Objective:
             self.n_measurements += len(pts)
             self.n_nan += int(np.count_nonzero(np.isnan(vals)))
             reps.append(vals)
+            spent = self._bench_spent()
+            if spent is not None:
+                self.bench_time = (self.bench_time or 0.0) + spent
             sig = self._significance()
             if sig is not None:
                 significances.append(np.asarray(sig, dtype=np.float64).reshape(len(pts)))

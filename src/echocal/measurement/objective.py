@@ -67,6 +67,13 @@ def ascan_metric(
     return float(gated_metric(metric, scan.samples, window, pulse, gate, window_length))
 
 
+def _noise_colour(source: MeasurementSource) -> tuple[float, ...]:
+    """The AR coefficients of the source's receiver noise when it says (the simulator on a
+    bench with coloured noise), else () — white noise."""
+    bench = getattr(source, "bench", None)
+    return () if bench is None else tuple(bench.receiver.noise_ar)
+
+
 class SourceObjective(Objective):
     """Calibration objective measuring a source at a fixed position.
 
@@ -141,6 +148,8 @@ class SourceObjective(Objective):
         self._peaks = np.zeros(0)  # matched-envelope peak of each A-scan of the last batch
         self._warned_coarse = False
         self._gate_window: RecordingWindow | None = None
+        self._spent: float | None = None
+        self._noise_ar = _noise_colour(source)
 
     @property
     def last_scan(self) -> AScan | None:
@@ -161,7 +170,15 @@ class SourceObjective(Objective):
                 self._note_noise(scan.samples)
                 values[i], self._peaks[i] = self._metric_and_peak(scan)
         self._last_scan = scans[-1] if scans else None
+        spent = [scan.metadata.get("bench_time") for scan in scans]
+        known = [float(t) for t in spent if t is not None]
+        self._spent = sum(known) if known else None
         return values
+
+    def _bench_spent(self) -> float | None:
+        """[s] the bench time of the last batch: the sum of its A-scans' ``bench_time``
+        (the simulator's bench model reports it), None when none reports one."""
+        return self._spent
 
     def _metric_and_peak(self, scan: AScan) -> tuple[float, float]:
         """The metric of one finite A-scan and its matched-filter envelope peak [a.u.]
@@ -177,7 +194,8 @@ class SourceObjective(Objective):
             in_db = self.metric == "energy-db"
             return float(energy_to_db(energy) if in_db else energy), float(peak)
         metric = gated_metric(self.metric, samples, window, self.pulse, None, self.window_length)
-        return float(metric), float(_detector(self.pulse, scan.fs, scan.n_samples).peak(samples))
+        detector = _detector(self.pulse, scan.fs, scan.n_samples, self._noise_ar)
+        return float(metric), float(detector.peak(samples))
 
     def _check_gate_window(self, window: RecordingWindow) -> None:
         """Refuse an absolute gate outside the source's recording window (checked on the
@@ -220,7 +238,7 @@ class SourceObjective(Objective):
         sigma = self._receiver_sigma()
         if sigma <= 0.0:  # no noise measured yet: no evidence either way
             return np.full(len(self._peaks), np.nan)
-        detector = _detector(self.pulse, scan.fs, scan.n_samples)
+        detector = _detector(self.pulse, scan.fs, scan.n_samples, self._noise_ar)
         return detector.significance_of_peak(self._peaks, sigma)
 
     def search_passes(self) -> tuple[float, ...] | None:
