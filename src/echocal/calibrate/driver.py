@@ -390,6 +390,7 @@ def calibrate(
 
     start = objective.n_measurements
     bench_start = objective.bench_time
+    saved_start = getattr(objective, "bench_time_saved", None)
     objective.search_snr_db = None  # set by the objective's replan, should this run make one
     iterates = [x0.copy()]
     counts = [0]
@@ -484,12 +485,12 @@ def calibrate(
         posterior_search=getattr(opt, "search", None) is not None,
         search_snr_db=None if replanned is None else objective.search_snr_db,
         final_value=final_value,
-        bench_time=_bench_time(objective, bench_start),
+        bench_time=_bench_time(objective.bench_time, bench_start),
+        bench_time_saved=_bench_time(getattr(objective, "bench_time_saved", None), saved_start),
     )
 
 
-def _bench_time(objective: Objective, start: float | None) -> float | None:
-    """[s] the bench time the objective spent since it stood at ``start`` (None when
-    its source reports none)."""
-    total = objective.bench_time
+def _bench_time(total: float | None, start: float | None) -> float | None:
+    """[s] a bench-time total's growth since it stood at ``start`` (None while there is
+    none)."""
     return None if total is None else total - (start or 0.0)

@@ -44,7 +44,7 @@ NO_ECHO_STATUSES = frozenset({4, 6, 9})
 """Statuses of a run that found no echo: ``x`` is not an estimate of anything."""
 
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
-_OPTIONAL_NUMBERS = ("fun", "final_value", "search_snr_db", "bench_time")
+_OPTIONAL_NUMBERS = ("fun", "final_value", "search_snr_db", "bench_time", "bench_time_saved")
 """Fields that are a number or None; a non-finite one is stored as None."""
 
 
@@ -90,6 +90,8 @@ class CalibrationResult:
     bench_time : [s] the bench time of the run's measurements (motion, settling and
         acquisition, as the source reported them: the simulator's bench model), None
         when the source reports none (the ideal bench, a recording).
+    bench_time_saved : [s] the motion and settling time a motion-aware objective's order
+        saved against the plain order (predicted from the bench's axes), None without one.
     """
 
     x: FloatArray
@@ -116,6 +118,7 @@ class CalibrationResult:
     posterior_search: bool = False
     final_value: float | None = None
     bench_time: float | None = None
+    bench_time_saved: float | None = None
 
     @property
     def nfev(self) -> int:

@@ -22,7 +22,7 @@ from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.objective import Objective
 from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.errors import EchocalError, EchocalValueError
-from echocal.geometry import Pose, pose_from_angles
+from echocal.geometry import Pose, convert_angles, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.virtual import VirtualSetup
 from echocal.signal import Pulse, RecordingWindow, get_metric
@@ -74,6 +74,20 @@ def _noise_colour(source: MeasurementSource) -> tuple[float, ...]:
     return () if bench is None else tuple(bench.receiver.noise_ar)
 
 
+def _tilt_axes(source: MeasurementSource) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Speeds [deg/s] and settling times [s] of the source's tilt axes, ``(2,)`` each, and
+    whether they cost time: a simulated bench's, else 1 deg/s and no settling (the order
+    is then the shortest in angle, and its time unknown)."""
+    bench = getattr(source, "bench", None)
+    if bench is not None:
+        axes = (bench.positioner.tilt_x, bench.positioner.tilt_y)
+        speeds = np.array([axis.speed for axis in axes])
+        settling = np.array([axis.settling for axis in axes])
+        if np.any(np.isfinite(speeds)) or np.any(settling > 0.0):
+            return np.where(np.isfinite(speeds), speeds, 1e300), settling, True
+    return np.ones(2), np.zeros(2), False
+
+
 class SourceObjective(Objective):
     """Calibration objective measuring a source at a fixed position.
 
@@ -95,6 +109,11 @@ class SourceObjective(Objective):
     twin : the simulated setup of a rig's probe, pulse and part (its setup file), from
         whose diffraction lobe a blind search is sized (:meth:`search_passes`); None:
         the source itself when it is the simulator.
+    motion_aware : measure each batch of points along a short path of the positioner
+        (:func:`echocal.bench.motion.short_order`, from where the last batch ended) instead
+        of in the order asked; values come back in the order asked.  On a simulated bench
+        :attr:`bench_time_saved` keeps the motion and settling time this saved against
+        the plain order, predicted from the bench's tilt axes.
     """
 
     def __init__(
@@ -112,6 +131,7 @@ class SourceObjective(Objective):
         out_of_bounds: str = "clip",
         repeats: int = 1,
         twin: VirtualSetup | None = None,
+        motion_aware: bool = False,
     ) -> None:
         get_metric(metric)  # unknown names fail here, listing the valid ones
         pulse = pulse if pulse is not None else getattr(source, "pulse", None)
@@ -150,6 +170,12 @@ class SourceObjective(Objective):
         self._gate_window: RecordingWindow | None = None
         self._spent: float | None = None
         self._noise_ar = _noise_colour(source)
+        self.motion_aware = bool(motion_aware)
+        self.bench_time_saved: float | None = None
+        """[s] the motion and settling time the motion-aware order saved so far against the
+        plain order (predicted from a simulated bench's tilt axes); None otherwise."""
+        self._at: np.ndarray | None = None  # tilts [deg] of the last point measured
+        self._plain_at: np.ndarray | None = None  # ... had every batch gone in its order
 
     @property
     def last_scan(self) -> AScan | None:
@@ -161,6 +187,38 @@ class SourceObjective(Objective):
         return pose_from_angles(self.position, float(a), float(b), self.parameterization)
 
     def _evaluate(self, points: np.ndarray) -> np.ndarray:
+        order = self._motion_order(points) if self.motion_aware else None
+        if order is not None:
+            values = np.empty(len(points))
+            peaks = np.empty(len(points))
+            values[order] = self._measure(points[order])
+            peaks[order] = self._peaks
+            self._peaks = peaks
+            return values
+        return self._measure(points)
+
+    def _motion_order(self, points: np.ndarray) -> np.ndarray | None:
+        """The short order of ``points`` [deg] ``(k, 2)`` (None for one point), adding the
+        time it saves to :attr:`bench_time_saved` on a simulated bench: the predicted
+        motion and settling of the plain order (along its own path since the first
+        batch) minus the short order's."""
+        from echocal.bench.motion import move_times, short_order
+
+        tilts = np.column_stack(
+            convert_angles(points[:, 0], points[:, 1], self.parameterization, "tilt")
+        )
+        start, plain_start = self._at, self._plain_at
+        speeds, settling, timed = _tilt_axes(self.source)
+        order = short_order(tilts, start, speeds, settling)
+        self._at, self._plain_at = tilts[order[-1]], tilts[-1]
+        if timed:  # against the plain order's own path, batch after batch
+            plain = move_times(tilts, plain_start, speeds, settling).sum()
+            short = move_times(tilts[order], start, speeds, settling).sum()
+            self.bench_time_saved = (self.bench_time_saved or 0.0) + float(plain - short)
+        return order if len(points) > 1 else None
+
+    def _measure(self, points: np.ndarray) -> np.ndarray:
+        """Measure ``points`` [deg] ``(k, 2)`` in this order; their metric values ``(k,)``."""
         poses = [self.pose(a, b) for a, b in points]
         scans = self.source.measure_many(poses)
         values = np.full(len(scans), np.nan)
