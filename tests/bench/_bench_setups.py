@@ -8,6 +8,14 @@ from cli_helpers import tiny_setup_toml
 from echocal.setups import load_setup
 
 
+def timed_tilts(speed: float, settling: str) -> str:
+    """``[bench]`` tables giving both tilt axes ``speed`` [deg/s] and ``settling`` (a time)."""
+    return "".join(
+        f'[bench.positioner.{axis}]\nspeed = {speed}\nsettling = "{settling}"\n'
+        for axis in ("tilt_x", "tilt_y")
+    )
+
+
 def bench_setup(tmp_path: Path, bench: str = "", *, noise: str = "", seed: int = 4):
     """The tiny setup (8 × 8 rays, 256 samples, flat plate 16 mm below) with ``bench`` (the
     body of its ``[bench…]`` tables) and ``noise`` (a ``[noise]`` table body)."""

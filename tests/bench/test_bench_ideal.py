@@ -5,7 +5,7 @@ setup without one; a bench that only costs time measures the same A-scans too.""
 from __future__ import annotations
 
 import numpy as np
-from _bench_setups import bench_setup
+from _bench_setups import bench_setup, timed_tilts
 
 from echocal.calibrate import calibrate
 from echocal.geometry import Pose
@@ -19,16 +19,7 @@ backlash = 0
 [bench.receiver]
 noise_ar = []
 """
-TIMED = """
-[bench.positioner]
-acquisition_time = "2 ms"
-[bench.positioner.tilt_x]
-speed = 20
-settling = "50 ms"
-[bench.positioner.tilt_y]
-speed = 20
-settling = "50 ms"
-"""
+TIMED = '[bench.positioner]\nacquisition_time = "2 ms"\n' + timed_tilts(20, "50 ms")
 
 
 def _poses(setup):

@@ -3,20 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-from _bench_setups import bench_setup
+from _bench_setups import bench_setup, timed_tilts
 
 from echocal.bench.motion import move_times, short_order
 from echocal.calibrate import calibrate
 from echocal.measurement import SourceObjective
 
-AXES = """
-[bench.positioner.tilt_x]
-speed = 10
-settling = "20 ms"
-[bench.positioner.tilt_y]
-speed = 10
-settling = "20 ms"
-"""
+AXES = timed_tilts(10, "20 ms")
 
 
 def test_move_times_by_hand_and_a_raster_becomes_a_serpentine():
