@@ -47,8 +47,21 @@ def test_calibrate_on_a_bench_finds_the_squinted_optimum_and_reports_bench_time(
     # every measurement cost at least its 1 ms acquisition, and the search moved
     bench_time = summary["bench_time_s"]
     assert bench_time > 0.001 * summary["n_measurements"] + 0.02
+    # the positioner's error: 0.01° backlash on both tilt axes, √(2 × 0.01²/2) = 0.01° RMS
+    np.testing.assert_allclose(summary["bench_uncertainty_deg"], 0.01, rtol=1e-9)
+    assert "the positioner's error (0.01° RMS)" in summary["message"]
     saved = json.loads((tmp_path / "out" / "result.json").read_text())
     assert saved["bench_time"] == bench_time
     # the human-readable report prints it beside the counts
     result = CalibrationResult.load_json(tmp_path / "out" / "result.json")
     assert _bench_line(result) == f"   bench time {bench_time:.3g} s"
+
+
+def test_a_positioner_error_above_the_tolerance_is_said_to_limit_the_estimate():
+    from echocal.calibrate.driver import _unresolved
+
+    assert _unresolved(None, (0.01, 8), None) == ""
+    within = _unresolved(0.008, (0.01, 8), None)
+    assert "0.008° RMS" in within and "not resolved" not in within
+    assert "convergence tolerance (0.01°): not resolved below it" in _unresolved(0.05, (0.01, 8), 1)
+    assert "convergence tolerance (0.02°)" in _unresolved(0.05, None, 0.02)

@@ -39,6 +39,20 @@ def test_steps_round_and_repeatability_scatters_with_its_sigma():
     assert np.all(reached[:, [0, 1, 2, 4]] == 0.0)
 
 
+def test_the_rms_error_of_random_moves_is_the_positioners_stated_error():
+    b, s, sigma = 0.05, 0.01, 0.004
+    model = PositionerModel(tilt_x=Axis(backlash=b, step=s, repeatability=sigma))
+    commands = _tilt_x_commands(np.random.default_rng(4).uniform(-5.0, 5.0, 40000))
+    reached, _, _ = PositionerState(model).move(commands, np.random.default_rng(5))
+    error = reached[1:, 3] - commands[1:, 3]
+    # closed form: repeatability σ², rounding s²/12, and 0 or b half the time (b²/2)
+    expected = np.sqrt(sigma**2 + s**2 / 12 + b**2 / 2)
+    np.testing.assert_allclose(model.tilt_x.rms_error, expected, rtol=1e-12)
+    # 40,000 moves: the RMS to within 2 %
+    np.testing.assert_allclose(np.sqrt(np.mean(error**2)), expected, rtol=0.02)
+    assert model.tilt_error == model.tilt_x.rms_error  # tilt_y is exact
+
+
 def test_move_time_is_the_slowest_axis_plus_settling_and_reversals_travel_the_backlash():
     model = PositionerModel(
         tilt_x=Axis(speed=10.0, settling=0.1, backlash=0.5),

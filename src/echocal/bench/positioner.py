@@ -69,6 +69,14 @@ class Axis:
         """True when the axis reaches every commanded value exactly."""
         return self.backlash == 0.0 and self.step == 0.0 and self.repeatability == 0.0
 
+    @property
+    def rms_error(self) -> float:
+        """[unit] the RMS difference between a commanded and a reached value when the
+        approach direction is equally often either way: √(σ² + step²/12 + backlash²/2) —
+        the repeatability, a uniform rounding error over one step, and an offset of 0 or
+        ``backlash`` (mean square backlash²/2)."""
+        return math.sqrt(self.repeatability**2 + self.step**2 / 12.0 + self.backlash**2 / 2.0)
+
 
 @dataclass(frozen=True, kw_only=True)
 class PositionerModel:
@@ -98,6 +106,12 @@ class PositionerModel:
     def is_exact(self) -> bool:
         """True when every axis reaches every commanded value exactly."""
         return all(getattr(self, axis).is_exact for axis in AXES)
+
+    @property
+    def tilt_error(self) -> float:
+        """[deg] the RMS angle between a commanded and a reached orientation:
+        √(e_x² + e_y²) of the tilt axes' :attr:`Axis.rms_error` (small angles)."""
+        return math.hypot(self.tilt_x.rms_error, self.tilt_y.rms_error)
 
     @property
     def is_timeless(self) -> bool:

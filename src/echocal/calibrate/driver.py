@@ -461,6 +461,8 @@ def calibrate(
     replanned = getattr(opt, "replanned", None)
     if n_nan:
         message += f"; {n_nan} measurement(s) returned NaN (treated as the worst value seen)"
+    uncertainty = objective.bench_uncertainty()
+    message += _unresolved(uncertainty, settle, xtol)
     return CalibrationResult(
         x=x,
         fun=fun,
@@ -487,7 +489,21 @@ def calibrate(
         final_value=final_value,
         bench_time=_bench_time(objective.bench_time, bench_start),
         bench_time_saved=_bench_time(getattr(objective, "bench_time_saved", None), saved_start),
+        bench_uncertainty=uncertainty,
     )
+
+
+def _unresolved(uncertainty: float | None, settle: Any, xtol: float | None) -> str:
+    """The message's note when the positioner's error [deg] exceeds the convergence
+    tolerance [deg] the run was held to (``settle``'s, else ``xtol``): the run's settling
+    then says nothing below the positioner's error."""
+    if uncertainty is None:
+        return ""
+    tol = float(settle[0]) if settle is not None else xtol
+    note = f"; the estimate carries the positioner's error ({uncertainty:.3g}° RMS)"
+    if tol is not None and uncertainty > tol:
+        note += f", more than the convergence tolerance ({tol:g}°): not resolved below it"
+    return note
 
 
 def _bench_time(total: float | None, start: float | None) -> float | None:

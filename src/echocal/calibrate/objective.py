@@ -158,6 +158,12 @@ class Objective:
         or None when this objective cannot tell (the default)."""
         return None
 
+    def bench_uncertainty(self) -> float | None:
+        """[deg] the RMS angle between an orientation the positioner is commanded to and
+        the one it reaches, when the source knows it (a simulated bench's positioner);
+        None otherwise (the default).  A calibration cannot resolve the optimum below it."""
+        return None
+
     def _bench_spent(self) -> float | None:
         """[s] the bench time the last :meth:`_evaluate` cost, or None when its source
         does not report one (the default)."""

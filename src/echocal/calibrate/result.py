@@ -44,7 +44,14 @@ NO_ECHO_STATUSES = frozenset({4, 6, 9})
 """Statuses of a run that found no echo: ``x`` is not an estimate of anything."""
 
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
-_OPTIONAL_NUMBERS = ("fun", "final_value", "search_snr_db", "bench_time", "bench_time_saved")
+_OPTIONAL_NUMBERS = (
+    "fun",
+    "final_value",
+    "search_snr_db",
+    "bench_time",
+    "bench_time_saved",
+    "bench_uncertainty",
+)
 """Fields that are a number or None; a non-finite one is stored as None."""
 
 
@@ -92,6 +99,10 @@ class CalibrationResult:
         when the source reports none (the ideal bench, a recording).
     bench_time_saved : [s] the motion and settling time a motion-aware objective's order
         saved against the plain order (predicted from the bench's axes), None without one.
+    bench_uncertainty : [deg] the RMS angle between a commanded and a reached orientation
+        of the source's positioner (backlash, steps, repeatability), which the estimate, a
+        commanded orientation, carries besides the measurement noise; None when the source
+        does not know it (the ideal bench, a recording, a rig).
     """
 
     x: FloatArray
@@ -119,6 +130,7 @@ class CalibrationResult:
     final_value: float | None = None
     bench_time: float | None = None
     bench_time_saved: float | None = None
+    bench_uncertainty: float | None = None
 
     @property
     def nfev(self) -> int:

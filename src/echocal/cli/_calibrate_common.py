@@ -217,6 +217,7 @@ def calibration_summary(
         "final_value": result.final_value,
         "bench_time_s": result.bench_time,
         "bench_time_saved_s": result.bench_time_saved,
+        "bench_uncertainty_deg": result.bench_uncertainty,
         "n_iterations": result.n_iterations,
         "status": result.status,
         "message": result.message,

@@ -233,6 +233,14 @@ class SourceObjective(Objective):
         self._spent = sum(known) if known else None
         return values
 
+    def bench_uncertainty(self) -> float | None:
+        """[deg] the simulated bench's positioner error (:attr:`echocal.bench.PositionerModel.
+        tilt_error`), None on the ideal positioner or another source."""
+        bench = getattr(self.source, "bench", None)
+        if bench is None or bench.positioner.is_exact:
+            return None
+        return float(bench.positioner.tilt_error)
+
     def _bench_spent(self) -> float | None:
         """[s] the bench time of the last batch: the sum of its A-scans' ``bench_time``
         (the simulator's bench model reports it), None when none reports one."""

@@ -269,7 +269,7 @@ class VirtualSetup(BaseSource):
         return (
             f"{self.name}: {self.specimen.name}, {self.transducer.n_rays} rays, "
             f"{self.pulse.name} {self.pulse.center_frequency / 1e6:g} MHz, "
-            f"{self.reflection}, {noise}"
+            f"{self.reflection}, {noise}" + ("" if self.bench is None else ", on a bench")
         )
 
     # ------------------------------------------------------------------ simulation
