@@ -4,10 +4,12 @@ off), the calibration finds it, and the bench time is reported."""
 from __future__ import annotations
 
 import json
+import time
 
 import numpy as np
 
 from cli_helpers import run_main, tiny_setup_toml
+from echocal.ascan import AScan
 from echocal.calibrate import CalibrationResult
 from echocal.cli._calibrate_common import _bench_line
 
@@ -65,3 +67,33 @@ def test_a_positioner_error_above_the_tolerance_is_said_to_limit_the_estimate():
     assert "0.008° RMS" in within and "not resolved" not in within
     assert "convergence tolerance (0.01°): not resolved below it" in _unresolved(0.05, (0.01, 8), 1)
     assert "convergence tolerance (0.02°)" in _unresolved(0.05, None, 0.02)
+
+
+def test_a_rig_reports_the_time_each_measurement_took_by_the_clock():
+    from echocal.geometry import Pose
+    from echocal.measurement.hardware import HardwareSource
+    from echocal.measurement.limits import PositionerLimits
+
+    class SlowPositioner:
+        limits = PositionerLimits()
+
+        def move_to(self, pose: Pose) -> Pose:
+            time.sleep(0.02)
+            return pose
+
+        def close(self) -> None:
+            pass
+
+    class Receiver:
+        def acquire(self) -> AScan:
+            return AScan(np.zeros(64), fs=50e6)
+
+        def close(self) -> None:
+            pass
+
+    source = HardwareSource(SlowPositioner(), Receiver(), settle_time=0.01)
+    facts = source.measure(Pose(0.0, 0.0, 0.02)).metadata
+    # lower bounds only (the clock may run longer on a busy machine, never shorter)
+    assert facts["motion_time"] >= 0.02 and facts["settling_time"] >= 0.01
+    parts = facts["motion_time"] + facts["settling_time"] + facts["acquisition_time"]
+    np.testing.assert_allclose(facts["bench_time"], parts, rtol=1e-9)
