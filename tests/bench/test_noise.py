@@ -129,3 +129,18 @@ def test_the_gain_curve_multiplies_the_scan_by_its_interpolated_gain(tmp_path):
     t_us = scan.times * 1e6
     gain = 10 ** (np.clip((t_us - 20) / 5, 0, 1) * 12 / 20)
     np.testing.assert_allclose(scan.samples, reference.samples * gain, rtol=1e-12, atol=1e-300)
+
+
+def test_jitter_delays_each_scan_by_a_normal_time_of_its_sigma(tmp_path):
+    setup, _ = bench_setup(tmp_path, '[bench.receiver]\njitter = "2 ns"\n', noise="snr_db = 'none'")
+    x, y, z = setup.reference_position
+    scans = setup.measure_many([Pose.from_tilt(x, y, z, 0.0, 0.0)] * 400)
+    times = scans[0].times
+    power = np.array([s.samples for s in scans]) ** 2
+    centroid = power @ times / power.sum(axis=1)
+    # 400 draws: the sample σ within 10 % (3.5 σ of its own scatter, 1/√800 ≈ 3.5 %)
+    np.testing.assert_allclose(np.std(centroid), 2e-9, rtol=0.1)
+    # centred on the unjittered echo: the mean of 400 draws within 4 × 2 ns / √400
+    plain, _ = bench_setup(tmp_path, noise="snr_db = 'none'")
+    still = plain.measure(Pose.from_tilt(x, y, z, 0.0, 0.0)).samples ** 2
+    np.testing.assert_allclose(np.mean(centroid), still @ times / still.sum(), atol=0.4e-9)

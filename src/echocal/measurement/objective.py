@@ -234,8 +234,9 @@ class SourceObjective(Objective):
         return values
 
     def bench_uncertainty(self) -> float | None:
-        """[deg] the simulated bench's positioner error (:attr:`echocal.bench.PositionerModel.
-        tilt_error`), None on the ideal positioner or another source."""
+        """[deg] the simulated bench's positioner error
+        (:attr:`~echocal.bench.positioner.PositionerModel.tilt_error`), None on the ideal
+        positioner or another source."""
         bench = getattr(self.source, "bench", None)
         if bench is None or bench.positioner.is_exact:
             return None

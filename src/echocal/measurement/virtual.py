@@ -432,7 +432,8 @@ class VirtualSetup(BaseSource):
     def simulate(
         self, poses: Sequence[Pose], *, noise: bool = True, rng: RngLike = None
     ) -> FloatArray:
-        """A-scans of a batch of poses as one array ``(n_poses, n_samples)`` (no limit check).
+        """A-scans of a batch of poses as one array ``(n_poses, n_samples)`` (no limit check),
+        on the ideal bench (a :attr:`bench` applies in :meth:`measure_many`).
 
         ``noise=False`` gives the ideal A-scans.  Noise draws from ``rng`` if given,
         else from the setup's own generator.
