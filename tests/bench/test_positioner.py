@@ -26,6 +26,17 @@ def test_backlash_offsets_the_approach_from_above_by_the_backlash():
     np.testing.assert_allclose(from_above - from_below, 0.04, rtol=1e-12)
 
 
+def test_a_controller_that_approaches_from_below_has_no_backlash_offset_but_travels_more():
+    model = PositionerModel(tilt_x=Axis(backlash=0.04, speed=1.0), approach="positive")
+    commands = _tilt_x_commands([0.0, 1.0, 2.0, 1.0, 0.0, 1.0])
+    reached, motion, _ = PositionerState(model).move(commands, np.random.default_rng(0))
+    np.testing.assert_array_equal(reached[:, 3], commands[:, 3])
+    # a move down overshoots by the backlash and returns, two reversals' lost motion
+    # besides: 4 × 0.04° more travel at 1°/s; moves up travel their distance
+    np.testing.assert_allclose(motion, [0.0, 1.0, 1.0, 1.16, 1.16, 1.0], rtol=1e-12)
+    assert model.tilt_error == 0.0  # no repeatability, no steps: the backlash is gone
+
+
 def test_steps_round_and_repeatability_scatters_with_its_sigma():
     state = PositionerState(PositionerModel(tilt_x=Axis(step=0.01, repeatability=0.003)))
     # 20,000 moves alternating between 0.123 and 1.0: each ends at its step (0.12, 1.0)

@@ -14,12 +14,18 @@ with (units: the axis's, m or deg):
   longest axis's travel / speed (a reversal travels the backlash too) plus the longest
   settling of the axes that moved.
 
-Every A-scan also costs ``acquisition_time`` [s] (averaging, PRF).  The state (where
-each axis is and which way it last moved) is :class:`PositionerState`'s.
+Every A-scan also costs ``acquisition_time`` [s] (averaging, PRF).  With ``approach =
+"positive"`` the controller compensates the backlash, as many do: every move ends in the
+positive direction — a move in the negative direction overshoots the target by the
+backlash and comes back — so the target is reached without the backlash's offset, at the
+cost of the extra travel (the overshoot and the return, and the lost motion of the two
+reversals: 4 × backlash).  The state (where each axis is and which way it last moved) is
+:class:`PositionerState`'s.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -29,12 +35,16 @@ from numpy.typing import NDArray
 from echocal._validate import nonnegative_float, positive_float
 from echocal.errors import EchocalValueError
 
-__all__ = ["AXES", "Axis", "PositionerModel", "PositionerState"]
+__all__ = ["APPROACHES", "AXES", "Axis", "PositionerModel", "PositionerState"]
 
 FloatArray = NDArray[np.float64]
 
 AXES = ("x", "y", "z", "tilt_x", "tilt_y")
 """The positioner's axes: positions [m] then gimbal tilts [deg]."""
+
+APPROACHES = ("both", "positive")
+"""How moves end: from either side (``both``: the backlash shows) or always in the
+positive direction (``positive``: the controller's backlash compensation)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -88,8 +98,14 @@ class PositionerModel:
     tilt_x: Axis = field(default_factory=Axis)
     tilt_y: Axis = field(default_factory=Axis)
     acquisition_time: float = 0.0
+    approach: str = "both"
 
     def __post_init__(self) -> None:
+        if self.approach not in APPROACHES:
+            raise EchocalValueError(
+                f"bench.positioner.approach must be one of {', '.join(APPROACHES)}; "
+                f"got {self.approach!r}"
+            )
         for name in AXES:
             if not isinstance(getattr(self, name), Axis):
                 raise EchocalValueError(f"bench.positioner.{name} must be an Axis")
@@ -110,8 +126,13 @@ class PositionerModel:
     @property
     def tilt_error(self) -> float:
         """[deg] the RMS angle between a commanded and a reached orientation:
-        √(e_x² + e_y²) of the tilt axes' :attr:`Axis.rms_error` (small angles)."""
-        return math.hypot(self.tilt_x.rms_error, self.tilt_y.rms_error)
+        √(e_x² + e_y²) of the tilt axes' :attr:`Axis.rms_error` (small angles), without
+        the backlash's share when the controller compensates it (``approach =
+        "positive"``)."""
+        axes = (self.tilt_x, self.tilt_y)
+        if self.approach == "positive":
+            axes = tuple(dataclasses.replace(axis, backlash=0.0) for axis in axes)
+        return math.hypot(axes[0].rms_error, axes[1].rms_error)
 
     @property
     def is_timeless(self) -> bool:
@@ -159,6 +180,11 @@ class PositionerState:
         index = np.where(signs != 0.0, np.arange(len(signs))[:, None], 0)
         direction = np.take_along_axis(signs, np.maximum.accumulate(index, axis=0), axis=0)[1:]
         reversed_ = moved & (direction != np.vstack([self._direction[None], direction[:-1]]))
+        if model.approach == "positive":  # overshoot, reverse, return: every move ends going +
+            travel = np.abs(delta) + np.where(moved & (delta < 0.0), 4.0 * backlash, 0.0)
+            direction = np.ones_like(direction)
+        else:
+            travel = np.abs(delta) + np.where(reversed_, backlash, 0.0)
         reached = targets + np.where(direction < 0.0, backlash, 0.0)
         if np.any(sigma > 0.0):
             draws = rng.standard_normal(targets.shape) * sigma
@@ -173,7 +199,6 @@ class PositionerState:
         )
         chain = np.vstack([before, reached])
         actual = np.take_along_axis(chain, np.maximum.accumulate(index, axis=0), axis=0)[1:]
-        travel = np.abs(delta) + np.where(reversed_, backlash, 0.0)
         with np.errstate(invalid="ignore"):
             motion = np.where(moved, travel / speed, 0.0).max(axis=1)
         settle = np.where(moved, settling, 0.0).max(axis=1)

@@ -7,7 +7,7 @@ Units: positions [m] and tilts [deg] (text with a unit allowed: ``"0.1 mm"``), s
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -55,7 +55,8 @@ class BenchProbeConfig(_BenchModel):
 
 
 class BenchPositionerConfig(_BenchModel):
-    """The positioner's five axes and the acquisition time of one A-scan [s]."""
+    """The positioner's five axes, the acquisition time of one A-scan [s] and how moves end
+    (``"both"``: from either side; ``"positive"``: backlash compensated)."""
 
     x: BenchAxisConfig = BenchAxisConfig()
     y: BenchAxisConfig = BenchAxisConfig()
@@ -63,6 +64,7 @@ class BenchPositionerConfig(_BenchModel):
     tilt_x: BenchAxisConfig = BenchAxisConfig()
     tilt_y: BenchAxisConfig = BenchAxisConfig()
     acquisition_time: _Wait = 0.0
+    approach: Literal["both", "positive"] = "both"
 
 
 class BenchReceiverConfig(_BenchModel):
@@ -105,7 +107,9 @@ def build_bench(config: BenchConfig, temperature: float | None) -> Bench:
     receiver = config.receiver
     return Bench(
         probe=ProbeMount(squint=config.probe.squint, pivot_offset=config.probe.pivot_offset),
-        positioner=PositionerModel(**axes, acquisition_time=positioner.acquisition_time),
+        positioner=PositionerModel(
+            **axes, acquisition_time=positioner.acquisition_time, approach=positioner.approach
+        ),
         receiver=BenchReceiver(
             noise_ar=tuple(receiver.noise_ar),
             gain_curve=tuple(receiver.gain_curve),
