@@ -129,9 +129,9 @@ class PositionerModel:
         √(e_x² + e_y²) of the tilt axes' :attr:`Axis.rms_error` (small angles), without
         the backlash's share when the controller compensates it (``approach =
         "positive"``)."""
-        axes = (self.tilt_x, self.tilt_y)
+        axes = [self.tilt_x, self.tilt_y]
         if self.approach == "positive":
-            axes = tuple(dataclasses.replace(axis, backlash=0.0) for axis in axes)
+            axes = [dataclasses.replace(axis, backlash=0.0) for axis in axes]
         return math.hypot(axes[0].rms_error, axes[1].rms_error)
 
     @property
