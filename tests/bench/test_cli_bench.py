@@ -97,3 +97,25 @@ def test_a_rig_reports_the_time_each_measurement_took_by_the_clock():
     assert facts["motion_time"] >= 0.02 and facts["settling_time"] >= 0.01
     parts = facts["motion_time"] + facts["settling_time"] + facts["acquisition_time"]
     np.testing.assert_allclose(facts["bench_time"], parts, rtol=1e-9)
+
+
+def test_an_estimate_whose_echo_is_below_the_floor_is_not_a_convergence():
+    from types import SimpleNamespace
+
+    from echocal.calibrate import FunctionObjective
+    from echocal.calibrate.evidence import judge
+
+    class GrainyObjective(FunctionObjective):
+        def echo_floor(self) -> float:
+            return 1.0  # half a normal-incidence echo of 2.0
+
+    objective = GrainyObjective(lambda p: np.zeros(len(p)), noise_sigma=0.0)
+    points = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]])
+    searched = (points, np.array([0.2, 0.25, 0.2]))
+    opt = SimpleNamespace(concave=None)
+    x = np.array([0.5, 0.0])
+    status, detail = judge(7, x, opt, objective, searched, np.array([0.3]))
+    assert status == 10 and "not the surface's" in detail and "(2)" in detail
+    # a strong echo at the estimate keeps the claim
+    searched = (points, np.array([1.9, 2.0, 1.9]))
+    assert judge(7, x, opt, objective, searched, np.array([2.0]))[0] == 7

@@ -158,6 +158,13 @@ class Objective:
         or None when this objective cannot tell (the default)."""
         return None
 
+    def echo_floor(self) -> float | None:
+        """[objective units] a level the echo at the optimum is known to exceed where the
+        objective's measurements also hold peaks that are not the surface's (a simulated
+        bench's grain noise), so that an estimate below it has found such a peak; None
+        otherwise (the default)."""
+        return None
+
     def bench_uncertainty(self) -> float | None:
         """[deg] the RMS angle between an orientation the positioner is commanded to and
         the one it reaches, when the source knows it (a simulated bench's positioner);

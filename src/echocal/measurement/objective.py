@@ -233,6 +233,18 @@ class SourceObjective(Objective):
         self._spent = sum(known) if known else None
         return values
 
+    def echo_floor(self) -> float | None:
+        """[pseudo-energy units] half the simulator's noiseless echo at normal incidence
+        (:meth:`normal_echo`), on a bench with grain noise: the grains' backscatter peaks at
+        any tilt, and an estimate whose echo is below half the one at normal incidence is
+        off the main lobe (the optimum's echo is at least the normal one).  None without
+        grains or without :meth:`normal_echo`."""
+        bench = getattr(self.source, "bench", None)
+        if bench is None or bench.grain is None:
+            return None
+        echo = self.normal_echo()
+        return None if echo is None else 0.5 * echo
+
     def bench_uncertainty(self) -> float | None:
         """[deg] the simulated bench's positioner error
         (:attr:`~echocal.bench.positioner.PositionerModel.tilt_error`), None on the ideal
