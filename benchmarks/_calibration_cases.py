@@ -57,6 +57,47 @@ CASES: dict[str, dict[str, Any]] = {
         "lobe": "20 mm steel plate's back wall in its triggered gate, 12.7 mm probe (wave)",
     },
 }
+REAL_BENCH: dict[str, Any] = {
+    "probe": {"squint": (1.5, -1.0), "pivot_offset": (0.002, -0.001, -0.004)},
+    "positioner": {
+        "acquisition_time": 0.005,
+        **{
+            axis: {"backlash": 0.05, "step": 0.001, "repeatability": 0.002, "speed": 10.0,
+                   "settling": 0.05}
+            for axis in ("tilt_x", "tilt_y")
+        },
+    },
+    "receiver": {"noise_ar": [0.6]},
+}  # fmt: skip
+"""A realistic bench (the ``[bench]`` table as data; issue 47): squint 1.8°, pivot offset
+4.6 mm, 0.05° backlash, 0.001° steps, 0.002° repeatability, 10°/s and 50 ms settling per
+tilt axis, 5 ms per A-scan, AR(1) noise of coefficient 0.6."""
+GRAIN_BENCH: dict[str, Any] = {
+    **REAL_BENCH,
+    "grain": {"level_db": -30.0, "depth": 0.005, "width": 0.02},
+}
+""":data:`REAL_BENCH` with grains at −30 dB re the front-wall echo, 5 mm deep under 20 mm
+around the reference: their backscatter reaches the probe at any tilt (no gate)."""
+CASES["immersion-5mhz-ray-bench"] = {
+    "setup": "immersion-5mhz-ray",
+    "bench": REAL_BENCH,
+    "position": None,
+    "lobe": "narrow (~1°), the ray model, on a real bench (squint, pivot, backlash, AR, grain)",
+}
+CASES["thesis-bench"] = {
+    "setup": "thesis",
+    "bench": REAL_BENCH,
+    "position": (0.010, 0.0, 0.022),
+    "lobe": "broad (~±8°), on a real bench",
+}
+CASES["immersion-5mhz-ray-grain"] = {
+    "setup": "immersion-5mhz-ray",
+    "bench": GRAIN_BENCH,
+    "position": None,
+    "lobe": "narrow (~1°), the ray model, on the real bench with grain noise at -30 dB",
+}
+BENCH_CASES = ("immersion-5mhz-ray-bench", "thesis-bench", "immersion-5mhz-ray-grain")
+"""Cases on :data:`REAL_BENCH`; ``--cases`` only.  Their runs also report the bench time."""
 CURVED_CASES = ("sphere-12.7", "sphere-6.35", "rod-12.7", "rod-6.35")
 """Selectable with ``--cases``; not in a default run (each costs minutes)."""
 GATED_CASES = ("plate-back-wall",)

@@ -160,6 +160,7 @@ from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
 from echocal.measurement.objective import default_bounds  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402
+from echocal.setups.bench_schema import BenchConfig, build_bench  # noqa: E402
 from echocal.signal.gates import TimeGate, resolve_gate  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
 
@@ -191,6 +192,9 @@ def _case(case: str) -> Case:
         setup = load_setup(spec["setup"], seed=0)
         if "specimen" in spec:
             setup = dataclasses.replace(setup, specimen=builtin_specimen(spec["specimen"]))
+        if "bench" in spec:
+            config = BenchConfig.model_validate(spec["bench"])
+            setup = dataclasses.replace(setup, bench=build_bench(config, None))
         if "probe_width" in spec:
             width = spec["probe_width"]
             probe = dataclasses.replace(setup.transducer, width=width, height=width)
@@ -350,6 +354,7 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
             objective.n_measurements if n_measurements is None else n_measurements
         ),
         "acquisition_measurements": acquisition,
+        "bench_time": objective.bench_time,
         "status": status,
         "seconds": time.perf_counter() - t0,
     }

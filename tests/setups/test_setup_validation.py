@@ -130,6 +130,11 @@ ALLOWED: dict[str, set[str]] = {
     "x": {"negative", "inf", "-inf"},  # positioner limits [m]: inf is unlimited
     "y": {"negative", "inf", "-inf"},
     "z": {"negative", "inf", "-inf"},
+    "squint": {"negative"},  # [bench]: angles [deg] and offsets [m] have a sign
+    "pivot_offset": {"negative"},
+    "speed": {"inf", "huge"},  # an axis's speed: inf (or nearly) is instantaneous
+    "temperature_drift": {"negative"},  # [°C/h]: the water may cool
+    "level_db": {"negative"},  # grain noise below the reference echo
 }
 
 

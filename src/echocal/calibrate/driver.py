@@ -389,6 +389,8 @@ def calibrate(
         )
 
     start = objective.n_measurements
+    bench_start = objective.bench_time
+    saved_start = getattr(objective, "bench_time_saved", None)
     objective.search_snr_db = None  # set by the objective's replan, should this run make one
     iterates = [x0.copy()]
     counts = [0]
@@ -459,6 +461,8 @@ def calibrate(
     replanned = getattr(opt, "replanned", None)
     if n_nan:
         message += f"; {n_nan} measurement(s) returned NaN (treated as the worst value seen)"
+    uncertainty = objective.bench_uncertainty()
+    message += _unresolved(uncertainty, settle, xtol)
     return CalibrationResult(
         x=x,
         fun=fun,
@@ -483,4 +487,26 @@ def calibrate(
         posterior_search=getattr(opt, "search", None) is not None,
         search_snr_db=None if replanned is None else objective.search_snr_db,
         final_value=final_value,
+        bench_time=_bench_time(objective.bench_time, bench_start),
+        bench_time_saved=_bench_time(getattr(objective, "bench_time_saved", None), saved_start),
+        bench_uncertainty=uncertainty,
     )
+
+
+def _unresolved(uncertainty: float | None, settle: Any, xtol: float | None) -> str:
+    """The message's note when the positioner's error [deg] exceeds the convergence
+    tolerance [deg] the run was held to (``settle``'s, else ``xtol``): the run's settling
+    then says nothing below the positioner's error."""
+    if uncertainty is None:
+        return ""
+    tol = float(settle[0]) if settle is not None else xtol
+    note = f"; the estimate carries the positioner's error ({uncertainty:.3g}° RMS)"
+    if tol is not None and uncertainty > tol:
+        note += f", more than the convergence tolerance ({tol:g}°): not resolved below it"
+    return note
+
+
+def _bench_time(total: float | None, start: float | None) -> float | None:
+    """[s] a bench-time total's growth since it stood at ``start`` (None while there is
+    none)."""
+    return None if total is None else total - (start or 0.0)

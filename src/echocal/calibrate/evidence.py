@@ -157,6 +157,16 @@ def judge(
         return 8, ""
     if final is not None and echo_at_estimate(objective, final) is False:
         return 9, " (measured there at the end)"
+    floor = objective.echo_floor()
+    if status in (0, 7) and floor is not None and final is not None:
+        level = float(np.nanmean(final)) if np.any(np.isfinite(final)) else -np.inf
+        if level < floor:
+            return 10, (
+                f" ({STATUS_CLAIMS[status]}, but the echo at the estimate ({level:.4g}) is "
+                f"less than half the probe's echo at normal incidence ({2.0 * floor:.4g}): "
+                "the peak found is not the surface's (grain noise?); gate the front-wall "
+                "echo or start nearer"
+            )
     if status in (0, 7):
         reason = unsupported_claim(
             x,

@@ -144,6 +144,9 @@ class Objective:
         self.search_snr_db: float | None = None
         """[dB] the echo's peak SNR that the last :meth:`passes_for_measured_noise` sized
         its passes for; None before, or when it gave none."""
+        self.bench_time: float | None = None
+        """[s] the bench time of every measurement so far (motion, settling, acquisition)
+        as its source reported it; None while the source reports none."""
 
     # -- to override -------------------------------------------------------------------
     def _evaluate(self, points: FloatArray) -> ArrayLike:
@@ -153,6 +156,24 @@ class Objective:
     def _significance(self) -> FloatArray | None:
         """Detection significance of each point of the last :meth:`_evaluate`, shape (k,),
         or None when this objective cannot tell (the default)."""
+        return None
+
+    def echo_floor(self) -> float | None:
+        """[objective units] a level the echo at the optimum is known to exceed where the
+        objective's measurements also hold peaks that are not the surface's (a simulated
+        bench's grain noise), so that an estimate below it has found such a peak; None
+        otherwise (the default)."""
+        return None
+
+    def bench_uncertainty(self) -> float | None:
+        """[deg] the RMS angle between an orientation the positioner is commanded to and
+        the one it reaches, when the source knows it (a simulated bench's positioner);
+        None otherwise (the default).  A calibration cannot resolve the optimum below it."""
+        return None
+
+    def _bench_spent(self) -> float | None:
+        """[s] the bench time the last :meth:`_evaluate` cost, or None when its source
+        does not report one (the default)."""
         return None
 
     # -- public ------------------------------------------------------------------------
@@ -288,6 +309,9 @@ class Objective:
             self.n_measurements += len(pts)
             self.n_nan += int(np.count_nonzero(np.isnan(vals)))
             reps.append(vals)
+            spent = self._bench_spent()
+            if spent is not None:
+                self.bench_time = (self.bench_time or 0.0) + spent
             sig = self._significance()
             if sig is not None:
                 significances.append(np.asarray(sig, dtype=np.float64).reshape(len(pts)))

@@ -44,7 +44,14 @@ NO_ECHO_STATUSES = frozenset({4, 6, 9})
 """Statuses of a run that found no echo: ``x`` is not an estimate of anything."""
 
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
-_OPTIONAL_NUMBERS = ("fun", "final_value", "search_snr_db")
+_OPTIONAL_NUMBERS = (
+    "fun",
+    "final_value",
+    "search_snr_db",
+    "bench_time",
+    "bench_time_saved",
+    "bench_uncertainty",
+)
 """Fields that are a number or None; a non-finite one is stored as None."""
 
 
@@ -87,6 +94,15 @@ class CalibrationResult:
     final_value : [energy units] the mean of the final measurements at ``x`` (counted in
         ``n_measurements``; ``final_check`` of them), None when the run did not measure
         its estimate.
+    bench_time : [s] the bench time of the run's measurements (motion, settling and
+        acquisition, as the source reported them: the simulator's bench model), None
+        when the source reports none (the ideal bench, a recording).
+    bench_time_saved : [s] the motion and settling time a motion-aware objective's order
+        saved against the plain order (predicted from the bench's axes), None without one.
+    bench_uncertainty : [deg] the RMS angle between a commanded and a reached orientation
+        of the source's positioner (backlash, steps, repeatability), which the estimate, a
+        commanded orientation, carries besides the measurement noise; None when the source
+        does not know it (the ideal bench, a recording, a rig).
     """
 
     x: FloatArray
@@ -112,6 +128,9 @@ class CalibrationResult:
     search_snr_db: float | None = None
     posterior_search: bool = False
     final_value: float | None = None
+    bench_time: float | None = None
+    bench_time_saved: float | None = None
+    bench_uncertainty: float | None = None
 
     @property
     def nfev(self) -> int:

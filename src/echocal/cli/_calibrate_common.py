@@ -215,6 +215,9 @@ def calibration_summary(
         "search_snr_db": result.search_snr_db,
         "posterior_search": result.posterior_search,
         "final_value": result.final_value,
+        "bench_time_s": result.bench_time,
+        "bench_time_saved_s": result.bench_time_saved,
+        "bench_uncertainty_deg": result.bench_uncertainty,
         "n_iterations": result.n_iterations,
         "status": result.status,
         "message": result.message,
@@ -258,16 +261,26 @@ def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> No
         f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
         f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
         f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}"
-        f"{search}   iterations {result.n_iterations}\n"
+        f"{search}   iterations {result.n_iterations}{_bench_line(result)}\n"
         f"  stopped:  {escape(result.message)}\n"
         f"  saved to  {escape(str(out))}/"
     )
 
 
+def _bench_line(result: Any) -> str:
+    """``   bench time 12.3 s`` when the source reported one (a simulated bench), with the
+    time a motion-aware order saved when there is one, else ``""``."""
+    spent = getattr(result, "bench_time", None)
+    saved = getattr(result, "bench_time_saved", None)
+    line = "" if spent is None else f"   bench time {spent:.3g} s"
+    return line if saved is None else f"{line} (motion-aware order saved {saved:.3g} s)"
+
+
 def _print_failure(result: Any, out: Path) -> None:
     output.print(
         f"[bold red]no echo found[/] ({escape(result.method)}, "
-        f"{result.n_measurements} measurements): {escape(result.message)}.\n"
+        f"{result.n_measurements} measurements{_bench_line(result)}): "
+        f"{escape(result.message)}.\n"
         "  Nothing was calibrated.  Start nearer the echo (--x0), search farther "
         "(--search-radius) or check the setup (position, SNR).\n"
         f"  saved to  {escape(str(out))}/ (status {result.status})"

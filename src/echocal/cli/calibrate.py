@@ -161,6 +161,15 @@ def register(app: typer.Typer) -> None:
             "echocal-out/calibrate"
         ),
         plots: Annotated[bool, typer.Option(help="Save the convergence and path plots.")] = True,
+        motion_aware: Annotated[
+            bool,
+            typer.Option(
+                "--motion-aware",
+                help="Measure each batch of points along a short path of the positioner "
+                "instead of in the order asked; on a simulated bench ([bench] in the setup) "
+                "the bench time saved against the plain order is reported.  Simulator only.",
+            ),
+        ] = False,
         final_measure: Annotated[
             bool,
             typer.Option(
@@ -219,6 +228,12 @@ def register(app: typer.Typer) -> None:
         )
         refuse_existing_output(out, overwrite=overwrite)  # --out is locked once the inputs pass
         if replay is not None or instrument is not None or rig is not None:
+            if motion_aware:
+                raise typer.BadParameter(
+                    "orders the simulator's moves only; drop it with --replay, "
+                    "--instrument or --rig",
+                    param_hint="--motion-aware",
+                )
             from echocal.cli._calibrate_measured import (
                 _calibrate_measured,
                 _check_measured_options,
@@ -262,6 +277,7 @@ def register(app: typer.Typer) -> None:
             json_output=json_output,
             provenance=provenance,
             gate=gate,
+            motion_aware=motion_aware,
         )
 
 
@@ -280,6 +296,7 @@ def _calibrate_simulated(
     json_output: bool,
     provenance: Any = None,
     gate: str | None = None,
+    motion_aware: bool = False,
 ) -> None:
     """Calibrate on a simulated setup and judge the estimate against its true optimum."""
     from echocal.evaluation import evaluate_run
@@ -289,7 +306,9 @@ def _calibrate_simulated(
     where = _parse_position(position) if position else virtual.reference_position
     chosen = gate_for_setup(gate, virtual)  # refused here, before any measurement
     hold_output_lock(out)  # one writer per --out (made here), from the first measurement on
-    objective = SourceObjective(virtual, where, parameterization=parameterization, gate=chosen)
+    objective = SourceObjective(
+        virtual, where, parameterization=parameterization, gate=chosen, motion_aware=motion_aware
+    )
     # the effective seed: --seed, else the setup file's, else 0
     result = run(objective, parse_pair(x0, "--x0"), virtual.rng)
     evaluation = evaluate_run(virtual, where, result, gate=chosen)

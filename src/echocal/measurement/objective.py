@@ -22,7 +22,7 @@ from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.objective import Objective
 from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.errors import EchocalError, EchocalValueError
-from echocal.geometry import Pose, pose_from_angles
+from echocal.geometry import Pose, convert_angles, pose_from_angles
 from echocal.measurement.base import MeasurementSource
 from echocal.measurement.virtual import VirtualSetup
 from echocal.signal import Pulse, RecordingWindow, get_metric
@@ -67,6 +67,27 @@ def ascan_metric(
     return float(gated_metric(metric, scan.samples, window, pulse, gate, window_length))
 
 
+def _noise_colour(source: MeasurementSource) -> tuple[float, ...]:
+    """The AR coefficients of the source's receiver noise when it says (the simulator on a
+    bench with coloured noise), else () — white noise."""
+    bench = getattr(source, "bench", None)
+    return () if bench is None else tuple(bench.receiver.noise_ar)
+
+
+def _tilt_axes(source: MeasurementSource) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Speeds [deg/s] and settling times [s] of the source's tilt axes, ``(2,)`` each, and
+    whether they cost time: a simulated bench's, else 1 deg/s and no settling (the order
+    is then the shortest in angle, and its time unknown)."""
+    bench = getattr(source, "bench", None)
+    if bench is not None:
+        axes = (bench.positioner.tilt_x, bench.positioner.tilt_y)
+        speeds = np.array([axis.speed for axis in axes])
+        settling = np.array([axis.settling for axis in axes])
+        if np.any(np.isfinite(speeds)) or np.any(settling > 0.0):
+            return np.where(np.isfinite(speeds), speeds, 1e300), settling, True
+    return np.ones(2), np.zeros(2), False
+
+
 class SourceObjective(Objective):
     """Calibration objective measuring a source at a fixed position.
 
@@ -88,6 +109,11 @@ class SourceObjective(Objective):
     twin : the simulated setup of a rig's probe, pulse and part (its setup file), from
         whose diffraction lobe a blind search is sized (:meth:`search_passes`); None:
         the source itself when it is the simulator.
+    motion_aware : measure each batch of points along a short path of the positioner
+        (:func:`echocal.bench.motion.short_order`, from where the last batch ended) instead
+        of in the order asked; values come back in the order asked.  On a simulated bench
+        :attr:`bench_time_saved` keeps the motion and settling time this saved against
+        the plain order, predicted from the bench's tilt axes.
     """
 
     def __init__(
@@ -105,6 +131,7 @@ class SourceObjective(Objective):
         out_of_bounds: str = "clip",
         repeats: int = 1,
         twin: VirtualSetup | None = None,
+        motion_aware: bool = False,
     ) -> None:
         get_metric(metric)  # unknown names fail here, listing the valid ones
         pulse = pulse if pulse is not None else getattr(source, "pulse", None)
@@ -141,6 +168,14 @@ class SourceObjective(Objective):
         self._peaks = np.zeros(0)  # matched-envelope peak of each A-scan of the last batch
         self._warned_coarse = False
         self._gate_window: RecordingWindow | None = None
+        self._spent: float | None = None
+        self._noise_ar = _noise_colour(source)
+        self.motion_aware = bool(motion_aware)
+        self.bench_time_saved: float | None = None
+        """[s] the motion and settling time the motion-aware order saved so far against the
+        plain order (predicted from a simulated bench's tilt axes); None otherwise."""
+        self._at: np.ndarray | None = None  # tilts [deg] of the last point measured
+        self._plain_at: np.ndarray | None = None  # ... had every batch gone in its order
 
     @property
     def last_scan(self) -> AScan | None:
@@ -152,6 +187,38 @@ class SourceObjective(Objective):
         return pose_from_angles(self.position, float(a), float(b), self.parameterization)
 
     def _evaluate(self, points: np.ndarray) -> np.ndarray:
+        order = self._motion_order(points) if self.motion_aware else None
+        if order is not None:
+            values = np.empty(len(points))
+            peaks = np.empty(len(points))
+            values[order] = self._measure(points[order])
+            peaks[order] = self._peaks
+            self._peaks = peaks
+            return values
+        return self._measure(points)
+
+    def _motion_order(self, points: np.ndarray) -> np.ndarray | None:
+        """The short order of ``points`` [deg] ``(k, 2)`` (None for one point), adding the
+        time it saves to :attr:`bench_time_saved` on a simulated bench: the predicted
+        motion and settling of the plain order (along its own path since the first
+        batch) minus the short order's."""
+        from echocal.bench.motion import move_times, short_order
+
+        tilts = np.column_stack(
+            convert_angles(points[:, 0], points[:, 1], self.parameterization, "tilt")
+        )
+        start, plain_start = self._at, self._plain_at
+        speeds, settling, timed = _tilt_axes(self.source)
+        order = short_order(tilts, start, speeds, settling)
+        self._at, self._plain_at = tilts[order[-1]], tilts[-1]
+        if timed:  # against the plain order's own path, batch after batch
+            plain = move_times(tilts, plain_start, speeds, settling).sum()
+            short = move_times(tilts[order], start, speeds, settling).sum()
+            self.bench_time_saved = (self.bench_time_saved or 0.0) + float(plain - short)
+        return order if len(points) > 1 else None
+
+    def _measure(self, points: np.ndarray) -> np.ndarray:
+        """Measure ``points`` [deg] ``(k, 2)`` in this order; their metric values ``(k,)``."""
         poses = [self.pose(a, b) for a, b in points]
         scans = self.source.measure_many(poses)
         values = np.full(len(scans), np.nan)
@@ -161,7 +228,36 @@ class SourceObjective(Objective):
                 self._note_noise(scan.samples)
                 values[i], self._peaks[i] = self._metric_and_peak(scan)
         self._last_scan = scans[-1] if scans else None
+        spent = [scan.metadata.get("bench_time") for scan in scans]
+        known = [float(t) for t in spent if t is not None]
+        self._spent = sum(known) if known else None
         return values
+
+    def echo_floor(self) -> float | None:
+        """[pseudo-energy units] half the simulator's noiseless echo at normal incidence
+        (:meth:`normal_echo`), on a bench with grain noise: the grains' backscatter peaks at
+        any tilt, and an estimate whose echo is below half the one at normal incidence is
+        off the main lobe (the optimum's echo is at least the normal one).  None without
+        grains or without :meth:`normal_echo`."""
+        bench = getattr(self.source, "bench", None)
+        if bench is None or bench.grain is None:
+            return None
+        echo = self.normal_echo()
+        return None if echo is None else 0.5 * echo
+
+    def bench_uncertainty(self) -> float | None:
+        """[deg] the simulated bench's positioner error
+        (:attr:`~echocal.bench.positioner.PositionerModel.tilt_error`), None on the ideal
+        positioner or another source."""
+        bench = getattr(self.source, "bench", None)
+        if bench is None or bench.positioner.is_exact:
+            return None
+        return float(bench.positioner.tilt_error)
+
+    def _bench_spent(self) -> float | None:
+        """[s] the bench time of the last batch: the sum of its A-scans' ``bench_time``
+        (the simulator's bench model reports it), None when none reports one."""
+        return self._spent
 
     def _metric_and_peak(self, scan: AScan) -> tuple[float, float]:
         """The metric of one finite A-scan and its matched-filter envelope peak [a.u.]
@@ -177,7 +273,8 @@ class SourceObjective(Objective):
             in_db = self.metric == "energy-db"
             return float(energy_to_db(energy) if in_db else energy), float(peak)
         metric = gated_metric(self.metric, samples, window, self.pulse, None, self.window_length)
-        return float(metric), float(_detector(self.pulse, scan.fs, scan.n_samples).peak(samples))
+        detector = _detector(self.pulse, scan.fs, scan.n_samples, self._noise_ar)
+        return float(metric), float(detector.peak(samples))
 
     def _check_gate_window(self, window: RecordingWindow) -> None:
         """Refuse an absolute gate outside the source's recording window (checked on the
@@ -220,7 +317,7 @@ class SourceObjective(Objective):
         sigma = self._receiver_sigma()
         if sigma <= 0.0:  # no noise measured yet: no evidence either way
             return np.full(len(self._peaks), np.nan)
-        detector = _detector(self.pulse, scan.fs, scan.n_samples)
+        detector = _detector(self.pulse, scan.fs, scan.n_samples, self._noise_ar)
         return detector.significance_of_peak(self._peaks, sigma)
 
     def search_passes(self) -> tuple[float, ...] | None:

@@ -28,6 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, in_range, lookup, one_of, positive_float
 from echocal.ascan import AScan
+from echocal.bench import Bench, GrainField
+from echocal.bench.session import BenchSession
 from echocal.constants import SOUND_SPEED_WATER
 from echocal.echo import (
     WAVE_MODEL,
@@ -131,6 +133,9 @@ class VirtualSetup(BaseSource):
         ``material`` and a specimen of one plane (the front face).  None: no interior.
     gates : the setup's own named gates (:class:`~echocal.signal.gates.TimeGate`), which
         ``--gate NAME`` selects beside ``front-wall`` and ``back-wall``.
+    bench : the real bench (:class:`~echocal.bench.Bench`: squint, pivot offset,
+        positioner, coloured and grain noise, drift, and the time each measurement
+        costs), or None (the ideal bench, as is an ideal :class:`~echocal.bench.Bench`).
     """
 
     specimen: Specimen
@@ -150,6 +155,7 @@ class VirtualSetup(BaseSource):
     gates: tuple[TimeGate, ...] = ()
     rng: RngLike = None
     name: str = "virtual setup"
+    bench: Bench | None = None
     # set by __post_init__, never by the caller
     _generator: np.random.Generator = field(init=False, repr=False)
     _closed: bool = field(init=False, repr=False)
@@ -157,6 +163,7 @@ class VirtualSetup(BaseSource):
         init=False, repr=False
     )
     _closed_top: float = field(init=False, repr=False)
+    _bench_session: BenchSession | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         # Frozen: the cached reference echo, noise level and truth can never go stale.
@@ -187,6 +194,11 @@ class VirtualSetup(BaseSource):
             medium = replace(self.medium, longitudinal_speed=self.sound_speed)
             object.__setattr__(self, "medium", medium)
         object.__setattr__(self, "_generator", as_generator(self.rng))
+        if self.bench is not None and not isinstance(self.bench, Bench):
+            raise EchocalValueError(f"bench must be a Bench or None; got {self.bench!r}")
+        if self.bench is not None and self.bench.is_ideal:
+            object.__setattr__(self, "bench", None)  # the ideal bench: the plain simulator
+        self._start_bench()
         object.__setattr__(self, "_closed", False)
         object.__setattr__(self, "_truth_cache", {})
         # the probe usually sits above the closed shapes: one comparison settles it
@@ -259,7 +271,7 @@ class VirtualSetup(BaseSource):
         return (
             f"{self.name}: {self.specimen.name}, {self.transducer.n_rays} rays, "
             f"{self.pulse.name} {self.pulse.center_frequency / 1e6:g} MHz, "
-            f"{self.reflection}, {noise}"
+            f"{self.reflection}, {noise}" + ("" if self.bench is None else ", on a bench")
         )
 
     # ------------------------------------------------------------------ simulation
@@ -396,13 +408,34 @@ class VirtualSetup(BaseSource):
 
     def reseed(self, rng: RngLike) -> None:
         """Restart the receiver noise from ``rng`` (seed or Generator): the A-scans that
-        follow are those of a setup built with ``rng=rng``."""
+        follow are those of a setup built with ``rng=rng`` (the bench, if any, restarts
+        too: positioner at rest, bench time 0)."""
         object.__setattr__(self, "_generator", as_generator(rng))
+        self._start_bench()
+
+    def _start_bench(self) -> None:
+        """A fresh bench session (None without a bench); its random stream is spawned
+        from the receiver's generator without drawing from it."""
+        session = None
+        if self.bench is not None:
+            seed_seq = getattr(self._generator.bit_generator, "seed_seq", None)
+            child = seed_seq.spawn(1)[0] if seed_seq is not None else None
+            rng = np.random.default_rng(
+                child if child is not None else self._generator.integers(2**63)
+            )
+            session = BenchSession(self.bench, rng)
+        object.__setattr__(self, "_bench_session", session)
+
+    @property
+    def bench_time(self) -> float:
+        """[s] the bench time spent so far (0 on the ideal bench)."""
+        return 0.0 if self._bench_session is None else self._bench_session.clock
 
     def simulate(
         self, poses: Sequence[Pose], *, noise: bool = True, rng: RngLike = None
     ) -> FloatArray:
-        """A-scans of a batch of poses as one array ``(n_poses, n_samples)`` (no limit check).
+        """A-scans of a batch of poses as one array ``(n_poses, n_samples)`` (no limit check),
+        on the ideal bench (a :attr:`bench` applies in :meth:`measure_many`).
 
         ``noise=False`` gives the ideal A-scans.  Noise draws from ``rng`` if given,
         else from the setup's own generator.
@@ -454,6 +487,59 @@ class VirtualSetup(BaseSource):
         )
 
     @cached_property
+    def _digitizer(self) -> Receiver:
+        """The receiver's saturation and ADC without its noise (the bench adds its own)."""
+        return replace(self._receiver, noise_sigma=0.0)
+
+    @cached_property
+    def grain_field(self) -> GrainField | None:
+        """The part's grains (:mod:`echocal.bench.grain`), None without grain noise."""
+        grain = None if self.bench is None else self.bench.grain
+        if grain is None:
+            return None
+        from echocal.transducer import PistonDirectivity
+
+        reference = np.asarray(self.reference_position, dtype=np.float64)
+        hits = self.specimen.surface_below(reference[0], reference[1])
+        part_speed = self.sound_speed if self.material is None else self.material.longitudinal_speed
+        transducer = self.transducer
+        return GrainField.draw(
+            grain,
+            surface_point=np.asarray(hits.point, dtype=np.float64).reshape(3),
+            surface_normal=np.asarray(hits.normal, dtype=np.float64).reshape(3),
+            directivity=PistonDirectivity(
+                radius=0.5 * min(transducer.width, transducer.height),
+                frequency=self.pulse.center_frequency,
+                sound_speed=self.sound_speed,
+            ),
+            sound_speed=self.sound_speed,
+            part_speed=part_speed,
+        )
+
+    @cached_property
+    def grain_scale(self) -> float:
+        """[a.u.] the grain field's scale: its A-scan at the reference pose peaks
+        ``level_db`` below (or above) the reference echo's peak."""
+        field_ = self.grain_field
+        if field_ is None or self.bench is None or self.bench.grain is None:
+            return 0.0
+        reference = np.asarray(self.reference_position, dtype=np.float64)
+        tilts = self.normal_incidence_directions(reference)[:1]
+        frame = tilt_frame(tilts[:, 0], tilts[:, 1])
+        faces, acoustic = self.bench.probe.place(reference[None], frame)
+        grain = field_.ascans(faces, acoustic, self.pulse, self.window)
+        peak = float(np.max(np.abs(grain)))
+        if peak == 0.0:
+            raise GeometryError(
+                "bench.grain: no grain echo reaches the recording window from the reference "
+                "position; widen the window or move the grains (width, depth)"
+            )
+        target = 10.0 ** (self.bench.grain.level_db / 20.0) * float(
+            np.max(np.abs(self.reference_samples))
+        )
+        return target / peak
+
+    @cached_property
     def _receiver(self) -> Receiver:
         settings = self.receiver
         full_scale = None
@@ -478,18 +564,22 @@ class VirtualSetup(BaseSource):
         poses = [self.limits.check(p) for p in poses]
         if not poses:
             return []
-        samples = self.simulate(poses)
-        samples.setflags(write=False)  # read-only rows: AScan keeps them without a copy
         metadata = {"source": "virtual", "setup": self.name, "snr_db": self.receiver.snr_db}
+        if self._bench_session is None:
+            samples = self.simulate(poses)
+            facts: list[dict[str, Any]] = [{}] * len(poses)
+        else:
+            samples, facts = self._bench_session.measure(self, poses)
+        samples.setflags(write=False)  # read-only rows: AScan keeps them without a copy
         return [
             AScan(
                 samples=row,
                 fs=self.window.fs,
                 start_time=self.window.start,
                 pose=pose,
-                metadata=metadata,
+                metadata={**metadata, **fact},
             )
-            for row, pose in zip(samples, poses, strict=True)
+            for row, pose, fact in zip(samples, poses, facts, strict=True)
         ]
 
     def skip_noise(self, n_ascans: int) -> None:
@@ -499,6 +589,11 @@ class VirtualSetup(BaseSource):
         A-scan is then exactly that of an uninterrupted recording (the noise of one A-scan is
         ``n_samples`` consecutive standard normal draws, however they were batched).
         """
+        if self.bench is not None:
+            raise EchocalValueError(
+                "a recording on a bench (a [bench] table) cannot be resumed: its positioner "
+                "and noise depend on every move before; record it again from the start"
+            )
         if not self._receiver.noise_sigma:
             return  # a noiseless receiver draws nothing
         left = int(n_ascans) * self.window.n_samples
@@ -529,7 +624,10 @@ class VirtualSetup(BaseSource):
         One batched simulation for all orientations — used for cost maps (thesis
         Figs. 12–24 backgrounds) and for the ground truth.  Noiseless by default.
         ``gate``: the metric inside this gate (:func:`echocal.signal.gates.gated_metric`);
-        None: the whole recording.
+        None: the whole recording.  On a bench the orientations are the positioner's
+        (mechanical): the probe's squint turns the beam and its pivot offset moves the
+        face (:meth:`~echocal.bench.ProbeMount.place`); the positioner's errors, the
+        grains and the bench's receiver are left out (``noise=True`` adds white noise).
         """
         get_metric(metric)  # an unknown name is refused before anything is simulated
         one_of("parameterization", parameterization, PARAMETERIZATIONS)
@@ -537,6 +635,9 @@ class VirtualSetup(BaseSource):
         position = finite_array("position", position, shape_tail=(3,)).reshape(3)
         self._check_outside(position[None], what="position")
         positions, frames = pose_arrays(position, a.ravel(), b.ravel(), parameterization)
+        if self.bench is not None and not self.bench.probe.is_ideal:
+            positions, frames = self.bench.probe.place(np.array(positions), frames)
+            self._check_outside(positions, what="probe face")
         generator = None
         if noise:
             generator = self._generator if rng is None else as_generator(rng)
@@ -563,7 +664,9 @@ class VirtualSetup(BaseSource):
         ``position`` [m] (inside ``gate`` when one is given: the truth of a gated
         calibration): the first of :meth:`true_optima`.
 
-        Kept apart from :meth:`measure`: an algorithm cannot peek.
+        Kept apart from :meth:`measure`: an algorithm cannot peek.  On a bench it is the
+        positioner's orientation whose beam, after the probe's squint and pivot offset,
+        gives the strongest echo (see :meth:`metric_values`).
         """
         optima = self.true_optima(
             position, parameterization=parameterization, metric=metric, gate=gate, ratio=1.0
@@ -606,7 +709,10 @@ class VirtualSetup(BaseSource):
                 position, a, b, parameterization="tilt", metric=metric, gate=gate
             )
 
-        return search_optima(in_tilts, self.normal_incidence_directions(position))
+        candidates = self.normal_incidence_directions(position)
+        if self.bench is not None and not self.bench.probe.is_ideal:
+            candidates = self.bench.probe.mechanical_tilts(candidates)
+        return search_optima(in_tilts, candidates)
 
     def normal_incidence_directions(self, position: FloatArray, *, limit: int = 6) -> FloatArray:
         """Tilts [deg] ``(n, 2)`` of the beam from ``position`` [m] at normal incidence on

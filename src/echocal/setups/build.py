@@ -23,6 +23,7 @@ from echocal.measurement.virtual import (
     VirtualSetup,
     check_sample_count,
 )
+from echocal.setups.bench_schema import build_bench
 from echocal.setups.fields import _SI_UNIT
 from echocal.setups.schema import (
     _SHAPE_FIELDS,
@@ -322,6 +323,9 @@ def _build_parts(
     if "specimen" not in invalid and config.specimen.thickness is not None:
         run("interior", lambda: _build_interior(config, parts))
     run("positioner", lambda: _build_limits(config.positioner))
+    if config.bench is not None:
+        bench = config.bench
+        run("bench", lambda: _wrap("bench", lambda: build_bench(bench, config.medium.temperature)))
     if "pulse" in parts and "window" in parts:
         for check in (check_sample_count, lambda p, w: check_window(w, p)):
             try:
@@ -496,6 +500,7 @@ def _assemble(config: SetupConfig, parts: dict[str, Any], seed: int | None) -> V
             gates=parts.get("gates", ()),
             rng=seed if seed is not None else config.seed,
             name=config.name,
+            bench=parts.get("bench"),
         )
     except (ConfigError, DataFileError):
         raise

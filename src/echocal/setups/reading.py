@@ -164,5 +164,8 @@ def validate_setup_file(name_or_path: str | Path) -> list[str]:
 
 
 def config_as_json(config: SetupConfig) -> str:
-    """The resolved setup as pretty JSON (SI units, degrees)."""
-    return json.dumps(config.model_dump(mode="json"), indent=2)
+    """The resolved setup as pretty JSON (SI units, degrees; no ``bench`` on the ideal one)."""
+    data = config.model_dump(mode="json")
+    if data.get("bench") is None:
+        data.pop("bench", None)
+    return json.dumps(data, indent=2)

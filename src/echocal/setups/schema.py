@@ -27,6 +27,7 @@ from echocal.material_config import (
 from echocal.measurement.virtual import (
     MAX_SIMULATED_SAMPLES,
 )
+from echocal.setups.bench_schema import BenchConfig
 from echocal.setups.fields import (
     MAX_SCALE,
     Angle,
@@ -271,6 +272,8 @@ class SetupConfig(_Model):
     positioner: PositionerConfig = PositionerConfig()
     gates: list[GateConfig] = []
     """Named measurement gates (``--gate NAME``), besides front-wall and back-wall."""
+    bench: BenchConfig | None = None
+    """The real bench (:mod:`echocal.bench`); None: the ideal bench."""
 
 
 def _flaw_by_name(parts: list[str], raw: Mapping[str, Any] | None) -> list[str]:

@@ -69,6 +69,10 @@ class EchoDetector:
     pulse : the transmitted pulse (the matched filter's template).
     fs : [Hz] sampling rate.
     n_samples : samples per A-scan.
+    noise_ar : the receiver noise's AR coefficients (a₁, …, a_p)
+        (:func:`echocal.bench.receiver.ar_noise`); () for white noise.  The detector is
+        calibrated on noise of that colour (unit variance per sample), so the
+        significances of coloured noise keep their design false-alarm rate.
 
     Attributes (measured on unit-σ noise at construction)
     ----------
@@ -79,6 +83,7 @@ class EchoDetector:
     pulse: Pulse
     fs: float
     n_samples: int
+    noise_ar: tuple[float, ...] = ()
     noise_gain: float = field(init=False)
     n_cells: float = field(init=False)
 
@@ -87,7 +92,14 @@ class EchoDetector:
         n = self.n_samples
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < _MIN_SAMPLES:
             raise EchocalValueError(f"n_samples must be an integer >= {_MIN_SAMPLES}; got {n!r}")
-        key = detector_cache.cache_key(self.pulse, self.fs, int(n), _CALIBRATION_CONSTANTS)
+        from echocal.bench.receiver import ar_noise, check_ar
+
+        ar = check_ar("noise_ar", self.noise_ar)
+        object.__setattr__(self, "noise_ar", ar)
+        constants = (
+            {**_CALIBRATION_CONSTANTS, "noise_ar": list(ar)} if ar else _CALIBRATION_CONSTANTS
+        )
+        key = detector_cache.cache_key(self.pulse, self.fs, int(n), constants)
         cached = detector_cache.load(key)
         if cached is not None:  # the same seeded calibration, kept from an earlier process
             object.__setattr__(self, "noise_gain", cached[0])
@@ -96,7 +108,7 @@ class EchoDetector:
         rng = np.random.default_rng(_CALIBRATION_SEED)
         power, peaks = 0.0, []
         for _ in range(_CALIBRATION_SCANS // _CALIBRATION_CHUNK):
-            noise = rng.standard_normal((_CALIBRATION_CHUNK, int(self.n_samples)))
+            noise = ar_noise((_CALIBRATION_CHUNK, int(self.n_samples)), ar, rng)
             env = matched_envelope(noise, self.pulse, self.fs)
             power += float(np.mean(env * env))
             peaks.append(env.max(axis=-1))
@@ -194,8 +206,11 @@ class EchoDetector:
 
 
 @functools.lru_cache(maxsize=8)
-def shared_detector(pulse: Pulse, fs: float, n_samples: int) -> EchoDetector:
-    """The calibrated :class:`EchoDetector` of (pulse, sampling rate [Hz], A-scan length),
-    built once per process and shared by every caller (its calibration costs 1,024 noise
-    A-scans, and is kept on disk between processes: :mod:`echocal.signal.detector_cache`)."""
-    return EchoDetector(pulse, fs, n_samples)
+def shared_detector(
+    pulse: Pulse, fs: float, n_samples: int, noise_ar: tuple[float, ...] = ()
+) -> EchoDetector:
+    """The calibrated :class:`EchoDetector` of (pulse, sampling rate [Hz], A-scan length,
+    noise colour), built once per process and shared by every caller (its calibration
+    costs 1,024 noise A-scans, and is kept on disk between processes:
+    :mod:`echocal.signal.detector_cache`)."""
+    return EchoDetector(pulse, fs, n_samples, noise_ar)
