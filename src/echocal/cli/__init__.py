@@ -56,6 +56,7 @@ _COMMAND_MODULES = (
     "echocal.cli.instrument",
     "echocal.cli.rig",
     "echocal.cli.scan",
+    "echocal.cli.positionscan",
     "echocal.cli.sweep",
     "echocal.cli.experiments",
 )
