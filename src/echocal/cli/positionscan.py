@@ -1,4 +1,5 @@
-"""``echocal import``: a foreign scan file into a position-scan NetCDF file."""
+"""Position scans on the command line: ``echocal import`` (a foreign scan file into a
+position-scan NetCDF file), ``echocal view`` (B-, C- and A-scans)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,12 @@ def _quantity(field: str, text: str | None, kind: str, unit: str) -> float | Non
 
 
 def register(app: typer.Typer) -> None:
-    """Add ``echocal import`` to ``app``."""
+    """Add ``echocal import``, ``view``, ``surface`` and ``record-scan`` to ``app``."""
+    _register_import(app)
+    register_view(app)
+
+
+def _register_import(app: typer.Typer) -> None:
 
     @app.command("import")
     def import_command(
@@ -121,3 +127,101 @@ def register(app: typer.Typer) -> None:
             soft_wrap=True,
             highlight=False,
         )
+
+
+def _parse_xy(text: str) -> tuple[float, float | None]:
+    """``"X,Y"`` or ``"X"`` (mm unless a unit is given) into metres."""
+    from echocal.errors import EchocalValueError
+
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) not in (1, 2) or not all(parts):
+        raise EchocalValueError(f"--ascan takes X,Y (mm unless a unit is given); got {text!r}")
+    x = _quantity("--ascan x", parts[0], "length", "mm")
+    y = _quantity("--ascan y", parts[1], "length", "mm") if len(parts) == 2 else None
+    assert x is not None
+    return x, y
+
+
+def scan_gate(text: str, scan: Any, *, field: str = "--gate") -> Any:
+    """The gate ``text`` names on a position scan: ``front-wall`` (sized by the scan's own
+    echo) or ``START,WIDTH`` (µs unless a unit is given)."""
+    from echocal.positionscan.tof import echo_template
+    from echocal.signal.gates import check_gate, resolve_gate
+
+    gate = resolve_gate(text, pulse=echo_template(scan.samples, scan.fs), field=field)
+    check_gate(gate, scan.window, field=field)
+    return gate
+
+
+def register_view(app: typer.Typer) -> None:
+    """Add ``echocal view`` to ``app``."""
+
+    @app.command("view")
+    def view_command(
+        file: Annotated[Path, typer.Argument(help="Position-scan file (.nc).")],
+        out: Annotated[
+            Path, typer.Option("--out", "-o", help="Figure to write (.png, .svg, .pdf).")
+        ],
+        bscan: Annotated[bool, typer.Option("--bscan", help="B-scan (the default view).")] = False,
+        cscan: Annotated[
+            str | None,
+            typer.Option(help="C-scan inside this gate: front-wall or START,WIDTH (µs)."),
+        ] = None,
+        ascan: Annotated[
+            str | None, typer.Option(help="A-scan nearest X,Y (mm unless a unit is given).")
+        ] = None,
+        value: Annotated[str, typer.Option(help="C-scan value: amplitude or tof.")] = "amplitude",
+        line: Annotated[
+            str | None,
+            typer.Option(help="B-scan: the row at this y (mm), or column with --along y."),
+        ] = None,
+        along: Annotated[str, typer.Option(help="B-scan along x (a row) or y (a column).")] = "x",
+        depth: Annotated[
+            bool, typer.Option(help="B-scan: water path c₀t/2 instead of time.")
+        ] = False,
+        gate: Annotated[
+            list[str] | None, typer.Option(help="A-scan: a gate to draw (repeatable).")
+        ] = None,
+        dynamic_range: Annotated[
+            float, typer.Option(help="Colour span below the peak [dB].")
+        ] = 40.0,
+    ) -> None:
+        """Show a position scan: B-scan, C-scan (gated amplitude or time of flight) or A-scan."""
+        from echocal.errors import EchocalValueError
+        from echocal.plots import save_figure
+        from echocal.plots.position_scan import ascan_figure, bscan_figure, cscan_figure
+        from echocal.positionscan import PositionScan
+
+        chosen = sum([bscan, cscan is not None, ascan is not None])
+        if chosen > 1:
+            raise EchocalValueError("choose one view: --bscan, --cscan GATE or --ascan X,Y")
+        fmt = out.suffix.lower().lstrip(".")
+        if fmt not in ("png", "svg", "pdf"):
+            raise EchocalValueError(f"--out {out}: give a .png, .svg or .pdf file")
+        scan = PositionScan.load(file)
+        if cscan is not None:
+            if value not in ("amplitude", "tof"):
+                raise EchocalValueError(f"--value must be amplitude or tof; got {value!r}")
+            fig = cscan_figure(
+                scan,
+                scan_gate(cscan, scan, field="--cscan"),
+                value=value,
+                dynamic_range_db=dynamic_range,
+            )
+        elif ascan is not None:
+            x, y = _parse_xy(ascan)
+            gates = tuple(scan_gate(g, scan) for g in gate or [])
+            fig = ascan_figure(scan, x, y, gates=gates)
+        else:
+            if along not in ("x", "y"):
+                raise EchocalValueError(f"--along must be x or y; got {along!r}")
+            if depth and scan.sound_speed is None:
+                raise EchocalValueError(
+                    "--depth needs the medium's sound speed; import the scan with --sound-speed"
+                )
+            where = _quantity("--line", line, "length", "mm")
+            fig = bscan_figure(
+                scan, y=where, along=along, depth=depth, dynamic_range_db=dynamic_range
+            )
+        written = save_figure(fig, out, formats=(fmt,))
+        console.print(f"wrote {', '.join(str(p) for p in written)}", soft_wrap=True)
