@@ -57,6 +57,7 @@ _COMMAND_MODULES = (
     "echocal.cli.rig",
     "echocal.cli.scan",
     "echocal.cli.positionscan",
+    "echocal.cli.position_fit",
     "echocal.cli.sweep",
     "echocal.cli.experiments",
 )

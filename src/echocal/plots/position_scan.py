@@ -7,6 +7,8 @@ envelope (sequential, colour-blind-safe colour maps: viridis for dB, cividis for
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
@@ -16,7 +18,7 @@ from echocal.positionscan.dataset import PositionScan
 from echocal.signal.analytic import analytic_signal
 from echocal.signal.gates import TimeGate
 
-__all__ = ["ascan_figure", "bscan_figure", "cscan_figure"]
+__all__ = ["ascan_figure", "bscan_figure", "cscan_figure", "gated_values", "residual_map_figure"]
 
 _MM, _US = 1e3, 1e6
 
@@ -184,4 +186,52 @@ def ascan_figure(
     ax.set_ylabel(f"amplitude [{unit}]")
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize="small")
+    return fig
+
+
+def residual_map_figure(scan: PositionScan, fit: Any) -> Figure:
+    """The residuals [µm] of a :class:`~echocal.positionscan.SurfaceFit` over the scan
+    (diverging map centred on 0; outliers circled), with the estimates in the title."""
+    res = np.where(fit.inliers, fit.residuals, np.nan) * _US  # m -> µm
+    outliers = np.isfinite(fit.residuals) & ~fit.inliers
+    lim = float(np.nanmax(np.abs(res))) if np.any(np.isfinite(res)) else 1.0
+    fig = Figure(figsize=(6.0, 4.8), layout="constrained")
+    ax = fig.add_subplot()
+    p, s = fit.parameters, fit.sigma
+    if fit.shape == "plane":
+        head = f"plane: distance {p['distance'] * _MM:.4f} ± {s['distance'] * _MM:.4f} mm"
+    else:
+        head = f"{fit.shape}: radius {p['radius'] * _MM:.3f} ± {s['radius'] * _MM:.3f} mm"
+    if scan.is_raster:
+        mesh = ax.pcolormesh(
+            _edges(scan.x * _MM),
+            _edges(scan.y * _MM),
+            np.ma.masked_invalid(res),
+            cmap="RdBu_r",
+            vmin=-lim,
+            vmax=lim,
+        )
+        ax.set_facecolor("0.8")  # grey, not white (0 on the diverging map): no echo there
+        xx, yy = np.meshgrid(scan.x * _MM, scan.y * _MM)
+        if np.any(outliers):
+            ax.plot(xx[outliers], yy[outliers], "o", mfc="none", mec="k", label="outlier")
+            ax.legend(loc="upper right", fontsize="small")
+        ax.set_aspect("equal")
+        ax.set_ylabel("y [mm]")
+        fig.colorbar(mesh, ax=ax, label="residual: measured − fitted water path [µm]")
+    else:
+        ax.plot(scan.x * _MM, res[0], **series_style(0), ms=3, label="residual")
+        if np.any(outliers[0]):
+            ax.plot(
+                scan.x[outliers[0]] * _MM,
+                fit.residuals[0][outliers[0]] * _US,
+                "x",
+                color="k",
+                label="outlier",
+            )
+        ax.set_ylabel("residual [µm]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize="small")
+    ax.set_xlabel("x [mm]")
+    ax.set_title(f"{head}, rms {fit.rms * _US:.2f} µm", fontsize="medium")
     return fig

@@ -273,6 +273,29 @@ class PositionScan:
         iy = 0 if y is None or not self.is_raster else int(np.argmin(np.abs(self.y - float(y))))
         return iy, ix
 
+    def with_samples(self, samples: ArrayLike) -> PositionScan:
+        """The same scan (positions, times, attributes) holding float ``samples`` [a.u.],
+        shape ``(n_y, n_x, n_time)`` (a line scan: n_y = 1)."""
+        data = np.asarray(samples, dtype=np.float64)
+        if data.shape != self.samples.shape:
+            raise EchocalValueError(
+                f"samples must have shape {self.samples.shape}; got {data.shape}"
+            )
+        keep = {
+            k: v
+            for k, v in self.dataset.attrs.items()
+            if k not in ("echocal_format", "sampling_rate_hz", "start_time_s")
+        }
+        return position_scan(
+            data if self.is_raster else data[0],
+            fs=self.fs,
+            start_time=self.start_time,
+            x=self.x,
+            y=self.y if self.is_raster else None,
+            valid=self.valid if self.is_raster else self.valid[0],
+            attrs=keep,
+        )
+
     # ------------------------------------------------------------------ files
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the scan in echocal's NetCDF schema (compressed, checksummed), atomically."""

@@ -23,7 +23,7 @@ from echocal.errors import EchocalValueError
 from echocal.geometry import Pose
 from echocal.positionscan.dataset import PositionScan, position_scan
 
-__all__ = ["simulate_position_scan", "zero_offset"]
+__all__ = ["receiver_noise", "simulate_position_scan", "zero_offset"]
 
 _BATCH = 64
 """Poses simulated at once."""
@@ -121,3 +121,18 @@ def simulate_position_scan(
         y=ys if y is not None else None,
         attrs=attrs,
     )
+
+
+def receiver_noise(scan: PositionScan, setup: Any, rng: RngLike) -> PositionScan:
+    """A noiseless simulated ``scan`` (``noise=False``) with the receiver of ``setup``
+    applied (its noise at the setup's SNR, its ADC), drawn from ``rng``: the same A-scans
+    :func:`simulate_position_scan` records with noise, for many noise draws of one
+    (costly) noiseless simulation."""
+    if scan.dataset.attrs.get("snr_db") is not None:
+        raise EchocalValueError(
+            "receiver_noise needs a noiseless scan (simulated with noise=False)"
+        )
+    noisy = setup._receiver._receive_unchecked(scan.samples, as_generator(rng))
+    out = scan.with_samples(noisy)
+    out.dataset.attrs["snr_db"] = setup.receiver.snr_db
+    return out

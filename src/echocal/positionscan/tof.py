@@ -10,6 +10,8 @@ envelope.  The default gate is the interface-triggered ``front-wall`` gate of
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -21,7 +23,13 @@ from echocal.signal.processing import _peak_position, matched_envelope
 from echocal.signal.pulses import Pulse, SampledPulse
 from echocal.signal.window import RecordingWindow
 
-__all__ = ["echo_template", "front_wall_tof", "gated_peak_time", "stacked_template"]
+__all__ = [
+    "echo_template",
+    "front_wall_tof",
+    "gated_peak_time",
+    "stacked_template",
+    "template_origin_sigma",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -118,3 +126,27 @@ def stacked_template(samples: ArrayLike, window: RecordingWindow, tof: ArrayLike
     spec = np.fft.rfft(x[ok], axis=-1) * np.exp(2j * np.pi * f * shift[:, None])
     mean = np.fft.irfft(spec.mean(axis=0), n=n)
     return echo_template(mean, window.fs)
+
+
+def template_origin_sigma(
+    samples: ArrayLike, window: RecordingWindow, tof: ArrayLike, gate: TimeGate | None = None
+) -> float:
+    """[s] 1-σ of the time origin of the :func:`stacked_template` of ``samples``.
+
+    Every time of flight measured with the scan's own echo refers to that template's
+    envelope peak, so its error is common to all traces (no fit residual shows it).  It is
+    the spread of one trace's raw envelope peak about its time of flight ``tof`` [s]
+    (robust: 1.4826 × the median absolute deviation) over √N for the N traces stacked.
+    """
+    x = np.asarray(samples, dtype=np.float64)
+    t = np.asarray(tof, dtype=np.float64)
+    env = np.abs(analytic_signal(x))
+    chosen = (
+        gate if gate is not None else named_gate("front-wall", pulse=echo_template(x, window.fs))
+    )
+    raw = gated_peak_time(env, chosen.masks(x, window), window)
+    diff = (raw - t)[np.isfinite(raw) & np.isfinite(t)]
+    if diff.size < 2:
+        return float("nan")
+    spread = 1.4826 * float(np.median(np.abs(diff - np.median(diff))))
+    return spread / math.sqrt(diff.size)
