@@ -1,5 +1,5 @@
-"""``echocal record-scan`` (a position scan on the simulator) and ``echocal surface`` (a
-time-of-flight surface fit of a position scan)."""
+"""``echocal record-scan`` (a position scan on the simulator), ``echocal surface`` (a
+time-of-flight surface fit of a position scan) and ``echocal layers`` (layer thickness)."""
 
 from __future__ import annotations
 
@@ -39,7 +39,8 @@ def parse_positions(text: str, option: str) -> Any:
 
 
 def register(app: typer.Typer) -> None:
-    """Add ``echocal record-scan`` and ``echocal surface`` to ``app``."""
+    """Add ``echocal record-scan``, ``surface`` and ``layers`` to ``app``."""
+    register_layers(app)
 
     @app.command("record-scan")
     def record_scan_command(
@@ -174,3 +175,64 @@ def _print_fit(fit: Any) -> None:
         else:
             lines.append(f"  {key:<15} {value * 1e3:+.4f} ± {sigma * 1e3:.4f} mm")
     console.print("\n".join(lines), soft_wrap=True, highlight=False)
+
+
+def register_layers(app: typer.Typer) -> None:
+    """Add ``echocal layers`` to ``app``."""
+
+    @app.command("layers")
+    def layers_command(
+        file: Annotated[Path, typer.Argument(help="Position-scan file (.nc).")],
+        speed: Annotated[
+            list[str], typer.Option(help="Speed of each layer, front to back (m/s unless a unit).")
+        ],
+        gate: Annotated[
+            list[str] | None,
+            typer.Option(
+                help="Gate of each interface, front wall first (front-wall or START,WIDTH µs);"
+                " default: the front-wall gate, and for one layer the strongest later echo."
+            ),
+        ] = None,
+        out: Annotated[
+            Path | None, typer.Option("--out", "-o", help="Thickness maps (.nc).")
+        ] = None,
+        as_json: Annotated[
+            bool, typer.Option("--json", help="Print the statistics as JSON.")
+        ] = False,
+    ) -> None:
+        """Thickness of each layer under each trace from the interface echoes, as a map
+        with its statistics."""
+        from echocal.cli._common import write_json
+        from echocal.cli.positionscan import scan_gate
+        from echocal.netcdf import write_netcdf
+        from echocal.positionscan import PositionScan
+        from echocal.positionscan.layers import layer_thickness
+        from echocal.provenance import start
+        from echocal.units import parse_quantity
+
+        opened = start("layers", {"file": str(file), "speed": speed, "gate": gate})
+        speeds = [parse_quantity("--speed", s, "speed", "m/s") for s in speed]
+        scan = PositionScan.load(file)
+        gates = None if not gate else [scan_gate(g, scan) for g in gate]
+        result = layer_thickness(scan, speeds, gates=gates)
+        if out is not None:
+            ds = result.dataset(scan)
+            ds.attrs["provenance"] = opened.finish_json()
+            write_netcdf(
+                ds, out, fmt="layers/1", title="echocal layer thickness map", source=str(file)
+            )
+        stats = result.statistics()
+        if as_json:
+            write_json({"layers": stats})
+            return
+        for s in stats:
+            if s["traces"]:
+                console.print(
+                    f"layer {s['layer']} (c = {s['speed_m_s']:g} m/s): {s['traces']} traces, "
+                    f"mean {s['mean'] * 1e3:.4f} mm, std {s['std'] * 1e3:.4f} mm, "
+                    f"min {s['min'] * 1e3:.4f}, max {s['max'] * 1e3:.4f} mm",
+                    soft_wrap=True,
+                    highlight=False,
+                )
+            else:
+                console.print(f"layer {s['layer']}: no trace holds both echoes")
