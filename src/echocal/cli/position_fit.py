@@ -1,5 +1,6 @@
 """``echocal record-scan`` (a position scan on the simulator), ``echocal surface`` (a
-time-of-flight surface fit of a position scan) and ``echocal layers`` (layer thickness)."""
+time-of-flight surface fit of a position scan), ``echocal layers`` (layer thickness) and
+``echocal probe`` (the probe from its echo)."""
 
 from __future__ import annotations
 
@@ -41,6 +42,7 @@ def parse_positions(text: str, option: str) -> Any:
 def register(app: typer.Typer) -> None:
     """Add ``echocal record-scan``, ``surface`` and ``layers`` to ``app``."""
     register_layers(app)
+    register_probe(app)
 
     @app.command("record-scan")
     def record_scan_command(
@@ -236,3 +238,55 @@ def register_layers(app: typer.Typer) -> None:
                 )
             else:
                 console.print(f"layer {s['layer']}: no trace holds both echoes")
+
+
+def register_probe(app: typer.Typer) -> None:
+    """Add ``echocal probe`` to ``app``."""
+
+    @app.command("probe")
+    def probe_command(
+        file: Annotated[Path, typer.Argument(help="Position-scan file (.nc).")],
+        pulse: Annotated[
+            Path | None,
+            typer.Option(help="Write the echo as a sampled pulse (.csv) for a setup file."),
+        ] = None,
+        gate: Annotated[
+            str | None, typer.Option(help="Gate of the echo: front-wall (default) or START,WIDTH.")
+        ] = None,
+        as_json: Annotated[
+            bool, typer.Option("--json", help="Print the estimate as JSON.")
+        ] = False,
+    ) -> None:
+        """The probe from its front-wall echo: centre frequency, -6 dB bandwidth, noise
+        level and whiteness; optionally its sampled pulse for a setup file."""
+        from echocal.cli._common import check_out_file, write_json
+        from echocal.cli.positionscan import scan_gate
+        from echocal.positionscan import PositionScan
+        from echocal.positionscan.probe import probe_from_echo
+
+        if pulse is not None:
+            check_out_file(pulse, suffix=".csv", option="--pulse", what="a CSV pulse file")
+        scan = PositionScan.load(file)
+        est = probe_from_echo(scan, gate=None if gate is None else scan_gate(gate, scan))
+        if pulse is not None:
+            est.write_pulse(pulse)
+        summary = est.summary()
+        if as_json:
+            write_json(summary)
+            return
+        lo, hi = est.band
+        snr = summary["snr_db"]
+        console.print(
+            f"centre frequency {est.center_frequency / 1e6:.3f} MHz, -6 dB band "
+            f"{lo / 1e6:.3f}-{hi / 1e6:.3f} MHz ({est.bandwidth_percent:.1f} %)\n"
+            f"noise sigma {est.noise_sigma:.4g} (echo peak/noise {snr:.1f} dB), spectral "
+            f"flatness {est.spectral_flatness:.2f}, Ljung-Box p = {est.whiteness_p_value:.2g}: "
+            f"{'white' if est.white else 'NOT white (coloured noise)'}"
+            + (
+                f'\npulse written to {pulse} ([pulse] name = "sampled", file = ...)'
+                if pulse
+                else ""
+            ),
+            soft_wrap=True,
+            highlight=False,
+        )

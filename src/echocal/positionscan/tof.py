@@ -33,8 +33,8 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-_TEMPLATE_LEVEL = 0.01
-"""The template spans the strongest echo down to this fraction (−40 dB) of its envelope ..."""
+_TEMPLATE_LEVEL = 0.003
+"""The template spans the strongest echo down to this fraction (−50 dB) of its envelope ..."""
 
 _NOISE_LEVEL = 5.0
 """... or down to this many noise σ (robust: :func:`~echocal.signal.noise.mad_sigma` of the
@@ -43,9 +43,9 @@ trace), whichever is higher: noise beyond the echo would only blur the template.
 
 def echo_template(samples: ArrayLike, fs: float) -> SampledPulse:
     """The strongest echo of ``samples`` (..., n_time) as a :class:`SampledPulse`: the
-    trace with the largest |x|, cut where its envelope falls below 1 % of its peak (or
+    trace with the largest |x|, cut where its envelope falls below 0.3 % of its peak (or
     below 5 noise σ),
-    with a Hann taper on the outer fifth of each side; its origin (t = 0) is the envelope's
+    with a Hann taper on the outer tenth of each side; its origin (t = 0) is the envelope's
     peak, interpolated between samples."""
     x = np.asarray(samples, dtype=np.float64).reshape(-1, np.shape(samples)[-1])
     trace = x[int(np.argmax(np.max(np.abs(x), axis=-1)))]
@@ -57,7 +57,7 @@ def echo_template(samples: ArrayLike, fs: float) -> SampledPulse:
     left = k - int(np.argmax(low[k::-1])) if np.any(low[: k + 1]) else 0
     right = k + int(np.argmax(low[k:])) if np.any(low[k:]) else trace.size - 1
     piece = trace[left : right + 1].copy()
-    taper = max(2, piece.size // 5)
+    taper = max(2, piece.size // 10)
     ramp = 0.5 - 0.5 * np.cos(np.pi * np.arange(taper) / taper)
     piece[:taper] *= ramp
     piece[-taper:] *= ramp[::-1]
