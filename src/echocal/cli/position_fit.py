@@ -289,4 +289,5 @@ def register_probe(app: typer.Typer) -> None:
             ),
             soft_wrap=True,
             highlight=False,
+            markup=False,
         )

@@ -154,7 +154,7 @@ def _positions(
         raise EchocalValueError(
             f"{axis}_step: {n} traces from {first * 1e3:g} mm in steps of {step * 1e3:g} mm "
             f"end at {values[-1] * 1e3:g} mm, not {axis}_end = {end * 1e3:g} mm (that span "
-            f"holds {expected:g} steps + 1); correct the step, the span or the trace count"
+            f"holds {expected:g} positions); correct the step, the span or the trace count"
         )
     return values
 
