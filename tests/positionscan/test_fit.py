@@ -59,6 +59,7 @@ def test_tilted_plate_tilt_and_distance(setup):
     assert max(abs(e) for e in errors["distance"]) < 10e-6
     for key in truth:
         assert _inside(errors[key], sigmas[key]) >= 9, (key, errors[key], sigmas[key])
+    assert not fit.misfit and fit.noise == pytest.approx(fit.rms, rel=0.3)  # white residuals
 
 
 @pytest.mark.parametrize(("part", "radius"), [("sphere", 25e-3), ("cylinder", 20e-3)])
@@ -75,9 +76,20 @@ def test_curved_part_radius(setup, part, radius):
         sigmas.append(fit.sigma["radius"])
     assert max(abs(e) for e in errors) < 0.01 * radius  # within 1 %
     assert _inside(errors, sigmas) >= 9, (errors, sigmas)
+    assert not fit.misfit
     if part == "cylinder":  # the rod lies along y (axis azimuth 90 deg, level)
         assert abs(abs(fit.parameters["axis_azimuth"]) - 90.0) < 1.0
         assert abs(fit.parameters["axis_elevation"]) < 0.5
+
+
+def test_a_wide_probe_on_a_sphere_is_flagged_as_a_misfit(setup):
+    # the 3 mm disc over the 25 mm ball, 4 mm off its top: its echoes do not follow the
+    # small-probe model (the radius comes out near 14 mm); the fit must say so
+    virtual = dataclasses.replace(setup, specimen=builtin_specimen("sphere"))
+    xs = np.linspace(-4e-3, 4e-3, 7)
+    fit = fit_surface(simulate_position_scan(virtual, x=xs, y=xs, rng=1), "sphere")
+    assert fit.misfit and fit.rms > 2.5 * fit.noise
+    assert fit.summary()["misfit"] is True
 
 
 def test_outliers_are_set_aside_and_bad_requests_refused(setup):

@@ -176,6 +176,13 @@ def _print_fit(fit: Any) -> None:
             lines.append(f"  {key:<15} {value:+.4f} ± {sigma:.4f} deg")
         else:
             lines.append(f"  {key:<15} {value * 1e3:+.4f} ± {sigma * 1e3:.4f} mm")
+    if fit.misfit:
+        lines.append(
+            f"warning: the residuals (rms {fit.rms * 1e6:.2f} µm) are smooth and exceed the "
+            f"noise ({fit.noise * 1e6:.2f} µm): the {fit.shape} model does not describe these "
+            "echoes and the ± are too small (a probe too wide for the curvature? see "
+            "docs/position-scans.md)"
+        )
     console.print("\n".join(lines), soft_wrap=True, highlight=False)
 
 

@@ -34,7 +34,12 @@ from numpy.typing import NDArray
 from echocal.errors import EchocalValueError
 from echocal.geometry import normal_to_orientation, tilt_normal
 from echocal.positionscan.dataset import PositionScan
-from echocal.positionscan.tof import front_wall_tof, template_origin_sigma
+from echocal.positionscan.tof import (
+    front_wall_tof,
+    stacked_template,
+    template_origin_sigma,
+    tof_noise,
+)
 from echocal.signal.gates import TimeGate
 
 __all__ = ["SHAPES", "SurfaceFit", "fit_surface", "scan_distances"]
@@ -73,6 +78,19 @@ class SurfaceFit:
     rms: float
     facts: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def noise(self) -> float:
+        """[m] the water path's expected noise: the median over the inliers of each
+        trace's time-of-flight bound (:func:`~echocal.positionscan.tof.tof_noise`) × c₀/2."""
+        return float(self.facts.get("water_path_noise_m", math.nan))
+
+    @property
+    def misfit(self) -> bool:
+        """The residuals are larger than the noise explains (rms > 2 × :attr:`noise`): the
+        model does not describe these echoes, and the σ (which assume it does) are too
+        small.  A probe whose aperture is large for the part's curvature does this."""
+        return bool(math.isfinite(self.noise) and self.rms > 2.0 * self.noise)
+
     def summary(self) -> dict[str, Any]:
         """JSON-ready: shape, estimates with σ, residual statistics and the facts used."""
         return {
@@ -80,6 +98,8 @@ class SurfaceFit:
             "parameters": dict(self.parameters),
             "sigma": dict(self.sigma),
             "rms_m": self.rms,
+            "noise_m": self.noise,
+            "misfit": self.misfit,
             "traces": int(np.isfinite(self.tof).sum()),
             "inliers": int(self.inliers.sum()),
             "outliers": int(np.isfinite(self.tof).sum() - self.inliers.sum()),
@@ -135,6 +155,17 @@ def scan_distances(
     tof = np.where(scan.valid, tof, np.nan)
     common = template_origin_sigma(scan.samples, scan.window, tof, gate)
     return tof, c * (tof - t0) / 2.0, float(c), float(t0), common
+
+
+def water_path_noise(scan: PositionScan, tof: FloatArray, sound_speed: float) -> FloatArray:
+    """[m] each trace's expected water-path noise c₀/2 × :func:`tof_noise`, shape
+    ``(n_y, n_x)`` (NaN where there is no echo)."""
+    ok = np.isfinite(tof)
+    out = np.full(tof.shape, np.nan)
+    if np.any(ok):
+        template = stacked_template(scan.samples[ok], scan.window, tof[ok])
+        out[ok] = sound_speed / 2.0 * tof_noise(scan.samples[ok], template, scan.fs)
+    return out
 
 
 # ------------------------------------------------------------------ the models
@@ -357,6 +388,9 @@ def fit_surface(
         "sound_speed_m_s": c,
         "zero_offset_s": t0,
         "time_origin_sigma_s": common,
+        "water_path_noise_m": float(np.nanmedian(water_path_noise(scan, tof, c)[inliers]))
+        if np.any(inliers)
+        else math.nan,
         "probe_z_m": z0,
         "scan_centre_m": [float(centre[0]), float(centre[1])],
     }

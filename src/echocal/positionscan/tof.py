@@ -29,6 +29,7 @@ __all__ = [
     "gated_peak_time",
     "stacked_template",
     "template_origin_sigma",
+    "tof_noise",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -150,3 +151,21 @@ def template_origin_sigma(
         return float("nan")
     spread = 1.4826 * float(np.median(np.abs(diff - np.median(diff))))
     return spread / math.sqrt(diff.size)
+
+
+def tof_noise(samples: ArrayLike, template: Pulse, fs: float) -> FloatArray:
+    """[s] the expected 1-σ of each trace's time of flight, shape ``samples.shape[:-1]``:
+    the Cramér–Rao bound of a delay read from the envelope of a known echo in white noise,
+    √2·σ / (a·√Σ ė(t)²) — σ the trace's noise (:func:`~echocal.signal.noise.mad_sigma`),
+    a its echo's amplitude over the template's, ė the derivative [1/s] of the template's
+    envelope, √2 for the analytic signal's two noisy quadratures."""
+    x = np.asarray(samples, dtype=np.float64)
+    if isinstance(template, SampledPulse):
+        w = np.asarray(template.samples, dtype=np.float64)
+    else:
+        w = np.asarray(template.waveform(np.arange(-64, 65) / fs), dtype=np.float64)
+    env = np.abs(analytic_signal(w))
+    slope = float(np.sqrt(np.sum((np.gradient(env) * fs) ** 2)))
+    amplitude = np.max(np.abs(x), axis=-1) / float(np.max(np.abs(w)))
+    with np.errstate(divide="ignore"):
+        return np.sqrt(2.0) * mad_sigma(x) / (amplitude * slope)
