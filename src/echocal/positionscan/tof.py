@@ -21,6 +21,7 @@ from echocal.signal.gates import TimeGate, named_gate
 from echocal.signal.noise import mad_sigma
 from echocal.signal.processing import _peak_position, matched_envelope
 from echocal.signal.pulses import Pulse, SampledPulse
+from echocal.signal.thickness import _peak_time
 from echocal.signal.window import RecordingWindow
 
 __all__ = [
@@ -69,10 +70,9 @@ def echo_template(samples: ArrayLike, fs: float) -> SampledPulse:
 def gated_peak_time(
     env: FloatArray, inside: NDArray[np.bool_], window: RecordingWindow
 ) -> FloatArray:
-    """[s] the interpolated peak of ``env`` inside ``inside`` per trace; NaN if empty."""
-    masked = np.where(inside, env, 0.0)
-    t = window.start + _peak_position(masked) / window.fs
-    return np.where(np.any(masked > 0.0, axis=-1), t, np.nan)
+    """[s] the interpolated peak of ``env`` inside ``inside`` per trace; NaN if empty (the
+    thickness gauge's echo time, :mod:`echocal.signal.thickness`)."""
+    return _peak_time(env, inside, window)
 
 
 def front_wall_tof(
