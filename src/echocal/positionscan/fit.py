@@ -81,7 +81,7 @@ class SurfaceFit:
     @property
     def noise(self) -> float:
         """[m] the water path's expected noise: the median over the inliers of each
-        trace's time-of-flight bound (:func:`~echocal.positionscan.tof.tof_noise`) × c₀/2."""
+        trace's time-of-flight bound (``echocal.positionscan.tof.tof_noise``) × c₀/2."""
         return float(self.facts.get("water_path_noise_m", math.nan))
 
     @property
