@@ -154,7 +154,7 @@ def position_scan(
             raise EchocalValueError(f"valid must have shape {ok.shape}; got {v.shape}")
         ok = (v != 0).astype(np.int8)
     ds = xr.Dataset({"samples": (dims, data), "valid": (dims[:-1], ok)}, coords=coords)
-    ds["samples"].attrs.update(units="1", long_name="received amplitude")
+    ds["samples"].attrs.update(units="1", long_name="received amplitude (arbitrary units)")
     if scale_factor is not None:
         ds["samples"].attrs["scale_factor"] = finite_float("scale_factor", scale_factor)
     if add_offset is not None:
