@@ -38,6 +38,12 @@ FloatArray = NDArray[np.float64]
 _TEMPLATE_LEVEL = 0.003
 """The template spans the strongest echo down to this fraction (−50 dB) of its envelope ..."""
 
+_BAND_LEVEL = 3.0
+"""The stacked template keeps the spectrum where it exceeds this many times its median."""
+
+_BAND_EDGE = 4
+"""Bins of the raised-cosine edge of that band."""
+
 _NOISE_LEVEL = 5.0
 """... or down to this many noise σ (robust: :func:`~echocal.signal.noise.mad_sigma` of the
 trace), whichever is higher: noise beyond the echo would only blur the template."""
@@ -115,7 +121,8 @@ def stacked_template(samples: ArrayLike, window: RecordingWindow, tof: ArrayLike
     """The :func:`echo_template` of the traces' mean after aligning their echoes (each
     trace shifted by its ``tof`` [s] minus their mean, a Fourier phase ramp): N traces
     give a template √N times less noisy, whose envelope peak (the time origin every time
-    of flight refers to) is that much more precise than one trace's."""
+    of flight refers to) is that much more precise than one trace's; the noise outside the
+    echo's band is then removed (:func:`_echo_band`)."""
     x = np.asarray(samples, dtype=np.float64).reshape(-1, np.shape(samples)[-1])
     t = np.asarray(tof, dtype=np.float64).reshape(-1)
     ok = np.isfinite(t)
@@ -125,8 +132,27 @@ def stacked_template(samples: ArrayLike, window: RecordingWindow, tof: ArrayLike
     n = x.shape[-1]
     f = np.fft.rfftfreq(n, 1.0 / window.fs)
     spec = np.fft.rfft(x[ok], axis=-1) * np.exp(2j * np.pi * f * shift[:, None])
-    mean = np.fft.irfft(spec.mean(axis=0), n=n)
+    mean = np.fft.irfft(_echo_band(spec.mean(axis=0)), n=n)
     return echo_template(mean, window.fs)
+
+
+def _echo_band(spectrum: NDArray[np.complex128]) -> NDArray[np.complex128]:
+    """``spectrum`` (one trace's, rfft) kept only on the echo's band: the contiguous bins
+    around its peak where |S| exceeds 3 × its median (the noise floor: the echo fills a
+    small part of a trace's band), with a raised-cosine edge of 4 bins on each side."""
+    mag = np.abs(spectrum)
+    k = int(np.argmax(mag))
+    above = mag > _BAND_LEVEL * float(np.median(mag))
+    lo = k - int(np.argmax(~above[k::-1])) + 1 if not np.all(above[: k + 1]) else 0
+    hi = k + int(np.argmax(~above[k:])) - 1 if not np.all(above[k:]) else mag.size - 1
+    weight = np.zeros(mag.size)
+    weight[lo : hi + 1] = 1.0
+    edge = 0.5 + 0.5 * np.cos(np.pi * np.arange(1, _BAND_EDGE + 1) / (_BAND_EDGE + 1))
+    for step, start in ((-1, lo - 1), (1, hi + 1)):
+        idx = start + step * np.arange(_BAND_EDGE)
+        keep = (idx >= 0) & (idx < mag.size)
+        weight[idx[keep]] = edge[keep]
+    return spectrum * weight
 
 
 def template_origin_sigma(
