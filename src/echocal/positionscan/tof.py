@@ -164,6 +164,10 @@ def template_origin_sigma(
     envelope peak, so its error is common to all traces (no fit residual shows it).  It is
     the spread of one trace's raw envelope peak about its time of flight ``tof`` [s]
     (robust: 1.4826 × the median absolute deviation) over √N for the N traces stacked.
+    An upper bound: the stacked template keeps only the echo's band, so its origin is
+    about 4 times more precise (scan-5mhz, 30 dB).  The surplus happens to cover the
+    0.25 µm of water path by which a 0.5° tilt under a 3 mm disc delays the echo beyond a
+    zero offset measured at normal incidence, not the 1 µm of a 1° tilt.
     """
     x = np.asarray(samples, dtype=np.float64)
     t = np.asarray(tof, dtype=np.float64)
