@@ -56,6 +56,8 @@ _COMMAND_MODULES = (
     "echocal.cli.instrument",
     "echocal.cli.rig",
     "echocal.cli.scan",
+    "echocal.cli.positionscan",
+    "echocal.cli.position_fit",
     "echocal.cli.sweep",
     "echocal.cli.experiments",
 )
