@@ -65,3 +65,25 @@ def test_cli_view_writes_each_figure(scan, tmp_path, capsys, monkeypatch):
         monkeypatch,
     )
     assert code != 0 and "outside the recording window" in err and "Traceback" not in err
+
+
+@pytest.mark.foreign_netcdf  # a damaged .nc on purpose
+def test_report_of_a_position_scan_shows_its_views(scan, tmp_path, capsys, monkeypatch):
+    path = tmp_path / "s.nc"
+    scan.save(path)
+    out = tmp_path / "report.html"
+    code, _, err = run_main(["report", str(path), "--out", str(out)], capsys, monkeypatch)
+    assert code == 0, err
+    page = out.read_text()
+    assert "position scan (raster of 5 × 6 traces)" in page
+    assert page.count("data:image/png;base64,") == 3  # B-scan, C-scan, A-scan
+    for view in ("B-scan", "C-scan", "A-scan"):
+        assert view in page
+    # a file that is not a position scan is refused in one line, nothing written
+    other = tmp_path / "other.nc"
+    other.write_bytes(b"not netcdf")
+    code, _, err = run_main(
+        ["report", str(other), "--out", str(tmp_path / "r2.html")], capsys, monkeypatch
+    )
+    assert code != 0 and "Traceback" not in err and "position scan's .nc file" in err
+    assert not (tmp_path / "r2.html").exists()

@@ -97,7 +97,8 @@ def register(app: typer.Typer) -> None:
         results: Annotated[
             list[Path],
             typer.Argument(
-                help="Result folders: of calibrate --out, scan --out, scenario run or sweep run."
+                help="Result folders (of calibrate --out, scan --out, scenario run or sweep "
+                "run) or position-scan files (of import or record-scan)."
             ),
         ],
         out: Annotated[Path, typer.Option(help="The HTML page to write.")] = Path("report.html"),

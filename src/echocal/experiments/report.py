@@ -30,6 +30,7 @@ import pandas as pd
 from echocal.errors import DataFileError, EchocalError
 from echocal.experiments._output import FINDINGS_FILE
 from echocal.experiments._report_html import CSS, fig_png, fmt, png, table
+from echocal.experiments._report_position_scan import is_position_scan, position_scan_section
 from echocal.experiments._report_results import (
     CALIBRATION_FILE,
     SCAN_FILE,
@@ -45,9 +46,16 @@ _SWEEP_FILE = "sweep.json"
 
 
 def folder_kind(folder: str | Path) -> str:
-    """``"scenario"``, ``"sweep"``, ``"calibration"`` or ``"scan"``; DataFileError for a
-    folder that is none of them."""
+    """``"scenario"``, ``"sweep"``, ``"calibration"``, ``"scan"`` or ``"position-scan"`` (a
+    position scan's ``.nc`` file); DataFileError for a path that is none of them."""
     path = Path(folder)
+    if path.is_file():
+        if is_position_scan(path):
+            return "position-scan"
+        raise DataFileError(
+            f"{str(path)!r} is a file but not a position scan's .nc file (`echocal import` "
+            "and `echocal record-scan` write those); pass it or a results folder"
+        )
     if not path.is_dir():
         raise DataFileError(f"results folder not found: {str(path)!r}")
     if (path / FINDINGS_FILE).is_file():
@@ -61,7 +69,8 @@ def folder_kind(folder: str | Path) -> str:
     raise DataFileError(
         f"{str(path)!r} holds no result echocal can report: pass a folder of `echocal "
         f"calibrate --out` ({CALIBRATION_FILE}), `echocal scan --out` ({SCAN_FILE}), "
-        f"`echocal scenario run` ({FINDINGS_FILE}) or `echocal sweep run` ({_SWEEP_FILE})"
+        f"`echocal scenario run` ({FINDINGS_FILE}) or `echocal sweep run` ({_SWEEP_FILE}), "
+        "or a position scan's .nc file (`echocal import` / `echocal record-scan`)"
     )
 
 
@@ -189,6 +198,7 @@ _SECTIONS = {
     "sweep": _sweep_section,
     "calibration": calibration_section,
     "scan": scan_section,
+    "position-scan": position_scan_section,
 }
 
 
@@ -198,8 +208,9 @@ def write_report(
     """Write one self-contained HTML page for result folders.
 
     results_dirs : folders written by ``echocal calibrate --out``, ``echocal scan --out``,
-    ``run_scenario`` or ``run_sweep`` (each recognized by its files, one section each;
-    DataFileError for any other folder, before anything is written).
+    ``run_scenario`` or ``run_sweep``, or position-scan files (``echocal import``,
+    ``echocal record-scan``), each recognized by its files, one section each
+    (DataFileError for any other path, before anything is written).
     out_html : the page to write (atomically).  Returns its path.
     """
     folders = [Path(d) for d in results_dirs]
