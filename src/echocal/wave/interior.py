@@ -55,10 +55,11 @@ from echocal.coefficients import (
 from echocal.materials import Material
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.cylinder import Cylinder
-from echocal.specimen.interior import Flaw, Interior, SurfaceSamples
+from echocal.specimen.interior import Flaw, Interior, Layer, SurfaceSamples
 from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 from echocal.wave.curved_wall import curved_back_walls, tangent_plane
+from echocal.wave.layered import EchoPath, echo_paths, pp_coefficients
 from echocal.wave.model import WaveEchoModel
 from echocal.wave.shell import equivalent_mirror
 
@@ -144,6 +145,9 @@ class InteriorEchoes:
     @property
     def labels(self) -> tuple[str, ...]:
         """Every echo's label, in the order of :meth:`echoes`."""
+        if self.interior.layers:
+            paths = self.paths(0.0)
+            return (FRONT_WALL, *(p.label for p in paths), *(f.name for f in self.interior.flaws))
         walls = tuple(back_wall_label(k) for k in range(1, self.interior.back_wall_echoes + 1))
         return (FRONT_WALL, *walls, *(f.name for f in self.interior.flaws))
 
@@ -165,7 +169,17 @@ class InteriorEchoes:
             zero = np.zeros(self.model.window.n_samples)
             return out | {label: zero for label in self.labels[1:]}
         orders = range(1, self.interior.back_wall_echoes + 1)
-        if isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
+        if self.interior.layers:
+            sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
+            unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
+            for path in self.paths(sin_w):
+                key = (round(path.equivalent_depth, 12), round(path.delay, 15))
+                if key not in unit:
+                    unit[key] = self._mirror(
+                        path.equivalent_depth, 1.0, path.delay, position, frame
+                    )
+                out[path.label] = self._layered(path, unit[key], front)
+        elif isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
             spectra = curved_back_walls(
                 self.model,
                 self.front,
@@ -185,6 +199,63 @@ class InteriorEchoes:
         for flaw in self.interior.flaws:
             out[flaw.name] = self._flaw(flaw, position, frame, front)
         return out
+
+    def paths(self, sin_water: float = 0.0) -> list[EchoPath]:
+        """The layered plate's echo paths (:func:`echocal.wave.layered.echo_paths`) at the
+        beam axis's incidence sine ``sin_water`` in the medium; empty without layers."""
+        if not self.interior.layers:
+            return []
+        return echo_paths(
+            self.interior.layers,
+            self._medium_at_model_speed,
+            sin_water,
+            self.interior.back_wall_echoes,
+        )
+
+    def describe(self) -> dict[str, dict[str, object]]:
+        """Each echo's path through a layered plate, by label (``simulate --json``): the
+        interfaces it reflects at (0 the front face seen from below) and its legs (layer
+        number, material, wave mode), at normal incidence; a flaw's host layer.  Empty
+        without layers."""
+        if not self.interior.layers:
+            return {}
+        layers = self.interior.layers
+        out: dict[str, dict[str, object]] = {}
+        for path in self.paths(0.0):
+            out[path.label] = {
+                "reflections": list(path.turns),
+                "legs": [
+                    {"layer": leg, "material": layers[leg - 1].material.name, "mode": "L"}
+                    for leg in path.legs
+                ],
+            }
+        for flaw in self.interior.flaws:
+            host = len(self._flaw_column(flaw).layers)
+            out[flaw.name] = {"layer": host, "material": layers[host - 1].material.name}
+        return out
+
+    @property
+    def _medium_at_model_speed(self) -> Material:
+        return Material(
+            name=self.medium.name,
+            density=self.medium.density,
+            longitudinal_speed=self.model.sound_speed,
+        )
+
+    def _layered(self, path: EchoPath, unit: ComplexArray, front: _Front) -> FloatArray:
+        """A layered plate's echo along ``path`` from ``unit``, the echo spectrum of its
+        equivalent water mirror with coefficient 1 (:meth:`_mirror`; a coefficient c
+        scales it by conj(c), the e^{−iωt} phase in numpy's convention), attenuated in
+        each layer over the distance the path runs there."""
+        spectrum = np.conj(path.coefficient) * unit
+        f = self.model.frequencies
+        loss = np.zeros_like(f)
+        for layer, length in path.attenuation_path:
+            loss += (
+                np.asarray(self.interior.layers[layer - 1].material.attenuation.alpha(f)) * length
+            )
+        spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
+        return self.model.samples(spectrum)
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -282,12 +353,26 @@ class InteriorEchoes:
             delay = 2.0 * depth / self.material.longitudinal_speed
             delay -= 2.0 * mirror.distance / self.model.sound_speed
             return self._kirchhoff(sphere, position, frame, through, delay)
+        return self._mirror(
+            depth * self._ratio, through, self._delay_per_depth() * depth, position, frame
+        )
+
+    def _mirror(
+        self,
+        equivalent_depth: float,
+        coefficient: complex,
+        delay: float,
+        position: FloatArray,
+        frame: FloatArray,
+    ) -> ComplexArray:
+        """The echo spectrum (before attenuation) of a copy of the plate's face
+        ``equivalent_depth`` [m] below it, with one ``coefficient`` and two-way ``delay``
+        [s]: by the image form when it fills the beam, else the Kirchhoff sum."""
         assert isinstance(self.front, FinitePlane)  # a pipe's walls come from curved_wall
         equivalent = FinitePlane(
             center=self.front.center
             - self.front.normal
-            * depth
-            * self._ratio
+            * equivalent_depth
             * np.sign(float(self.front.normal @ (position - self.front.center))),
             width=self.front.width,
             height=self.front.height,
@@ -295,12 +380,11 @@ class InteriorEchoes:
             coelevation=self.front.coelevation,
             name="equivalent back wall",
         )
-        delay = self._delay_per_depth() * depth
         plane = self.model.image_plane((equivalent,), position, frame)
         if plane is not None:  # the wall fills the beam: the exact image form
-            spectrum, _ = self.model.image_spectrum(plane, through, delay)
+            spectrum, _ = self.model.image_spectrum(plane, coefficient, delay)
             return spectrum
-        return self._kirchhoff(equivalent, position, frame, through, delay)
+        return self._kirchhoff(equivalent, position, frame, coefficient, delay)
 
     def _kirchhoff(
         self,
@@ -320,14 +404,40 @@ class InteriorEchoes:
     @cached_property
     def _flaw_samples(self) -> dict[str, SurfaceSamples]:
         assert isinstance(self.front, FinitePlane)  # flaws are refused inside a shell
-        c_l = self.material.longitudinal_speed
-        spacing = c_l / self.model.pulse.center_frequency / _SOLID_SAMPLES_PER_WAVELENGTH
-        return {f.name: f.surface_samples(spacing, self.front.normal) for f in self.interior.flaws}
+        out = {}
+        for f in self.interior.flaws:
+            c_l = self._flaw_column(f).layers[-1].material.longitudinal_speed
+            spacing = c_l / self.model.pulse.center_frequency / _SOLID_SAMPLES_PER_WAVELENGTH
+            out[f.name] = f.surface_samples(spacing, self.front.normal)
+        return out
+
+    def _flaw_column(self, flaw: Flaw) -> _Column:
+        """The layers above ``flaw`` and the one that holds it (the last; the plate's one
+        layer without layers), its top [m] below the face."""
+        assert isinstance(self.front, FinitePlane)
+        layers = self.interior.layers or (Layer(self.material, self.interior.thickness),)
+        centre = float((self.front.center - flaw.position) @ self.front.normal)
+        tops = self.interior.interfaces[:-1]
+        j = int(np.searchsorted(tops, centre, side="right"))  # 1-based layer number
+        return _Column(layers[:j], float(tops[j - 1]))
 
     def _flaw(
         self, flaw: Flaw, position: FloatArray, frame: FloatArray, front: _Front
     ) -> FloatArray:
-        """A void's echo: Kirchhoff over its lit side, fields at the equivalent points."""
+        """A void's echo: Kirchhoff over its lit side, fields at the equivalent points
+        (through the layers above it, each at its own equivalent depth)."""
+        column = self._flaw_column(flaw)
+        host = column.layers[-1].material
+        c_w = self.model.sound_speed
+        ratio = host.longitudinal_speed / c_w
+        above = column.layers[:-1]
+        eq_top = sum(layer.thickness * layer.material.longitudinal_speed / c_w for layer in above)
+        delay_top = sum(
+            2.0
+            * layer.thickness
+            * (1.0 / layer.material.longitudinal_speed - layer.material.longitudinal_speed / c_w**2)
+            for layer in above
+        )
         samples = self._flaw_samples[flaw.name]
         basis = self._basis(frame)
         points = basis @ (samples.points - position[:, None])
@@ -335,15 +445,44 @@ class InteriorEchoes:
         lit = (front.normal @ outward) > 0.0
         points, outward, area = points[:, lit], outward[:, lit], samples.areas[lit]
         depth = (front.point - points.T) @ front.normal  # (n,) [m] below the face
-        points_eq = points - np.outer(front.normal, depth * (self._ratio - 1.0))
+        in_host = depth - column.top
+        points_eq = points - np.outer(front.normal, eq_top + in_host * ratio - depth)
         # m: the normal pointing away from the probe (into the void); its component along
         # the depth direction carries k_L/k_w = c_w/c_L (see the module doc)
         m = -outward
         m_depth = -(front.normal @ m)  # component along −n_f (into the part)
-        m_eff = m + np.outer(front.normal, m_depth * (1.0 - 1.0 / self._ratio))
-        through = self._through_the_face(*self._axis_angles(front))
-        coefficient = np.full(area.shape, -through * self._ratio, dtype=np.complex128)  # R = −1
-        delays = self._delay_per_depth() * depth
+        m_eff = m + np.outer(front.normal, m_depth * (1.0 - 1.0 / ratio))
+        through = self._through_layers(column, front)
+        coefficient = np.full(area.shape, -through * ratio, dtype=np.complex128)  # R = −1
+        delays = delay_top + 2.0 * in_host * (1.0 / host.longitudinal_speed - ratio / c_w)
         spectrum, _ = self.model.spectrum(points_eq, m_eff, area, coefficient, delays)
         centre_depth = float((front.point - basis @ (flaw.position - position)) @ front.normal)
-        return self._finish(spectrum, front, 2.0 * centre_depth)
+        f = self.model.frequencies
+        loss = 2.0 * (centre_depth - column.top) * np.asarray(host.attenuation.alpha(f))
+        for layer in above:
+            loss += 2.0 * layer.thickness * np.asarray(layer.material.attenuation.alpha(f))
+        spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
+        return self.model.samples(spectrum)
+
+    def _through_layers(self, column: _Column, front: _Front) -> complex:
+        """Π T_down · Π T_up through the front face and every interface above the host
+        layer, at the beam axis's angle (0 beyond a critical angle)."""
+        medium = self._medium_at_model_speed
+        sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
+        media = [medium, *(layer.material for layer in column.layers)]
+        sines = [sin_w * m.longitudinal_speed / self.model.sound_speed for m in media]
+        if any(s >= 1.0 for s in sines):
+            return 0.0j
+        through = 1.0 + 0.0j
+        for i in range(len(media) - 1):
+            through *= pp_coefficients(sines[i], media[i], media[i + 1])[1]
+            through *= pp_coefficients(sines[i + 1], media[i + 1], media[i])[1]
+        return through
+
+
+@dataclass(frozen=True)
+class _Column:
+    """The layers from the face down to a flaw's (its host, last) and the host's top [m]."""
+
+    layers: tuple[Layer, ...]
+    top: float
