@@ -197,6 +197,28 @@ class Flaw:
         assert self.length is not None
         return _cylinder_samples(self.position, self.radius, self.length, self.axis, step)
 
+    def silhouette(self, spacing: float, front_normal: FloatArray) -> SurfaceSamples:
+        """The flaw's shadow seen along ``front_normal`` (towards the probe), as samples in
+        the plane through its centre facing the probe, about ``spacing`` [m] apart: a disc
+        of its diameter (flat-bottom hole, pore) or the rectangle of a side-drilled hole
+        (its diameter × its length's extent across the normal)."""
+        step = min(spacing, self.diameter / 8.0)
+        if self.kind != "side-drilled-hole":
+            return _disc_samples(self.position, self.radius, front_normal, step)
+        assert self.length is not None
+        along = self.axis - front_normal * float(self.axis @ front_normal)
+        extent = self.length * float(np.linalg.norm(along))
+        along = along / max(float(np.linalg.norm(along)), 1e-12)
+        across = np.cross(front_normal, along)
+        n_along = max(2, math.ceil(extent / step))
+        n_across = max(2, math.ceil(self.diameter / step))
+        s = ((np.arange(n_along) + 0.5) / n_along - 0.5) * extent
+        w = ((np.arange(n_across) + 0.5) / n_across - 0.5) * self.diameter
+        ss, ww = (g.ravel() for g in np.meshgrid(s, w))
+        points = self.position[:, None] + along[:, None] * ss + across[:, None] * ww
+        areas = np.full(ss.size, extent * self.diameter / ss.size)
+        return SurfaceSamples(points, np.repeat(front_normal[:, None], ss.size, axis=1), areas)
+
 
 def _sphere_samples(centre: FloatArray, radius: float, step: float) -> SurfaceSamples:
     """Equal-area samples of a sphere (a Fibonacci lattice), outward normals."""

@@ -178,7 +178,19 @@ class InteriorEchoes:
                     unit[key] = self._mirror(
                         path.equivalent_depth, 1.0, path.delay, position, frame
                     )
-                out[path.label] = self._layered(path, unit[key], front)
+                spectrum = np.conj(path.coefficient) * unit[key]
+                if self.interior.flaws:
+                    wall = float(self.interior.interfaces[max(path.turns)])
+                    spectrum = spectrum - self._shadows(
+                        wall,
+                        path.equivalent_depth,
+                        path.coefficient,
+                        path.delay,
+                        position,
+                        frame,
+                        front,
+                    )
+                out[path.label] = self._layered(path, spectrum, front)
         elif isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
             spectra = curved_back_walls(
                 self.model,
@@ -242,12 +254,11 @@ class InteriorEchoes:
             longitudinal_speed=self.model.sound_speed,
         )
 
-    def _layered(self, path: EchoPath, unit: ComplexArray, front: _Front) -> FloatArray:
-        """A layered plate's echo along ``path`` from ``unit``, the echo spectrum of its
-        equivalent water mirror with coefficient 1 (:meth:`_mirror`; a coefficient c
-        scales it by conj(c), the e^{−iωt} phase in numpy's convention), attenuated in
-        each layer over the distance the path runs there."""
-        spectrum = np.conj(path.coefficient) * unit
+    def _layered(self, path: EchoPath, spectrum: ComplexArray, front: _Front) -> FloatArray:
+        """A layered plate's echo along ``path`` from its ``spectrum`` before attenuation
+        (its equivalent water mirror's echo: :meth:`_mirror` with coefficient 1 scaled by
+        conj(c), the e^{−iωt} phase in numpy's convention, less the flaws' shadows),
+        attenuated in each layer over the distance the path runs there."""
         f = self.model.frequencies
         loss = np.zeros_like(f)
         for layer, length in path.attenuation_path:
@@ -329,9 +340,62 @@ class InteriorEchoes:
     def _back_wall(
         self, order: int, position: FloatArray, frame: FloatArray, front: _Front
     ) -> FloatArray:
-        """The ``order``-th back-wall echo's samples (see :meth:`back_wall_spectrum`)."""
+        """The ``order``-th back-wall echo's samples (see :meth:`back_wall_spectrum`), less
+        the part of the wall the flaws hide (:meth:`_shadows`)."""
         spectrum = self.back_wall_spectrum(order, position, frame, front)
+        if self.interior.flaws and isinstance(self.front, FinitePlane):
+            depth = order * self.interior.thickness
+            spectrum = spectrum - self._shadows(
+                self.interior.thickness,
+                depth * self._ratio,
+                self._wall_coefficient(order, front),
+                self._delay_per_depth() * depth,
+                position,
+                frame,
+                front,
+            )
         return self._finish(spectrum, front, 2.0 * order * self.interior.thickness)
+
+    def _shadows(
+        self,
+        wall_depth: float,
+        equivalent_depth: float,
+        coefficient: complex,
+        delay: float,
+        position: FloatArray,
+        frame: FloatArray,
+        front: _Front,
+    ) -> ComplexArray:
+        """The echo spectrum of the parts of a wall (an interface ``wall_depth`` [m] below
+        the face) that the flaws above it hide from the probe: each flaw's silhouette
+        projected along the face's normal onto the wall's equivalent mirror, with the
+        wall path's ``coefficient`` and ``delay`` — the physical-optics echo of the wall
+        is that of its lit part only.  A multiple loses its shadowed patch once (first
+        order in the hidden fraction)."""
+        assert isinstance(self.front, FinitePlane)  # flaws sit in plates only
+        total = np.zeros(self.model.frequencies.shape, dtype=np.complex128)
+        basis = self._basis(frame)
+        for flaw in self.interior.flaws:
+            if flaw.depth_range(self.front)[1] >= wall_depth:
+                continue  # not above this wall
+            samples = self._silhouettes[flaw.name]
+            points = basis @ (samples.points - position[:, None])
+            depth = (front.point - points.T) @ front.normal
+            points = points - np.outer(front.normal, equivalent_depth - depth)
+            unit_m = np.repeat(-front.normal[:, None], samples.areas.size, axis=1)
+            weights = np.full(samples.areas.shape, coefficient, dtype=np.complex128)
+            delays = np.full(samples.areas.shape, delay)
+            spectrum, _ = self.model.spectrum(points, unit_m, samples.areas, weights, delays)
+            total += spectrum
+        return total
+
+    @cached_property
+    def _silhouettes(self) -> dict[str, SurfaceSamples]:
+        """Each flaw's silhouette along the face's normal, sampled at the surface spacing
+        the wave model uses on planes."""
+        assert isinstance(self.front, FinitePlane)
+        spacing = self.model._sample_spacing((self.front,))
+        return {f.name: f.silhouette(spacing, self.front.normal) for f in self.interior.flaws}
 
     def back_wall_spectrum(
         self, order: int, position: FloatArray, frame: FloatArray, front: _Front
