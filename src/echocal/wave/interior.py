@@ -23,11 +23,15 @@ solid→water reflection, at the back wall and, for multiples, under the front f
 time 2d/c_w + 2kT/c_L at normal incidence.  A flaw is a void (R = −1, pressure release) with
 Kirchhoff boundary values on its lit side (outward normal towards the front face).  The
 solid's attenuation α_s(f) acts over the echo's path in the part, the medium's over the
-water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).
+water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).  A flaw hides the part of
+the back wall behind it: its silhouette along the face's normal, on the wall's equivalent
+mirror, is taken out of the wall's echo (:meth:`InteriorEchoes._shadows`).  A plate of
+several layers (:mod:`echocal.wave.layered`, docs/layered-parts.md) has an echo per path
+through its interfaces, each evaluated the same way.
 
 **Left out** (documented in docs/inside-the-specimen.md): mode-converted (L→T) echoes and
 the shear waves' own echoes (the coefficients account for the energy they take), shadowing
-of the back wall by flaws and of flaws by each other, and flaw–wall interactions.  A
+of flaws by each other, and flaw–wall interactions.  A
 curved front face is modelled for the back wall of a spherical shell
 (:mod:`echocal.wave.shell`: an equivalent water sphere) and of a pipe
 (:mod:`echocal.wave.curved_wall`: angular spectrum on the tangent plane); no flaws in
