@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from echocal import load_setup
+from echocal import Pose, load_setup
 from echocal.cli import app
 from echocal.materials import material
 from echocal.setups import validate_setup_file
 from echocal.signal.gates import plate_layers, resolve_gate
+from echocal.wave.interior import echo_list
 
 C = 1480.0
 LAYERED = """
@@ -174,3 +176,9 @@ def test_the_built_in_layered_setup_shows_its_holes_in_the_aluminium() -> None:
         ("aluminium", 0.05),
     ]
     assert setup.interior_echoes.describe()["fbh-3mm"] == {"layer": 2, "material": "aluminium"}
+    pose = Pose(0.0, 0.0, 0.05)
+    listed = {e.label: e for e in echo_list(setup.labelled_echoes(pose), setup.window)}
+    # interface-2.0.2 arrives at 143 µs, after the window's end (140 µs): absent
+    assert listed["interface-2.0.2"].amplitude == 0.0
+    assert math.isnan(listed["interface-2.0.2"].tof_s)
+    assert listed["interface-2.1.2"].tof_s < setup.window.end

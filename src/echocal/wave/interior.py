@@ -80,6 +80,10 @@ _SOLID_SAMPLES_PER_WAVELENGTH = 6.0
 of a sixth of a period across a curved flaw."""
 
 
+_NO_ECHO = 1e-7
+"""An echo below this fraction of the strongest one is reported as absent."""
+
+
 @dataclass(frozen=True)
 class LabelledEcho:
     """One echo of the train: its label, time of flight [s] and amplitude (the envelope
@@ -93,13 +97,15 @@ class LabelledEcho:
 def echo_list(echoes: dict[str, FloatArray], window: RecordingWindow) -> list[LabelledEcho]:
     """Each labelled echo's envelope peak and its time (parabolic interpolation between
     samples), in the order given; an echo with no signal (outside the window, or blocked
-    beyond the critical angle) has amplitude 0 and time NaN."""
+    beyond the critical angle: below 1e-7 of the strongest echo, the spectral leak of one
+    that arrives after the window) has amplitude 0 and time NaN."""
+    envelopes = {label: np.abs(scipy.signal.hilbert(x)) for label, x in echoes.items()}
+    floor = _NO_ECHO * max((float(e.max()) for e in envelopes.values()), default=0.0)
     out = []
-    for label, samples in echoes.items():
-        envelope = np.abs(scipy.signal.hilbert(samples))
+    for label, envelope in envelopes.items():
         i = int(np.argmax(envelope))
         peak = float(envelope[i])
-        if peak <= 0.0:
+        if peak <= floor:
             out.append(LabelledEcho(label, math.nan, 0.0))
             continue
         shift = 0.0
