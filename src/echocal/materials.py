@@ -299,6 +299,11 @@ _TABLE = (
     _solid("nickel", 8800.0, 5630.0, 2960.0, 0.05),  # Krautkrämer; Olympus
     _solid("glass", 2500.0, 5660.0, 3420.0, 0.005),  # crown glass (Krautkrämer; Olympus)
     _solid("acrylic", 1190.0, 2730.0, 1430.0, 0.64),  # PMMA (Olympus; Selfridge 1985)
+    # cured unfilled epoxy (bisphenol-A resins, also fusion-bonded epoxy coatings):
+    # ρ, c_L, c_T as Selfridge 1985 (epoxies 2.5–2.8 km/s, 1.1–1.3 km/s shear); loss from a
+    # damping factor 0.02, α = πfD/c_L (Ono 2020's definition; PMMA's is 0.013) — a
+    # representative value, cure and filler change it by ×3: measure yours
+    _solid("epoxy", 1170.0, 2650.0, 1200.0, 1.03),
 )
 
 MATERIALS: MappingProxyType[str, Material] = MappingProxyType({m.name: m for m in _TABLE})
@@ -318,6 +323,8 @@ _ALIASES = {
     "cu": "copper",
     "ni": "nickel",
     "h2o": "water",
+    "epoxy-resin": "epoxy",
+    "fbe": "epoxy",  # fusion-bonded epoxy, the common pipeline coating
 }
 
 

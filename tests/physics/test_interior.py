@@ -265,8 +265,12 @@ def test_small_flat_bottom_hole_in_the_far_field_gives_the_dgs_echo() -> None:
 
 def test_a_flat_bottom_hole_wider_than_the_beam_echoes_like_the_back_wall() -> None:
     """Consistency of the two paths (flaw sampling vs the wall's fan): a 40 mm disc 19.9 mm
-    deep returns the back wall's echo, scaled by R_void/R_sw = 1/0.938."""
+    deep returns the plain back wall's echo, scaled by R_void/R_sw = 1/0.938; and it hides
+    the back wall behind it (what is left: under 2 % of it, the beam's skirt outside the
+    disc)."""
     wide = Flaw("wide", "flat-bottom-hole", np.array([0, 0, -0.0199]), 0.04)
     got = _listed(d=0.05, orders=1, flaws=(wide,), thickness=0.0200)
-    ratio = got["wide"][1] / got["back-wall"][1]
+    plain = _listed(d=0.05, orders=1, thickness=0.0200)
+    ratio = got["wide"][1] / plain["back-wall"][1]
     assert ratio == pytest.approx(1 / R_WS, rel=0.02)
+    assert got["back-wall"][1] < 0.02 * plain["back-wall"][1]

@@ -42,7 +42,7 @@ def gate_for_source(
     (a rig's is checked on its first A-scan)."""
     if text is None:
         return None
-    from echocal.signal.gates import check_gate, resolve_gate
+    from echocal.signal.gates import check_gate, plate_layers, resolve_gate
 
     if isinstance(setup, str):
         from echocal.setups import load_setup
@@ -55,6 +55,7 @@ def gate_for_source(
         material=getattr(setup, "material", None),
         defined=getattr(setup, "gates", ()),
         field=field,
+        layers=plate_layers(setup),
     )
     if window is not None:
         check_gate(gate, window, field=field)

@@ -195,7 +195,13 @@ def _echoes(virtual: Any, pose: Any) -> list[dict[str, Any]]:
     if not hasattr(virtual, "labelled_echoes"):  # a replayed or rig source has no labels
         return []
     echoes = echo_list(virtual.labelled_echoes(pose), virtual.window)
-    return [{"label": e.label, "tof_s": e.tof_s, "amplitude": e.amplitude} for e in echoes]
+    train = getattr(virtual, "interior_echoes", None)
+    paths = train.describe() if train is not None else {}  # a layered plate's paths
+    return [
+        {"label": e.label, "tof_s": e.tof_s, "amplitude": e.amplitude}
+        | ({"path": paths[e.label]} if e.label in paths else {})
+        for e in echoes
+    ]
 
 
 def _show(value: float, unit: str) -> str:
@@ -264,12 +270,20 @@ def _surface_tof(samples: np.ndarray, virtual: Any, gate: Any, tof: float) -> fl
 
 def _depth(virtual: Any, tof: float, surface_tof: float) -> float | None:
     """[m] depth of the gated echo below the front surface, c_L·(τ − τ_front)/2 (a flaw
-    detector's IF-gate sound path), when it lies deeper than the front wall in a plate with
-    an interior; else None."""
+    detector's IF-gate sound path; through a layered plate layer by layer, each at its
+    c_L), when it lies deeper than the front wall in a plate with an interior; else None."""
     speed = getattr(getattr(virtual, "material", None), "longitudinal_speed", None)
     if getattr(virtual, "thickness", None) is None or speed is None or surface_tof == tof:
         return None
-    return float(speed) * (tof - surface_tof) / 2.0
+    from echocal.signal.gates import plate_layers
+
+    half_time, depth = (tof - surface_tof) / 2.0, 0.0
+    for h, c in plate_layers(virtual):  # a layered plate: through each layer at its speed
+        speed = c
+        if half_time <= h / c:
+            break
+        half_time, depth = half_time - h / c, depth + h
+    return depth + float(speed) * half_time
 
 
 def _shade(fig: Any, span: tuple[float, float], label: str) -> None:

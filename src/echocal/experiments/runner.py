@@ -146,7 +146,7 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
             virtual = setup_with_overrides(case.setup, snr_db=case.snr_db, seed=noise_seed)
             gate = None
             if case.gate is not None:  # checked with the sweep; resolved for this setup
-                from echocal.signal.gates import resolve_gate
+                from echocal.signal.gates import plate_layers, resolve_gate
 
                 gate = resolve_gate(
                     case.gate,
@@ -155,6 +155,7 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
                     material=virtual.material,
                     defined=virtual.gates,
                     field="gate",
+                    layers=plate_layers(virtual),
                 )
             objective = SourceObjective(
                 virtual, position, parameterization=case.parameterization, gate=gate

@@ -48,7 +48,7 @@ from echocal.specimen import (
     builtin_specimen,
     specimen_names,
 )
-from echocal.specimen.interior import INTERIOR_SHAPES, Flaw, Interior
+from echocal.specimen.interior import INTERIOR_SHAPES, Flaw, Interior, Layer
 from echocal.transducer import Transducer, directivity_names, make_directivity
 from echocal.units import (
     parse_quantity,
@@ -308,6 +308,12 @@ def _build_parts(
         material, found = build_material("specimen.material", config.specimen.material)
         problems.extend(found)
         parts["material"] = material
+    if "specimen" not in invalid and config.specimen.layers:
+        layers, found = _build_layers(config)
+        problems.extend(found)
+        if layers is not None:
+            parts["layers"] = layers
+            parts["material"] = layers[0].material  # the front face's reflection
     run("pulse", lambda: _build_pulse(config.pulse, base_dir))
     pulse = parts.get("pulse")
     # the piston's default frequency is the pulse's; a broken pulse leaves the default
@@ -320,7 +326,8 @@ def _build_parts(
         lambda: _wrap("noise", lambda: ReceiverSettings(**config.noise.model_dump())),
     )
     run("echo", lambda: _check_echo(config.echo))
-    if "specimen" not in invalid and config.specimen.thickness is not None:
+    has_inside = config.specimen.thickness is not None or config.specimen.layers
+    if "specimen" not in invalid and has_inside:
         run("interior", lambda: _build_interior(config, parts))
     run("positioner", lambda: _build_limits(config.positioner))
     if config.bench is not None:
@@ -384,14 +391,42 @@ def _wrap(field: str, build: Callable[[], Any]) -> tuple[Any, list[str]]:
         return None, [_problem(field, exc)]
 
 
+def _build_layers(config: SetupConfig) -> tuple[tuple[Layer, ...] | None, list[str]]:
+    """The layers of a layered plate (``specimen.layers``), top first, and the problems:
+    each layer's material by itself; ``material`` and ``thickness`` belong to the layers."""
+    spec = config.specimen
+    assert spec.layers  # only called with layers
+    for key in ("material", "thickness"):
+        if getattr(spec, key) is not None:
+            return None, [
+                f"specimen.{key}: a layered plate gives each layer's {key} in "
+                "[[specimen.layers]]; remove specimen." + key
+            ]
+    layers, problems = [], []
+    for i, entry in enumerate(spec.layers):
+        where = f"specimen.layers.{i}"
+        material, found = build_material(f"{where}.material", entry.material)
+        problems.extend(found)
+        if material is None:
+            continue
+        try:
+            layers.append(Layer(material, entry.thickness))
+        except EchocalError as exc:
+            problems.append(_problem(where, exc))
+    return (None, problems) if problems else (tuple(layers), [])
+
+
 def _build_interior(
     config: SetupConfig, parts: dict[str, Any]
 ) -> tuple[Interior | None, list[str]]:
-    """The plate's thickness and flaws, checked against the front face and the models."""
+    """The plate's thickness (or layers) and flaws, checked against the front face and
+    the models."""
     spec = config.specimen
     material = parts.get("material")
-    if spec.material is not None and material is None:
+    if (spec.material is not None or spec.layers) and material is None:
         return None, []  # the material's own problem is reported
+    if spec.layers and "layers" not in parts:
+        return None, []  # the layers' problems are reported
     if material is None or material.is_fluid:
         return None, [
             "specimen.thickness: an interior needs a solid specimen.material "
@@ -419,8 +454,10 @@ def _build_interior(
             )
             for f in spec.flaws or ()
         )
-        assert spec.thickness is not None  # only called with a thickness
-        interior = Interior(spec.thickness, spec.back_wall_echoes, flaws)
+        layers: tuple[Layer, ...] = parts.get("layers", ())
+        thickness = sum(layer.thickness for layer in layers) if layers else spec.thickness
+        assert thickness is not None  # only called with a thickness or layers
+        interior = Interior(thickness, spec.back_wall_echoes, flaws, layers)
         interior.check_inside(specimen[0])
     except EchocalError as exc:
         return None, [_problem("specimen", exc)]

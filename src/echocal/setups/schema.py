@@ -117,6 +117,14 @@ class FlawConfig(_Model):
     axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
 
 
+class LayerConfig(_Model):
+    """One layer of a layered plate (``[[specimen.layers]]``, top first): its material
+    (a built-in name or an inline table) and thickness."""
+
+    material: MaterialSpec
+    thickness: Size
+
+
 class GateConfig(_Model):
     """A named gate (``[[gates]]``): absolute (``start``) or triggered by the interface echo
     (``trigger = "interface"`` and ``delay``); see :mod:`echocal.signal.gates`."""
@@ -163,7 +171,10 @@ class SpecimenConfig(_Model):
     back_wall_echoes: Annotated[int, NotBool] = Field(default=3, ge=0, le=MAX_BACK_WALL_ECHOES)
     """How many back-wall echoes (the back wall and its multiples) are simulated."""
     flaws: list[FlawConfig] | None = None
-    """Reflectors inside the part (need ``thickness``)."""
+    """Reflectors inside the part (need ``thickness`` or ``layers``)."""
+    layers: list[LayerConfig] | None = None
+    """A layered plate, top first (instead of ``material`` and ``thickness``); its echo
+    train holds every path up to order ``back_wall_echoes`` (2M − 1 reflections)."""
 
 
 class DirectivityConfig(_Model):

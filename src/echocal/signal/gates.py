@@ -19,6 +19,9 @@ Named gates (:func:`resolve_gate`):
   2T/c_L on a plate thinner than that, so the back wall stays out.
 - ``back-wall``: the front-wall gate moved 2T/c_L later (T the plate's thickness, c_L its
   material's longitudinal speed): centred on the back-wall echo.
+- ``interface-K`` (a layered plate): the front-wall gate moved Σ 2h_i/c_i over the layers
+  above interface K (K = 1 … N, N the back wall, which ``back-wall`` then names too),
+  narrowed to the round trip of layer K: centred on that interface's primary echo.
 - ``NAME``: a gate defined in the setup file (``[[gates]]``).
 - ``START,WIDTH``: an absolute gate, µs unless a unit is given (``30us,2us``).
 """
@@ -49,6 +52,7 @@ __all__ = [
     "gated_metric",
     "interface_trigger",
     "named_gate",
+    "plate_layers",
     "resolve_gate",
     "setup_gate",
 ]
@@ -223,6 +227,27 @@ def _plate_round_trip(thickness: float | None, material: Any, field: str) -> flo
     return 2.0 * float(thickness) / float(speed)
 
 
+def plate_layers(setup: Any) -> tuple[tuple[float, float], ...]:
+    """``((h [m], c_L [m/s]), …)`` of a setup's layered plate, top first; empty for a
+    setup without layers."""
+    interior = getattr(setup, "interior", None)
+    layers = getattr(interior, "layers", ()) or ()
+    return tuple((layer.thickness, layer.material.longitudinal_speed) for layer in layers)
+
+
+def _interface_gate(
+    name: str, layers: tuple[tuple[float, float], ...], delay: float, width: float
+) -> TimeGate | None:
+    """The ``interface-K`` gate of a layered plate, or None when ``name`` is not one."""
+    if not layers or not name.startswith("interface-") or not name[10:].isdigit():
+        return None
+    k = int(name[10:])
+    if not 1 <= k <= len(layers):
+        return None
+    trips = [2.0 * h / c for h, c in layers]
+    return TimeGate(name=name, delay=delay + sum(trips[:k]), width=min(width, trips[k - 1]))
+
+
 def named_gate(
     name: str,
     *,
@@ -231,6 +256,7 @@ def named_gate(
     material: Any = None,
     defined: Iterable[TimeGate] = (),
     field: str = "--gate",
+    layers: tuple[tuple[float, float], ...] = (),
 ) -> TimeGate:
     """The gate called ``name``: ``front-wall``, ``back-wall`` or one of ``defined``.
 
@@ -240,12 +266,19 @@ def named_gate(
     thickness : [m] the plate's thickness T (None: no interior).
     material : the plate's material (its ``longitudinal_speed`` c_L [m/s]).
     defined : the setup file's own gates.
+    layers : a layered plate's ``(h [m], c_L [m/s])`` per layer (:func:`plate_layers`).
     """
     own = {g.name: g for g in defined}
     if name in own:
         return own[name]
     d = float(pulse.duration)
     width, delay = 2.0 * d, -0.75 * d
+    if layers:
+        if name == "back-wall":
+            name = f"interface-{len(layers)}"
+        gate = _interface_gate(name, layers, delay, min(width, 2.0 * layers[0][0] / layers[0][1]))
+        if gate is not None:
+            return gate
     if thickness is not None and getattr(material, "longitudinal_speed", None) is not None:
         width = min(width, _plate_round_trip(thickness, material, field))
     if name == "front-wall":
@@ -254,7 +287,8 @@ def named_gate(
         return TimeGate(
             name=name, delay=delay + _plate_round_trip(thickness, material, field), width=width
         )
-    valid = ", ".join([*BUILTIN_GATES, *sorted(own)])
+    interfaces = [f"interface-1…{len(layers)}"] if layers else []
+    valid = ", ".join([*BUILTIN_GATES, *interfaces, *sorted(own)])
     raise UnknownNameError(
         f"{field}: unknown gate {name!r}; valid: {valid}, or START,WIDTH (µs unless a unit)"
     )
@@ -268,6 +302,7 @@ def resolve_gate(
     material: Any = None,
     defined: Iterable[TimeGate] = (),
     field: str = "--gate",
+    layers: tuple[tuple[float, float], ...] = (),
 ) -> TimeGate:
     """The gate a command line names: a gate name (:func:`named_gate`) or ``START,WIDTH``
     (µs unless a unit is given, e.g. ``30us,2us``), an absolute gate."""
@@ -284,6 +319,7 @@ def resolve_gate(
             material=material,
             defined=defined,
             field=field,
+            layers=layers,
         )
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 2:
@@ -360,6 +396,7 @@ def setup_gate(text: str, setup: Any, *, field: str = "--gate", sees_echo: bool 
         material=getattr(setup, "material", None),
         defined=getattr(setup, "gates", ()),
         field=field,
+        layers=plate_layers(setup),
     )
     if not (gate.triggered or sees_echo):
         check_gate(gate, setup.window, field=field)

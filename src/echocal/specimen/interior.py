@@ -4,7 +4,9 @@ A plate of a given ``thickness`` below its front face (a :class:`FinitePlane`, t
 only shape) has a back wall parallel to the front, at depth T along −n, and may hold
 reflectors (flaws).  A :class:`Sphere` with a thickness is a spherical shell and a
 :class:`Cylinder` (its outer surface) a pipe: the back wall is the concentric inner
-surface of radius R − T (no flaws).  The reflector kinds:
+surface of radius R − T (no flaws).  A plate may be a stack of :class:`Layer` s (each a
+material and a thickness, top first; the thickness is their sum), its flaws in any layer.
+The reflector kinds:
 
 =====================  =====================================================================
 kind                   geometry
@@ -29,11 +31,21 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal.errors import GeometryError
+from echocal.materials import Material
 from echocal.specimen.cylinder import Cylinder
 from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 
-__all__ = ["FLAW_KINDS", "INTERIOR_SHAPES", "Flaw", "Interior", "SurfaceSamples"]
+__all__ = [
+    "FLAW_KINDS",
+    "INTERIOR_SHAPES",
+    "MAX_ECHO_PATHS",
+    "Flaw",
+    "Interior",
+    "Layer",
+    "SurfaceSamples",
+    "turn_sequences",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -49,6 +61,35 @@ INTERIOR_SHAPES = (
 
 MAX_BACK_WALL_ECHOES = 20
 """The largest back-wall multiple order a setup may ask for."""
+
+MAX_ECHO_PATHS = 400
+"""The most echo paths a layered plate may list (the count grows as N^(2M−1))."""
+
+
+def turn_sequences(n_layers: int, order: int) -> list[tuple[int, ...]]:
+    """The interfaces at which each echo path through ``n_layers`` layers turns, every
+    path with at most 2·order − 1 reflections, shortest first.  Interface 0 is the front
+    face, i the bottom of layer i.  Going down the wave turns at a deeper interface, going
+    up at a shallower one (0, the front face seen from below, included).
+
+    Raises :class:`GeometryError` beyond :data:`MAX_ECHO_PATHS` paths."""
+    out: list[tuple[int, ...]] = []
+    frontier: list[tuple[int, ...]] = [(k,) for k in range(1, n_layers + 1)]
+    while frontier:
+        out.extend(frontier)
+        grown: list[tuple[int, ...]] = []
+        for turns in frontier:
+            if len(turns) + 2 > 2 * order - 1:
+                continue
+            for up in range(turns[-1]):
+                grown.extend((*turns, up, down) for down in range(up + 1, n_layers + 1))
+        frontier = grown
+        if len(out) + len(frontier) > MAX_ECHO_PATHS:
+            raise GeometryError(
+                f"specimen.back_wall_echoes: order {order} over {n_layers} layers gives more "
+                f"than {MAX_ECHO_PATHS} echo paths; lower the order"
+            )
+    return out
 
 
 @dataclass(frozen=True)
@@ -156,6 +197,28 @@ class Flaw:
         assert self.length is not None
         return _cylinder_samples(self.position, self.radius, self.length, self.axis, step)
 
+    def silhouette(self, spacing: float, front_normal: FloatArray) -> SurfaceSamples:
+        """The flaw's shadow seen along ``front_normal`` (towards the probe), as samples in
+        the plane through its centre facing the probe, about ``spacing`` [m] apart: a disc
+        of its diameter (flat-bottom hole, pore) or the rectangle of a side-drilled hole
+        (its diameter × its length's extent across the normal)."""
+        step = min(spacing, self.diameter / 8.0)
+        if self.kind != "side-drilled-hole":
+            return _disc_samples(self.position, self.radius, front_normal, step)
+        assert self.length is not None
+        along = self.axis - front_normal * float(self.axis @ front_normal)
+        extent = self.length * float(np.linalg.norm(along))
+        along = along / max(float(np.linalg.norm(along)), 1e-12)
+        across = np.cross(front_normal, along)
+        n_along = max(2, math.ceil(extent / step))
+        n_across = max(2, math.ceil(self.diameter / step))
+        s = ((np.arange(n_along) + 0.5) / n_along - 0.5) * extent
+        w = ((np.arange(n_across) + 0.5) / n_across - 0.5) * self.diameter
+        ss, ww = (g.ravel() for g in np.meshgrid(s, w))
+        points = self.position[:, None] + along[:, None] * ss + across[:, None] * ww
+        areas = np.full(ss.size, extent * self.diameter / ss.size)
+        return SurfaceSamples(points, np.repeat(front_normal[:, None], ss.size, axis=1), areas)
+
 
 def _sphere_samples(centre: FloatArray, radius: float, step: float) -> SurfaceSamples:
     """Equal-area samples of a sphere (a Fibonacci lattice), outward normals."""
@@ -203,6 +266,24 @@ def _cylinder_samples(
 
 
 @dataclass(frozen=True)
+class Layer:
+    """One layer of a plate: a solid ``material`` and its ``thickness`` [m] (> 0)."""
+
+    material: Material
+    thickness: float
+
+    def __post_init__(self) -> None:
+        t = self.thickness
+        if isinstance(t, bool) or not (isinstance(t, int | float) and math.isfinite(t) and t > 0):
+            raise GeometryError(f"thickness: must be a length > 0; got {t!r}")
+        if not isinstance(self.material, Material) or self.material.is_fluid:
+            raise GeometryError(
+                f"material: a layer must be a solid (with a shear speed); got "
+                f"{getattr(self.material, 'name', self.material)!r}"
+            )
+
+
+@dataclass(frozen=True)
 class Interior:
     """A solid part's inside: the plate below its front face.
 
@@ -212,11 +293,16 @@ class Interior:
     back_wall_echoes : how many back-wall echoes to simulate (1 = the back wall only,
         2 adds its first multiple, …), 0 to 20.
     flaws : reflectors inside the part.
+    layers : the plate's layers, top first (their thicknesses sum to ``thickness``); empty:
+        one layer of the specimen's material.  With layers, ``back_wall_echoes`` is the
+        order M of the echo train: every path with at most 2M − 1 reflections
+        (:mod:`echocal.wave.layered`).
     """
 
     thickness: float
     back_wall_echoes: int = 3
     flaws: tuple[Flaw, ...] = ()
+    layers: tuple[Layer, ...] = ()
 
     def __post_init__(self) -> None:
         t = self.thickness
@@ -233,6 +319,23 @@ class Interior:
         if duplicate is not None:
             raise GeometryError(f"specimen.flaws: the name {duplicate!r} is used twice")
         object.__setattr__(self, "flaws", tuple(self.flaws))
+        object.__setattr__(self, "layers", tuple(self.layers))
+        if self.layers:
+            total = sum(layer.thickness for layer in self.layers)
+            if not math.isclose(total, t, rel_tol=1e-9):
+                raise GeometryError(
+                    f"specimen.thickness: {1e3 * t:g} mm is not the layers' total "
+                    f"{1e3 * total:g} mm; leave thickness out with layers"
+                )
+            turn_sequences(len(self.layers), n)  # refuses an order with too many paths
+
+    @property
+    def interfaces(self) -> FloatArray:
+        """[m] depths of the interfaces below the front face, ``(N + 1,)``: 0, then the
+        bottom of each layer (the last is the back wall); ``(0, T)`` without layers."""
+        if not self.layers:
+            return np.array([0.0, self.thickness])
+        return np.concatenate([[0.0], np.cumsum([layer.thickness for layer in self.layers])])
 
     def check_inside(self, front: FinitePlane | Sphere | Cylinder) -> None:
         """Refuse a flaw that is not wholly inside the plate below ``front``; for a curved
@@ -262,6 +365,14 @@ class Interior:
                     f"{where}: the flaw spans depths {1e3 * shallow:g} to {1e3 * deep:g} mm "
                     f"below the front face; it must lie inside the part (0 to "
                     f"{1e3 * self.thickness:g} mm): move it or make it smaller"
+                )
+            inner = self.interfaces[1:-1]
+            crossed = inner[(inner > shallow) & (inner < deep)] if self.layers else inner[:0]
+            if crossed.size:
+                raise GeometryError(
+                    f"{where}: the flaw spans depths {1e3 * shallow:g} to {1e3 * deep:g} mm, "
+                    f"across the interface at {1e3 * float(crossed[0]):g} mm; a flaw must lie "
+                    "within one layer"
                 )
             offset = flaw.position - front.center
             lateral = (abs(float(offset @ front.x_axis)), abs(float(offset @ front.y_axis)))

@@ -23,11 +23,15 @@ solid→water reflection, at the back wall and, for multiples, under the front f
 time 2d/c_w + 2kT/c_L at normal incidence.  A flaw is a void (R = −1, pressure release) with
 Kirchhoff boundary values on its lit side (outward normal towards the front face).  The
 solid's attenuation α_s(f) acts over the echo's path in the part, the medium's over the
-water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).
+water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).  A flaw hides the part of
+the back wall behind it: its silhouette along the face's normal, on the wall's equivalent
+mirror, is taken out of the wall's echo (:meth:`InteriorEchoes._shadows`).  A plate of
+several layers (:mod:`echocal.wave.layered`, docs/layered-parts.md) has an echo per path
+through its interfaces, each evaluated the same way.
 
 **Left out** (documented in docs/inside-the-specimen.md): mode-converted (L→T) echoes and
 the shear waves' own echoes (the coefficients account for the energy they take), shadowing
-of the back wall by flaws and of flaws by each other, and flaw–wall interactions.  A
+of flaws by each other, and flaw–wall interactions.  A
 curved front face is modelled for the back wall of a spherical shell
 (:mod:`echocal.wave.shell`: an equivalent water sphere) and of a pipe
 (:mod:`echocal.wave.curved_wall`: angular spectrum on the tangent plane); no flaws in
@@ -55,10 +59,11 @@ from echocal.coefficients import (
 from echocal.materials import Material
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.cylinder import Cylinder
-from echocal.specimen.interior import Flaw, Interior, SurfaceSamples
+from echocal.specimen.interior import Flaw, Interior, Layer, SurfaceSamples
 from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 from echocal.wave.curved_wall import curved_back_walls, tangent_plane
+from echocal.wave.layered import EchoPath, echo_paths, pp_coefficients
 from echocal.wave.model import WaveEchoModel
 from echocal.wave.shell import equivalent_mirror
 
@@ -75,6 +80,10 @@ _SOLID_SAMPLES_PER_WAVELENGTH = 6.0
 of a sixth of a period across a curved flaw."""
 
 
+_NO_ECHO = 1e-7
+"""An echo below this fraction of the strongest one is reported as absent."""
+
+
 @dataclass(frozen=True)
 class LabelledEcho:
     """One echo of the train: its label, time of flight [s] and amplitude (the envelope
@@ -88,13 +97,15 @@ class LabelledEcho:
 def echo_list(echoes: dict[str, FloatArray], window: RecordingWindow) -> list[LabelledEcho]:
     """Each labelled echo's envelope peak and its time (parabolic interpolation between
     samples), in the order given; an echo with no signal (outside the window, or blocked
-    beyond the critical angle) has amplitude 0 and time NaN."""
+    beyond the critical angle: below 1e-7 of the strongest echo, the spectral leak of one
+    that arrives after the window) has amplitude 0 and time NaN."""
+    envelopes = {label: np.abs(scipy.signal.hilbert(x)) for label, x in echoes.items()}
+    floor = _NO_ECHO * max((float(e.max()) for e in envelopes.values()), default=0.0)
     out = []
-    for label, samples in echoes.items():
-        envelope = np.abs(scipy.signal.hilbert(samples))
+    for label, envelope in envelopes.items():
         i = int(np.argmax(envelope))
         peak = float(envelope[i])
-        if peak <= 0.0:
+        if peak <= floor:
             out.append(LabelledEcho(label, math.nan, 0.0))
             continue
         shift = 0.0
@@ -144,6 +155,9 @@ class InteriorEchoes:
     @property
     def labels(self) -> tuple[str, ...]:
         """Every echo's label, in the order of :meth:`echoes`."""
+        if self.interior.layers:
+            paths = self.paths(0.0)
+            return (FRONT_WALL, *(p.label for p in paths), *(f.name for f in self.interior.flaws))
         walls = tuple(back_wall_label(k) for k in range(1, self.interior.back_wall_echoes + 1))
         return (FRONT_WALL, *walls, *(f.name for f in self.interior.flaws))
 
@@ -165,7 +179,29 @@ class InteriorEchoes:
             zero = np.zeros(self.model.window.n_samples)
             return out | {label: zero for label in self.labels[1:]}
         orders = range(1, self.interior.back_wall_echoes + 1)
-        if isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
+        if self.interior.layers:
+            sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
+            unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
+            for path in self.paths(sin_w):
+                key = (round(path.equivalent_depth, 12), round(path.delay, 15))
+                if key not in unit:
+                    unit[key] = self._mirror(
+                        path.equivalent_depth, 1.0, path.delay, position, frame
+                    )
+                spectrum = np.conj(path.coefficient) * unit[key]
+                if self.interior.flaws:
+                    wall = float(self.interior.interfaces[max(path.turns)])
+                    spectrum = spectrum - self._shadows(
+                        wall,
+                        path.equivalent_depth,
+                        path.coefficient,
+                        path.delay,
+                        position,
+                        frame,
+                        front,
+                    )
+                out[path.label] = self._layered(path, spectrum, front)
+        elif isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
             spectra = curved_back_walls(
                 self.model,
                 self.front,
@@ -185,6 +221,62 @@ class InteriorEchoes:
         for flaw in self.interior.flaws:
             out[flaw.name] = self._flaw(flaw, position, frame, front)
         return out
+
+    def paths(self, sin_water: float = 0.0) -> list[EchoPath]:
+        """The layered plate's echo paths (:func:`echocal.wave.layered.echo_paths`) at the
+        beam axis's incidence sine ``sin_water`` in the medium; empty without layers."""
+        if not self.interior.layers:
+            return []
+        return echo_paths(
+            self.interior.layers,
+            self._medium_at_model_speed,
+            sin_water,
+            self.interior.back_wall_echoes,
+        )
+
+    def describe(self) -> dict[str, dict[str, object]]:
+        """Each echo's path through a layered plate, by label (``simulate --json``): the
+        interfaces it reflects at (0 the front face seen from below) and its legs (layer
+        number, material, wave mode), at normal incidence; a flaw's host layer.  Empty
+        without layers."""
+        if not self.interior.layers:
+            return {}
+        layers = self.interior.layers
+        out: dict[str, dict[str, object]] = {}
+        for path in self.paths(0.0):
+            out[path.label] = {
+                "reflections": list(path.turns),
+                "legs": [
+                    {"layer": leg, "material": layers[leg - 1].material.name, "mode": "L"}
+                    for leg in path.legs
+                ],
+            }
+        for flaw in self.interior.flaws:
+            host = len(self._flaw_column(flaw).layers)
+            out[flaw.name] = {"layer": host, "material": layers[host - 1].material.name}
+        return out
+
+    @property
+    def _medium_at_model_speed(self) -> Material:
+        return Material(
+            name=self.medium.name,
+            density=self.medium.density,
+            longitudinal_speed=self.model.sound_speed,
+        )
+
+    def _layered(self, path: EchoPath, spectrum: ComplexArray, front: _Front) -> FloatArray:
+        """A layered plate's echo along ``path`` from its ``spectrum`` before attenuation
+        (its equivalent water mirror's echo: :meth:`_mirror` with coefficient 1 scaled by
+        conj(c), the e^{−iωt} phase in numpy's convention, less the flaws' shadows),
+        attenuated in each layer over the distance the path runs there."""
+        f = self.model.frequencies
+        loss = np.zeros_like(f)
+        for layer, length in path.attenuation_path:
+            loss += (
+                np.asarray(self.interior.layers[layer - 1].material.attenuation.alpha(f)) * length
+            )
+        spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
+        return self.model.samples(spectrum)
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -258,9 +350,62 @@ class InteriorEchoes:
     def _back_wall(
         self, order: int, position: FloatArray, frame: FloatArray, front: _Front
     ) -> FloatArray:
-        """The ``order``-th back-wall echo's samples (see :meth:`back_wall_spectrum`)."""
+        """The ``order``-th back-wall echo's samples (see :meth:`back_wall_spectrum`), less
+        the part of the wall the flaws hide (:meth:`_shadows`)."""
         spectrum = self.back_wall_spectrum(order, position, frame, front)
+        if self.interior.flaws and isinstance(self.front, FinitePlane):
+            depth = order * self.interior.thickness
+            spectrum = spectrum - self._shadows(
+                self.interior.thickness,
+                depth * self._ratio,
+                self._wall_coefficient(order, front),
+                self._delay_per_depth() * depth,
+                position,
+                frame,
+                front,
+            )
         return self._finish(spectrum, front, 2.0 * order * self.interior.thickness)
+
+    def _shadows(
+        self,
+        wall_depth: float,
+        equivalent_depth: float,
+        coefficient: complex,
+        delay: float,
+        position: FloatArray,
+        frame: FloatArray,
+        front: _Front,
+    ) -> ComplexArray:
+        """The echo spectrum of the parts of a wall (an interface ``wall_depth`` [m] below
+        the face) that the flaws above it hide from the probe: each flaw's silhouette
+        projected along the face's normal onto the wall's equivalent mirror, with the
+        wall path's ``coefficient`` and ``delay`` — the physical-optics echo of the wall
+        is that of its lit part only.  A multiple loses its shadowed patch once (first
+        order in the hidden fraction)."""
+        assert isinstance(self.front, FinitePlane)  # flaws sit in plates only
+        total = np.zeros(self.model.frequencies.shape, dtype=np.complex128)
+        basis = self._basis(frame)
+        for flaw in self.interior.flaws:
+            if flaw.depth_range(self.front)[1] >= wall_depth:
+                continue  # not above this wall
+            samples = self._silhouettes[flaw.name]
+            points = basis @ (samples.points - position[:, None])
+            depth = (front.point - points.T) @ front.normal
+            points = points - np.outer(front.normal, equivalent_depth - depth)
+            unit_m = np.repeat(-front.normal[:, None], samples.areas.size, axis=1)
+            weights = np.full(samples.areas.shape, coefficient, dtype=np.complex128)
+            delays = np.full(samples.areas.shape, delay)
+            spectrum, _ = self.model.spectrum(points, unit_m, samples.areas, weights, delays)
+            total += spectrum
+        return total
+
+    @cached_property
+    def _silhouettes(self) -> dict[str, SurfaceSamples]:
+        """Each flaw's silhouette along the face's normal, sampled at the surface spacing
+        the wave model uses on planes."""
+        assert isinstance(self.front, FinitePlane)
+        spacing = self.model._sample_spacing((self.front,))
+        return {f.name: f.silhouette(spacing, self.front.normal) for f in self.interior.flaws}
 
     def back_wall_spectrum(
         self, order: int, position: FloatArray, frame: FloatArray, front: _Front
@@ -282,12 +427,26 @@ class InteriorEchoes:
             delay = 2.0 * depth / self.material.longitudinal_speed
             delay -= 2.0 * mirror.distance / self.model.sound_speed
             return self._kirchhoff(sphere, position, frame, through, delay)
+        return self._mirror(
+            depth * self._ratio, through, self._delay_per_depth() * depth, position, frame
+        )
+
+    def _mirror(
+        self,
+        equivalent_depth: float,
+        coefficient: complex,
+        delay: float,
+        position: FloatArray,
+        frame: FloatArray,
+    ) -> ComplexArray:
+        """The echo spectrum (before attenuation) of a copy of the plate's face
+        ``equivalent_depth`` [m] below it, with one ``coefficient`` and two-way ``delay``
+        [s]: by the image form when it fills the beam, else the Kirchhoff sum."""
         assert isinstance(self.front, FinitePlane)  # a pipe's walls come from curved_wall
         equivalent = FinitePlane(
             center=self.front.center
             - self.front.normal
-            * depth
-            * self._ratio
+            * equivalent_depth
             * np.sign(float(self.front.normal @ (position - self.front.center))),
             width=self.front.width,
             height=self.front.height,
@@ -295,12 +454,11 @@ class InteriorEchoes:
             coelevation=self.front.coelevation,
             name="equivalent back wall",
         )
-        delay = self._delay_per_depth() * depth
         plane = self.model.image_plane((equivalent,), position, frame)
         if plane is not None:  # the wall fills the beam: the exact image form
-            spectrum, _ = self.model.image_spectrum(plane, through, delay)
+            spectrum, _ = self.model.image_spectrum(plane, coefficient, delay)
             return spectrum
-        return self._kirchhoff(equivalent, position, frame, through, delay)
+        return self._kirchhoff(equivalent, position, frame, coefficient, delay)
 
     def _kirchhoff(
         self,
@@ -320,14 +478,40 @@ class InteriorEchoes:
     @cached_property
     def _flaw_samples(self) -> dict[str, SurfaceSamples]:
         assert isinstance(self.front, FinitePlane)  # flaws are refused inside a shell
-        c_l = self.material.longitudinal_speed
-        spacing = c_l / self.model.pulse.center_frequency / _SOLID_SAMPLES_PER_WAVELENGTH
-        return {f.name: f.surface_samples(spacing, self.front.normal) for f in self.interior.flaws}
+        out = {}
+        for f in self.interior.flaws:
+            c_l = self._flaw_column(f).layers[-1].material.longitudinal_speed
+            spacing = c_l / self.model.pulse.center_frequency / _SOLID_SAMPLES_PER_WAVELENGTH
+            out[f.name] = f.surface_samples(spacing, self.front.normal)
+        return out
+
+    def _flaw_column(self, flaw: Flaw) -> _Column:
+        """The layers above ``flaw`` and the one that holds it (the last; the plate's one
+        layer without layers), its top [m] below the face."""
+        assert isinstance(self.front, FinitePlane)
+        layers = self.interior.layers or (Layer(self.material, self.interior.thickness),)
+        centre = float((self.front.center - flaw.position) @ self.front.normal)
+        tops = self.interior.interfaces[:-1]
+        j = int(np.searchsorted(tops, centre, side="right"))  # 1-based layer number
+        return _Column(layers[:j], float(tops[j - 1]))
 
     def _flaw(
         self, flaw: Flaw, position: FloatArray, frame: FloatArray, front: _Front
     ) -> FloatArray:
-        """A void's echo: Kirchhoff over its lit side, fields at the equivalent points."""
+        """A void's echo: Kirchhoff over its lit side, fields at the equivalent points
+        (through the layers above it, each at its own equivalent depth)."""
+        column = self._flaw_column(flaw)
+        host = column.layers[-1].material
+        c_w = self.model.sound_speed
+        ratio = host.longitudinal_speed / c_w
+        above = column.layers[:-1]
+        eq_top = sum(layer.thickness * layer.material.longitudinal_speed / c_w for layer in above)
+        delay_top = sum(
+            2.0
+            * layer.thickness
+            * (1.0 / layer.material.longitudinal_speed - layer.material.longitudinal_speed / c_w**2)
+            for layer in above
+        )
         samples = self._flaw_samples[flaw.name]
         basis = self._basis(frame)
         points = basis @ (samples.points - position[:, None])
@@ -335,15 +519,44 @@ class InteriorEchoes:
         lit = (front.normal @ outward) > 0.0
         points, outward, area = points[:, lit], outward[:, lit], samples.areas[lit]
         depth = (front.point - points.T) @ front.normal  # (n,) [m] below the face
-        points_eq = points - np.outer(front.normal, depth * (self._ratio - 1.0))
+        in_host = depth - column.top
+        points_eq = points - np.outer(front.normal, eq_top + in_host * ratio - depth)
         # m: the normal pointing away from the probe (into the void); its component along
         # the depth direction carries k_L/k_w = c_w/c_L (see the module doc)
         m = -outward
         m_depth = -(front.normal @ m)  # component along −n_f (into the part)
-        m_eff = m + np.outer(front.normal, m_depth * (1.0 - 1.0 / self._ratio))
-        through = self._through_the_face(*self._axis_angles(front))
-        coefficient = np.full(area.shape, -through * self._ratio, dtype=np.complex128)  # R = −1
-        delays = self._delay_per_depth() * depth
+        m_eff = m + np.outer(front.normal, m_depth * (1.0 - 1.0 / ratio))
+        through = self._through_layers(column, front)
+        coefficient = np.full(area.shape, -through * ratio, dtype=np.complex128)  # R = −1
+        delays = delay_top + 2.0 * in_host * (1.0 / host.longitudinal_speed - ratio / c_w)
         spectrum, _ = self.model.spectrum(points_eq, m_eff, area, coefficient, delays)
         centre_depth = float((front.point - basis @ (flaw.position - position)) @ front.normal)
-        return self._finish(spectrum, front, 2.0 * centre_depth)
+        f = self.model.frequencies
+        loss = 2.0 * (centre_depth - column.top) * np.asarray(host.attenuation.alpha(f))
+        for layer in above:
+            loss += 2.0 * layer.thickness * np.asarray(layer.material.attenuation.alpha(f))
+        spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
+        return self.model.samples(spectrum)
+
+    def _through_layers(self, column: _Column, front: _Front) -> complex:
+        """Π T_down · Π T_up through the front face and every interface above the host
+        layer, at the beam axis's angle (0 beyond a critical angle)."""
+        medium = self._medium_at_model_speed
+        sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
+        media = [medium, *(layer.material for layer in column.layers)]
+        sines = [sin_w * m.longitudinal_speed / self.model.sound_speed for m in media]
+        if any(s >= 1.0 for s in sines):
+            return 0.0j
+        through = 1.0 + 0.0j
+        for i in range(len(media) - 1):
+            through *= pp_coefficients(sines[i], media[i], media[i + 1])[1]
+            through *= pp_coefficients(sines[i + 1], media[i + 1], media[i])[1]
+        return through
+
+
+@dataclass(frozen=True)
+class _Column:
+    """The layers from the face down to a flaw's (its host, last) and the host's top [m]."""
+
+    layers: tuple[Layer, ...]
+    top: float

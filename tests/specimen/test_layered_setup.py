@@ -1,0 +1,184 @@
+"""Layered plates in setup files, on the CLI and in gates (issue 46)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from echocal import Pose, load_setup
+from echocal.cli import app
+from echocal.materials import material
+from echocal.setups import validate_setup_file
+from echocal.signal.gates import plate_layers, resolve_gate
+from echocal.wave.interior import echo_list
+
+C = 1480.0
+LAYERED = """
+name = "layered"
+[specimen]
+builtin = "flat-plate"
+back_wall_echoes = {order}
+{top}
+[[specimen.layers]]
+material = "acrylic"
+thickness = "4 mm"
+[[specimen.layers]]
+material = {second}
+thickness = "{second_thickness}"
+{flaws}
+[transducer]
+width = "12.7 mm"
+aperture = "circular"
+[echo]
+reflection = "wave"
+[window]
+fs = "100 MHz"
+start = "60 us"
+n_samples = 2000
+[noise]
+snr_db = "none"
+[positioner]
+reference_position = ["0 mm", "0 mm", "50 mm"]
+"""
+
+
+def _text(
+    *,
+    order: int = 2,
+    top: str = "",
+    second: str = '"steel"',
+    second_thickness: str = "6 mm",
+    flaws: str = "",
+) -> str:
+    return LAYERED.format(
+        order=order, top=top, second=second, second_thickness=second_thickness, flaws=flaws
+    )
+
+
+def _problems(tmp_path: Path, text: str) -> list[str]:
+    path = tmp_path / "layered.toml"
+    path.write_text(text)
+    return validate_setup_file(path)
+
+
+def test_a_layered_plate_loads_with_its_layers_and_paths(tmp_path: Path) -> None:
+    path = tmp_path / "layered.toml"
+    path.write_text(_text())
+    setup = load_setup(path)
+    assert [layer.material.name for layer in setup.interior.layers] == ["acrylic", "steel"]
+    assert setup.thickness == pytest.approx(0.010)
+    assert setup.material.name == "acrylic"  # the front face's reflection
+    labels = setup.interior_echoes.labels
+    assert labels[:3] == ("front-wall", "interface-1", "interface-2")
+    # order 2: the primaries and every path with three reflections
+    assert set(labels[3:]) == {
+        "interface-1.0.1",
+        "interface-1.0.2",
+        "interface-2.0.1",
+        "interface-2.0.2",
+        "interface-2.1.2",
+    }
+
+
+@pytest.mark.parametrize(
+    ("edit", "field", "fix"),
+    [
+        ({"top": 'material = "steel"'}, "specimen.material", "[[specimen.layers]]"),
+        ({"top": 'thickness = "3 mm"'}, "specimen.thickness", "[[specimen.layers]]"),
+        ({"second": '"unobtainium"'}, "specimen.layers.1.material", "steel"),
+        ({"second": '"water"'}, "specimen.layers.1", "solid"),
+        ({"second_thickness": "-2 mm"}, "specimen.layers.1.thickness", ""),
+        ({"order": 9}, "specimen.back_wall_echoes", "lower the order"),
+    ],
+)
+def test_a_bad_layer_is_refused_naming_the_field(
+    tmp_path: Path, edit: dict[str, object], field: str, fix: str
+) -> None:
+    problems = _problems(tmp_path, _text(**edit))  # type: ignore[arg-type]
+    assert any(p.startswith(field) and fix in p for p in problems), problems
+
+
+def test_a_flaw_across_an_interface_is_refused(tmp_path: Path) -> None:
+    flaw = """
+[[specimen.flaws]]
+name = "pore"
+kind = "pore"
+position = ["0 mm", "0 mm", "-4 mm"]
+diameter = "2 mm"
+"""
+    problems = _problems(tmp_path, _text(flaws=flaw))
+    assert any("specimen.flaws.pore.position" in p and "interface" in p for p in problems)
+
+
+def test_interface_gates_sit_on_each_interface_echo(tmp_path: Path) -> None:
+    """``interface-K`` is the front-wall gate moved by the round trips of the layers above
+    interface K; ``back-wall`` is the last interface."""
+    path = tmp_path / "layered.toml"
+    path.write_text(_text())
+    setup = load_setup(path)
+    layers = plate_layers(setup)
+    c_acrylic, c_steel = (material(n).longitudinal_speed for n in ("acrylic", "steel"))
+    assert layers == ((0.004, c_acrylic), (0.006, c_steel))
+    front = resolve_gate("front-wall", pulse=setup.pulse)
+
+    def gate(name: str):
+        return resolve_gate(name, pulse=setup.pulse, layers=layers)
+
+    assert gate("interface-1").delay - front.delay == pytest.approx(2 * 0.004 / c_acrylic)
+    step = 2 * 0.004 / c_acrylic + 2 * 0.006 / c_steel
+    assert gate("interface-2").delay - front.delay == pytest.approx(step)
+    assert gate("back-wall").delay == gate("interface-2").delay
+    with pytest.raises(KeyError, match="interface-1…2"):
+        gate("interface-3")
+
+
+def test_simulate_json_lists_each_echo_with_its_path_time_and_amplitude(tmp_path: Path) -> None:
+    path = tmp_path / "layered.toml"
+    path.write_text(_text(order=1))
+    result = CliRunner().invoke(
+        app,
+        [
+            *("simulate", "--setup", str(path), "--pose", "0,0,50", "--json"),
+            *("--gate", "interface-2", "--out", str(tmp_path / "out")),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    echoes = {e["label"]: e for e in summary["echoes"]}
+    assert list(echoes) == ["front-wall", "interface-1", "interface-2"]
+    assert echoes["interface-2"]["path"] == {
+        "reflections": [2],
+        "legs": [
+            {"layer": 1, "material": "acrylic", "mode": "L"},
+            {"layer": 2, "material": "steel", "mode": "L"},
+            {"layer": 2, "material": "steel", "mode": "L"},
+            {"layer": 1, "material": "acrylic", "mode": "L"},
+        ],
+    }
+    c_acrylic, c_steel = (material(n).longitudinal_speed for n in ("acrylic", "steel"))
+    want = 2 * 0.05 / C + np.array([0.0, 2 * 0.004 / c_acrylic, 2 * 0.006 / c_steel]).cumsum()
+    got = [echoes[k]["tof_s"] for k in echoes]
+    np.testing.assert_allclose(got, want, atol=2e-8)  # two samples
+    # the gate on interface 2: its time and its depth through both layers (10 mm)
+    assert summary["tof_s"] == pytest.approx(want[2], abs=2e-8)
+    assert summary["depth_m"] == pytest.approx(0.010, abs=1e-4)
+
+
+def test_the_built_in_layered_setup_shows_its_holes_in_the_aluminium() -> None:
+    setup = load_setup("immersion-layered")
+    assert [(layer.material.name, layer.thickness) for layer in setup.interior.layers] == [
+        ("acrylic", 0.03),
+        ("aluminium", 0.05),
+    ]
+    assert setup.interior_echoes.describe()["fbh-3mm"] == {"layer": 2, "material": "aluminium"}
+    pose = Pose(0.0, 0.0, 0.05)
+    listed = {e.label: e for e in echo_list(setup.labelled_echoes(pose), setup.window)}
+    # interface-2.0.2 arrives at 143 µs, after the window's end (140 µs): absent
+    assert listed["interface-2.0.2"].amplitude == 0.0
+    assert math.isnan(listed["interface-2.0.2"].tof_s)
+    assert listed["interface-2.1.2"].tof_s < setup.window.end
