@@ -69,3 +69,24 @@ def test_cli_layers(plate, tmp_path, capsys, monkeypatch):
     assert code == 0, err
     stats = json.loads(stdout)["layers"][0]
     assert abs(stats["mean"] / THICKNESS - 1) < 1e-3 and out.stat().st_size > 0
+
+
+def test_two_layers_of_a_layered_part_within_0_1_percent():
+    # the built-in layered part: acrylic 30 mm (2730 m/s) on aluminium 50 mm (6320 m/s),
+    # scanned 25 mm off its two flat-bottom holes; each interface in a gate of its own,
+    # centred on the ray-path time through the layers (computed here from the speeds)
+    setup = load_setup("immersion-layered")
+    scan = simulate_position_scan(
+        setup, x=np.linspace(-12e-3, -8e-3, 3), y=np.array([-25e-3, -24e-3]), noise=False
+    )
+    front = 2 * 50e-3 / 1480.0
+    first = front + 2 * 30e-3 / 2730.0
+    second = first + 2 * 50e-3 / 6320.0
+    gates = [None] + [
+        TimeGate(name=f"interface-{k}", start=t - 2e-6, width=4e-6)
+        for k, t in ((1, first), (2, second))
+    ]
+    layers = layer_thickness(scan, [2730.0, 6320.0], gates=gates)
+    # measured -0.067 % and -0.060 %: the interface echoes' diffraction delays
+    np.testing.assert_array_less(np.abs(layers.thickness[0] / 30e-3 - 1), 1e-3)
+    np.testing.assert_array_less(np.abs(layers.thickness[1] / 50e-3 - 1), 1e-3)
