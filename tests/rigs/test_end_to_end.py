@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_helpers import TILTED_PLATE as TILTED
 from cli_helpers import tiny_setup_toml
 from echocal.calibrate import calibrate
 from echocal.geometry import Pose, convert_angles
@@ -32,16 +33,6 @@ from echocal.rigs.plans import calibrate_plan
 POSITION = (0.001, -0.0005, 0.016)  # [m]
 X0 = (0.0, 0.0)  # [deg] tilts: 4 deg from the optimum
 RUN = {"method": "auto", "x0": X0, "settle": (0.01, 8), "rng": 11}
-
-TILTED = """
-[[specimen.shapes]]
-kind = "plane"
-center = [0, 0, 0]
-width = "40 mm"
-height = "40 mm"
-azimuth = 30
-coelevation = 4
-"""
 
 
 def test_simulator_tcp_rig_and_bluesky_calibrate_identically(tmp_path: Path):

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_helpers import TILTED_PLATE as TILTED
 from cli_helpers import flat, run_main, tiny_setup_toml
 from echocal.geometry import Pose
 from echocal.setups import load_setup
@@ -24,15 +25,6 @@ from echocal.rigs import connect_rig
 from echocal.rigs.scpi_bench import ScpiBench, rig_file_text
 
 POSITION = (0.001, -0.0005, 0.016)  # [m]
-TILTED = """
-[[specimen.shapes]]
-kind = "plane"
-center = [0, 0, 0]
-width = "40 mm"
-height = "40 mm"
-azimuth = 30
-coelevation = 4
-"""
 
 
 @pytest.fixture
