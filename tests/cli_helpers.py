@@ -57,6 +57,18 @@ coelevation = [-30, 30]
 """
 
 
+TILTED_PLATE = """
+[[specimen.shapes]]
+kind = "plane"
+center = [0, 0, 0]
+width = "40 mm"
+height = "40 mm"
+azimuth = 30
+coelevation = 4
+"""
+"""The ``[specimen]`` body of a 40 mm plate whose normal is azimuth 30°, co-elevation 4°."""
+
+
 SPHERE_UNDER_REFERENCE = (
     '[[specimen.shapes]]\nkind = "sphere"\ncenter = [0, 0, "-20 mm"]\nradius = "30 mm"'
 )

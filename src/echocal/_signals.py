@@ -9,14 +9,23 @@ code for that signal (128 + its number: 130 for SIGINT, 143 for SIGTERM, 129 for
 
 It also ignores SIGXFSZ, so writing past a file-size limit (``ulimit -f``) is an
 ``OSError`` (EFBIG) naming the file, not a killed process.
+
+A signal never interrupts an import: one that arrives while a module is being imported
+(numba's first kernel imports numba, a second or more, often during the first measurement
+on a rig) is delivered again :data:`IMPORT_RETRY` later, once the import is over.  An
+exception raised inside an import leaves the module half-imported, and the cleanup that
+saves the measurements would then fail on it (``module 'numba' has no attribute 'core'``).
+The same holds for Ctrl-C (SIGINT) while the context is active.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 from collections.abc import Iterator
+from types import FrameType
 
 __all__ = [
     "INTERRUPTED",
@@ -31,6 +40,9 @@ TERMINATION_SIGNALS: tuple[signal.Signals, ...] = tuple(
     getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)
 )
 """The signals turned into :class:`Terminated` (those the platform has)."""
+
+IMPORT_RETRY = 0.05
+"""[s] delay after which a signal that arrived during an import is delivered again."""
 
 INTERRUPTED = 128 + int(signal.SIGINT)
 """130: the exit code of a command stopped by Ctrl-C (and what typer returns for any
@@ -73,6 +85,23 @@ def how(exc: BaseException | None = None) -> str:
     return str(found) if isinstance(found, Terminated) else "interrupted (Ctrl-C)"
 
 
+def importing(frame: FrameType | None) -> bool:
+    """Whether ``frame`` or a frame calling it runs Python's import machinery (a module is
+    being imported)."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib._bootstrap"):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _deliver_later(signum: int) -> None:
+    """Send ``signum`` to this process again after :data:`IMPORT_RETRY`."""
+    timer = threading.Timer(IMPORT_RETRY, os.kill, (os.getpid(), signum))
+    timer.daemon = True
+    timer.start()
+
+
 @contextlib.contextmanager
 def terminate_like_ctrl_c() -> Iterator[list[int]]:
     """While active, SIGTERM and SIGHUP raise :class:`Terminated` in the main thread and
@@ -82,20 +111,33 @@ def terminate_like_ctrl_c() -> Iterator[list[int]]:
     command: a caller that only sees an exit code, typer's 130 for any interrupt, learns
     which signal it was).  The first termination signal raises; further ones while the
     command cleans up (saving what it measured) are ignored — SIGKILL still ends the
-    process.  Outside the main thread (where Python cannot set handlers) this does nothing.
+    process.  Ctrl-C (SIGINT) raises :class:`KeyboardInterrupt` as usual.  No signal
+    raises inside an import: it is delivered again once the import is over.  Outside the
+    main thread (where Python cannot set handlers) this does nothing.
     """
     fired: list[int] = []
     if threading.current_thread() is not threading.main_thread():
         yield fired
         return
 
-    def handler(signum: int, frame: object) -> None:
+    def handler(signum: int, frame: FrameType | None) -> None:
         if fired:
             return  # already stopping: let the cleanup finish
+        if importing(frame):
+            _deliver_later(signum)  # never leave a module half-imported
+            return
         fired.append(signum)
         raise Terminated(signum)
 
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        if importing(frame):
+            _deliver_later(signum)
+            return
+        raise KeyboardInterrupt
+
     previous = {sig: signal.signal(sig, handler) for sig in TERMINATION_SIGNALS}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, interrupt)
     if hasattr(signal, "SIGXFSZ"):
         previous[signal.SIGXFSZ] = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     try:

@@ -120,6 +120,12 @@ _WHY = {
 }
 
 
+def unwritable(target: str | os.PathLike[str], exc: OSError) -> DataFileError:
+    """The one-line error of a write to ``target`` that failed with ``exc``: the file and
+    the cause (a full disk, a file-size limit, permissions) with what to do."""
+    return _unwritable(Path(target), exc)
+
+
 def _unwritable(target: Path, exc: OSError) -> DataFileError:
     why = _WHY.get(exc.errno or 0)
     if why is None and "errno = 27" in str(exc):  # HDF5 reports EFBIG in its message

@@ -78,3 +78,22 @@ def test_a_sweep_whose_grid_exceeds_the_cap_is_refused_before_expanding():
     }
     with pytest.raises(ConfigError, match="120,000 runs exceed the cap"):
         expand(load_sweep(spec, check_runs=False))
+
+
+@pytest.mark.parametrize("phase", ["1e308", "-361", "720"])
+def test_a_pulse_phase_beyond_360_deg_is_refused(phase, tmp_path, capsys, monkeypatch):
+    """The documented bound of angles (±360°) holds for the pulse's carrier phase too."""
+    from cli_helpers import tiny_setup_toml
+    from echocal.signal.pulses.analytic import GaborPulse
+
+    text = tiny_setup_toml().replace(
+        'center_frequency = "5 MHz"', f'center_frequency = "5 MHz"\nphase = {phase}'
+    )
+    path = tmp_path / "phase.toml"
+    path.write_text(text, encoding="utf-8")
+    code, out, err = run_main(["setup", "validate", str(path)], capsys, monkeypatch)
+    assert code == 1 and "Traceback" not in err  # validate: 1 = the file has problems
+    assert "pulse.phase: must lie in [-360, 360]" in flat(out + err)
+    with pytest.raises(EchocalValueError, match=r"phase must lie in \[-360, 360\]"):
+        GaborPulse(center_frequency=5e6, bandwidth=50.0, phase=float(phase))
+    assert GaborPulse(center_frequency=5e6, bandwidth=50.0, phase=-360.0).phase == -360.0

@@ -166,7 +166,21 @@ def test_listening_beyond_loopback_needs_allow_remote(capsys, monkeypatch):
     assert "--allow-remote" in err and "--token" in err
 
 
-def test_allow_remote_warns_and_serves(capsys, monkeypatch):
+def test_allow_remote_without_a_token_is_refused(capsys, monkeypatch):
+    monkeypatch.delenv("ECHOCAL_INSTRUMENT_TOKEN", raising=False)
+    code, _, err = run_main(
+        ["instrument-server", "--host", "0.0.0.0", "--allow-remote", "--port", "0"],
+        capsys,
+        monkeypatch,
+    )
+    assert code == 2 and err.count("error:") == 1 and "Traceback" not in err
+    assert "needs a token" in flat(err) and "--token" in err
+
+
+TOKEN_ARGS = ("--token", "s3cret-token-42")
+
+
+def test_allow_remote_with_a_token_warns_and_serves(capsys, monkeypatch):
     from echocal.cli import instrument
 
     served = {}
@@ -176,12 +190,12 @@ def test_allow_remote_warns_and_serves(capsys, monkeypatch):
 
     monkeypatch.setattr("echocal.measurement.instrument_server.serve_forever", fake_serve)
     code, _, err = run_main(
-        ["instrument-server", "--host", "0.0.0.0", "--allow-remote", "--port", "0"],
+        ["instrument-server", "--host", "0.0.0.0", "--allow-remote", "--port", "0", *TOKEN_ARGS],
         capsys,
         monkeypatch,
     )
     assert code == 0, err
-    assert served == {"host": "0.0.0.0", "token": None}
-    assert "warning:" in err and "WITHOUT a token" in flat(err)
+    assert served == {"host": "0.0.0.0", "token": "s3cret-token-42"}
+    assert "warning:" in err and "clients must send the --token first" in flat(err)
     assert instrument.is_loopback("127.0.0.1") and instrument.is_loopback("localhost")
     assert not instrument.is_loopback("0.0.0.0")

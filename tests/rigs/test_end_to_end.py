@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_helpers import TILTED_PLATE as TILTED
 from cli_helpers import tiny_setup_toml
 from echocal.calibrate import calibrate
 from echocal.geometry import Pose, convert_angles
@@ -32,16 +33,6 @@ from echocal.rigs.plans import calibrate_plan
 POSITION = (0.001, -0.0005, 0.016)  # [m]
 X0 = (0.0, 0.0)  # [deg] tilts: 4 deg from the optimum
 RUN = {"method": "auto", "x0": X0, "settle": (0.01, 8), "rng": 11}
-
-TILTED = """
-[[specimen.shapes]]
-kind = "plane"
-center = [0, 0, 0]
-width = "40 mm"
-height = "40 mm"
-azimuth = 30
-coelevation = 4
-"""
 
 
 def test_simulator_tcp_rig_and_bluesky_calibrate_identically(tmp_path: Path):
@@ -69,7 +60,8 @@ def test_simulator_tcp_rig_and_bluesky_calibrate_identically(tmp_path: Path):
             )
         assert server.n_acquisitions == on_rig.n_measurements
 
-    probe, detector = simulated_devices(load_setup(setup), gimbal=True)
+    # seed=None: the detector draws from the setup's own noise stream, as the others do
+    probe, detector = simulated_devices(load_setup(setup), gimbal=True, seed=None)
     events = []
     engine = RunEngine({}, call_returns_result=True)
     plan = calibrate_plan(probe, detector, position=POSITION, **RUN)
@@ -88,4 +80,4 @@ def test_simulator_tcp_rig_and_bluesky_calibrate_identically(tmp_path: Path):
         np.testing.assert_allclose(other.points, direct.points, rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(other.values, direct.values, rtol=1e-9, atol=0)
         np.testing.assert_allclose(other.x, direct.x, rtol=1e-9, atol=1e-12)
-    assert len(events) == direct.n_measurements
+    assert len(events) == direct.n_measurements + 1  # and the result stream's one event

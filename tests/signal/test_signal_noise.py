@@ -102,3 +102,21 @@ def test_bad_snr_and_reference():
         noise_sigma_for_snr(REF, math.nan, WIN, PULSE)
     with pytest.raises(EchocalValueError, match="reference_samples"):
         noise_sigma_for_snr(np.zeros(WIN.n_samples), 20.0, WIN, PULSE)
+
+
+def test_scan_noise_sigma_of_an_overflowing_trace_is_unknown_not_inf():
+    """A trace of infinite or overflowing samples (a receiver fault) has no noise level:
+    None ("cannot tell"), never an infinite σ that a detector then refuses with
+    "sigma must be finite"."""
+    from echocal.signal.noise import scan_noise_sigma
+
+    rng = np.random.default_rng(0)
+    noise = rng.normal(size=256)
+    for trace in (
+        np.full(256, np.inf),
+        np.where(np.arange(256) % 2 == 0, np.inf, -np.inf),
+        np.where(np.arange(256) < 200, 1e308, -1e308) * np.sign(noise),
+    ):
+        assert scan_noise_sigma(trace) == (None, False)
+    sigma, _ = scan_noise_sigma(noise)
+    assert 0.8 < sigma < 1.2  # a normal trace still measures its σ (1, within 20 %)

@@ -55,10 +55,23 @@ def rerun_parameters(path: Path, ctx: Any) -> dict[str, Any]:
             f"--from {path} reruns the recorded calibration as it was; drop {', '.join(extra)}"
             " (only --out, --plots/--no-plots, --json, --token and --overwrite may change)"
         )
-    params = dict(record.get("parameters") or {})
+    recorded = record.get("parameters")
+    if not isinstance(recorded, dict) or not recorded:
+        raise ConfigError(
+            f"--from {path}: its provenance holds no parameters (provenance.parameters is "
+            "missing or empty), so the run cannot be repeated; give the options again instead"
+        )
+    params = dict(recorded)
     unknown = sorted(set(params) - set(ctx.params))
     if unknown:
         raise ConfigError(f"--from {path}: unknown recorded parameters {', '.join(unknown)}")
+    missing = sorted(set(ctx.params) - set(NOT_RECORDED) - set(params))
+    if missing:
+        raise ConfigError(
+            f"--from {path}: provenance.parameters lacks {', '.join(missing)}, so the rerun "
+            "would fall back to defaults the run may not have used; give the options again "
+            "instead"
+        )
     setup = record.get("setup")
     if isinstance(setup, dict) and setup.get("sha256") and params.get("setup"):
         now = setup_digest(str(params["setup"]))["sha256"]

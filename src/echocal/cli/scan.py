@@ -112,6 +112,12 @@ def register(app: typer.Typer) -> None:
         figures: bool = typer.Option(True, "--figures/--no-figures", help="Save figures."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar."),
         as_json: bool = typer.Option(False, "--json", help="Print one JSON object on stdout."),
+        scheduler: str | None = typer.Option(
+            None,
+            "--scheduler",
+            help="Dask scheduler address tcp://HOST:PORT: measure the points on its "
+            "cluster (a simulated setup; the result equals a local scan's, bit for bit).",
+        ),
     ) -> None:
         """Scan a specimen: surface normal and distance at every raster point.
 
@@ -136,6 +142,15 @@ def register(app: typer.Typer) -> None:
         )
         gx, gy = parse_grid(grid)
         scan_grid = ScanGrid.regular(x=gx, y=gy, z=parse_length("--z", z))
+        if scheduler is not None:
+            from echocal.experiments.execution import _check_scheduler
+
+            _check_scheduler(scheduler)
+            if rig is not None:
+                raise EchocalValueError(
+                    "--scheduler: a rig is measured where it stands, not on a cluster; "
+                    "drop --scheduler or --rig"
+                )
         if rig is not None:
             refuse_simulation_options(specimen=specimen, snr=snr)
             setup = rig_setup(setup, rig, "--rig")
@@ -159,6 +174,11 @@ def register(app: typer.Typer) -> None:
             else:
                 source, extra = base, {}
                 metadata = {"setup": setup, "specimen": base.specimen.name, "seed": effective}
+            if scheduler is not None:
+                from echocal.experiments.execution import _connect
+
+                extra["client"] = stack.enter_context(_connect(scheduler))
+                metadata["scheduler"] = scheduler
 
             metadata["provenance"] = opened.finish(  # finished when scan.nc is written
                 setup=setup_digest(setup),

@@ -245,7 +245,8 @@ def _connect(scheduler: str) -> Any:
             "scheduler needs dask.distributed; install it (pip install distributed)"
         ) from None
     try:
-        return Client(scheduler, timeout="20s")
+        # not the default client: xarray would then lock its file writes through the cluster
+        return Client(scheduler, timeout="20s", set_as_default=False)
     except OSError as exc:
         raise EchocalValueError(f"scheduler {scheduler}: cannot connect: {exc}") from None
 

@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
-from echocal.setups.fields import Angle, Point
+from echocal.setups.fields import Angle, NotBool, Point
 
 __all__ = ["MAX_SWEEP_RUNS", "MethodSpec", "SweepSalvage", "SweepSpec", "X0Spec"]
 
@@ -22,7 +22,10 @@ almost always a mistyped count (``seeds = 100000000``)."""
 
 def _seed_count(value: Any) -> Any:
     """``seeds``: a count or list of at most :data:`MAX_SWEEP_RUNS` (checked before a range
-    of a hundred million seeds is ever built)."""
+    of a hundred million seeds is ever built); a boolean is refused, not read as 1 or 0."""
+    items = value if isinstance(value, list) else [value]
+    if any(isinstance(v, bool) for v in items):
+        raise ValueError(f"must be a seed count or a list of seeds, not a boolean; got {value!r}")
     n = len(value) if isinstance(value, list) else value
     if isinstance(n, int) and not isinstance(n, bool) and n > MAX_SWEEP_RUNS:
         raise ValueError(
@@ -48,7 +51,7 @@ def _offset(value: Any) -> Any:
     return value
 
 
-Snr = Annotated[Annotated[float, Field(allow_inf_nan=False)] | None, BeforeValidator(_snr)]
+Snr = Annotated[Annotated[float, Field(allow_inf_nan=False)] | None, BeforeValidator(_snr), NotBool]
 SnrList = Annotated[list[Snr] | None, BeforeValidator(lambda v: None if v is None else _as_list(v))]
 
 
@@ -97,12 +100,18 @@ class SweepSpec(_Model):
     setup: str = "thesis"
     position: Point | None = None
     parameterization: Literal["tilt", "azimuth-coelevation"] = "tilt"
-    budget: int | None = Field(default=None, ge=1)
-    max_iter: int = Field(default=100, ge=1)
-    xtol: float | None = Field(default=None, ge=0, allow_inf_nan=False)
-    settle: tuple[Annotated[float, Field(gt=0)], Annotated[int, Field(ge=1)]] | None = None
-    tolerance: float = Field(default=0.1, gt=0, allow_inf_nan=False)
-    seed: int = Field(default=0, ge=0)
+    budget: Annotated[int | None, NotBool] = Field(default=None, ge=1)
+    max_iter: Annotated[int, NotBool] = Field(default=100, ge=1)
+    xtol: Annotated[float | None, NotBool] = Field(default=None, ge=0, allow_inf_nan=False)
+    settle: (
+        tuple[
+            Annotated[float, NotBool, Field(gt=0)],
+            Annotated[int, NotBool, Field(ge=1)],
+        ]
+        | None
+    ) = None
+    tolerance: Annotated[float, NotBool] = Field(default=0.1, gt=0, allow_inf_nan=False)
+    seed: Annotated[int, NotBool] = Field(default=0, ge=0)
     seeds: Annotated[int | list[Annotated[int, Field(ge=0)]], BeforeValidator(_seed_count)] = 1
     snr_db: SnrList = None
     x0: X0Spec = X0Spec(points=[(0.0, 0.0)])

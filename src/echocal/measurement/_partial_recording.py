@@ -1,14 +1,17 @@
 """The sidecar of an unfinished recording (private): chunk files plus a manifest.
 
 ``<path>.partial/`` holds ``chunk-<start>.npy`` files of shape ``(count, n_samples)`` and
-``manifest.json`` listing the finished chunks (each written atomically); see
-:func:`echocal.measurement.recording.record`.  A damaged sidecar — a chunk missing,
-unreadable or of another shape than the manifest says — is refused in one line when the
-recording resumes, before anything more is measured.
+``manifest.json`` listing the finished chunks (each written atomically, with the SHA-256
+of its file); see :func:`echocal.measurement.recording.record`.  A damaged sidecar — a
+chunk missing, unreadable, of another shape than the manifest says, whose bytes no longer
+match its SHA-256, or holding a sample that is not finite — is refused in one line when
+the recording resumes, before anything more is measured, and again before the final file
+is written.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -74,6 +77,15 @@ class _Partial:
         atomic_write_text(self.manifest_path, json.dumps(self.manifest, indent=1))
 
     def check_format(self, ascan: AScan, index: int) -> None:
+        """Refuse an A-scan of another sampling format than the earlier ones, or with a
+        sample that is not finite (a receiver fault: a recording holds finite A-scans)."""
+        if not ascan.is_finite:
+            n_bad = int(np.count_nonzero(~np.isfinite(ascan.samples)))
+            raise EchocalValueError(
+                f"measurement {index}: the source delivered an A-scan with {n_bad} sample(s) "
+                "that are not finite (a receiver fault); the earlier measurements are kept: "
+                "fix the receiver and run again to resume"
+            )
         fmt = {"fs": ascan.fs, "start_time": ascan.start_time, "n_samples": ascan.n_samples}
         known = self.manifest.get("ascan")
         if known is None:
@@ -94,14 +106,19 @@ class _Partial:
         rows = rows[done - start :]
         if rows:
             name = f"chunk-{done:09d}.npy"
-            with atomic_path(self.dir / name) as tmp, tmp.open("wb") as fh:
-                np.save(fh, np.stack(rows))
-            self.manifest["chunks"].append({"file": name, "start": done, "count": len(rows)})
+            with atomic_path(self.dir / name) as tmp:
+                with tmp.open("wb") as fh:
+                    np.save(fh, np.stack(rows))
+                digest = _sha256(tmp)
+            self.manifest["chunks"].append(
+                {"file": name, "start": done, "count": len(rows), "sha256": digest}
+            )
         self._save()
 
     def check_chunks(self) -> None:
         """Refuse, in one line, a partial recording whose chunks are damaged: missing,
-        unreadable, out of order, or of another shape than the manifest says — before
+        unreadable, out of order, of another shape than the manifest says, changed since it
+        was written (its SHA-256) or holding a sample that is not finite — before
         anything more is measured into it."""
         for chunk in self.manifest["chunks"]:
             self._chunk(chunk, mmap=True)
@@ -120,6 +137,28 @@ class _Partial:
                 f"partial recording {path} is damaged: it holds an array of shape "
                 f"{arr.shape}, the manifest says {expected} (A-scans, samples); {fix}"
             )
+        expected_digest = chunk.get("sha256")
+        if expected_digest is not None:
+            try:
+                digest = _sha256(path)
+            except OSError as exc:
+                raise DataFileError(
+                    f"partial recording {path} is unreadable ({exc.strerror or exc}); {fix}"
+                ) from None
+            if digest != expected_digest:
+                raise DataFileError(
+                    f"partial recording {path} is damaged: its SHA-256 is {digest[:12]}…, "
+                    f"the manifest says {str(expected_digest)[:12]}… (the file changed after "
+                    f"it was written); {fix}"
+                )
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            row, column = (int(v[0]) for v in np.nonzero(bad))
+            raise DataFileError(
+                f"partial recording {path} is damaged: {int(bad.sum())} sample(s) are not "
+                f"finite (first: A-scan {int(chunk['start']) + row}, sample {column}: "
+                f"{arr[row, column]}); {fix}"
+            )
         return arr
 
     def load(self, total: int) -> NDArray[np.float64]:
@@ -132,3 +171,12 @@ class _Partial:
         if expected != total:
             raise DataFileError(f"partial recording {self.dir} holds {expected} of {total} A-scans")
         return np.concatenate(parts, axis=0)
+
+
+def _sha256(path: Path) -> str:
+    """The SHA-256 (hex) of the file at ``path``."""
+    digest = hashlib.sha256()
+    with path.open("rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()

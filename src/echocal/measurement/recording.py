@@ -421,7 +421,10 @@ def record(
     progress : show a rich progress bar on stderr.
     batch_size : poses handed to ``source.measure_many`` at once (>= 1).  With 1 every
         finished measurement survives an interruption; with more, an interruption inside
-        a batch loses (and later re-measures) that batch.
+        a batch loses (and later re-measures) that batch.  Only a simulator (a source
+        with ``ideal_samples``) is batched: any other source (a rig measures one pose
+        after another) is measured one pose at a time, so every A-scan it delivered
+        survives an interruption.
     chunk_size : measurements per chunk file in the sidecar directory.
     setup : JSON-ready description of the setup, stored with the source description.
     provenance : a provenance record (:mod:`echocal.provenance`), stored as the file's
@@ -465,6 +468,8 @@ def record(
     target = Path(path)
     repeats = positive_int("repeats", repeats)
     batch_size = positive_int("batch_size", batch_size)
+    if not hasattr(source, "ideal_samples"):  # no vectorized batch to gain: keep each A-scan
+        batch_size = 1
     chunk_size = positive_int("chunk_size", chunk_size)
     sidecar = partial_path(target)
     if target.is_dir():

@@ -272,6 +272,7 @@ class ReplaySource(BaseSource):
         """
         if p not in self._blocks:
             block = np.asarray(self._samples[p].values, dtype=np.float64)
+            _check_magnitudes(block, self.path, p)
             block.setflags(write=False)
             self._blocks[p] = block
         return self._blocks[p]
@@ -460,3 +461,24 @@ def _validate(ds: Any, file: Path) -> None:
             raise DataFileError(
                 f"{file}: coordinate {axis!r} must be finite and strictly increasing"
             )
+
+
+MAX_SAMPLE = 1e30
+"""[a.u.] the largest sample magnitude a recording may hold: metrics square samples, so
+beyond it an energy overflows (1e300² is inf) and every later number is meaningless."""
+
+
+def _check_magnitudes(block: NDArray[np.float64], path: Any, p: int) -> None:
+    """Refuse a position's A-scans ``block`` holding an infinite sample or one beyond
+    :data:`MAX_SAMPLE` (NaN marks a missing A-scan and stays)."""
+    with np.errstate(invalid="ignore"):
+        bad = np.abs(block) > MAX_SAMPLE  # NaN compares False; inf is caught
+    if not bad.any():
+        return
+    a, c, r, t = (int(v[0]) for v in np.nonzero(bad))
+    raise DataFileError(
+        f"{path}: variable 'samples' holds {int(bad.sum())} value(s) that are infinite or "
+        f"beyond ±{MAX_SAMPLE:g} at position index {p} (first: azimuth index {a}, "
+        f"coelevation index {c}, repeat {r}, sample {t}: {block[a, c, r, t]:g}); a receiver "
+        "fault or a damaged file: re-record it, or set those A-scans to NaN (missing)"
+    )

@@ -6,7 +6,10 @@
   :data:`SCOPE_PRESETS` (Keysight, Tektronix, Rigol);
 * :class:`VisaPositioner` — a SCPI-style motion controller, presets :data:`MOTION_PRESETS`;
 * :mod:`echocal.rigs.ophyd_devices` and :mod:`echocal.rigs.plans` — Bluesky (``bluesky``
-  extra): ophyd devices for the simulator and :func:`~echocal.rigs.plans.calibrate_plan`.
+  extra): ophyd devices for the simulator and :func:`~echocal.rigs.plans.calibrate_plan`;
+* :mod:`echocal.rigs.scpi_bench` — a simulated SCPI bench (motion controller and
+  oscilloscope on TCP) serving the simulator's pose-dependent echoes to the VISA drivers
+  through pyvisa-py.
 
 PyVISA, Bluesky and ophyd are optional (extras ``visa`` and ``bluesky``); they are
 imported on first use and a missing one is named with the extra to install.

@@ -11,9 +11,25 @@ detector read is handed back to the optimizer (a worker thread runs the driver a
 waits for each A-scan; the plan waits for each request, so exactly one of them works
 at a time).  The plan returns the :class:`~echocal.calibrate.CalibrationResult`.
 
+Pause and resume follow Bluesky's contract: the plan yields a ``checkpoint`` before and
+right after each measurement, so a deferred pause (one Ctrl-C) stops after the
+measurement in progress, and an immediate pause rewinds to the measurement's start and
+takes it again on ``RE.resume()``.  The optimizer is told each measurement once, with
+the A-scan of its event (read back after the event is saved), so a resumed run has one
+event per measurement, unique ``seq_num``, and the result of an uninterrupted run when
+the detector's retake is the same A-scan (echocal's simulated detector draws the noise
+of measurement ``seq`` from a seed).  ``stop``, ``abort`` and ``halt`` end the
+optimizer's thread with the run.
+
+The estimate, the metric of every measurement and the outcome go into the run's
+``result`` stream (one event after the last measurement); the start document carries
+``plan_name``, ``plan_args``, ``hints`` and the method's settings, and the stop
+document's ``reason`` is the outcome's message.
+
 The detector may be the user's own: it must read its A-scan samples (an array signal),
 and its sampling frequency [Hz] and first-sample time [s] as signals or as numbers
-given to the plan.
+given to the plan.  A detector with a ``seq`` signal is given each measurement's index
+(the event's ``seq_num``) before its trigger.
 """
 
 from __future__ import annotations
@@ -26,6 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from echocal import __version__
 from echocal.ascan import AScan
 from echocal.calibrate import CalibrationResult, calibrate
 from echocal.errors import EchocalValueError
@@ -197,11 +214,31 @@ def calibrate_plan(
         "position_m": [float(v) for v in objective.position],
         "detectors": [name],
         "motors": [str(getattr(m, "name", a)) for a, m in zip(AXES, axes, strict=True)],
+        "plan_args": {
+            "motors": repr(motors),
+            "detector": repr(detector),
+            "position": [float(v) for v in objective.position],
+            "method": method,
+            "x0": [float(v) for v in x0],
+            "parameterization": parameterization,
+            "metric": metric,
+            "budget": budget,
+            "max_iter": max_iter,
+            "settle": None if settle is None else list(settle),
+            "rng": repr(rng),
+            "options": {k: repr(v) for k, v in options.items()},
+        },
+        "hints": {"dimensions": [([f"{name}_seq"], "primary")]}
+        if getattr(detector, "seq", None) is not None
+        else {"dimensions": [(["time"], "primary")]},
+        "echocal_version": __version__,
         **dict(md or {}),
     }
     worker = threading.Thread(target=drive, name="echocal-calibrate-plan", daemon=True)
     yield from bps.open_run(md=start_md)
     worker.start()
+    seq = getattr(detector, "seq", None)
+    n_measured = 0
     try:
         while True:
             request = bridge.requests.get()
@@ -209,9 +246,22 @@ def calibrate_plan(
                 outcome = request[1]
                 break
             pose: Pose = request
-            targets = zip(axes, pose.as_array(), strict=True)
-            yield from bps.mv(*[v for motor, value in targets for v in (motor, float(value))])
-            reading = yield from bps.trigger_and_read([detector, *axes])
+            n_measured += 1
+            # a pause from here to the save rewinds to this checkpoint and retakes the
+            # measurement: the optimizer has not been told it yet
+            yield from bps.checkpoint()
+            targets = [v for m, x in zip(axes, pose.as_array(), strict=True) for v in (m, float(x))]
+            if seq is not None:
+                targets = [seq, n_measured, *targets]
+            yield from bps.mv(*targets)
+            yield from bps.trigger_and_read([detector, *axes])
+            # the event is saved: no rewind may take it again
+            yield from bps.checkpoint()
+            # the values the event recorded (a read outside the event bundle: the reply a
+            # rewound message gives the plan may be incomplete)
+            reading: dict[str, Any] = {}
+            for device in (detector, *axes):
+                reading.update((yield from bps.read(device)) or {})
             bridge.replies.put(_ascan(reading, keys, _reached(reading, axes, pose)))
     except BaseException as exc:
         bridge.replies.put(_Aborted(f"calibrate_plan stopped: {type(exc).__name__}: {exc}"))
@@ -220,8 +270,34 @@ def calibrate_plan(
     worker.join()
     if isinstance(outcome, BaseException):
         raise outcome
-    yield from bps.close_run()
+    yield from bps.checkpoint()
+    yield from bps.trigger_and_read(_result_signals(outcome), name="result")
+    yield from bps.close_run(exit_status="success", reason=outcome.message)
     return outcome
+
+
+def _result_signals(result: CalibrationResult) -> list[Any]:
+    """ophyd signals holding the result: the ``result`` stream's one event.
+
+    ``result_x`` [deg] (2,), ``result_fun`` (the metric at the estimate; NaN when not
+    measured there), ``result_values`` (the metric of every measurement, in order),
+    ``result_points`` [deg] (n_measurements, 2), ``result_success``,
+    ``result_status``, ``result_message``, ``result_n_measurements``.
+    """
+    from ophyd import Signal
+
+    fun = float("nan") if result.fun is None else float(result.fun)
+    fields: dict[str, Any] = {
+        "x": np.asarray(result.x, dtype=np.float64),
+        "fun": fun,
+        "values": np.asarray(result.values, dtype=np.float64),
+        "points": np.asarray(result.points, dtype=np.float64),
+        "success": int(bool(result.success)),
+        "status": int(result.status),
+        "message": str(result.message),
+        "n_measurements": int(result.n_measurements),
+    }
+    return [Signal(name=f"result_{key}", value=value) for key, value in fields.items()]
 
 
 def _reached(reading: Mapping[str, Any], axes: list[Any], requested: Pose) -> Pose:

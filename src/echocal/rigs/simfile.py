@@ -1,4 +1,9 @@
-"""Simulated VISA instruments (pyvisa-sim YAML) for tests, demos and ``echocal rig check``.
+"""Simulated VISA instruments (pyvisa-sim YAML) for protocol tests and ``echocal rig check``.
+
+These instruments test the protocol only: pyvisa-sim answers fixed text, so each scope
+returns the same trace at every pose and a calibration on them means nothing.  For
+echoes that follow the pose, use :class:`echocal.rigs.scpi_bench.ScpiBench`
+(``echocal instrument-server --protocol scpi``).
 
 pyvisa-sim answers each query with fixed text encoded as UTF-8 (version 0.7), so a
 binary block can only hold bytes below 0x80; ``\\n``, ``\\r`` and ``\\`` are also left

@@ -283,6 +283,7 @@ def scan_surface(
     gate: TimeGate | None = None,
     longitudinal_speed: float | None = None,
     prechecked: int | None = None,
+    client: Any = None,
 ) -> SurfaceScan:
     """Scan ``grid`` with ``source``: surface normal and distance at every point.
 
@@ -339,6 +340,13 @@ def scan_surface(
     prechecked : what :func:`check_scan` returned for this source, grid and these same
         settings, when the caller has already run it (the CLI does, before it creates the
         output folder); None: the check runs here.
+    client : a :class:`distributed.Client`: the points are measured on its Dask cluster
+        (the source travels to the workers: a simulator or a replay, not a rig).  A point
+        starts once every earlier point (in scan order) within the warm-start radius is
+        finished, and its warm start is computed from them here, exactly as a local scan
+        does; each point's noise and calibration come from its own seed.  So the result
+        equals a local scan's bit for bit; a cold scan (``warm_start=False``) runs all
+        its points at once, a warm scan's serpentine chain runs mostly one after another.
 
     Notes
     -----
@@ -447,16 +455,27 @@ def scan_surface(
     }
     radius = 2.5 * grid.spacing
     t_start = time.perf_counter()
+    runner = _Runner(ctx, client)
+    ahead = _Ahead(runner, order, xy, radius, warm_start, records)
     with ProgressBar("scan", total=len(order), completed=resumed, enabled=progress) as bar:
         for i, key in enumerate(order):
             if key in records:
                 continue
-            guess = None
-            if warm_start:
-                guess = predict(found, xy[key], {k: xy[k] for k in found}, radius)
-            guess = ctx.x0 if guess is None else guess
-            rec = _measure_point(ctx, positions[key], guess, [int(seeds[i])])
-            rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and guess is not ctx.x0))
+
+            def start_point(j: int) -> tuple[Any, bool]:
+                """Start point ``j`` (its earlier neighbours are finished): its task and
+                whether it is warm-started."""
+                k = order[j]
+                guess = None
+                if warm_start:
+                    guess = predict(found, xy[k], {n: xy[n] for n in found}, radius)
+                start = ctx.x0 if guess is None else guess
+                return runner.submit(positions[k], start, [int(seeds[j])]), guess is not None
+
+            ahead.start_ready(i, start_point)
+            task, warm = ahead.take(i)
+            rec = runner.result(task)
+            rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and warm))
             records[key] = rec
             if rec["status"] == 0:
                 found[key] = np.array([rec["a"], rec["b"]])
@@ -493,12 +512,13 @@ def scan_surface(
                 continue
             others = {k: v for k, v in found.items() if k != key}
             guess = predict(others, xy[key], {k: xy[k] for k in others}, radius)
-            new = _measure_point(
-                ctx,
-                positions[key],
-                ctx.x0 if guess is None else guess,  # None only without neighbours (not here)
-                [int(seeds[i]), 1],
-                left,
+            new = runner.result(
+                runner.submit(
+                    positions[key],
+                    ctx.x0 if guess is None else guess,  # None only without neighbours
+                    [int(seeds[i]), 1],
+                    left,
+                )
             )
             new["warm"] = True
             best = new if attempt_score(new) >= attempt_score(old) else old
@@ -512,6 +532,7 @@ def scan_surface(
                 store.append(rec)
         for key in records:  # a found echo far below the strong ones is not trusted
             records[key] = demote_weak(records[key], ctx.relative_snr, snr_ref)
+    runner.close()
     wall = time.perf_counter() - t_start
     if truth is None:
         truth = getattr(source, "specimen", None)
@@ -537,3 +558,83 @@ def scan_surface(
         result.save(out)
         store.remove()
     return result
+
+
+class _Runner:
+    """Measures points (:func:`_measure_point`) here, or on a Dask cluster (private)."""
+
+    def __init__(self, ctx: _Context, client: Any) -> None:
+        self.ctx = ctx
+        self.client = client
+        self._ctx_future = None
+        if client is not None:  # sent to every worker once, not with each point
+            self._ctx_future = client.scatter(ctx, broadcast=True, hash=False)
+
+    def submit(self, position: FloatArray, start: FloatArray, seed: list[int], *rest: Any) -> Any:
+        """A point's task: its record (here) or a future of it (on the cluster)."""
+        if self.client is None:
+            return _measure_point(self.ctx, position, start, seed, *rest)
+        return self.client.submit(
+            _measure_point, self._ctx_future, position, start, seed, *rest, pure=False
+        )
+
+    def result(self, task: Any) -> dict[str, Any]:
+        """The record of a task :meth:`submit` returned."""
+        if self.client is None:
+            return task
+        record = task.result()
+        task.release()
+        return record
+
+    def close(self) -> None:
+        """Forget the context on the cluster."""
+        if self._ctx_future is not None:
+            self._ctx_future.release()
+            self._ctx_future = None
+
+
+class _Ahead:
+    """Which points of the first pass may start before the one being collected (private).
+
+    Point ``j`` depends on the earlier points (in scan order) within the warm-start
+    ``radius`` (none on a cold scan): once all of them are collected, its warm start is
+    the one a local scan computes, and it may run.  Locally nothing runs ahead (each
+    point is measured when it is collected); on a cluster every ready point is started.
+    """
+
+    def __init__(
+        self,
+        runner: _Runner,
+        order: list[tuple[int, int]],
+        xy: FloatArray,
+        radius: float,
+        warm_start: bool,
+        records: Mapping[tuple[int, int], Any],
+    ) -> None:
+        self.runner = runner
+        self.order = order
+        self.todo = [j for j, key in enumerate(order) if key not in records]
+        points = np.array([xy[key] for key in order]).reshape(len(order), 2)
+        self.last_dependency = np.full(len(order), -1)
+        if warm_start:
+            for j in range(len(order)):
+                near = np.hypot(*(points[:j] - points[j]).T) <= radius
+                earlier = np.flatnonzero(near)
+                self.last_dependency[j] = earlier[-1] if earlier.size else -1
+        self.started: dict[int, tuple[Any, bool]] = {}
+        self._next = 0  # index into todo of the first point not started
+
+    def start_ready(self, i: int, start_point: Callable[[int], tuple[Any, bool]]) -> None:
+        """Start point ``i`` and, on a cluster, every later point whose dependencies
+        are all before ``i`` (collected)."""
+        while self._next < len(self.todo):
+            j = self.todo[self._next]
+            if j != i and (self.runner.client is None or self.last_dependency[j] >= i):
+                break
+            if j not in self.started:
+                self.started[j] = start_point(j)
+            self._next += 1
+
+    def take(self, i: int) -> tuple[Any, bool]:
+        """The started task of point ``i``."""
+        return self.started.pop(i)

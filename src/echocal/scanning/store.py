@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from echocal.errors import DataFileError
-from echocal.io import atomic_write_text
+from echocal.io import atomic_write_text, unwritable
 
 __all__ = [
     "PARTIAL_FORMAT",
@@ -131,11 +131,16 @@ class PointStore:
         return records
 
     def append(self, record: dict[str, Any]) -> None:
-        """Save one finished point durably."""
-        with self._points.open("a", encoding="utf-8") as fh:
-            fh.write(json.dumps(record, allow_nan=True) + "\n")
-            fh.flush()
-            os.fsync(fh.fileno())
+        """Save one finished point durably; a refused write (a full disk, a file-size
+        limit) is a :class:`~echocal.errors.DataFileError` naming the file and the cause
+        (a torn line it may leave is dropped on resume)."""
+        try:
+            with self._points.open("a", encoding="utf-8") as fh:
+                fh.write(json.dumps(record, allow_nan=True) + "\n")
+                fh.flush()
+                os.fsync(fh.fileno())
+        except OSError as exc:
+            raise unwritable(self._points, exc) from None
 
     def remove(self) -> None:
         """Delete the store (after the final file is written)."""

@@ -223,10 +223,16 @@ def scan_noise_sigma(samples: np.ndarray) -> tuple[float | None, bool]:
     estimate.  When the noise is below the ADC step Δ most samples share one level and the
     MAD is 0; then the RMS deviation of the samples within ±3 Δ of that level measures the
     quantized noise the receiver actually delivers (the echo's large samples excluded).
-    σ is None for a constant trace (nothing to tell).  "Below the ADC step" means the
-    MAD is 0 and the sample values lie on a grid (an ADC's levels).
+    σ is None for a constant trace (nothing to tell), and when it would not be finite (a
+    trace of infinite or overflowing samples: a receiver fault, not a noise level).
+    "Below the ADC step" means the MAD is 0 and the sample values lie on a grid (an
+    ADC's levels).
     """
-    sigma = float(mad_sigma(samples))
+    samples = np.asarray(samples, dtype=np.float64)
+    with np.errstate(invalid="ignore", over="ignore"):
+        sigma = float(mad_sigma(samples))
+    if not np.isfinite(sigma):
+        return None, False
     if sigma > 0.0:
         return sigma, False
     dev = samples - np.median(samples)

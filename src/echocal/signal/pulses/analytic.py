@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
-from echocal._validate import finite_float, lookup, positive_float, positive_int
+from echocal._validate import finite_float, in_range, lookup, positive_float, positive_int
 from echocal.constants import DEFAULT_CENTER_FREQUENCY
 from echocal.errors import EchocalValueError
 from echocal.signal.pulses.base import (
@@ -43,7 +43,7 @@ class GaborPulse(Pulse):
         full −6 dB width is 2√(α ln 2)/π (the same convention as scipy.signal.gausspulse;
         exact for the positive-frequency lobe, whose overlap with the negative one is
         negligible for bandwidths below ~150 %).  Use :meth:`from_alpha` to give α.
-    phase : [deg] carrier phase φ.
+    phase : [deg] carrier phase φ, within ±360°.
     """
 
     center_frequency: float = DEFAULT_CENTER_FREQUENCY
@@ -57,7 +57,7 @@ class GaborPulse(Pulse):
         if bw > 200.0:
             raise EchocalValueError(f"bandwidth must lie in (0, 200] %; got {bw:g}")
         object.__setattr__(self, "bandwidth", bw)
-        object.__setattr__(self, "phase", finite_float("phase", self.phase))
+        object.__setattr__(self, "phase", in_range("phase", self.phase, -360.0, 360.0))
 
     @classmethod
     def from_alpha(
@@ -164,7 +164,7 @@ class SincPulse(Pulse):
     window : truncation window, one of :data:`WINDOW_NAMES` (``kaiser`` uses ``kaiser_beta``).
     lobes : number of sinc zero crossings kept on each side: T = lobes / (2B).
     length : [s] full truncated length 2T; overrides ``lobes`` when given.
-    phase : [deg] carrier phase φ.
+    phase : [deg] carrier phase φ, within ±360°.
     kaiser_beta : shape parameter β of the ``kaiser`` window.
     """
 
@@ -186,7 +186,7 @@ class SincPulse(Pulse):
         object.__setattr__(self, "lobes", positive_int("lobes", self.lobes))
         if self.length is not None:
             object.__setattr__(self, "length", positive_float("length", self.length))
-        object.__setattr__(self, "phase", finite_float("phase", self.phase))
+        object.__setattr__(self, "phase", in_range("phase", self.phase, -360.0, 360.0))
         object.__setattr__(self, "kaiser_beta", finite_float("kaiser_beta", self.kaiser_beta))
         if b > fc:
             warnings.warn(

@@ -1,0 +1,65 @@
+"""``calibrate --from result.json`` refuses a result that lacks what a rerun needs, in one
+line, instead of silently running the default calibration."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from cli_helpers import flat, run_main, tiny_setup_toml
+
+CALIBRATE = ["calibrate", "--setup", "tiny.toml", "--position", "0,0,16", "--x0", "2,-1"]
+CALIBRATE += ["--method", "model-based", "--budget", "8", "--settle", "none", "--no-plots"]
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("rerun")
+    (folder / "tiny.toml").write_text(tiny_setup_toml(), encoding="utf-8")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(folder)
+        code, _, err = run_main([*CALIBRATE, "--out", "first"], _Capsys(), patch)
+    assert code in (0, 1, 3), err
+    return folder / "first" / "result.json"
+
+
+class _Capsys:
+    """run_main's capture for a module fixture (capsys is per test)."""
+
+    def readouterr(self) -> tuple[str, str]:
+        return "", ""
+
+
+def _edited(result: Path, tmp_path: Path, edit) -> Path:
+    data = json.loads(result.read_text(encoding="utf-8"))
+    edit(data["provenance"])
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("edit", "expected"),
+    [
+        (lambda p: p.pop("parameters"), "holds no parameters"),
+        (lambda p: p.update(parameters={}), "holds no parameters"),
+        (lambda p: p["parameters"].pop("method"), "lacks method"),
+        (lambda p: p["parameters"].pop("position"), "lacks position"),
+    ],
+    ids=["removed", "empty", "no-method", "no-position"],
+)
+def test_from_refuses_a_result_without_its_parameters(
+    result, edit, expected, tmp_path, capsys, monkeypatch
+):
+    monkeypatch.chdir(result.parent.parent)
+    edited = _edited(result, tmp_path, edit)
+    out = tmp_path / "again"
+    code, _, err = run_main(
+        ["calibrate", "--from", str(edited), "--out", str(out)], capsys, monkeypatch
+    )
+    assert code == 2 and err.count("error:") == 1 and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err
+    assert expected in flat(err) and str(edited) in flat(err)
+    assert not out.exists()  # nothing ran, nothing written

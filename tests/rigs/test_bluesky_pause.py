@@ -1,0 +1,215 @@
+"""``calibrate_plan`` under Bluesky's pause/resume contract, in a real RunEngine.
+
+Pauses are injected into the plan's message stream (a ``pause`` message after the n-th
+message of a kind, as a plan's own ``bps.pause`` or ``RE.request_pause`` would do), so
+each test interrupts at a known point: during the move, after the trigger, inside the
+event bundle, and a deferred pause (one Ctrl-C).  Whatever the point, a resumed run has
+one ``primary`` event per measurement, unique ``seq_num``, and the uninterrupted run's
+result; ``stop``, ``abort`` and ``halt`` end the run and the optimizer's thread.
+"""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cli_helpers import tiny_setup_toml
+from echocal.setups import load_setup
+
+pytest.importorskip("ophyd")
+pytest.importorskip("bluesky")
+from bluesky import Msg, RunEngine
+from bluesky.preprocessors import plan_mutator
+from bluesky.utils import FailedStatus, RunEngineInterrupted, single_gen
+
+from echocal.rigs.ophyd_devices import simulated_devices
+from echocal.rigs.plans import calibrate_plan
+
+POSITION = (0.0, 0.0, 0.016)  # [m] the tiny setup's reference position
+PLAN = {"position": POSITION, "x0": (2.0, 1.0), "method": "model-based", "budget": 14}
+
+
+@pytest.fixture(scope="module")
+def virtual(tmp_path_factory: pytest.TempPathFactory):
+    path: Path = tmp_path_factory.mktemp("setup") / "tiny.toml"
+    path.write_text(tiny_setup_toml(), encoding="utf-8")
+    return load_setup(path)
+
+
+def _pause_after(plan, command: str, nth: int, *, defer: bool = False, obj_name: str = ""):
+    """``plan`` with a ``pause`` message after its ``nth`` (1-based) ``command`` message
+    (on the object named ``obj_name``, if given)."""
+    seen = {"n": 0}
+
+    def insert(msg):
+        name = getattr(msg.obj, "name", "")
+        if msg.command == command and (not obj_name or name == obj_name):
+            seen["n"] += 1
+            if seen["n"] == nth:
+                return None, single_gen(Msg("pause", None, defer=defer))
+        return None, None
+
+    return plan_mutator(plan, insert)
+
+
+def _streams(docs):
+    """{stream name: [event, ...]} of a run's documents."""
+    names = {d["uid"]: d["name"] for n, d in docs if n == "descriptor"}
+    out: dict[str, list[dict]] = {}
+    for n, d in docs:
+        if n == "event":
+            out.setdefault(names[d["descriptor"]], []).append(d)
+    return out
+
+
+def _drive(virtual, wrap=None, then: str = "resume"):
+    """Run the plan (``wrap``-ped), resuming every pause (or ending the run with
+    ``then``); returns (the plan's result or None, documents, number of pauses)."""
+    probe, detector = simulated_devices(virtual, gimbal=True, seed=7)
+    plan = calibrate_plan(probe, detector, **PLAN)
+    docs: list[tuple[str, dict]] = []
+    engine = RunEngine({}, call_returns_result=True)
+    engine.subscribe(lambda name, doc: docs.append((name, doc)))
+    call = lambda: engine(wrap(plan) if wrap else plan)  # noqa: E731
+    pauses = 0
+    while True:
+        try:
+            outcome = call()
+        except RunEngineInterrupted:
+            pauses += 1
+            call = getattr(engine, then)
+            continue
+        return outcome, docs, pauses
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(virtual):
+    outcome, docs, pauses = _drive(virtual)
+    assert pauses == 0 and outcome.exit_status == "success"
+    return outcome.plan_result, docs
+
+
+def _check_documents(docs, n_measurements: int) -> None:
+    primary = _streams(docs)["primary"]
+    seq_nums = [e["seq_num"] for e in primary]
+    assert seq_nums == list(range(1, n_measurements + 1))  # one event each, unique, in order
+    # the detector's seq (the index the plan set before the trigger) is the event's
+    assert [e["data"]["ascan_seq"] for e in primary] == seq_nums
+
+
+@pytest.mark.parametrize(
+    ("command", "nth", "obj_name", "defer"),
+    [
+        ("set", 7, "probe_azimuth", False),  # during a move
+        ("trigger", 4, "", False),  # after the detector's trigger, before the event
+        ("read", 9, "ascan", False),  # inside the event bundle (the 5th measurement's)
+        ("read", 8, "ascan", False),  # after the 4th event: the plan reads its values back
+        ("create", 11, "", False),  # the bundle opened, nothing read
+        ("trigger", 2, "", True),  # one Ctrl-C: pause at the next checkpoint
+    ],
+)
+def test_a_paused_and_resumed_run_equals_an_uninterrupted_one(
+    virtual, uninterrupted, command, nth, obj_name, defer
+):
+    reference, reference_docs = uninterrupted
+    wrap = lambda plan: _pause_after(plan, command, nth, defer=defer, obj_name=obj_name)  # noqa: E731
+    outcome, docs, pauses = _drive(virtual, wrap)
+    assert pauses == 1 and outcome.exit_status == "success"
+    result = outcome.plan_result
+    _check_documents(docs, result.n_measurements)
+    # the same measurements, values and estimate: the retake is the same A-scan and the
+    # optimizer was told each measurement once
+    assert result.n_measurements == reference.n_measurements
+    np.testing.assert_array_equal(result.points, reference.points)
+    np.testing.assert_array_equal(result.values, reference.values)
+    np.testing.assert_array_equal(result.x, reference.x)
+    events = _streams(docs)["primary"]
+    for ours, theirs in zip(events, _streams(reference_docs)["primary"], strict=True):
+        np.testing.assert_array_equal(
+            ours["data"]["ascan_samples"], theirs["data"]["ascan_samples"]
+        )
+    # the result stream: one event with the estimate, every measurement's metric and
+    # the outcome; the stop document's reason is the outcome's message
+    (final,) = _streams(docs)["result"]
+    np.testing.assert_array_equal(final["data"]["result_x"], result.x)
+    np.testing.assert_array_equal(final["data"]["result_values"], result.values)
+    assert final["data"]["result_n_measurements"] == result.n_measurements
+    assert final["data"]["result_message"] == result.message
+    stop = [d for n, d in docs if n == "stop"][-1]
+    assert stop["reason"] == result.message and stop["num_events"]["primary"] == len(events)
+
+
+def test_a_deferred_pause_takes_effect_after_the_measurement_in_progress(virtual):
+    """One Ctrl-C during measurement 3 pauses at the checkpoint after its event."""
+    probe, detector = simulated_devices(virtual, gimbal=True, seed=7)
+    docs: list[tuple[str, dict]] = []
+    engine = RunEngine({}, call_returns_result=True)
+    engine.subscribe(lambda name, doc: docs.append((name, doc)))
+    plan = _pause_after(calibrate_plan(probe, detector, **PLAN), "trigger", 3, defer=True)
+    with pytest.raises(RunEngineInterrupted):
+        engine(plan)
+    assert engine.state == "paused" and len(_streams(docs)["primary"]) == 3
+    engine.abort()
+    assert not [t for t in threading.enumerate() if t.name == "echocal-calibrate-plan"]
+
+
+@pytest.mark.parametrize(
+    ("then", "exit_status"), [("stop", "success"), ("abort", "abort"), ("halt", "abort")]
+)
+def test_stop_abort_and_halt_after_a_pause_end_the_run(virtual, then, exit_status):
+    wrap = lambda plan: _pause_after(plan, "create", 5)  # noqa: E731
+    _, docs, pauses = _drive(virtual, wrap, then=then)
+    assert pauses == 1
+    stop = [d for n, d in docs if n == "stop"]
+    assert len(stop) == 1 and stop[0]["exit_status"] == exit_status
+    primary = _streams(docs)["primary"]
+    # measurements 1-4 were saved; the 5th was interrupted in its bundle: never saved
+    assert [e["seq_num"] for e in primary] == [1, 2, 3, 4]
+    assert "result" not in _streams(docs)
+    assert not [t for t in threading.enumerate() if t.name == "echocal-calibrate-plan"]
+
+
+def test_the_plan_documents_follow_the_conventions(virtual, uninterrupted):
+    _, docs = uninterrupted
+    start = docs[0][1]
+    assert start["plan_name"] == "calibrate_plan"
+    assert start["plan_args"]["method"] == "model-based" and start["plan_args"]["budget"] == 14
+    assert start["hints"] == {"dimensions": [(["ascan_seq"], "primary")]}
+    descriptor = next(d for n, d in docs if n == "descriptor" and d["name"] == "primary")
+    keys = descriptor["data_keys"]
+    assert keys["ascan_samples"]["units"] == "a.u." and keys["ascan_samples"]["dtype"] == "array"
+    assert keys["ascan_fs"]["units"] == "Hz" and keys["ascan_start_time"]["units"] == "s"
+    assert keys["probe_z"]["units"] == "m" and keys["probe_azimuth"]["units"] == "deg"
+    assert descriptor["hints"]["ascan"] == {"fields": ["ascan_peak"]}
+
+
+def test_a_failing_trigger_finishes_its_status_with_the_exception(virtual):
+    probe, detector = simulated_devices(virtual, gimbal=True)
+
+    class Unplugged:
+        limits = virtual.limits
+
+        def measure(self, pose):
+            raise OSError("scope unplugged")
+
+    detector.source = Unplugged()
+    status = detector.trigger()  # does not raise
+    assert status.done and not status.success
+    assert isinstance(status.exception(), OSError)
+    engine = RunEngine({})
+    with pytest.raises(FailedStatus) as failed:  # the RunEngine's way to report it
+        engine(calibrate_plan(probe, detector, **PLAN))
+    assert "scope unplugged" in repr(failed.value.__cause__) + repr(failed.value.args)
+    assert not [t for t in threading.enumerate() if t.name == "echocal-calibrate-plan"]
+
+
+def test_the_simulated_devices_start_at_the_reference_pose(virtual):
+    _, detector = simulated_devices(virtual)
+    pose = detector.pose()
+    np.testing.assert_allclose([pose.x, pose.y, pose.z], virtual.reference_position)
+    assert (pose.azimuth, pose.coelevation) == (0.0, 0.0)
+    detector.trigger()
+    assert detector.peak.get() > 0.0  # an echo: something is measured where it starts

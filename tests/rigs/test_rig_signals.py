@@ -1,0 +1,152 @@
+"""Every signal keeps every measurement, on every driver: ``record --rig`` through the TCP
+driver (the emulator) and through the VISA drivers (the simulated SCPI bench, pyvisa-py)
+is stopped by SIGINT, SIGTERM or SIGHUP after a few A-scans, then run again: it resumes
+and the file holds every A-scan the rig delivered, once, in order.
+
+The instruments serve from a recording proxy of the simulator, so the test knows every
+A-scan the rig sent; the signal is sent to this process (the CLI runs in-process in the
+main thread, where the handlers are) by a thread watching the instrument's count.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from cli_helpers import flat, run_main, tiny_setup_toml
+from echocal.geometry import Pose
+from echocal.measurement import InstrumentServer
+from echocal.setups import load_setup
+
+pytest.importorskip("pyvisa_py")
+from echocal.rigs.scpi_bench import ScpiBench, rig_file_text
+
+GRID = ["--azimuth", "0", "--coelevation", "-3:3:7", "--position", "0,0,16"]
+STOP_AFTER = 3  # A-scans the instrument delivers before the signal
+EXIT = {"SIGINT": 130, "SIGTERM": 143, "SIGHUP": 129}
+
+
+class Served:
+    """A measurement source that keeps every A-scan it serves (delegates the rest)."""
+
+    def __init__(self, source: Any) -> None:
+        self._source = source
+        self.samples: list[np.ndarray] = []
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._source, name)
+
+    def measure(self, pose: Pose) -> Any:
+        return self.measure_many([pose])[0]
+
+    def measure_many(self, poses: list[Pose]) -> list[Any]:
+        scans = self._source.measure_many(poses)
+        self.samples += [np.asarray(s.samples) for s in scans]
+        return scans
+
+
+def _tcp(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float]:
+    server = InstrumentServer(source, initial_pose=Pose(0.0, 0.0, 0.016), move_time=0.02)
+    host, port = server.address
+    lines = ["[rig]", f'setup = "{setup.as_posix()}"']
+    for part in ("positioner", "receiver"):
+        lines += [f"[rig.{part}]", 'driver = "tcp"', f'address = "{host}:{port}"', "timeout = 30"]
+    rig = tmp_path / "tcp-rig.toml"
+    rig.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return server, rig, 0.0  # the line protocol sends float64: exact
+
+
+def _visa(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float]:
+    bench = ScpiBench(source)
+    rig = tmp_path / "visa-rig.toml"
+    rig.write_text(rig_file_text(bench.resource, setup=setup.as_posix()), encoding="utf-8")
+    return bench, rig, 0.51 * bench.y_increment  # 16-bit codes: half a code
+
+
+def _count(instrument: Any) -> int:
+    return len(instrument._served.samples)
+
+
+@pytest.mark.slow  # six record runs and six resumes over sockets: about 25 s
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize("driver", [_tcp, _visa], ids=["tcp", "visa"])
+@pytest.mark.parametrize("name", list(EXIT))
+def test_a_signal_keeps_every_ascan_and_the_run_resumes(
+    name, driver, tmp_path, capsys, monkeypatch
+):
+    setup = tmp_path / "tiny.toml"
+    setup.write_text(tiny_setup_toml(), encoding="utf-8")
+    served = Served(load_setup(setup))
+    instrument, rig, atol = driver(served, tmp_path, setup)
+    out = tmp_path / "rec.nc"
+    args = ["record", "--rig", str(rig), *GRID, "--out", str(out), "--no-progress"]
+
+    def send_signal() -> None:
+        while len(served.samples) < STOP_AFTER:
+            time.sleep(0.005)
+        os.kill(os.getpid(), getattr(signal, name))
+
+    with instrument:
+        killer = threading.Thread(target=send_signal, daemon=True)
+        killer.start()
+        code, _, err = run_main(args, capsys, monkeypatch)
+        killer.join()
+        first = list(served.samples)
+        assert code == EXIT[name], err
+        assert "Traceback" not in err and "run the same command again to resume" in flat(err)
+        assert not out.exists()
+        code, _, err = run_main(args, capsys, monkeypatch)
+        assert code == 0, err
+    resumed_after = int(flat(err).split("resumed after ")[1].split(")")[0])
+    # every A-scan delivered before the signal is kept (the one in flight, if any, is
+    # measured again on resume)
+    assert len(first) - 1 <= resumed_after <= len(first) and resumed_after >= STOP_AFTER - 1
+    expected = first[:resumed_after] + served.samples[len(first) :]
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        stored = ds["samples"].values.reshape(-1, ds.sizes["time"])
+    assert len(stored) == len(expected) == 7
+    for got, sent in zip(stored, expected, strict=True):
+        np.testing.assert_allclose(got, sent, rtol=0, atol=atol)
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize("driver", [_tcp, _visa], ids=["tcp", "visa"])
+def test_sighup_during_calibrate_on_a_rig_saves_every_measurement(
+    driver, tmp_path, capsys, monkeypatch
+):
+    """The reported case: SIGHUP during ``calibrate --rig`` (exit 1 with a traceback from
+    numba's interrupted first import, and no partial_log.json)."""
+    setup = tmp_path / "tiny.toml"
+    setup.write_text(tiny_setup_toml(), encoding="utf-8")
+    served = Served(load_setup(setup))
+    instrument, rig, _ = driver(served, tmp_path, setup)
+    args = ["calibrate", "--rig", str(rig), "--position", "0,0,16", "--x0", "2,-1"]
+    args += ["--method", "model-based", "--budget", "200", "--no-plots", "--out", "cal"]
+    monkeypatch.chdir(tmp_path)
+
+    def send_signal() -> None:
+        while len(served.samples) < STOP_AFTER:
+            time.sleep(0.005)
+        os.kill(os.getpid(), signal.SIGHUP)
+
+    with instrument:
+        killer = threading.Thread(target=send_signal, daemon=True)
+        killer.start()
+        code, _, err = run_main(args, capsys, monkeypatch)
+        killer.join()
+    assert code == 129, err
+    assert "Traceback" not in err and "aborted: terminated by SIGHUP" in err
+    log = json.loads((tmp_path / "cal" / "partial_log.json").read_text())
+    assert log["status"] == "interrupted" and log["error"] == "terminated by SIGHUP"
+    delivered = len(served.samples)
+    assert delivered - 1 <= log["n_measurements"] <= delivered  # one may be in flight
+    assert len(log["values"]) == log["n_measurements"] >= STOP_AFTER - 1

@@ -1,0 +1,49 @@
+"""Termination signals (``echocal._signals``): a signal never interrupts an import.
+
+A signal raised inside an import leaves the module half-imported; numba's lazy import on
+the first measurement of a rig run made the cleanup fail (``module 'numba' has no
+attribute 'core'``) and lose the measurements.  Here a module sends the signal to its
+own process in the middle of being imported: the import completes, then the signal
+arrives as the same exception as before.
+"""
+
+from __future__ import annotations
+
+import importlib
+import signal
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from echocal._signals import Terminated, terminate_like_ctrl_c
+
+SELF_SIGNALLING = """
+import os, signal, time
+os.kill(os.getpid(), signal.{name})
+deadline = time.monotonic() + 0.2
+while time.monotonic() < deadline:  # the handler runs here, inside the import
+    pass
+COMPLETE = True
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [("SIGHUP", Terminated), ("SIGTERM", Terminated), ("SIGINT", KeyboardInterrupt)],
+)
+def test_a_signal_during_an_import_arrives_after_it(name, expected, tmp_path: Path, monkeypatch):
+    module = f"echocal_test_self_signalling_{name.lower()}"
+    (tmp_path / f"{module}.py").write_text(SELF_SIGNALLING.format(name=name), encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    imported = None
+    with pytest.raises(expected), terminate_like_ctrl_c() as fired:
+        imported = importlib.import_module(module)
+        time.sleep(5.0)  # the signal is delivered again 50 ms after the import: ends this
+    assert imported is not None and imported.COMPLETE  # the import was not interrupted
+    assert module in sys.modules and sys.modules[module].COMPLETE
+    if expected is Terminated:
+        assert fired == [getattr(signal, name)]
+    del sys.modules[module]
