@@ -5,23 +5,10 @@ from __future__ import annotations
 import typer
 
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP
+from echocal.measurement.instrument_server import is_loopback
 
 TOKEN_ENV = "ECHOCAL_INSTRUMENT_TOKEN"
 """Environment variable holding the instrument's shared token (kept out of `ps`)."""
-
-
-def is_loopback(host: str) -> bool:
-    """Whether every address ``host`` resolves to is this machine's loopback."""
-    import ipaddress
-    import socket
-
-    try:
-        infos = socket.getaddrinfo(host, None)
-    except OSError:
-        return False  # unresolvable: not known to be local (binding will say more)
-    return bool(infos) and all(
-        ipaddress.ip_address(str(info[4][0]).split("%")[0]).is_loopback for info in infos
-    )
 
 
 def _check_host(host: str, allow_remote: bool, token: str | None) -> None:
