@@ -1,0 +1,24 @@
+"""Probe characterization on a bench (EN 12668-2 / ASTM E1065 style measurements).
+
+- :func:`~echocal.characterize.axis.measure_beam_axis`: the beam axis over a flat
+  reflector and its squint against the mechanical axis;
+- :func:`~echocal.characterize.spectrum.measure_spectrum`: centre frequency and −6 dB
+  bandwidth from the front-wall echo's spectrum;
+- :func:`~echocal.characterize.profile.measure_beam_profile`: the −6 dB beam width at
+  several distances from lateral scans over a ball, and the on-axis echo against distance.
+
+Every function takes any :class:`~echocal.measurement.base.MeasurementSource`, so the
+same code characterizes a simulated probe and one on a rig.
+"""
+
+from echocal.characterize.axis import BeamAxis, measure_beam_axis, squint_of
+from echocal.characterize.spectrum import EchoSpectrum, measure_spectrum, spectrum_band
+
+__all__ = [
+    "BeamAxis",
+    "EchoSpectrum",
+    "measure_beam_axis",
+    "measure_spectrum",
+    "spectrum_band",
+    "squint_of",
+]
