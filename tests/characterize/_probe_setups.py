@@ -48,3 +48,52 @@ def write_setup(folder: Path, text: str, name: str = "probe.toml") -> Path:
     path = folder / name
     path.write_text(text)
     return path
+
+
+WATER_LIKE = (
+    'material = { name = "water-like", density = "1000 kg/m3", '
+    'longitudinal_speed = "1480 m/s", shear_speed = "10 m/s" }'
+)
+
+
+def pore_setup(width: str = "2 mm", focus: str | None = None, start: str = "65 us") -> str:
+    """A probe over a 0.6 mm pore 20 mm deep in a water-like solid (c_L and density of
+    water: no front-wall echo, no refraction), so the pore is a point target in water; a
+    narrowband (10 %) pulse so the beam is the centre frequency's; wave model."""
+    focused = "" if focus is None else f'focus = "{focus}"\n'
+    return f"""
+name = "pore-probe-test"
+seed = 0
+[medium]
+sound_speed = "1480 m/s"
+[specimen]
+builtin = "flat-plate"
+{WATER_LIKE}
+thickness = "40 mm"
+back_wall_echoes = 0
+[[specimen.flaws]]
+name = "ball"
+kind = "pore"
+position = [0, 0, "-20 mm"]
+diameter = "0.6 mm"
+[transducer]
+width = "{width}"
+aperture = "circular"
+n_h = 16
+pinhole_distance = "1 m"
+{focused}[pulse]
+name = "gabor"
+center_frequency = "5 MHz"
+bandwidth = 10
+[window]
+fs = "50 MHz"
+start = "{start}"
+n_samples = 2048
+[echo]
+reflection = "wave"
+[positioner]
+reference_position = ["0 mm", "0 mm", "40 mm"]
+"""
+
+
+PORE_TOP = (0.0, 0.0, -0.0197)  # [m] the pore's top (centre 20 mm deep, radius 0.3 mm)
