@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from _probe_setups import BENCH, FLAT, SQUINT, write_setup
+from _probe_setups import BENCH, FLAT, SQUINT, pore_setup, write_setup
 
 from cli_helpers import flat, run_main
 
@@ -30,6 +30,23 @@ def test_characterize_prints_writes_json_and_the_report(tmp_path, capsys, monkey
     assert "squint (0.5" in flat(text) and "centre frequency" in text
 
 
+def test_characterize_measures_beam_widths_and_focus_over_the_point_setup(
+    tmp_path, capsys, monkeypatch
+):
+    flat_probe = write_setup(tmp_path, FLAT.replace('"12.7 mm"', '"2 mm"'), "flat.toml")
+    point = write_setup(tmp_path, pore_setup(start="40 us") + BENCH, "point.toml")
+    args = ["characterize", "--setup", str(flat_probe), "--coarse-points", "5", "--span", "4"]
+    args += ["--point-setup", str(point), "--distances", "40,55", "--line-points", "21"]
+    args += ["--half-span", "8", "--focus-distances", "30,35,40", "--json"]
+    code, text, err = run_main(args, capsys, monkeypatch)
+    assert code == 0, err
+    data = json.loads(text)
+    widths = np.array(data["beam_profile"]["width_6db_m"])
+    assert widths.shape == (2, 2) and np.all(widths[1] > widths[0])  # the beam spreads
+    # a flat 2 mm probe has no focus beyond its 3.4 mm near field: no maximum inside
+    assert data["focus"]["focal_distance_m"] is None
+
+
 @pytest.mark.parametrize(
     ("option", "value", "field"),
     [
@@ -37,6 +54,7 @@ def test_characterize_prints_writes_json_and_the_report(tmp_path, capsys, monkey
         ("--position", "1,2", "--position"),
         ("--reflector-tilts", "a,b", "--reflector-tilts"),
         ("--averages", "0", "n_ascans"),
+        ("--distances", "40", "--point-setup"),
     ],
 )
 def test_bad_input_is_one_line_naming_the_field(

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 import typer
@@ -12,6 +12,9 @@ from echocal.cli._common import output, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.errors import EchocalValueError
 from echocal.units import parse_quantity
+
+if TYPE_CHECKING:
+    from echocal.measurement.virtual import VirtualSetup
 
 
 def _position(text: str) -> np.ndarray:
@@ -32,6 +35,26 @@ def _tilts(text: str) -> np.ndarray:
     if len(values) != 2 or not np.all(np.isfinite(values)):
         raise EchocalValueError(f"--reflector-tilts must be TX,TY in degrees; got {text!r}")
     return np.array(values)
+
+
+def _lengths(option: str, text: str) -> np.ndarray:
+    """Comma-separated lengths (mm unless a unit is given) [m]."""
+    parts = [p.strip() for p in text.split(",") if p.strip()]
+    if not parts:
+        raise EchocalValueError(f"{option} must be one or more lengths, e.g. 40,50,60 (mm)")
+    return np.array([parse_quantity(option, p, "length", "mm") for p in parts])
+
+
+def _default_target(virtual: VirtualSetup) -> np.ndarray:
+    """The top of the point setup's first flaw (a pore's top, a hole's axis)."""
+    interior = virtual.interior
+    if interior is None or not interior.flaws:
+        raise EchocalValueError(
+            "--target: the point setup has no flaw to scan; give X,Y,Z of the point target"
+        )
+    flaw = interior.flaws[0]
+    top = 0.5 * flaw.diameter if flaw.kind == "pore" else 0.0
+    return np.asarray(flaw.position, float) + np.array([0.0, 0.0, top])
 
 
 def register(app: typer.Typer) -> None:
@@ -62,6 +85,32 @@ def register(app: typer.Typer) -> None:
         fine_points: Annotated[int, typer.Option(help="Fine grid points per side.")] = 11,
         repeats: Annotated[int, typer.Option(help="A-scans averaged per tilt.")] = 1,
         averages: Annotated[int, typer.Option(help="A-scans averaged for the spectrum.")] = 16,
+        point_setup: Annotated[
+            str | None,
+            typer.Option(
+                help="Setup (same probe) with a point target (a ball; a pore in a part of "
+                "water's impedance) for the beam widths and the focal distance."
+            ),
+        ] = None,
+        target: Annotated[
+            str | None,
+            typer.Option(
+                help="X,Y,Z of the point target (mm unless a unit is given); default: the "
+                "top of the point setup's first flaw."
+            ),
+        ] = None,
+        distances: Annotated[
+            str | None,
+            typer.Option(help="Distances probe to target for the beam widths, e.g. 40,50,60 (mm)."),
+        ] = None,
+        half_span: Annotated[
+            str, typer.Option(help="Each lateral line's half-length (mm unless a unit is given).")
+        ] = "10",
+        line_points: Annotated[int, typer.Option(help="Points per lateral line.")] = 41,
+        focus_distances: Annotated[
+            str | None,
+            typer.Option(help="Distances of the on-axis scan for the focal distance (mm)."),
+        ] = None,
         out: Annotated[
             Path | None, typer.Option(help="Folder for characterize.json and characterize.png.")
         ] = None,
@@ -70,7 +119,9 @@ def register(app: typer.Typer) -> None:
         ] = False,
     ) -> None:
         """Measure the probe's beam axis and squint over a flat reflector, then the centre
-        frequency and −6 dB bandwidth of the echo at that axis (EN 12668-2 style)."""
+        frequency and −6 dB bandwidth of the echo at that axis; with --point-setup, the −6
+        dB beam widths at --distances and the focal distance over a point target (EN
+        12668-2 style)."""
         from echocal.characterize import characterize_probe
 
         virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
@@ -88,6 +139,24 @@ def register(app: typer.Typer) -> None:
             reflector = np.asarray(normals[0], float)
         else:
             reflector = _tilts(reflector_tilts)
+        if point_setup is None and (distances or focus_distances or target):
+            raise EchocalValueError(
+                "--point-setup: the beam widths and the focal distance need a setup with a "
+                "point target"
+            )
+        points = target_at = None
+        dist = focal = np.zeros(0)
+        span_m = parse_quantity("--half-span", half_span, "length", "mm")
+        if point_setup is not None:
+            points = resolve_setup(point_setup, snr=snr, seed=seed)
+            target_at = _default_target(points) if target is None else _position(target)
+            dist = np.zeros(0) if distances is None else _lengths("--distances", distances)
+            if focus_distances is not None:
+                focal = _lengths("--focus-distances", focus_distances)
+            if dist.size == 0 and focal.size == 0:
+                raise EchocalValueError(
+                    "--distances: give the distances of the beam widths (or --focus-distances)"
+                )
         result = characterize_probe(
             virtual,
             where,
@@ -97,6 +166,12 @@ def register(app: typer.Typer) -> None:
             fine_points=fine_points,
             repeats=repeats,
             n_ascans=averages,
+            point_source=points,
+            target=target_at,
+            distances=dist,
+            half_span=span_m,
+            line_points=line_points,
+            focus_distances=focal,
         )
         data = result.to_dict()
         if out is not None:
@@ -129,5 +204,21 @@ def register(app: typer.Typer) -> None:
             f"{spec.bandwidth_sigma_hz / 1e6:.4f} MHz ({100 * spec.relative_bandwidth:.1f} %), "
             f"{spec.lower_hz / 1e6:.4f} to {spec.upper_hz / 1e6:.4f} MHz"
         )
+        if result.profile is not None:
+            profile = result.profile
+            for d, widths, sigmas in zip(
+                profile.distances, profile.width, profile.width_sigma, strict=True
+            ):
+                shown = ", ".join(
+                    f"{name}' {1e3 * w:.3f} ± {1e3 * e:.3f} mm"
+                    for name, w, e in zip(profile.axes, widths, sigmas, strict=True)
+                )
+                output.print(f"  -6 dB beam width at {1e3 * d:g} mm: {shown}")
+        if result.focus is not None:
+            f, e = result.focus.focal_distance, result.focus.focal_sigma
+            shown = "no maximum inside the scan" if not np.isfinite(f) else f"{1e3 * f:.2f} mm"
+            if np.isfinite(e):
+                shown += f" ± {1e3 * e:.2f} mm"
+            output.print(f"  focal distance: {shown}")
         if out is not None:
             output.print(f"  wrote {', '.join(data['files'])}")  # type: ignore[arg-type]
