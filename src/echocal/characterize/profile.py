@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_array, positive_float, positive_int
+from echocal.characterize.axis import echo_peaks
 from echocal.errors import EchocalValueError
 from echocal.geometry import Pose, tilt_frame
 from echocal.measurement.base import MeasurementSource
@@ -253,9 +254,6 @@ def measure_focus(
     tilts = finite_array("tilts", tilts_deg, shape_tail=(2,)).reshape(2)
     n_rep = positive_int("repeats", repeats)
     axis = tilt_frame(*tilts)[:, 2]
-    poses = [Pose.from_tilt(*(where + d * axis), *tilts) for d in dist for _ in range(n_rep)]
-    scans = source.measure_many(poses)
-    samples = np.array([s.samples for s in scans]).reshape(dist.size, n_rep, -1)
-    amp = envelope(samples.mean(axis=1)).max(axis=-1)
+    amp = echo_peaks(source, [Pose.from_tilt(*(where + d * axis), *tilts) for d in dist], n_rep)
     focus, sigma = focal_distance(dist, amp)
     return FocalScan(distances=dist, amplitude=amp, focal_distance=focus, focal_sigma=sigma)

@@ -10,20 +10,12 @@ import typer
 
 from echocal.cli._common import output, write_json
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.cli.lobe import _position  # X,Y,Z in mm, as `echocal lobe` reads it
 from echocal.errors import EchocalValueError
 from echocal.units import parse_quantity
 
 if TYPE_CHECKING:
     from echocal.measurement.virtual import VirtualSetup
-
-
-def _position(text: str) -> np.ndarray:
-    parts = [p.strip() for p in text.split(",")]
-    if len(parts) != 3:
-        raise EchocalValueError(
-            f"--position must be X,Y,Z (mm unless a unit is given); got {text!r}"
-        )
-    return np.array([parse_quantity("--position", p, "length", "mm") for p in parts])
 
 
 def _tilts(text: str) -> np.ndarray:
