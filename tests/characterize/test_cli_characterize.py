@@ -67,3 +67,20 @@ def test_bad_input_is_one_line_naming_the_field(
     assert code != 0
     assert field in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_the_mechanical_axis_is_the_tilted_plates_normal(tmp_path, capsys, monkeypatch):
+    setup = write_setup(tmp_path, FLAT.replace('"flat-plate"', '"tilted-plate"'))
+    args = ["characterize", "--setup", str(setup), "--snr", "none", "--coarse-points", "7"]
+    code, text, err = run_main([*args, "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    axis = json.loads(text)["beam_axis"]
+    # the plate's normal (azimuth 30°, co-elevation 4°) as gimbal tilts, computed here:
+    # n = (sin 4° cos 30°, sin 4° sin 30°, cos 4°) = R_y(t_y) R_x(t_x) ẑ
+    n = np.array([np.sin(np.radians(4)) * np.cos(np.radians(30)), 0.0, np.cos(np.radians(4))])
+    n[1] = np.sin(np.radians(4)) * np.sin(np.radians(30))
+    t_x = np.degrees(np.arcsin(-n[1]))
+    t_y = np.degrees(np.arctan2(n[0], n[2]))
+    assert np.allclose(axis["reflector_tilts_deg"], [t_x, t_y], atol=1e-6)
+    # an ideal bench has no squint: within the 0.05° (the fit lands within 0.005°)
+    assert np.allclose(axis["squint_deg"], 0.0, atol=0.05)

@@ -49,13 +49,27 @@ def _default_target(virtual: VirtualSetup) -> np.ndarray:
     return np.asarray(flaw.position, float) + np.array([0.0, 0.0, top])
 
 
+def _surface_normal_tilts(virtual: VirtualSetup, where: np.ndarray) -> np.ndarray:
+    """Gimbal tilts [deg] of the specimen's surface normal where the beam meets it at
+    normal incidence from ``where`` [m] (the exact normal of the surface hit)."""
+    from echocal.geometry import normal_to_tilt, tilt_normal
+    from echocal.raytrace import cast
+
+    best = virtual.normal_incidence_directions(where)[0]
+    direction = -tilt_normal(*best)[None, :]
+    hits = cast(virtual.specimen, where[None, :], direction)
+    normal = np.asarray(hits.normal[0], float)
+    normal = normal if normal @ direction[0] < 0 else -normal
+    return np.array([float(v) for v in normal_to_tilt(normal)])
+
+
 def register(app: typer.Typer) -> None:
     """Add ``echocal characterize`` to ``app``."""
 
     @app.command("characterize")
     def characterize(
         setup: Annotated[str, typer.Option(help=SETUP_HELP)] = "immersion-5mhz-ray",
-        specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = "flat-plate",
+        specimen: Annotated[str | None, typer.Option(help=SPECIMEN_HELP)] = None,
         snr: Annotated[str | None, typer.Option(help=SNR_HELP)] = None,
         seed: Annotated[int | None, typer.Option(help="Noise seed.")] = None,
         position: Annotated[
@@ -123,12 +137,7 @@ def register(app: typer.Typer) -> None:
             else _position(position)
         )
         if reflector_tilts is None:
-            normals = virtual.normal_incidence_directions(where)
-            if len(normals) == 0:
-                raise EchocalValueError(
-                    "--reflector-tilts: no surface below the probe; give TX,TY or --position"
-                )
-            reflector = np.asarray(normals[0], float)
+            reflector = _surface_normal_tilts(virtual, where)
         else:
             reflector = _tilts(reflector_tilts)
         if point_setup is None and (distances or focus_distances or target):
