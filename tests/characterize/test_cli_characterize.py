@@ -84,3 +84,28 @@ def test_the_mechanical_axis_is_the_tilted_plates_normal(tmp_path, capsys, monke
     assert np.allclose(axis["reflector_tilts_deg"], [t_x, t_y], atol=1e-6)
     # an ideal bench has no squint: within the issue's 0.05° (the fit lands within 0.005°)
     assert np.allclose(axis["squint_deg"], 0.0, atol=0.05)
+
+
+def test_characterize_on_a_rig_file(tmp_path, capsys, monkeypatch):
+    """The emulated rig (the simulator behind an instrument server on loopback, as in
+    tests/rigs) measures the squint of the probe it serves."""
+    pytest.importorskip("pyvisa_sim")
+    from echocal.geometry import Pose
+    from echocal.measurement import InstrumentServer
+    from echocal.setups import load_setup
+
+    setup = write_setup(tmp_path, FLAT + BENCH)
+    with InstrumentServer(load_setup(setup), initial_pose=Pose(0.0, 0.0, 0.05)) as server:
+        host, port = server.address
+        lines = ["[rig]", 'name = "emulated"']
+        for part in ("positioner", "receiver"):
+            lines += [f"[rig.{part}]", 'driver = "tcp"', f'address = "{host}:{port}"']
+            lines += ["timeout = 30"]
+        rig = tmp_path / "rig.toml"
+        rig.write_text("\n".join(lines) + "\n")
+        args = ["characterize", "--rig", str(rig), "--coarse-points", "7", "--averages", "4"]
+        code, _, err = run_main([*args, "--snr", "20"], capsys, monkeypatch)
+        assert code != 0 and "--snr" in err
+        code, text, err = run_main([*args, "--position", "0,0,50", "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    assert np.allclose(json.loads(text)["beam_axis"]["squint_deg"], SQUINT, atol=0.05)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -9,12 +10,14 @@ import numpy as np
 import typer
 
 from echocal.cli._common import output, write_json
+from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.cli.lobe import _position  # X,Y,Z in mm, as `echocal lobe` reads it
 from echocal.errors import EchocalValueError
 from echocal.units import parse_quantity
 
 if TYPE_CHECKING:
+    from echocal.measurement.base import MeasurementSource
     from echocal.measurement.virtual import VirtualSetup
 
 
@@ -29,8 +32,10 @@ def _tilts(text: str) -> np.ndarray:
     return np.array(values)
 
 
-def _lengths(option: str, text: str) -> np.ndarray:
-    """Comma-separated lengths (mm unless a unit is given) [m]."""
+def _lengths(option: str, text: str | None) -> np.ndarray:
+    """Comma-separated lengths (mm unless a unit is given) [m]; none when not given."""
+    if text is None:
+        return np.zeros(0)
     parts = [p.strip() for p in text.split(",") if p.strip()]
     if not parts:
         raise EchocalValueError(f"{option} must be one or more lengths, e.g. 40,50,60 (mm)")
@@ -91,6 +96,7 @@ def register(app: typer.Typer) -> None:
         fine_points: Annotated[int, typer.Option(help="Fine grid points per side.")] = 11,
         repeats: Annotated[int, typer.Option(help="A-scans averaged per tilt.")] = 1,
         averages: Annotated[int, typer.Option(help="A-scans averaged for the spectrum.")] = 16,
+        rig: Annotated[Path | None, typer.Option(help=RIG_HELP)] = None,
         point_setup: Annotated[
             str | None,
             typer.Option(
@@ -127,53 +133,82 @@ def register(app: typer.Typer) -> None:
         """Measure the probe's beam axis and squint over a flat reflector, then the centre
         frequency and −6 dB bandwidth of the echo at that axis; with --point-setup, the −6
         dB beam widths at --distances and the focal distance over a point target (EN
-        12668-2 style)."""
+        12668-2 style).  With --rig, on a rig: --position is required, the reflector is
+        level unless --reflector-tilts says otherwise, and the point target (--target) is
+        on the same rig."""
         from echocal.characterize import characterize_probe
 
-        virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
-        where = (
-            np.asarray(virtual.reference_position, float)
-            if position is None
-            else _position(position)
-        )
-        if reflector_tilts is None:
-            reflector = _surface_normal_tilts(virtual, where)
-        else:
-            reflector = _tilts(reflector_tilts)
-        if point_setup is None and (distances or focus_distances or target):
-            raise EchocalValueError(
-                "--point-setup: the beam widths and the focal distance need a setup with a "
-                "point target"
-            )
-        points = target_at = None
-        dist = focal = np.zeros(0)
         span_m = parse_quantity("--half-span", half_span, "length", "mm")
-        if point_setup is not None:
-            points = resolve_setup(point_setup, snr=snr, seed=seed)
-            target_at = _default_target(points) if target is None else _position(target)
-            dist = np.zeros(0) if distances is None else _lengths("--distances", distances)
-            if focus_distances is not None:
-                focal = _lengths("--focus-distances", focus_distances)
-            if dist.size == 0 and focal.size == 0:
-                raise EchocalValueError(
-                    "--distances: give the distances of the beam widths (or --focus-distances)"
-                )
-        result = characterize_probe(
-            virtual,
-            where,
-            reflector_tilts_deg=reflector,
-            span_deg=span,
-            coarse_points=coarse_points,
-            fine_points=fine_points,
-            repeats=repeats,
-            n_ascans=averages,
-            point_source=points,
-            target=target_at,
-            distances=dist,
-            half_span=span_m,
-            line_points=line_points,
-            focus_distances=focal,
+        dist = np.zeros(0) if distances is None else _lengths("--distances", distances)
+        focal = (
+            np.zeros(0)
+            if focus_distances is None
+            else _lengths("--focus-distances", focus_distances)
         )
+        target_at = None if target is None else _position(target)
+        with ExitStack() as stack:
+            if rig is not None:
+                from echocal.cli._rig_option import (
+                    open_rig,
+                    refuse_simulation_options,
+                    require_position,
+                )
+
+                refuse_simulation_options(
+                    specimen=specimen, snr=snr, seed=seed, point_setup=point_setup
+                )
+                where = _position(require_position(position, "--rig"))
+                reflector = np.zeros(2) if reflector_tilts is None else _tilts(reflector_tilts)
+                if target_at is None and (dist.size or focal.size):
+                    raise EchocalValueError(
+                        "--target X,Y,Z of the point target is required with --rig for "
+                        "--distances and --focus-distances"
+                    )
+                source: MeasurementSource = stack.enter_context(open_rig(rig))
+                points: MeasurementSource | None = source
+            else:
+                virtual = resolve_setup(setup, specimen=specimen, snr=snr, seed=seed)
+                source, points = virtual, None
+                where = (
+                    np.asarray(virtual.reference_position, float)
+                    if position is None
+                    else _position(position)
+                )
+                reflector = (
+                    _surface_normal_tilts(virtual, where)
+                    if reflector_tilts is None
+                    else _tilts(reflector_tilts)
+                )
+                if point_setup is None and (dist.size or focal.size or target is not None):
+                    raise EchocalValueError(
+                        "--point-setup: the beam widths and the focal distance need a setup "
+                        "with a point target (or --rig)"
+                    )
+                if point_setup is not None:
+                    points = resolve_setup(point_setup, snr=snr, seed=seed)
+                    if target_at is None:
+                        target_at = _default_target(points)
+                    if dist.size == 0 and focal.size == 0:
+                        raise EchocalValueError(
+                            "--distances: give the distances of the beam widths (or "
+                            "--focus-distances)"
+                        )
+            result = characterize_probe(
+                source,
+                where,
+                reflector_tilts_deg=reflector,
+                span_deg=span,
+                coarse_points=coarse_points,
+                fine_points=fine_points,
+                repeats=repeats,
+                n_ascans=averages,
+                point_source=points,
+                target=target_at,
+                distances=dist,
+                half_span=span_m,
+                line_points=line_points,
+                focus_distances=focal,
+            )
         data = result.to_dict()
         if out is not None:
             from echocal.plots import save_figure
