@@ -26,6 +26,8 @@ def test_characterize_prints_writes_json_and_the_report(tmp_path, capsys, monkey
     )
     assert (out / "characterize.png").stat().st_size > 0
     code, text, err = run_main(args, capsys, monkeypatch)
+    assert code == 2 and "--overwrite" in err  # the folder holds the first run's files
+    code, text, err = run_main([*args, "--overwrite"], capsys, monkeypatch)
     assert code == 0, err
     assert "squint (0.5" in flat(text) and "centre frequency" in text
 

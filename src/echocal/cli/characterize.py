@@ -21,6 +21,10 @@ if TYPE_CHECKING:
     from echocal.measurement.virtual import VirtualSetup
 
 
+_OWN_FILES = ("characterize.json", "characterize.png", "characterize.svg")
+"""What ``--out`` holds after a run (removed first with --overwrite)."""
+
+
 def _tilts(text: str) -> np.ndarray:
     parts = text.split(",")
     try:
@@ -126,6 +130,9 @@ def register(app: typer.Typer) -> None:
         out: Annotated[
             Path | None, typer.Option(help="Folder for characterize.json and characterize.png.")
         ] = None,
+        overwrite: Annotated[
+            bool, typer.Option("--overwrite", help="Replace the files of a run in --out.")
+        ] = False,
         json_output: Annotated[
             bool, typer.Option("--json", help="Print the result as one JSON object.")
         ] = False,
@@ -137,7 +144,10 @@ def register(app: typer.Typer) -> None:
         level unless --reflector-tilts says otherwise, and the point target (--target) is
         on the same rig."""
         from echocal.characterize import characterize_probe
+        from echocal.io import check_out_dir, refuse_existing_output
 
+        if out is not None:  # refused before anything is measured
+            refuse_existing_output(out, overwrite=overwrite)
         span_m = parse_quantity("--half-span", half_span, "length", "mm")
         dist = np.zeros(0) if distances is None else _lengths("--distances", distances)
         focal = (
@@ -214,7 +224,7 @@ def register(app: typer.Typer) -> None:
             from echocal.plots import save_figure
             from echocal.plots.characterize import plot_characterization
 
-            out.mkdir(parents=True, exist_ok=True)
+            check_out_dir(out, overwrite=overwrite, own_files=_OWN_FILES)
             write_json(data, out / "characterize.json")
             files = save_figure(plot_characterization(result), out / "characterize.png")
             data["files"] = [str(out / "characterize.json"), *map(str, files)]
