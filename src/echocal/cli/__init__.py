@@ -47,6 +47,7 @@ _COMMAND_MODULES = (
     "echocal.cli.scene",
     "echocal.cli.simulate",
     "echocal.cli.lobe",
+    "echocal.cli.characterize",
     "echocal.cli.calibrate",
     "echocal.cli.methods",
     "echocal.cli.setup",
