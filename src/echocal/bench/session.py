@@ -4,22 +4,44 @@ time so far, and how a batch of commanded poses becomes A-scans on this bench.""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from echocal.bench.grain import GrainField
 from echocal.bench.model import Bench
 from echocal.bench.positioner import PositionerState
 from echocal.bench.receiver import ar_noise
 from echocal.geometry import Pose, poses_to_arrays, tilt_frame
-
-if TYPE_CHECKING:
-    from echocal.measurement.virtual import VirtualSetup
+from echocal.signal import Pulse, Receiver, RecordingWindow
 
 __all__ = ["BenchSession"]
 
 FloatArray = NDArray[np.float64]
+
+
+class Simulator(Protocol):
+    """What a bench session needs of the simulator (:class:`echocal.measurement.VirtualSetup`)."""
+
+    @property
+    def window(self) -> RecordingWindow: ...
+    @property
+    def pulse(self) -> Pulse: ...
+    @property
+    def grain_field(self) -> GrainField | None: ...
+    @property
+    def grain_scale(self) -> float: ...
+    @property
+    def noise_sigma(self) -> float: ...
+    @property
+    def _generator(self) -> np.random.Generator: ...
+    @property
+    def _digitizer(self) -> Receiver: ...
+    def _check_outside(
+        self, positions: FloatArray, *, poses: Sequence[Pose] | None = None, what: str = "pose"
+    ) -> None: ...
+    def _ideal(self, positions: FloatArray, frames: FloatArray) -> FloatArray: ...
 
 
 class BenchSession:
@@ -41,7 +63,7 @@ class BenchSession:
         """[s] the bench time spent so far (motion, settling and acquisition)."""
 
     def measure(
-        self, setup: VirtualSetup, poses: Sequence[Pose]
+        self, setup: Simulator, poses: Sequence[Pose]
     ) -> tuple[FloatArray, list[dict[str, Any]]]:
         """Noisy A-scans ``(P, n_samples)`` of ``poses`` visited in order, and each one's
         bench facts: ``bench_time`` [s] (its motion + settling + acquisition),
