@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from echocal.experiments._findings import Finding
 from echocal.geometry import Pose, orientation_normal
 from echocal.measurement.virtual import VirtualSetup
+from echocal.plots._figure import new_figure
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.processing import envelope, time_of_flight
 from echocal.specimen.builtins import THESIS_BLOCK_FACETS
@@ -61,7 +62,7 @@ def ascan_overlay_figure(
     from echocal.constants import ECHO_THRESHOLD
     from echocal.plots.ascan import _detection_level, _noise_sigma
 
-    fig = Figure(figsize=(10, 4.0), layout="constrained")
+    fig = new_figure(figsize=(10, 4.0), layout="constrained")
     full, zoom = fig.subplots(1, 2, width_ratios=(2, 1))
     t_us = times * 1e6
     styles = ("-", (0, (5, 1.5)), "-.", (0, (1, 1)))

@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
 from echocal.constants import ECHO_THRESHOLD
+from echocal.plots._figure import new_figure
 from echocal.signal.gates import TimeGate
 from echocal.signal.processing import Gate, envelope, time_of_flight
 from echocal.signal.pulses import Pulse
@@ -77,7 +78,7 @@ def plot_ascan(
         tof = float(time_of_flight(gated, window, pulse, gate=gate)) if np.any(gated) else None
         tof = tof if tof is not None and np.isfinite(tof) else None
     zoom = tof is not None and pulse is not None
-    fig = Figure(figsize=(12, 5.8 if zoom else 3.6), layout="constrained")
+    fig = new_figure(figsize=(12, 5.8 if zoom else 3.6), layout="constrained")
     axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
     sigma = _noise_sigma(x) if noise_sigma is None else float(noise_sigma)
     env = envelope(x)
