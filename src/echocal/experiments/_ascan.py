@@ -60,7 +60,7 @@ def ascan_overlay_figure(
     (:data:`~echocal.constants.ECHO_THRESHOLD` σ, as an echo's envelope peak) are drawn.
     """
     from echocal.constants import ECHO_THRESHOLD
-    from echocal.plots.ascan import _detection_level, _noise_sigma
+    from echocal.plots.ascan import _detection_level, _noise_sigma, noise_label, threshold_label
 
     fig = new_figure(figsize=(10, 4.0), layout="constrained")
     full, zoom = fig.subplots(1, 2, width_ratios=(2, 1))
@@ -84,7 +84,7 @@ def ascan_overlay_figure(
                     color="0.3",
                     ls=":",
                     lw=1.0,
-                    label=f"noise ±σ (σ = {sigma:.3g})" if ax is full else None,
+                    label=noise_label(sigma) if ax is full else None,
                 )
                 ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
             if level:
@@ -93,7 +93,7 @@ def ascan_overlay_figure(
                     color="C4",
                     ls=(0, (6, 3)),
                     lw=1.2,
-                    label=f"detection threshold {level:.3g} (g = {ECHO_THRESHOLD:g} σ)"
+                    label=threshold_label(level, ECHO_THRESHOLD)
                     if ax is full
                     else None,
                 )

@@ -87,10 +87,10 @@ def plot_ascan(
         ax.plot(t_us, x, lw=0.8, color="C0", ls="-", label="A-scan")
         ax.plot(t_us, env, lw=1.2, color="C1", ls="--", label="envelope")
         if sigma > 0:
-            ax.axhline(sigma, color="0.3", ls=":", lw=1.0, label=f"noise ±σ (σ = {sigma:.3g})")
+            ax.axhline(sigma, color="0.3", ls=":", lw=1.0, label=noise_label(sigma))
             ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
         if detect:
-            label = f"detection threshold {detect:.3g} (g = {significance:g} σ)"
+            label = threshold_label(detect, significance)
             ax.axhline(detect, color="C4", ls=(0, (6, 3)), lw=1.2, label=label)
         if gate is not None:
             level = float(gate.level(x[None, :])[0])
@@ -150,6 +150,18 @@ def _draw_gates(ax, gates: Sequence[TimeGate], x: np.ndarray, window: RecordingW
         if g.triggered:
             t = float(interface_trigger(x[None, :], window, g.threshold)[0])
             ax.plot([t * 1e6], [0.0], marker="^", ms=7, color=colour, ls="none")
+
+
+def noise_label(sigma: float) -> str:
+    """The legend of the noise lines: the σ of the raw samples."""
+    return f"sample noise ±σ (σ = {sigma:.3g})"
+
+
+def threshold_label(level: float, significance: float) -> str:
+    """The legend of the detection threshold: the echo envelope peak whose matched-filter
+    significance is g.  g counts the matched filter's output noise σ, which filtering
+    makes far smaller than the samples' σ, so the level is not g times the samples' σ."""
+    return f"detection threshold {level:.3g} (g = {significance:g} matched-filter σ)"
 
 
 def _noise_sigma(x: np.ndarray) -> float:
