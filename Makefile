@@ -4,11 +4,12 @@
 #   make test  — install with the test, docs and rig extras, lint (ruff), type-check (mypy),
 #                run the test suite, then build the documentation (make docs)
 # Each installs only what it needs, once: a stamp file in the venv remembers which extras
-# are in (reinstalled when pyproject.toml changes).
+# are in (reinstalled when pyproject.toml changes).  --no-compile: Python compiles the
+# modules a command imports when it first imports them, not every module of every package.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
-PIP     = $(BIN)/python -m pip install --quiet --disable-pip-version-check
+PIP     = $(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile
 
 .PHONY: demo test setup setup-test lint typecheck docs clean
 
