@@ -16,7 +16,7 @@ PIP     = $(BIN)/python -m pip install --quiet --disable-pip-version-check --no-
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
-# core + fast: what `echocal demo` and everyday use need
+# core (numba included) + fast (embree): what `echocal demo` and everyday use need
 $(VENV)/.installed-demo: pyproject.toml | $(BIN)/python
 	$(PIP) -e ".[fast]"
 	touch $@
