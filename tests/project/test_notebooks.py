@@ -10,6 +10,7 @@ whole gallery (about a minute) is marked slow.
 from __future__ import annotations
 
 import copy
+import json
 import os
 from pathlib import Path
 
@@ -80,6 +81,7 @@ def test_gallery_notebook_shows_its_figures(example, tmp_path, monkeypatch):
 
     _, blocks = split_code_and_text_blocks(str(example))
     conf = copy.deepcopy(gen_gallery.DEFAULT_GALLERY_CONF)
-    nb = nbformat.from_dict(jupyter_notebook(blocks, conf, example.parent))
+    # as the downloadable .ipynb: JSON (its cells' sources as lists of lines), read back
+    nb = nbformat.reads(json.dumps(jupyter_notebook(blocks, conf, example.parent)), 4)
     out = _execute(nb, tmp_path, monkeypatch)
     assert _images(out) >= 1, f"{example.name}: the executed notebook shows no figure"
