@@ -38,9 +38,17 @@ def test_budget_stops_cleanly_and_is_never_exceeded(method, per_iter, gauss_obje
 
 
 def test_objective_budget_is_respected_too(gauss_objective):
-    obj = gauss_objective(budget=20)
-    res = calibrate(obj, "model-based", x0=X0, max_iter=1000)
+    obj = gauss_objective(budget=20)  # no settle stop: the run goes on to the budget
+    res = calibrate(obj, "model-based", x0=X0, max_iter=1000, settle=None)
     assert res.status == 2 and obj.n_measurements == 20
+
+
+def test_calibrate_settles_by_default_as_the_command_line_does(gauss_objective):
+    from echocal.constants import DEFAULT_SETTLE
+
+    assert DEFAULT_SETTLE == (0.01, 8)
+    res = calibrate(gauss_objective(budget=200), "model-based", x0=X0, max_iter=1000)
+    assert res.status == 7 and res.success and res.n_measurements < 200
 
 
 def test_budget_smaller_than_one_iteration_raises_before_measuring(gauss_objective):
