@@ -43,6 +43,13 @@ def _listen_for_compiles() -> None:
     _listening = True
     from numba.core import event
 
+    event.register("numba:compile", _announcer())
+
+
+def _announcer() -> Any:
+    """A numba event listener that prints the compile notice at its first echocal kernel."""
+    from numba.core import event
+
     class _Announce(event.Listener):
         said = False
 
@@ -63,7 +70,7 @@ def _listen_for_compiles() -> None:
         def on_end(self, ev: Any) -> None:
             pass
 
-    event.register("numba:compile", _Announce())
+    return _Announce()
 
 
 def jit(func: Callable[..., Any], **options: Any) -> Callable[..., Any]:
