@@ -1,28 +1,42 @@
 # Two entry points, each sets itself up on a fresh machine (Python >= 3.11 with venv).
-#   make demo  — install, then run the main job (see README)
-#   make test  — install with test extras, lint (ruff), type-check (mypy), run the test
-#                suite, then build the documentation (make docs)
+#   make demo  — install the package with its fast engines (numba, embree), then run the
+#                demo: a simulated calibration study and the thesis comparison
+#   make test  — install with the test, docs and rig extras, lint (ruff), type-check (mypy),
+#                run the test suite, then build the documentation (make docs)
+# Each installs only what it needs, once: a stamp file in the venv remembers which extras
+# are in (reinstalled when pyproject.toml changes).  --no-compile: Python compiles the
+# modules a command imports when it first imports them, not every module of every package.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
+PIP     = $(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile
 
-.PHONY: demo test setup lint typecheck docs clean
+.PHONY: demo test setup setup-test lint typecheck docs clean
 
-$(BIN)/echocal: pyproject.toml
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,fast,docs,visa,bluesky]"
-	touch $(BIN)/echocal
 
-setup: $(BIN)/echocal
+# core (numba included) + fast (embree): what `echocal demo` and everyday use need
+$(VENV)/.installed-demo: pyproject.toml | $(BIN)/python
+	$(PIP) -e ".[fast]"
+	touch $@
+
+# + test, docs and the rig extras (VISA simulator, bluesky): the whole suite runs, none skipped
+$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+	$(PIP) -e ".[fast,test,docs,visa,bluesky]"
+	touch $@ $(VENV)/.installed-demo
+
+setup: $(VENV)/.installed-demo
+
+setup-test: $(VENV)/.installed-test
 
 demo: setup
 	$(BIN)/echocal demo --out echocal-out/demo --overwrite
 
-lint: setup
+lint: setup-test
 	$(BIN)/ruff check src tests docs $(wildcard benchmarks)
 
-typecheck: setup
+typecheck: setup-test
 	$(BIN)/mypy
 
 test: lint typecheck
@@ -30,7 +44,7 @@ test: lint typecheck
 	$(MAKE) docs
 
 # The documentation site (Sphinx): warnings are errors, every gallery example is executed.
-docs: setup
+docs: setup-test
 	rm -rf docs/_build docs/api/generated docs/auto_examples
 	MPLBACKEND=Agg $(BIN)/sphinx-build -j auto -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"

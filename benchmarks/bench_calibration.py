@@ -324,6 +324,7 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
                 x0=x0,
                 budget=budget,
                 max_iter=10_000,
+                settle=None,  # to the budget: the estimate is read after every measurement
                 rng=seed,
                 **OURS[method],
             )

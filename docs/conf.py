@@ -52,7 +52,7 @@ exclude_patterns = [
 ]
 
 # ---------------------------------------------------------------- MyST (docs/*.md)
-myst_enable_extensions = ["colon_fence", "dollarmath", "deflist"]
+myst_enable_extensions = ["colon_fence", "dollarmath", "amsmath", "deflist"]  # $…$ → MathJax
 myst_heading_anchors = 3
 
 # ---------------------------------------------------------------- API reference

@@ -11,6 +11,11 @@ DEFAULT_CENTER_FREQUENCY = 5.0e6
 DEFAULT_SAMPLING_FREQUENCY = 100.0e6
 """Sampling frequency of the default receiver [Hz]."""
 
+DEFAULT_SETTLE = (0.01, 8)
+"""The settle stop every calibration uses unless told otherwise (``calibrate(settle=...)``,
+``echocal calibrate --settle``): ``(tol [deg], patience)``, stop once the last 8
+recommendations lie within 0.01° of their mean."""
+
 MM = 1.0e-3
 """One millimetre [m], for readable literals: ``20 * MM``."""
 

@@ -1,6 +1,6 @@
 """Frames, orientations and poses — the conventions of echocal in one place.
 
-Conventions (see DESIGN.md):
+Conventions (docs/getting-started.md, "Conventions"):
 
 * SI units: positions in metres.  Angles are **degrees** in every public
   function here; radians appear only inside.

@@ -115,6 +115,9 @@ def write_netcdf(
         for name, var in out.variables.items()
         if _numeric(var.values) and var.ndim > 0
     }
+    for name in out.dims:  # CF 2.5.1: a coordinate variable has no missing values
+        if name in encoding:
+            encoding[str(name)]["_FillValue"] = None
     target = Path(path)
     # in memory, then to disk: a refused write is an OSError naming the file, not a crash
     atomic_write_bytes(target, netcdf_bytes(out, encoding=encoding))
@@ -253,7 +256,8 @@ def schema_problems(path: str | os.PathLike[str]) -> list[str]:
     """What in the file ``path`` departs from echocal's NetCDF schema (empty if nothing).
 
     Checks the global attributes, ``long_name`` and UDUNITS ``units`` of every variable,
-    and a verified Fletcher-32 checksum with deflate on every numeric variable.
+    no ``_FillValue`` on a coordinate variable (CF 2.5.1: coordinates have no missing
+    values), and a verified Fletcher-32 checksum with deflate on every numeric variable.
     """
     import h5py
 
@@ -266,6 +270,7 @@ def schema_problems(path: str | os.PathLike[str]) -> list[str]:
         problems.append(f"{name}: no Fletcher-32 checksum")
     ds = open_netcdf(path, what="file", verify=False)
     with ds:
+        dims = {str(d) for d in ds.dims}
         if ds.attrs.get("Conventions") != CONVENTIONS:
             problems.append(f"Conventions is {ds.attrs.get('Conventions')!r}, not {CONVENTIONS!r}")
         for key in ("title", "institution", "source", "history", "echocal_format"):
@@ -280,6 +285,8 @@ def schema_problems(path: str | os.PathLike[str]) -> list[str]:
                     problems.append(f"{name}: units {unit!r} is not one of {sorted(UDUNITS)}")
     with h5py.File(path, "r") as handle:
         for name, dset in handle.items():
+            if name in dims and "_FillValue" in dset.attrs:
+                problems.append(f"{name}: a coordinate variable with a _FillValue (CF 2.5.1)")
             if _is_variable(dset) and dset.dtype.kind in "biuf" and dset.shape:
                 if dset.compression != "gzip" or not dset.shuffle:
                     problems.append(f"{name}: not deflate+shuffle compressed")

@@ -87,7 +87,7 @@ def test_repeats_combine_significances_by_stouffer():
 def test_the_driver_wires_the_objective_detector_into_auto():
     # neither the significances nor the values ever show an echo
     obj = _WithSignificance([np.zeros(7), np.array([0.0]), *[np.zeros(1)] * 50])
-    res = calibrate(obj, "auto", x0=(0.0, 0.0), budget=20, max_radius=2.0, rng=0)
+    res = calibrate(obj, "auto", x0=(0.0, 0.0), budget=20, max_radius=2.0, rng=0, settle=None)
     assert res.options["detector"] == "objective"  # supplied by the objective, named
     assert res.status == 4  # nothing significant: the lattice to 2° searched in vain
     assert res.n_measurements == 19 and res.acquisition_measurements is None

@@ -36,7 +36,7 @@ def _run(plate, seed, *, offset=(8.5, -8.5), snr=20.0, budget=80, **options):
         warnings.simplefilter("ignore")
         res = calibrate(
             objective, "auto", x0=truth + np.array(offset), budget=budget, max_iter=10_000,
-            rng=seed, **options,
+            rng=seed, settle=None, **options,
         )  # fmt: skip
     return res, float(angular_error(np.asarray(res.x)[None], truth, "tilt")[0])
 
@@ -99,7 +99,7 @@ def test_where_the_caller_places_the_search_the_posterior_stays_off(plate, given
 
 def test_an_objective_without_a_probe_keeps_the_lattice():
     obj = FunctionObjective(lambda p: np.exp(-np.sum((p - 5.0) ** 2, axis=1)), noise_sigma=0.01)
-    res = calibrate(obj, "auto", x0=(0.0, 0.0), budget=300, rng=0)
+    res = calibrate(obj, "auto", x0=(0.0, 0.0), budget=300, rng=0, settle=None)
     assert not res.posterior_search and res.options["posterior"] is True
 
 

@@ -86,7 +86,7 @@ def _measurements_to_stay_within(
     truth = _truth(None, tuple(position))
     objective = SourceObjective(setup, position, parameterization="tilt")
     x0 = tuple(truth + np.array(offset))
-    result = calibrate(objective, method="auto", x0=x0, budget=budget, rng=seed)
+    result = calibrate(objective, method="auto", x0=x0, budget=budget, rng=seed, settle=None)
     assert result.n_measurements == objective.n_measurements <= budget  # every one counted
     return measurements_to_stay_within(result, tilt_errors(result, truth), tolerance)
 
@@ -144,7 +144,7 @@ def _sphere_measurements(case) -> int | None:
     truth = _truth("sphere", tuple(position))
     objective = SourceObjective(setup, position, parameterization="tilt")
     x0 = tuple(truth + np.array(offset))
-    result = calibrate(objective, method="auto", x0=x0, budget=60, rng=seed)
+    result = calibrate(objective, method="auto", x0=x0, budget=60, rng=seed, settle=None)
     assert result.n_measurements == objective.n_measurements <= 60  # every one counted
     return measurements_to_stay_within(result, tilt_errors(result, truth), 0.1)
 
@@ -183,7 +183,9 @@ def test_auto_does_not_circle_the_trust_circle_after_a_refuted_fit() -> None:
     objective = SourceObjective(
         setup, position, parameterization="tilt", budget=BUDGET, bounds=[[-half, half]] * 2
     )
-    result = calibrate(objective, method="auto", x0=x0, budget=BUDGET, max_iter=10_000, rng=seed)
+    result = calibrate(
+        objective, method="auto", x0=x0, budget=BUDGET, max_iter=10_000, rng=seed, settle=None
+    )
     assert result.n_measurements == objective.n_measurements <= BUDGET  # every one counted
     reached = measurements_to_stay_within(result, tilt_errors(result, truth), 0.1)
     assert reached is not None, "never stayed within 0.1°"

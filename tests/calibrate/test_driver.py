@@ -38,9 +38,17 @@ def test_budget_stops_cleanly_and_is_never_exceeded(method, per_iter, gauss_obje
 
 
 def test_objective_budget_is_respected_too(gauss_objective):
-    obj = gauss_objective(budget=20)
-    res = calibrate(obj, "model-based", x0=X0, max_iter=1000)
+    obj = gauss_objective(budget=20)  # no settle stop: the run goes on to the budget
+    res = calibrate(obj, "model-based", x0=X0, max_iter=1000, settle=None)
     assert res.status == 2 and obj.n_measurements == 20
+
+
+def test_calibrate_settles_by_default_as_the_command_line_does(gauss_objective):
+    from echocal.constants import DEFAULT_SETTLE
+
+    assert DEFAULT_SETTLE == (0.01, 8)
+    res = calibrate(gauss_objective(budget=200), "model-based", x0=X0, max_iter=1000)
+    assert res.status == 7 and res.success and res.n_measurements < 200
 
 
 def test_budget_smaller_than_one_iteration_raises_before_measuring(gauss_objective):
@@ -61,9 +69,8 @@ def test_x0_outside_bounds_raises_limit_error_naming_x0():
 def test_unknown_method_and_unknown_options(gauss_objective):
     with pytest.raises(UnknownNameError, match="model-based"):
         calibrate(gauss_objective(), "bobyqa", x0=X0)
-    with pytest.warns(UserWarning, match="stepsize"):
-        res = calibrate(gauss_objective(), "gradient", x0=X0, max_iter=3, stepsize=0.1)
-    assert res.n_iterations == 3 and "stepsize" not in res.options
+    with pytest.raises(UnknownNameError, match=r"method .gradient.: stepsize; accepted: delta"):
+        calibrate(gauss_objective(), "gradient", x0=X0, max_iter=3, stepsize=0.1)
 
 
 def test_iteration_limit_xtol_and_callback(gauss_objective):
@@ -242,9 +249,12 @@ def test_acquisition_options_and_local_options_are_checked_when_built(gauss_obje
         calibrate(gauss_objective(), "gradient", x0=X0, final_check="2")
 
 
-def test_an_unknown_option_warning_suggests_the_nearest_name(gauss_objective):
-    with pytest.warns(UserWarning, match=r"fine_raduis \(did you mean fine_radius\?\)"):
-        calibrate(gauss_objective(), "auto", x0=X0, max_iter=1, fine_raduis=1.0)
+def test_an_unknown_option_is_an_error_naming_the_nearest_name(gauss_objective):
+    # Python refuses a misspelt option as the command line does, before measuring
+    obj = gauss_objective()
+    with pytest.raises(UnknownNameError, match=r"fine_raduis \(did you mean fine_radius\?\)"):
+        calibrate(obj, "auto", x0=X0, max_iter=1, fine_raduis=1.0)
+    assert obj.n_measurements == 0
 
 
 def test_a_grid_too_large_to_measure_is_refused_before_it_is_built():

@@ -82,13 +82,16 @@ def test_spsa_on_the_5mhz_probe_no_longer_runs_to_the_limit():
 
 def test_the_run_ends_by_measuring_its_estimate_within_the_budget():
     objective = FunctionObjective(peak((0.3, -0.2)), noise_sigma=0.01, rng=4, noise_floor=0.0)
-    result = calibrate(objective, "model-based", x0=(1.0, 1.0), budget=30, rng=0)
+    # no settle stop: the run goes to its budget
+    result = calibrate(objective, "model-based", x0=(1.0, 1.0), budget=30, rng=0, settle=None)
     assert result.n_measurements == objective.n_measurements <= 30
     np.testing.assert_array_equal(result.points[-1], result.x)  # the last pose: the estimate
     assert result.final_value == result.values[-1] == result.fun
     # disabled: the estimate is not measured, the positioner stays where the method probed
     quiet = FunctionObjective(peak((0.3, -0.2)), noise_sigma=0.01, rng=4, noise_floor=0.0)
-    skipped = calibrate(quiet, "model-based", x0=(1.0, 1.0), budget=30, rng=0, final_check=0)
+    skipped = calibrate(
+        quiet, "model-based", x0=(1.0, 1.0), budget=30, rng=0, final_check=0, settle=None
+    )
     assert skipped.final_value is None and skipped.n_measurements == 30
     assert result.n_measurements == 30  # 29 by the method + 1 at the estimate
 

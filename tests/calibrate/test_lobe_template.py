@@ -134,7 +134,7 @@ def test_model_based_climbs_from_the_tail_faster_with_the_template():
             objective = _tail_objective(truth, template, seed=seed)
             options = {"lobe_template": (lambda: template)} if given else {}
             result = calibrate(
-                objective, method="model-based", x0=x0, budget=30, rng=seed, **options
+                objective, method="model-based", x0=x0, budget=30, rng=seed, settle=None, **options
             )
             counts[given].append(_measurements_to_stay_within(result, truth, 0.1))
     assert None not in counts[True] and None not in counts[False], counts

@@ -59,7 +59,9 @@ def test_noisy_gaussian_reaches_the_optimum_with_few_measurements():
         ang = 2.0 * np.pi * seed / 10
         x0 = OPT + 2.0 * np.array([np.cos(ang), np.sin(ang)])
         obj = FunctionObjective(gaussian, noise_sigma=SNR30, rng=seed)
-        res = calibrate(obj, "model-based", x0=x0, budget=30, max_iter=1000, rng=seed)
+        res = calibrate(
+            obj, "model-based", x0=x0, budget=30, max_iter=1000, rng=seed, settle=None
+        )
         assert res.n_measurements == 30
         errors.append(np.hypot(*(res.x - OPT)))
     errors = np.array(errors)
@@ -89,8 +91,9 @@ def test_acquisition_finds_a_narrow_peak_from_pure_noise(local):
     assert f(np.array([OPT])) < 1e-40
     opts = {"radius": 0.5} if local == "model-based" else {}
     res = calibrate(
-        obj, local, x0=OPT, acquire={"spacing": 1.0}, max_iter=60, rng=0, budget=400, **opts
-    )
+        obj, local, x0=OPT, acquire={"spacing": 1.0}, max_iter=60, rng=0, budget=400,
+        settle=None, **opts,
+    )  # fmt: skip
     assert res.status in (1, 2) and res.acquisition_measurements is not None, res.message
     # tolerance: 30 dB noise on a 0.5 deg peak; Newton (delta 0.5) is the less precise
     tol = 0.05 if local == "model-based" else 0.1

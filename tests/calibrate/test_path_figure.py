@@ -15,7 +15,9 @@ from echocal.plots.calibration import path_figure
 @pytest.fixture
 def run_and_map(gauss_objective):
     objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
-    result = calibrate(objective, method="model-based", x0=(1.5, 0.5), budget=30, rng=0)
+    result = calibrate(
+        objective, method="model-based", x0=(1.5, 0.5), budget=30, rng=0, settle=None
+    )
     a = b = np.linspace(-10.0, 10.0, 41)
     grid = np.stack(np.meshgrid(a, b, indexing="ij"), axis=-1).reshape(-1, 2)
     values = gaussian(grid, width=0.3).reshape(41, 41)  # a lobe far narrower than the map
@@ -96,7 +98,10 @@ def test_paths_and_convergence_differ_without_colour_and_keep_legends_off_the_da
 
     objective = gauss_objective(bounds=[[-20.0, 20.0], [-20.0, 20.0]])
     methods = ("gradient", "spsa", "nesterov", "quasi-newton", "newton", "momentum")
-    runs = {m: calibrate(objective, method=m, x0=(1.5, 0.5), budget=40, rng=0) for m in methods}
+    runs = {
+        m: calibrate(objective, method=m, x0=(1.5, 0.5), budget=40, rng=0, settle=None)
+        for m in methods
+    }
     a = b = np.linspace(-5.0, 5.0, 21)
     grid = np.stack(np.meshgrid(a, b, indexing="ij"), axis=-1).reshape(-1, 2)
     cmap = CostMap(a=a, b=b, values=gaussian(grid).reshape(21, 21), names=("a", "b"))

@@ -82,6 +82,7 @@ def _from_the_tail(template, seed: int, seek: bool, monkeypatch) -> int | None:
         x0=x0,
         budget=30,
         rng=seed,
+        settle=None,
         history=(history, echo(history) + SIGMA * noise),
         lobe_template=lambda: template,
     )

@@ -170,6 +170,7 @@ def test_methods_names_where_an_option_comes_from():
     lines = {
         line.split()[0]: line
         for line in CliRunner().invoke(app, ["methods", "auto"]).output.splitlines()[1:]
+        if " default " in line  # an option's line (its description follows on the next)
     }
     assert "Python API only" in lines["replan"]  # the objective's search for its noise
     assert "objective's probe" in lines["passes"] and "objective's)" in lines["noise_sigma"]

@@ -168,7 +168,7 @@ def test_replay_finds_the_simulators_optimum(recording, truth, tmp_path, capsys,
     saved = CalibrationResult.load_json(out / "result.json")
     np.testing.assert_array_equal(saved.x, summary["estimate_deg"])
     assert saved.n_measurements == summary["n_measurements"] == len(saved.points)
-    assert sorted(p.name for p in out.iterdir()) == ["ascan.nc", "result.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["ascan.nc", "result.json", "summary.json"]
 
 
 def test_replay_in_tilts_interpolated_stays_on_the_recording(

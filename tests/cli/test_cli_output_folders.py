@@ -40,7 +40,12 @@ def test_calibrate_overwrite_removes_its_own_stale_plots(tmp_path, capsys, monke
     assert code in (0, 3), err
     # the plots of the first run would describe another run: gone; the user's file kept
     # data, not plots, is kept with --no-plots: the A-scan at the estimate (ascan.nc)
-    assert sorted(p.name for p in out.iterdir()) == ["ascan.nc", "notes.txt", "result.json"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "ascan.nc",
+        "notes.txt",
+        "result.json",
+        "summary.json",
+    ]
     assert json.loads(stdout)["files"] == {
         "result": str(out / "result.json"),
         "ascan": str(out / "ascan.nc"),

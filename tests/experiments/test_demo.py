@@ -34,13 +34,24 @@ def test_demo_quick_end_to_end(tmp_path):
     for f in disagree:
         assert f"why: {f['why']}" in page.replace("&#x27;", "'")
     for i, line in enumerate(lines):
-        if "does not agree" in line:
+        if "not reproduced here" in line:
             assert lines[i + 1].strip().startswith("why:"), lines[i : i + 2]
-    # the sweep's lines use the report's words and percentages: "never", "40 %"
-    sweep_lines = [line for line in lines if "success" in line and "measurements" in line]
+    # the summary leads with the calibration study, echocal's own methods first, and
+    # only then the thesis's findings; no verdict is worded as a failure of echocal
+    study = next(i for i, line in enumerate(lines) if line.startswith("What echocal finds"))
+    thesis = next(i for i, line in enumerate(lines) if line.startswith("The thesis's Table 7"))
+    assert study < thesis and "does not agree" not in printed.getvalue()
+    rows = [line.split()[0] for line in lines[study + 1 : thesis] if " dB  success" in line]
+    assert rows[:4] == ["auto", "auto", "model-based", "model-based"], rows
+    # the sweep's lines use the report's words and percentages: "never", "40 %"; a row
+    # that missed the tolerance says where its runs ended and why
+    sweep_lines = [line for line in lines if " dB  success" in line]
     assert sweep_lines and not [
         line for line in sweep_lines if "—" in line or "%" in line.replace(" %", "")
     ]
+    for line in sweep_lines:
+        ok, n = line.split("success ")[1].split()[0].split("/")
+        assert (ok != n) == ("from the optimum" in line), line
     # ... and the last thing printed is where the report is
     assert lines[-1].startswith(f"report: {(out / 'report.html').resolve()}")
     # the sweep summary covers every configuration of quick.toml: 4 methods x 2 SNRs

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import json
 import re
 
 import pandas as pd
@@ -55,6 +56,13 @@ def test_cli_report_renders_a_calibration_and_a_scan_folder(folders, tmp_path):
     assert "setup immersion-5mhz, method auto, x0 0.5,-0.3," in cal_part
     assert "immersion-5mhz (sha256 " in cal_part and "provenance" in cal_part
     assert "search beyond the first ring" in cal_part  # found near x0: none
+    # what was calibrated, the simulator's truth and the error, as the command printed them
+    summary = json.loads((cal / "summary.json").read_text(encoding="utf-8"))
+    assert "setup</td><td>immersion-5mhz: " in cal_part
+    pairs = zip(summary["names"], summary["truth_deg"], strict=True)
+    truth = ", ".join(f"{n} {v:.4f}°" for n, v in pairs)
+    assert f"true optimum</td><td>{truth}<" in cal_part
+    assert f"error [°]</td><td>{summary['error_deg']:.4f}<" in cal_part
     # the scan: its maps and its 3-D view
     images = _images(scan_part)
     for name in ("height", "normals", "errors", "measurements", "surface-3d"):

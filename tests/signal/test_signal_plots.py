@@ -38,7 +38,7 @@ def test_a_noise_ascan_is_drawn_at_the_scale_of_the_expected_echo():
     assert len(fig.axes) == 1  # no echo: no zoom panel
     np.testing.assert_allclose(fig.axes[0].get_ylim(), (-0.88, 0.88))
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert "noise ±σ (σ = 0.01)" in labels
+    assert "sample noise ±σ (σ = 0.01)" in labels
 
 
 def test_a_no_echo_ascan_draws_the_threshold_the_noise_stays_below_off_the_trace():
@@ -58,6 +58,10 @@ def test_a_no_echo_ascan_draws_the_threshold_the_noise_stays_below_off_the_trace
     threshold = next(ln for ln in ax.get_lines() if ln.get_label().startswith("detection"))
     want = EchoDetector(p, w.fs, w.n_samples).threshold_amplitude(0.01, 4.5)
     assert threshold.get_ydata()[0] == pytest.approx(want, rel=1e-9)
+    # the legend says what g counts: the matched filter's σ, so the level is not g x the
+    # samples' σ (here it is below it: filtering gains SNR), and the legend does not claim it
+    assert want < 4.5 * 0.01
+    assert "g = 4.5 matched-filter σ" in threshold.get_label()
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     box = ax.get_legend().get_window_extent(canvas.get_renderer())
@@ -94,7 +98,7 @@ def test_the_scenarios_overlay_draws_noise_threshold_and_distinct_styles():
     fig = ascan_overlay_figure(w.times, rows, ["a", "b"], [24e-6, 26e-6], title="t", pulse=p)
     full = fig.axes[0]
     labels = [t.get_text() for t in full.get_legend().get_texts()]
-    assert labels[:2] == ["a", "b"] and any(s.startswith("noise ±σ") for s in labels)
+    assert labels[:2] == ["a", "b"] and any(s.startswith("sample noise ±σ") for s in labels)
     threshold = next(ln for ln in full.get_lines() if ln.get_label().startswith("detection"))
     sigma = float(labels[2].split("σ = ")[1].rstrip(")"))
     assert sigma == pytest.approx(0.02, rel=0.1)  # the MAD estimate of the noise drawn

@@ -168,11 +168,12 @@ class Acquisition(Optimizer):
     noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
         estimates (either may be None), consulted at every decision when the fixed values
         above are None — e.g. a source objective that measures the noise in each A-scan.
-    lobe_template : callable returning the probe's lobe template or None (e.g.
+    lobe_template, normal_echo, resolution : handed to a local method that takes them:
+        a callable returning the probe's lobe template or None (e.g.
         :meth:`~echocal.calibrate.Objective.lobe_template`), likewise ``normal_echo``
         (:meth:`~echocal.calibrate.Objective.normal_echo`), and ``resolution`` [deg], a
         replay's grid step (:meth:`~echocal.calibrate.Objective.resolution`; None:
-        continuous): handed to a local method that takes them.
+        continuous).
     detector : callable returning the detection significances of the points just
         measured, shape (k,), or None (then the values are tested) — e.g.
         :meth:`~echocal.calibrate.Objective.detections`.

@@ -30,7 +30,8 @@ from echocal.calibrate.objective import Objective
 from echocal.calibrate.presets import method_options, presets
 from echocal.calibrate.registry import get_method
 from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, CalibrationResult
-from echocal.errors import BudgetExhaustedError, EchocalValueError
+from echocal.constants import DEFAULT_SETTLE
+from echocal.errors import BudgetExhaustedError, EchocalValueError, UnknownNameError
 from echocal.geometry import angle_between, convert_angles, orientation_normal
 
 __all__ = ["SEARCH_GEOMETRY", "CalibrationState", "build_optimizer", "calibrate"]
@@ -69,8 +70,8 @@ def build_optimizer(
 ) -> tuple[Optimizer, dict[str, Any]]:
     """Instantiate ``method`` (optionally behind an acquisition phase) for ``objective``.
 
-    Unknown options raise a warning naming them (with the nearest valid name) and are
-    ignored; an option of the wrong type (a string for a number or a boolean, ...) raises
+    An unknown option raises UnknownNameError naming it, the closest valid name and the
+    accepted ones; an option of the wrong type (a string for a number or a boolean, ...) raises
     EchocalValueError naming it.  Returns the optimizer and the options it runs with, as
     recorded in the result: every option of the method with its effective value,
     defaults included, and ``"objective"`` for the inputs the objective supplies (its
@@ -102,11 +103,10 @@ def build_optimizer(
         hints = "; ".join(
             f"{k}{suggestion(k.removeprefix('acquire.'), accepted_options(cls))}" for k in unknown
         )
-        warnings.warn(
-            f"unknown option(s) for method {method!r} ignored: {hints}; "
-            f"accepted: {', '.join(sorted(accepted_options(cls)))}",
-            UserWarning,
-            stacklevel=3,
+        raise UnknownNameError(
+            f"unknown option(s) for method {method!r}: {hints}; "
+            f"accepted: {', '.join(sorted(accepted_options(cls)))} "
+            f"(see `echocal methods {method}`)"
         )
     if wrap:
         aknown = {**_search_inputs(objective), **aknown}
@@ -286,7 +286,7 @@ def calibrate(
     budget: int | None = None,
     max_iter: int | None = None,
     xtol: float | None = None,
-    settle: tuple[float, int] | None = None,
+    settle: tuple[float, int] | None = DEFAULT_SETTLE,
     rng: RngLike = None,
     callback: Callable[[CalibrationState], bool | None] | None = None,
     acquire: bool | Mapping[str, Any] = False,
@@ -310,7 +310,9 @@ def calibrate(
         than this (after at least 2 iterations).
     settle : ``(tol [deg], patience)``: stop once the last ``patience`` recommendations
         lie within ``tol`` of their mean — a convergence test that noise cannot fool the
-        way a single short step can (status 7).  None disables it.
+        way a single short step can (status 7).  Default
+        :data:`~echocal.constants.DEFAULT_SETTLE` ``(0.01, 8)``, the command line's
+        ``--settle`` default; None disables it.
     rng : seed or Generator (randomized methods; reproducible runs).
     callback : called with a :class:`CalibrationState` after each iteration; True stops.
     acquire : True (or a dict of :class:`Acquisition` options) puts an acquisition phase
@@ -323,9 +325,10 @@ def calibrate(
         the echo there is part of the evidence for ``success``.  0 disables it (the
         positioner is then left at the last point the method probed).  Not done when no
         echo was found (status 4 or 6).
-    **options : method options (see ``echocal methods NAME``); unknown names are warned
-        about (with the nearest valid name) and ignored; a value of the wrong type (e.g. a
-        string for a number or a boolean) raises EchocalValueError naming the option.
+    **options : method options (see ``echocal methods NAME``); an unknown name raises
+        UnknownNameError naming the closest valid one, and a value of the wrong type (e.g.
+        a string for a number or a boolean) raises EchocalValueError naming the option,
+        both before anything is measured.
     """
     t0 = time.perf_counter()
     if not isinstance(objective, Objective):

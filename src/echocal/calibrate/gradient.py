@@ -29,6 +29,18 @@ __all__ = ["GradientAscent", "Momentum", "Nesterov"]
 
 
 class _FDAscent(Optimizer):
+    """Finite-difference gradient ascent, 4 measurements per iteration.
+
+    Parameters
+    ----------
+    mu : [deg² / energy] step size μ; None calibrates it from the first gradient so the
+        first step is ``first_step`` long.
+    delta : [deg] finite-difference step δ.
+    momentum : momentum η in [0, 1) (None: the method's default).
+    first_step : [deg] length of the first step when ``mu`` is calibrated.
+    max_step : [deg] cap on a step's length (None: no cap).
+    """
+
     batch_size = 4
     _nesterov = False
     _default_momentum = 0.0
@@ -46,10 +58,6 @@ class _FDAscent(Optimizer):
         rng: RngLike = None,
         normalize: str = "none",
     ) -> None:
-        """Parameters: ``mu`` step size [deg² / energy] (None: calibrated), ``delta``
-        difference step [deg], ``momentum`` η in [0, 1), ``first_step`` [deg] length of
-        the first step when ``mu`` is calibrated, ``max_step`` [deg] cap on a step (None: no cap).
-        """
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
         self.mu = None if mu is None else positive_float("mu", mu)
         self.delta = positive_float("delta", delta)

@@ -65,6 +65,11 @@ class GridSearch(Optimizer):
     The grid is clipped to the bounds; one of more than :data:`MAX_GRID_POINTS` nodes
     inside them is refused (EchocalValueError naming span and step) before anything is
     allocated or measured.
+
+    Parameters
+    ----------
+    span : [deg] half-width of the grid around x0 in each angle.
+    step : [deg] spacing of the grid's nodes.
     """
 
     def __init__(

@@ -144,6 +144,7 @@ class _Run:
 
 CALIBRATE_FILES = (
     "result.json",
+    "summary.json",
     "convergence.png",
     "path.png",
     "partial_log.json",
@@ -233,8 +234,11 @@ def _report(
     json_output: bool,
     print_estimate: Callable[[], None],
 ) -> None:
-    """Print ``summary`` (``--json``), the estimate or the failure; exit with
-    :func:`exit_code` (0 only for a converged run)."""
+    """Save ``summary`` as ``summary.json`` in ``out`` (what was calibrated, the estimate,
+    and on a simulator the truth and the error: the report shows them), print it
+    (``--json``), the estimate or the failure; exit with :func:`exit_code` (0 only for a
+    converged run)."""
+    write_json(summary, out / "summary.json")
     code = exit_code(result)
     if json_output:
         write_json(summary)

@@ -32,6 +32,7 @@ from echocal.cli._common import (
 from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
+from echocal.constants import DEFAULT_SETTLE
 from echocal.io import refuse_existing_output
 from echocal.locking import hold_output_lock
 
@@ -127,7 +128,7 @@ def register(app: typer.Typer) -> None:
                 help="TOL,PATIENCE: stop once the last PATIENCE recommendations lie within "
                 "TOL degrees of their mean; 'none' runs to the budget or iteration limit."
             ),
-        ] = "0.01,8",
+        ] = f"{DEFAULT_SETTLE[0]:g},{DEFAULT_SETTLE[1]}",
         preset: Annotated[
             str | None, typer.Option(help="Method options preset, e.g. thesis-table-7.")
         ] = None,

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import platform
+from typing import Annotated
 
 import typer
 
@@ -19,19 +21,47 @@ def register(app: typer.Typer) -> None:
         typer.echo(echocal.__version__)
 
     @app.command("info")
-    def info() -> None:
+    def info(
+        json_output: Annotated[
+            bool, typer.Option("--json", help="Print the same as one JSON object.")
+        ] = False,
+    ) -> None:
         """Print versions and which optional fast engines (embreex, numba) are available."""
+        from echocal._numba import USE_NUMBA
+
+        versions = {module: _installed_version(module) for module in PACKAGES}
+        engines = {"numba": bool(USE_NUMBA), "embree": versions["embreex"] is not None}
+        if json_output:
+            typer.echo(
+                json.dumps(
+                    {
+                        "echocal": echocal.__version__,
+                        "python": platform.python_version(),
+                        "packages": versions,
+                        "engines": engines,
+                    }
+                )
+            )
+            return
         typer.echo(f"echocal {echocal.__version__} on Python {platform.python_version()}")
-        for module in ("numpy", "scipy", "trimesh", "embreex", "numba", "dask"):
-            typer.echo(f"  {module:10s} {_installed_version(module)}")
+        for module, version in versions.items():
+            typer.echo(f"  {module:10s} {version or 'not installed'}")
+        typer.echo(
+            "  engines    "
+            + ", ".join(f"{name} {'active' if on else 'off'}" for name, on in engines.items())
+        )
 
 
-def _installed_version(distribution: str) -> str:
-    """The installed version of ``distribution``, or 'not installed'."""
+PACKAGES = ("numpy", "scipy", "trimesh", "embreex", "numba", "dask")
+"""The packages ``echocal info`` reports: the numerical core and the optional engines."""
+
+
+def _installed_version(distribution: str) -> str | None:
+    """The installed version of ``distribution``, or None."""
     try:
         return importlib.metadata.version(distribution)
     except importlib.metadata.PackageNotFoundError:
-        return "not installed"
+        return None
 
 
 def version_callback(value: bool) -> None:

@@ -84,10 +84,24 @@ def material_report(name: str, medium: str = "water", angles: list[float] | None
                 "transmission_shear_abs": float(abs(t.shear[i])),
                 "refraction_longitudinal_deg": float(t.angle_longitudinal[i]),
                 "refraction_shear_deg": float(t.angle_shear[i]),
+                "longitudinal_wave": _wave_kind(float(theta[i]), first),
+                "shear_wave": _wave_kind(float(theta[i]), second),
             }
             for i in range(theta.size)
         ]
     return report
+
+
+def _wave_kind(angle: float, critical: float | None) -> str:
+    """"evanescent" past the critical angle [deg] of a transmitted wave, else
+    "propagating" (no critical angle: the wave always propagates)."""
+    return "evanescent" if critical is not None and angle > critical else "propagating"
+
+
+EVANESCENT_NOTE = (
+    "evanescent: past its critical angle the transmitted wave decays away from the surface "
+    "and carries no energy into the part; |T| is its amplitude at the surface"
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -153,10 +167,17 @@ def register(app: typer.Typer) -> None:
         )
         shown = [f"{v:.2f}°" if v is not None else "none" for v in c.values()]
         typer.echo(f"critical angles: longitudinal {shown[0]}, shear {shown[1]}")
-        for row in report.get("oblique", []):
+        rows = report.get("oblique", [])
+        for row in rows:
             typer.echo(
                 f"  {row['angle_deg']:6.2f}°  |R| {row['reflection_abs']:.4f} "
                 f"({row['reflection_phase_deg']:+7.2f}°)  |T_L| "
-                f"{row['transmission_longitudinal_abs']:.4f}  |T_T| "
-                f"{row['transmission_shear_abs']:.4f}"
+                f"{row['transmission_longitudinal_abs']:.4f}{_mark(row['longitudinal_wave'])}"
+                f"  |T_T| {row['transmission_shear_abs']:.4f}{_mark(row['shear_wave'])}"
             )
+        if any("evanescent" in (r["longitudinal_wave"], r["shear_wave"]) for r in rows):
+            typer.echo(f"  {EVANESCENT_NOTE}")
+
+
+def _mark(kind: str) -> str:
+    return " (evanescent)" if kind == "evanescent" else ""

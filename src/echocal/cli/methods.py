@@ -36,13 +36,22 @@ def register(app: typer.Typer) -> None:
         cls = get_method(name)  # unknown names list the valid ones
         params, accepted = inspect.signature(cls.__init__).parameters, accepted_options(cls)
         options = {k: params[k].default for k in params if k in accepted}
+        docs = option_docs(cls)
         if json_output:
-            write_json({"method": name, "options": {k: _plain(v) for k, v in options.items()}})
+            write_json(
+                {
+                    "method": name,
+                    "options": {k: _plain(v) for k, v in options.items()},
+                    "descriptions": {k: docs.get(k, "") for k in options},
+                }
+            )
             return
         output.print(f"[bold]{escape(name)}[/]: {escape(_first_line(cls))}")
         for key, default in options.items():
             note = _note(key, cls)
             output.print(f"  {key:18s} default {escape(repr(default))}{note}")
+            if docs.get(key):
+                output.print(f"  {'':18s} {escape(docs[key])}", soft_wrap=True)
 
 
 def _note(key: str, cls: type) -> str:
@@ -63,6 +72,43 @@ def _note(key: str, cls: type) -> str:
     if key == "passes" and searches and option_defaults(cls).get("passes"):
         return "  (sized from the objective's probe when it has one)"
     return ""
+
+
+def option_docs(cls: type) -> dict[str, str]:
+    """Each option's meaning and unit, from the ``Parameters`` sections of the docstrings
+    of ``cls`` and its bases (NumPy style: ``name : text`` or ``a, b : text``, with
+    indented continuation lines); the class's own text wins over a base's."""
+    docs: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):
+        docs.update(_parameters(inspect.getdoc(klass) or ""))
+    return docs
+
+
+def _parameters(doc: str) -> dict[str, str]:
+    """``{name: text on one line}`` of the ``Parameters`` section of a docstring."""
+    lines = doc.splitlines()
+    try:
+        start = next(i for i, ln in enumerate(lines) if ln.strip() == "Parameters") + 2
+    except StopIteration:
+        return {}
+    found: dict[str, list[str]] = {}
+    names: list[str] = []
+    for line in lines[start:]:
+        if not line.strip():
+            if names:
+                continue
+            break
+        if line.startswith(" ") and names:  # a continuation line
+            for n in names:
+                found[n].append(line.strip())
+            continue
+        if " : " not in line:  # the next section's heading
+            break
+        head, text = line.split(" : ", 1)
+        names = [n.strip() for n in head.split(",")]
+        for n in names:
+            found[n] = [text.strip()]
+    return {n: " ".join(parts) for n, parts in found.items()}
 
 
 def _first_line(cls: type) -> str:

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from echocal.experiments._findings import Finding
 from echocal.geometry import Pose, orientation_normal
 from echocal.measurement.virtual import VirtualSetup
+from echocal.plots._figure import new_figure
 from echocal.signal import Pulse, RecordingWindow, get_metric
 from echocal.signal.processing import envelope, time_of_flight
 from echocal.specimen.builtins import THESIS_BLOCK_FACETS
@@ -59,9 +60,9 @@ def ascan_overlay_figure(
     (:data:`~echocal.constants.ECHO_THRESHOLD` σ, as an echo's envelope peak) are drawn.
     """
     from echocal.constants import ECHO_THRESHOLD
-    from echocal.plots.ascan import _detection_level, _noise_sigma
+    from echocal.plots.ascan import _detection_level, _noise_sigma, noise_label, threshold_label
 
-    fig = Figure(figsize=(10, 4.0), layout="constrained")
+    fig = new_figure(figsize=(10, 4.0), layout="constrained")
     full, zoom = fig.subplots(1, 2, width_ratios=(2, 1))
     t_us = times * 1e6
     styles = ("-", (0, (5, 1.5)), "-.", (0, (1, 1)))
@@ -83,7 +84,7 @@ def ascan_overlay_figure(
                     color="0.3",
                     ls=":",
                     lw=1.0,
-                    label=f"noise ±σ (σ = {sigma:.3g})" if ax is full else None,
+                    label=noise_label(sigma) if ax is full else None,
                 )
                 ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
             if level:
@@ -92,7 +93,7 @@ def ascan_overlay_figure(
                     color="C4",
                     ls=(0, (6, 3)),
                     lw=1.2,
-                    label=f"detection threshold {level:.3g} (g = {ECHO_THRESHOLD:g} σ)"
+                    label=threshold_label(level, ECHO_THRESHOLD)
                     if ax is full
                     else None,
                 )

@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 from echocal.experiments._findings import Finding
 from echocal.io import atomic_path, atomic_write_text, check_out_dir
 from echocal.plots import save_figure
+from echocal.plots._figure import release
 
 __all__ = ["FINDINGS_FILE", "check_out_dir", "write_figure", "write_summary", "write_table"]
 
@@ -41,8 +42,10 @@ def write_table(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
 
 
 def write_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
-    """``stem.png`` and ``stem.svg`` of ``fig``."""
-    return save_figure(fig, out_dir / f"{stem}.png", formats=("png", "svg"), dpi=110)
+    """``stem.png`` and ``stem.svg`` of ``fig`` (then released: a notebook does not show it)."""
+    written = save_figure(fig, out_dir / f"{stem}.png", formats=("png", "svg"), dpi=110)
+    release(fig)
+    return written
 
 
 def _jsonable(value: Any) -> Any:

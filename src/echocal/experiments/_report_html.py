@@ -19,6 +19,8 @@ from typing import Any
 import pandas as pd
 from matplotlib.figure import Figure
 
+from echocal.plots._figure import release
+
 __all__ = ["CSS", "NEVER", "facts", "fig_png", "fmt", "header", "percent", "png", "table"]
 
 CSS = """
@@ -160,5 +162,6 @@ def fig_png(fig: Figure) -> str:
     """An ``<img>`` with the figure embedded as PNG (base64)."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
+    release(fig)
     data = base64.b64encode(buffer.getvalue()).decode("ascii")
     return f'<img alt="figure" src="data:image/png;base64,{data}">'

@@ -60,6 +60,7 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
     names = result.get("names") or ["a", "b"]
     x = result.get("x") or []
     estimate = ", ".join(f"{n} {float(v):.4f}°" for n, v in zip(names, x, strict=False))
+    summary = _calibration_summary(folder)
     title = f"calibration ({result['method']})"
     outcome = (
         "converged" if result.get("success") else f"not converged (status {result.get('status')})"
@@ -67,7 +68,9 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
     rows: list[tuple[str, Any]] = [
         ("method", result["method"]),
         ("outcome", result.get("message") or outcome),
+        *_setup_rows(summary),
         ("estimate", estimate or "–"),
+        *_truth_rows(summary, names),
         ("parameterization", result.get("parameterization")),
         ("measurements", result.get("n_measurements")),
         ("of which acquisition", result.get("acquisition_measurements")),
@@ -103,6 +106,45 @@ def calibration_section(folder: Path, anchor: str) -> tuple[str, str]:
     ]
     line = f"{title} — {outcome}; estimate {estimate or 'none'}"
     return "\n".join(parts), line
+
+
+def _calibration_summary(folder: Path) -> dict[str, Any]:
+    """The ``summary.json`` that ``echocal calibrate`` writes beside ``result.json``
+    (what was calibrated, truth and error); empty for a folder without one."""
+    try:
+        data = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _setup_rows(summary: dict[str, Any]) -> list[tuple[str, Any]]:
+    """What was calibrated: the setup (or source), position [mm], seed."""
+    source = summary.get("source") or {}
+    what = source.get("description") or source.get("name") or source.get("kind")
+    rows: list[tuple[str, Any]] = []
+    if summary.get("setup") or what:
+        name = summary.get("setup")
+        both = name and what and what != name
+        rows.append(("setup", f"{name}: {what}" if both else name or what))
+    if summary.get("position_m") is not None:
+        rows.append(("position [mm]", _text([1e3 * float(v) for v in summary["position_m"]])))
+    return rows
+
+
+def _truth_rows(summary: dict[str, Any], names: list[str]) -> list[tuple[str, Any]]:
+    """The simulator's true optimum and the estimate's angular error [deg] (a simulated
+    calibration only: a recording or a rig knows no truth)."""
+    truth = summary.get("truth_deg")
+    if not truth:
+        return []
+    pairs = zip(names, truth, strict=False)
+    rows: list[tuple[str, Any]] = [
+        ("true optimum", ", ".join(f"{n} {float(v):.4f}°" for n, v in pairs))
+    ]
+    error = summary.get("error_deg")
+    rows.append(("error [°]", "– (no echo found)" if error is None else f"{float(error):.4f}"))
+    return rows
 
 
 def _text(value: Any) -> str:

@@ -140,6 +140,7 @@ class Bench:
                 config.method,
                 config.x0,
                 max_iter=config.max_iter,
+                settle=None,  # the thesis's studies run a fixed number of iterations
                 preset=config.preset,
                 rng=seed,
                 **dict(config.options),

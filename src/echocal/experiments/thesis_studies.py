@@ -211,7 +211,7 @@ def table_4(bench: Bench, quick: bool) -> Study:
         configs,
         checks,
         [
-            "The receiver's noise σ is fixed by the SNR of the reference echo (DESIGN.md).",
+            "The receiver's noise σ is fixed by the SNR of the reference echo (docs/physics.md).",
             "Second group: ε calibrated by Spall's rule (first step ≈ 0.5°), other gains as "
             "Table 4.",
         ],
@@ -256,7 +256,8 @@ def table_5(bench: Bench, quick: bool) -> Study:
             f"and points {', '.join(_fmt(d) for d in _NEWTON_DISTANCES)}° away along the "
             f"optimum's meridian; 'near' means ≤ {_fmt(_NEAR_MAX)}°.",
             "Our Newton is damped (Levenberg shift where H is not negative definite) and rejects "
-            "downhill steps (DESIGN.md errata), so it stalls rather than run away.",
+            "downhill steps (docs/physics.md, the thesis's errata), so it stalls rather than "
+            "run away.",
         ],
     )
 

@@ -38,6 +38,7 @@ from echocal.experiments._runs import (
     summarize_configs,
 )
 from echocal.experiments._scenario_base import Progress, Scenario, ScenarioResult, _finish
+from echocal.plots._figure import new_figure
 
 __all__ = ["SETUP", "WALL_SCENARIO", "lobe_half_width"]
 
@@ -95,7 +96,7 @@ def _lobes(setup, position, gates, n: int) -> tuple[np.ndarray, dict[str, np.nda
 
 
 def _lobe_figure(tilts: np.ndarray, peaks: dict[str, np.ndarray], widths: dict[str, float]):
-    fig = Figure(figsize=(7, 4), layout="constrained")
+    fig = new_figure(figsize=(7, 4), layout="constrained")
     ax = fig.add_subplot()
     for (name, peak), style in zip(peaks.items(), ("-", "--"), strict=False):
         db = 20 * np.log10(np.maximum(peak / np.max(peak), 1e-6))

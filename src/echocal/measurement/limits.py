@@ -17,7 +17,8 @@ _AXES = ("x", "y", "z", "azimuth", "coelevation")
 _POSITION_AXES = ("x", "y", "z")
 
 ANGLE_RANGES = {"azimuth": (-360.0, 360.0), "coelevation": (-90.0, 90.0)}
-"""[deg] where the limits of each orientation angle must lie (DESIGN.md, thesis eq. 8).
+"""[deg] where the limits of each orientation angle must lie (thesis eq. 8;
+docs/getting-started.md, "Conventions").
 
 Co-elevation θ is measured from straight down (θ = 0 fires along −z) and may be signed;
 beyond ±90° the beam points up, away from the specimen.  Azimuth is periodic: one turn

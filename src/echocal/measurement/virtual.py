@@ -1,13 +1,14 @@
 """``VirtualSetup``: the ray-traced simulator as a measurement source.
 
-Data flows one way (DESIGN.md)::
+Data flows one way (docs/architecture.md)::
 
     pose → transducer rays → closest hits → echoes (a·β, τ) → A-scan (eq. 28) → receiver
 
 The receiver's noise belongs to the instrument: its σ is fixed once, from the
 SNR of the noiseless reference echo at ``reference_position`` with the probe
 normal to the surface below it, and then applies to every measurement — so
-off-optimum orientations really have a lower SNR (DESIGN.md, thesis §12.2.1.3).
+off-optimum orientations really have a lower SNR (thesis §12.2.1.3; docs/physics.md,
+"The thesis's errata").
 
 The simulator also knows the truth — the orientation of maximum echo at a
 position (:meth:`VirtualSetup.true_optimum`) — but keeps it apart from

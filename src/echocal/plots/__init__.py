@@ -1,7 +1,8 @@
 """Figures: functions that only read data and return a :class:`matplotlib.figure.Figure`.
 
 Figures are built with the object-oriented API (no pyplot state), so they work headless
-and in parallel; :func:`save_figure` writes them atomically.
+and in parallel; inside IPython (a Jupyter notebook) they are made through pyplot, so the
+notebook shows them inline when the cell ends.  :func:`save_figure` writes them atomically.
 """
 
 from __future__ import annotations

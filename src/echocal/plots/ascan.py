@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
 from echocal.constants import ECHO_THRESHOLD
+from echocal.plots._figure import new_figure
 from echocal.signal.gates import TimeGate
 from echocal.signal.processing import Gate, envelope, time_of_flight
 from echocal.signal.pulses import Pulse
@@ -77,7 +78,7 @@ def plot_ascan(
         tof = float(time_of_flight(gated, window, pulse, gate=gate)) if np.any(gated) else None
         tof = tof if tof is not None and np.isfinite(tof) else None
     zoom = tof is not None and pulse is not None
-    fig = Figure(figsize=(12, 5.8 if zoom else 3.6), layout="constrained")
+    fig = new_figure(figsize=(12, 5.8 if zoom else 3.6), layout="constrained")
     axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
     sigma = _noise_sigma(x) if noise_sigma is None else float(noise_sigma)
     env = envelope(x)
@@ -86,10 +87,10 @@ def plot_ascan(
         ax.plot(t_us, x, lw=0.8, color="C0", ls="-", label="A-scan")
         ax.plot(t_us, env, lw=1.2, color="C1", ls="--", label="envelope")
         if sigma > 0:
-            ax.axhline(sigma, color="0.3", ls=":", lw=1.0, label=f"noise ±σ (σ = {sigma:.3g})")
+            ax.axhline(sigma, color="0.3", ls=":", lw=1.0, label=noise_label(sigma))
             ax.axhline(-sigma, color="0.3", ls=":", lw=1.0)
         if detect:
-            label = f"detection threshold {detect:.3g} (g = {significance:g} σ)"
+            label = threshold_label(detect, significance)
             ax.axhline(detect, color="C4", ls=(0, (6, 3)), lw=1.2, label=label)
         if gate is not None:
             level = float(gate.level(x[None, :])[0])
@@ -149,6 +150,18 @@ def _draw_gates(ax, gates: Sequence[TimeGate], x: np.ndarray, window: RecordingW
         if g.triggered:
             t = float(interface_trigger(x[None, :], window, g.threshold)[0])
             ax.plot([t * 1e6], [0.0], marker="^", ms=7, color=colour, ls="none")
+
+
+def noise_label(sigma: float) -> str:
+    """The legend of the noise lines: the σ of the raw samples."""
+    return f"sample noise ±σ (σ = {sigma:.3g})"
+
+
+def threshold_label(level: float, significance: float) -> str:
+    """The legend of the detection threshold: the echo envelope peak whose matched-filter
+    significance is g.  g counts the matched filter's output noise σ, which filtering
+    makes far smaller than the samples' σ, so the level is not g times the samples' σ."""
+    return f"detection threshold {level:.3g} (g = {significance:g} matched-filter σ)"
 
 
 def _noise_sigma(x: np.ndarray) -> float:

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
+from echocal.plots._figure import new_figure
 from echocal.plots._style import series_style
 
 __all__ = [
@@ -60,7 +61,7 @@ def convergence_figure(
         e.g. the noiseless simulated metric at the iterates.
     optimum_value : the metric at the true optimum, drawn as a dashed line.
     """
-    fig = Figure(figsize=(11, 4.2 + 0.2 * ((len(runs) + 3) // 4)), constrained_layout=True)
+    fig = new_figure(figsize=(11, 4.2 + 0.2 * ((len(runs) + 3) // 4)), constrained_layout=True)
     by_iter, by_meas = fig.subplots(1, 2, sharey=True)
     for i, (label, result) in enumerate(runs.items()):
         values = np.asarray(iterate_values[label], dtype=float)
@@ -131,7 +132,7 @@ def measured_convergence_figure(
         from echocal.errors import EchocalValueError
 
         raise EchocalValueError(f"scale must be > 0; got {scale}")
-    fig = Figure(figsize=(11, 4.2), constrained_layout=True)
+    fig = new_figure(figsize=(11, 4.2), constrained_layout=True)
     measured, settling = fig.subplots(1, 2)
     count = np.arange(1, len(values) + 1)
     measured.plot(count, values / scale, ls="", marker=".", ms=4, color="0.55", label="measured")
@@ -221,7 +222,7 @@ def path_figure(
     alone (a rig: no map is known), framed to every point drawn.  ``truth_label`` names
     the ``truth`` marker (e.g. a recording's best grid pose).
     """
-    fig = Figure(figsize=(6.8, 5.9 + 0.2 * ((len(runs) + 4) // 3)), constrained_layout=True)
+    fig = new_figure(figsize=(6.8, 5.9 + 0.2 * ((len(runs) + 4) // 3)), constrained_layout=True)
     ax = fig.add_subplot()
     on_map = cost_map is not None
     if cost_map is not None:

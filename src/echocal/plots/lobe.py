@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from echocal.lobe import EchoLobe, far_field_lobe, near_field_lobe
+from echocal.plots._figure import new_figure
 
 __all__ = ["plot_lobe"]
 
@@ -26,7 +27,7 @@ def plot_lobe(lobe: EchoLobe | Sequence[EchoLobe], *, title: str | None = None) 
     a disc, sin x / x for a rectangle), and the −6 dB level."""
     lobes = [lobe] if isinstance(lobe, EchoLobe) else list(lobe)
     first = lobes[0]
-    fig = Figure(figsize=(10.0, 4.2), layout="constrained")
+    fig = new_figure(figsize=(10.0, 4.2), layout="constrained")
     ax = fig.subplots()
     styles = ["-", "--", "-.", ":"]
     for i, item in enumerate(lobes):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from echocal.plots._figure import new_figure
 from echocal.signal.analytic import analytic_signal
 from echocal.signal.pulses import Pulse
 
@@ -25,7 +26,7 @@ def plot_pulse(pulse: Pulse, *, fs: float | None = None, title: str | None = Non
     with np.errstate(divide="ignore"):
         esd_db = 10 * np.log10(esd / esd.max())
 
-    fig = Figure(figsize=(13, 3.6), layout="constrained")
+    fig = new_figure(figsize=(13, 3.6), layout="constrained")
     ax_w, ax_r, ax_p = fig.subplots(1, 3)
     us = 1e6
     ax_w.plot(t * us, w, lw=1.2, label="w(t)")

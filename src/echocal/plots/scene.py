@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from echocal.echo import WAVE_MODEL, ray_echoes
 from echocal.geometry import Pose, poses_to_arrays
+from echocal.plots._figure import new_figure
 from echocal.specimen import Cylinder, FinitePlane, Specimen, Sphere, TriangleMesh
 from echocal.transducer import Transducer
 
@@ -89,7 +90,7 @@ def scene_figure(
     where it meets the part, with the part's surface normal there (magenta arrow): the
     angle between them is what a calibration removes.  Axes in millimetres.
     """
-    fig = Figure(figsize=(8, 6.5), constrained_layout=True)
+    fig = new_figure(figsize=(8, 6.5), constrained_layout=True)
     ax = fig.add_subplot(projection="3d", computed_zorder=False)  # part, rays, then axes
     polygons = [p for shape in specimen for p in _shape_polygons(shape)]
     if polygons:

@@ -20,6 +20,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from numpy.typing import NDArray
 
 from echocal.plots import save_figure
+from echocal.plots._figure import new_figure, release
 from echocal.plots.scene import _EDGE, _FACE, _grid_quads
 from echocal.scanning.dataset import SurfaceScan
 from echocal.specimen import Specimen
@@ -90,7 +91,7 @@ def _map_figure(
     scan: SurfaceScan, values: NDArray, label: str, title: str, **kw
 ) -> tuple[Figure, Any]:
     """One map of ``values`` (see :func:`_image`) titled ``title``; the figure and its axes."""
-    fig = Figure(figsize=(5.5, 4.5), layout="constrained")
+    fig = new_figure(figsize=(5.5, 4.5), layout="constrained")
     ax = fig.add_subplot()
     _image(fig, ax, scan, values, label, **kw)
     ax.set_title(title)
@@ -140,7 +141,7 @@ def _value_and_error_figure(
 ) -> Figure:
     """Two maps side by side: ``left`` = (values, colour-bar label, title) in viridis, and
     a signed ``error`` (same triple) in a diverging map centred on zero."""
-    fig = Figure(figsize=(10, 4.2), layout="constrained")
+    fig = new_figure(figsize=(10, 4.2), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     values, label, title = left
     _image(fig, ax1, scan, values, label, cmap="viridis")
@@ -199,7 +200,7 @@ def surface_3d_figure(scan: SurfaceScan, specimen: Specimen | None = None) -> Fi
     one grid step long; points not found are marked × at their probe position.
     """
     ds = scan.dataset
-    fig = Figure(figsize=(7.5, 6.2), layout="constrained")
+    fig = new_figure(figsize=(7.5, 6.2), layout="constrained")
     ax = fig.add_subplot(projection="3d", computed_zorder=False)
     pts = scan.surface_points() * _MM
     probe = (
@@ -300,4 +301,5 @@ def save_surface_figures(
     written: list[Path] = []
     for name, fig in figures.items():
         written += save_figure(fig, folder / f"{name}.png", formats=formats)
+        release(fig)
     return written

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from echocal.plots._figure import new_figure
 from echocal.plots._style import COLORS, series_style
 
 __all__ = ["measurements_figure", "success_ecdf_figure", "success_rate_figure"]
@@ -59,7 +60,7 @@ def success_rate_figure(summary: pd.DataFrame, *, title: str | None = None) -> F
 
     summary : one row per configuration and SNR with ``snr_db`` and ``success_rate``.
     """
-    fig = Figure(figsize=(8.0, 4.2), constrained_layout=True)
+    fig = new_figure(figsize=(8.0, 4.2), constrained_layout=True)
     ax = fig.add_subplot()
     pos, ticks = _snr_positions(summary["snr_db"])
     labels = _label_column(summary)
@@ -90,7 +91,7 @@ def measurements_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
 
     An empty box slot means no run of that configuration reached the tolerance.
     """
-    fig = Figure(figsize=(max(6.8, 0.9 * len(runs.groupby(["label", "snr_db"]))), 4.4))
+    fig = new_figure(figsize=(max(6.8, 0.9 * len(runs.groupby(["label", "snr_db"]))), 4.4))
     fig.set_layout_engine("constrained")
     ax = fig.add_subplot()
     labels = _label_column(runs)
@@ -142,7 +143,7 @@ def measurements_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figu
 def success_ecdf_figure(runs: pd.DataFrame, *, title: str | None = None) -> Figure:
     """Fraction of all runs within tolerance after m measurements, vs m; one line per
     configuration, line style per SNR.  Each curve ends at that configuration's success rate."""
-    fig = Figure(figsize=(8.6, 4.4), constrained_layout=True)
+    fig = new_figure(figsize=(8.6, 4.4), constrained_layout=True)
     ax = fig.add_subplot()
     labels = _label_column(runs)
     snrs = sorted({float(s) for s in runs["snr_db"]}, key=lambda s: (math.isnan(s), -s))

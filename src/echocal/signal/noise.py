@@ -1,8 +1,9 @@
 """Receiver noise, saturation and quantization (thesis §12.2.1.3).
 
-The noise power belongs to the instrument (DESIGN.md): it is fixed once per setup from the
-SNR of a *reference* echo — the echo at normal incidence, the best orientation — and then
-stays the same for every measurement, so off-optimum orientations really have lower SNR.
+The noise power belongs to the instrument (docs/physics.md, "The thesis's errata"): it is
+fixed once per setup from the SNR of a *reference* echo — the echo at normal incidence, the
+best orientation — and then stays the same for every measurement, so off-optimum
+orientations really have lower SNR.
 
 SNR definition used throughout::
 

@@ -28,8 +28,8 @@ class FinitePlane(Shape):
     ``(azimuth, coelevation)``: its normal is n (thesis eq. 8), its width runs
     along the frame's x' axis and its height along y' (thesis eqs. 19–20).
 
-    Intersection (thesis eq. 21, with the numerator of the text — see
-    DESIGN.md errata)::
+    Intersection (thesis eq. 21, with the numerator of the text — see docs/physics.md,
+    "The thesis's errata")::
 
         t' = nᵀ(p₀ − s) / nᵀd,   m = Tᵀ(s + t'd − p₀),   |m₀| <= w/2,  |m₁| <= h/2
 

@@ -1,6 +1,6 @@
 """The wave echo model: a Kirchhoff (physical-optics) integral with exact piston fields.
 
-Pipeline per pose (DESIGN.md, "Physics models")::
+Pipeline per pose (docs/physics.md, "The wave model")::
 
     footprint rays → closest hits = surface samples (point, normal, patch area, visibility)
         → two-way SIR correlation per sample → one time grid → spectrum × pulse → A-scan

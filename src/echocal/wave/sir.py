@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from echocal._numba import HAVE_NUMBA, USE_NUMBA
+from echocal._numba import HAVE_NUMBA, USE_NUMBA, jit
 
 
 def _jit(func: Callable[..., Any]) -> Callable[..., Any]:
@@ -60,9 +60,7 @@ def _jit(func: Callable[..., Any]) -> Callable[..., Any]:
     spares a check on every division of the inner loops (none of them divides by zero)."""
     if not (USE_NUMBA and HAVE_NUMBA):
         return func
-    from numba import njit
-
-    return njit(cache=True, nogil=True, error_model="numpy")(func)
+    return jit(func, error_model="numpy")
 
 
 def _jit_inline(func: Callable[..., Any]) -> Callable[..., Any]:
@@ -70,9 +68,7 @@ def _jit_inline(func: Callable[..., Any]) -> Callable[..., Any]:
     for every quadrature node (about 40 % of the kernels' time went to the calls)."""
     if not (USE_NUMBA and HAVE_NUMBA):
         return func
-    from numba import njit
-
-    return njit(cache=True, nogil=True, error_model="numpy", inline="always")(func)
+    return jit(func, error_model="numpy", inline="always")
 
 
 # 2-point Gauss–Legendre nodes and weights on [0, 1] (smooth pieces), and 3-point ones

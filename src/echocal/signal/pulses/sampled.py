@@ -91,8 +91,9 @@ class SampledPulse(Pulse):
 
         One column (or a 1-D array): amplitudes, ``fs`` [Hz] required.  Two columns: time
         [s], amplitude; ``fs`` follows from the (uniform) time step and, unless given,
-        ``start_time`` is the first time value.  CSV may have ``#`` comments and one header
-        line.
+        ``start_time`` is the first time value.  CSV may have ``#`` comment lines anywhere
+        and one header line before the numbers, as the A-scan CSV of ``echocal simulate``
+        has (a ``#`` summary line, then ``time_s,amplitude``).
         """
         path = Path(path)
         if not path.is_file():
@@ -101,13 +102,11 @@ class SampledPulse(Pulse):
             if path.suffix.lower() == ".npy":
                 data = np.load(path, allow_pickle=False)
             else:
+                rows = _csv_rows(path.read_text(encoding="utf-8"))
                 with warnings.catch_warnings():  # an empty file: refused below, by name
                     warnings.simplefilter("ignore", UserWarning)
-                    try:
-                        data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-                    except ValueError:
-                        data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, skiprows=1)
-        except (ValueError, OSError, EOFError) as exc:
+                    data = np.loadtxt(rows, delimiter=",", ndmin=2)
+        except (ValueError, OSError, EOFError, UnicodeDecodeError) as exc:
             raise DataFileError(
                 f"pulse file {str(path)!r} is not a numeric .npy or CSV file: {exc}"
             ) from None
@@ -192,3 +191,15 @@ class SampledPulse(Pulse):
     @property
     def _scan_limit(self) -> float:
         return self.fs / 2.0
+
+
+def _csv_rows(text: str) -> list[str]:
+    """The data rows of a CSV text: without ``#`` comment lines, blank lines and a first
+    line that is not numbers (a header such as ``time_s,amplitude``)."""
+    rows = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if rows:
+        try:
+            [float(v) for v in rows[0].split(",")]
+        except ValueError:
+            rows = rows[1:]
+    return rows

@@ -1,0 +1,44 @@
+"""Where echocal's figures are made: a plain Figure, or a pyplot one inside IPython (private).
+
+Outside IPython every plotting function builds its figure with the object-oriented API
+(``matplotlib.figure.Figure``: no pyplot state, safe in threads and servers).  Inside an
+IPython session (a Jupyter notebook, the IPython shell) the figure is made through
+:func:`matplotlib.pyplot.figure` instead, so the notebook shows it when the cell ends,
+like any pyplot figure (and closes it after showing it).  Code that only writes figures
+to files hands them to :func:`release` once written, so a notebook shows none of them.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+from matplotlib.figure import Figure
+
+__all__ = ["in_ipython", "new_figure", "release"]
+
+
+def in_ipython() -> bool:
+    """Whether this process runs an IPython session (Jupyter kernel or IPython shell)."""
+    ipython = sys.modules.get("IPython")
+    get = getattr(ipython, "get_ipython", None)
+    return get is not None and get() is not None
+
+
+def new_figure(**kwargs: Any) -> Figure:
+    """A new figure (``kwargs`` as for :class:`matplotlib.figure.Figure`): through pyplot
+    inside IPython, so that it displays inline, else a plain, state-free Figure."""
+    if in_ipython():
+        import matplotlib.pyplot as plt
+
+        return plt.figure(**kwargs)
+    return Figure(**kwargs)
+
+
+def release(fig: Figure) -> None:
+    """Forget a written-to-file figure in pyplot's registry (if it is there), so a
+    notebook does not show it; a plain Figure needs nothing."""
+    if getattr(fig.canvas, "manager", None) is not None:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
