@@ -98,6 +98,7 @@ def _measurements_to_stay_within(
         (20.0, (9.0, -9.0), BUDGET_20DB, LOCKED_MEDIAN_20DB),  # 12.7° out
     ],
 )
+@pytest.mark.slow  # 18 and 34 CPU-s: the slow tier
 def test_auto_from_a_far_start_on_the_wave_model(snr, offset, budget, locked) -> None:
     reached = {s: _measurements_to_stay_within(s, snr, offset, budget) for s in SEEDS}
     missed = [seed for seed, n in reached.items() if n is None]

@@ -34,7 +34,7 @@ def ray():
 
 def test_near_the_optimum_the_map_is_the_lobe_and_costs_no_ascan(ray) -> None:
     setup, pos, truth = ray
-    drawn = path_cost_map(setup, pos, truth, 8.0, max_points=0)
+    drawn = path_cost_map(setup, pos, truth, 8.0)  # by default nothing beyond the lobe
     assert drawn.from_lobe and drawn.simulated == drawn.planned == 0 and not drawn.stopped
     m = drawn.cost_map
     offsets = np.hypot(*np.meshgrid(m.a - truth[0], m.b - truth[1], indexing="ij"))

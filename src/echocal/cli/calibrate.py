@@ -164,17 +164,20 @@ def register(app: typer.Typer) -> None:
         ),
         plots: Annotated[bool, typer.Option(help="Save the convergence and path plots.")] = True,
         map_points: Annotated[
-            int,
+            int | None,
             typer.Option(
                 "--map-points",
                 min=0,
                 metavar="N",
-                help="The most noiseless A-scans the path plot's cost map may simulate "
-                f"(default {DEFAULT_MAP_POINTS}; near the optimum the map comes from the "
-                "setup's cached lobe profile, free; 0 draws only what that gives, or the "
-                f"paths alone); the map also stops after {DEFAULT_MAP_SECONDS:g} s.",
+                help="The most noiseless A-scans the path plot's cost map may simulate.  "
+                "Near the optimum the map comes from the setup's lobe profile (computed "
+                "once, cached on disk) and costs none; by default nothing is simulated "
+                f"beyond its reach (left blank), or {DEFAULT_MAP_POINTS} points where no "
+                "profile describes the metric (a gate, a two-humped lobe); 0 draws only "
+                f"what the profile gives.  The map also stops after {DEFAULT_MAP_SECONDS:g} "
+                "s (the rest blank, with a note).",
             ),
-        ] = DEFAULT_MAP_POINTS,
+        ] = None,
         final_measure: Annotated[
             bool,
             typer.Option(
@@ -297,7 +300,7 @@ def _calibrate_simulated(
     json_output: bool,
     provenance: Any = None,
     gate: str | None = None,
-    map_points: int = DEFAULT_MAP_POINTS,
+    map_points: int | None = None,
 ) -> None:
     """Calibrate on a simulated setup and judge the estimate against its true optimum."""
     from echocal.evaluation import evaluate_run
@@ -355,7 +358,7 @@ def _calibrate_simulated(
 
 
 def _save_plots(
-    virtual, where, evaluation, out: Path, gate=None, map_points=DEFAULT_MAP_POINTS, talk=True
+    virtual, where, evaluation, out: Path, gate=None, map_points=None, talk=True
 ) -> dict[str, str]:
     """The convergence and path figures (the path over a cost map of at most
     ``map_points`` simulated A-scans: :func:`~echocal.plots.path_map.path_cost_map`, with
@@ -393,12 +396,14 @@ def _save_plots(
             err=True,
         )
     empty = not np.any(np.isfinite(drawn.cost_map.values))
+    lobe_only = drawn.from_lobe and not drawn.planned
+    blank = f"; the map: the lobe, {drawn.reach:.3g}° around the truth" if lobe_only else ""
     path = path_figure(
         None if empty else drawn.cost_map,
         {label: result},
         x0=result.iterates[0],
         truth=evaluation.truth,
-        title=f"{label}: path over the cost map (every measured pose in grey)",
+        title=f"{label}: path over the cost map (every measured pose in grey{blank})",
         show_measurements=True,
     )
     return save_pngs({"convergence": conv, "path": path}, out)

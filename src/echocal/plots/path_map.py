@@ -14,10 +14,12 @@ already known where it can:
   :data:`FINE` × :data:`FINE` grid — no A-scan at all (the profile is computed once per
   setup and position, and cached on disk: :mod:`echocal.measurement.lobe_cache`);
 * **a coarse grid**: beyond that reach (or everywhere, without a profile) the metric is
-  simulated on the coarsest grid of the map's square whose points to simulate fit in
-  ``max_points``, nearest the centre first, with a progress bar, until the budget of
-  ``max_seconds`` runs out (the points left are blank, and :attr:`PathMap.stopped`
-  says so); the fine grid takes the coarse grid's values interpolated in log scale.
+  simulated on the finest grid of the map's square whose points to simulate fit in
+  ``max_points`` (by default none beyond a profile's reach, which stays blank, and
+  :data:`DEFAULT_MAP_POINTS` without a profile), nearest the centre first, with a
+  progress bar, until the budget of ``max_seconds`` runs out (the points left are blank,
+  and :attr:`PathMap.stopped` says so); the fine grid takes the coarse grid's values
+  interpolated in log scale.
 """
 
 from __future__ import annotations
@@ -102,16 +104,19 @@ def path_cost_map(
     *,
     parameterization: str = "tilt",
     gate: TimeGate | None = None,
-    max_points: int = DEFAULT_MAP_POINTS,
+    max_points: int | None = None,
     max_seconds: float = DEFAULT_MAP_SECONDS,
     progress: bool = False,
 ) -> PathMap:
     """The noiseless pseudo-energy (inside ``gate``, if given) on the square of half-side
     ``half_span`` [deg] around ``centre`` [deg] (the true optimum, in
     ``parameterization``) at ``position`` [m], within ``max_points`` simulated A-scans
-    (≥ 0; 0: only what the lobe profile gives) and ``max_seconds`` [s, > 0]; ``progress``
+    (≥ 0; 0: only what the lobe profile gives; None: 0 where a lobe profile describes the
+    metric, else :data:`DEFAULT_MAP_POINTS`) and ``max_seconds`` [s, > 0]; ``progress``
     shows a bar on stderr (see the module docstring)."""
-    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 0:
+    if max_points is not None and (
+        isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 0
+    ):
         raise EchocalValueError(f"map points must be a whole number >= 0; got {max_points!r}")
     if not (isinstance(max_seconds, (int, float)) and max_seconds > 0):
         raise EchocalValueError(f"map seconds must be > 0; got {max_seconds!r}")
@@ -120,6 +125,8 @@ def path_cost_map(
     if not (math.isfinite(half_span) and half_span > 0.0):
         raise EchocalValueError(f"half_span must be > 0 deg; got {half_span!r}")
     lobe_of = _lobe_template(setup, pos, gate)
+    if max_points is None:
+        max_points = 0 if lobe_of is not None else DEFAULT_MAP_POINTS
     if lobe_of is None:
         n = min(map_resolution(setup, half_span), max(math.isqrt(max_points), 0))
         n = max(n, 2)
