@@ -150,6 +150,7 @@ def _sphere_measurements(case) -> int | None:
     return measurements_to_stay_within(result, tilt_errors(result, truth), 0.1)
 
 
+@pytest.mark.slow  # 126 CPU-s (48 of them the lobe profile over the ball): the slow tier
 def test_auto_over_the_sphere_finds_the_central_peak() -> None:
     reached = [_sphere_measurements(case) for case in SPHERE_CASES]
     missed = [case for case, n in zip(SPHERE_CASES, reached, strict=True) if n is None]

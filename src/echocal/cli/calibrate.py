@@ -396,14 +396,19 @@ def _save_plots(
             err=True,
         )
     empty = not np.any(np.isfinite(drawn.cost_map.values))
-    lobe_only = drawn.from_lobe and not drawn.planned
-    blank = f"; the map: the lobe, {drawn.reach:.3g}° around the truth" if lobe_only else ""
     path = path_figure(
         None if empty else drawn.cost_map,
         {label: result},
         x0=result.iterates[0],
         truth=evaluation.truth,
-        title=f"{label}: path over the cost map (every measured pose in grey{blank})",
+        title=f"{label}: path over the cost map (every measured pose in grey)",
         show_measurements=True,
     )
+    if drawn.from_lobe and not drawn.planned and not empty:
+        path.axes[0].text(
+            0.02, 0.02,
+            f"map: the lobe profile, within {drawn.reach:.3g}° of the optimum;\n"
+            "beyond, blank (--map-points N simulates N A-scans there)",
+            transform=path.axes[0].transAxes, fontsize=7, color="0.2", va="bottom",
+        )  # fmt: skip
     return save_pngs({"convergence": conv, "path": path}, out)
