@@ -404,11 +404,12 @@ def _save_plots(
         title=f"{label}: path over the cost map (every measured pose in grey)",
         show_measurements=True,
     )
-    if drawn.from_lobe and not drawn.planned and not empty:
+    if drawn.from_lobe and not drawn.planned and np.any(np.isnan(drawn.cost_map.values)):
         path.axes[0].text(
             0.02, 0.02,
             f"map: the lobe profile, within {drawn.reach:.3g}° of the optimum;\n"
             "beyond, blank (--map-points N simulates N A-scans there)",
             transform=path.axes[0].transAxes, fontsize=7, color="0.2", va="bottom",
+            bbox={"fc": "w", "alpha": 0.7, "lw": 0},
         )  # fmt: skip
     return save_pngs({"convergence": conv, "path": path}, out)
