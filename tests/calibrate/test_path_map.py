@@ -96,3 +96,10 @@ def test_calibrate_map_points(tmp_path) -> None:
     assert (tmp_path / "a" / "path.png").stat().st_size > 10_000
     refused = CliRunner().invoke(app, [*base, "--map-points", "-1", "--out", str(tmp_path / "b")])
     assert refused.exit_code == 2 and "--map-points" in refused.output
+    # an output option, as --plots: a rerun may change it, and it is not recorded
+    recorded = json.loads((tmp_path / "a" / "result.json").read_text())["provenance"]
+    assert "map_points" not in recorded["parameters"]
+    rerun = ["calibrate", "--from", str(tmp_path / "a" / "result.json"), "--map-points", "4"]
+    again = CliRunner().invoke(app, [*rerun, "--out", str(tmp_path / "c"), "--json"])
+    assert again.exit_code == 0, again.output
+    assert json.loads(again.stdout)["n_measurements"] == json.loads(done.stdout)["n_measurements"]
