@@ -2,7 +2,9 @@
 #   make demo  — install the package with its fast engines (numba, embree), then run the
 #                demo: a simulated calibration study and the thesis comparison
 #   make test  — install with the test, docs and rig extras, lint (ruff), type-check (mypy),
-#                run the test suite, then build the documentation (make docs)
+#                run the test suite's fast tier, then build the documentation (make docs)
+#   make test-slow — the slow tier (tests marked `slow`: long physics and benchmark checks),
+#                time-boxed by SLOW_BUDGET; CI runs it after `make test`
 # Each installs only what it needs, once: a stamp file in the venv remembers which extras
 # are in (reinstalled when pyproject.toml changes).  --no-compile: Python compiles the
 # modules a command imports when it first imports them, not every module of every package.
@@ -11,7 +13,10 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PIP     = $(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile
 
-.PHONY: demo test setup setup-test lint typecheck docs clean
+.PHONY: demo test test-slow setup setup-test lint typecheck docs clean
+
+# the slow tier's time box (coreutils timeout): a hang ends the job, not an assertion
+SLOW_BUDGET ?= 45m
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -40,8 +45,12 @@ typecheck: setup-test
 	$(BIN)/mypy
 
 test: lint typecheck
-	$(BIN)/python -m pytest -n 2 --dist worksteal --timeout=600 --durations=25
+	$(BIN)/python -m pytest -n 2 --dist worksteal -m "not slow" --durations=25
 	$(MAKE) docs
+
+test-slow: setup-test
+	timeout --foreground --kill-after=1m $(SLOW_BUDGET) \
+		$(BIN)/python -m pytest -n 2 --dist worksteal -m slow --durations=25
 
 # The documentation site (Sphinx): warnings are errors, every gallery example is executed.
 docs: setup-test

@@ -27,3 +27,14 @@ ECHO_THRESHOLD = 4.5
 :class:`~echocal.signal.detection.EchoDetector`) above which an A-scan shows an echo: pure
 noise exceeds it about 3·10⁻⁶ of the time (``echocal simulate``; the acquisition phase's
 default ``threshold``)."""
+
+MAP_POINTS = 64
+"""The most noiseless A-scans a calibration's path plot simulates for its cost map by
+default where no lobe profile describes the metric (a gated metric, a lobe with two humps;
+``echocal calibrate --map-points N``; :mod:`echocal.plots.path_map`).  Where one does,
+the map is the profile's, within its reach (9.4° for the 12.7 mm 5 MHz probe, where the
+metric is more than 40 dB down, below the map's floor), and simulates nothing by default:
+a far-start calibration on the wave model takes about 2 CPU-s once its profile is cached,
+while 52 A-scans beyond that reach cost 5–6."""
+MAP_SECONDS = 60.0
+"""[s] a path plot's cost map stops simulating after this long (its budget in time)."""

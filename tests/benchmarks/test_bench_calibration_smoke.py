@@ -12,11 +12,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "benchmarks" / "bench_calibration.py"
 
 
+@pytest.mark.slow  # 30 CPU-s: the slow tier
 def test_bench_calibration_smoke_runs_and_reports(tmp_path):
     out_json, out_md, out_png = tmp_path / "c.json", tmp_path / "c.md", tmp_path / "c.png"
     proc = subprocess.run(
@@ -139,6 +141,7 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
         assert done.returncode == 2 and message in done.stdout + done.stderr
 
 
+@pytest.mark.slow  # 30 CPU-s: the slow tier
 def test_the_back_wall_case_and_the_front_first_workflow():
     """The gated case is judged against the truth inside its gate: a flat, level plate's
     back wall is strongest at normal incidence (the independent truth; 1e-4° is the truth

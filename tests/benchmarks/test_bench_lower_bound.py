@@ -52,7 +52,9 @@ def test_the_best_lattice_covers_a_disc_of_radius_2_with_7_sure_discs_of_radius_
     assert bench.lattice_search((0.0, 1.0), angles, sure, samples=4000)[0] == 1
 
 
-@pytest.mark.parametrize("width", [0.7, 1.0, 1.5])
+@pytest.mark.parametrize(
+    "width", [pytest.param(0.7, marks=pytest.mark.slow), 1.0, 1.5]
+)  # 0.7: 15 CPU-s
 def test_no_lattice_beats_the_union_bound(bench, width):
     """The union bound holds for every placement, so the best lattice spends at least as
     many measurements (soft Gaussian detection curves of three widths [deg], cut at 4 widths,
@@ -64,6 +66,7 @@ def test_no_lattice_beats_the_union_bound(bench, width):
     assert bench.area_bound(band, bench.seen_area(angles, prob)) <= n < math.inf
 
 
+@pytest.mark.slow  # 14 CPU-s: the slow tier
 def test_lower_bound_smoke_runs_and_reports(tmp_path):
     out_md = tmp_path / "lb.md"
     proc = subprocess.run(

@@ -10,6 +10,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "benchmarks" / "bench_ascan.py"
 
@@ -28,6 +30,7 @@ def _positive(x: float) -> bool:
     return math.isfinite(x) and x > 0
 
 
+@pytest.mark.slow  # 14 CPU-s: the slow tier
 def test_bench_ascan_smoke_runs_and_reports(tmp_path):
     out_json = tmp_path / "ascan.json"
     out_md = tmp_path / "ascan.md"

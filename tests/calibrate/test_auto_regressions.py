@@ -98,6 +98,7 @@ def _measurements_to_stay_within(
         (20.0, (9.0, -9.0), BUDGET_20DB, LOCKED_MEDIAN_20DB),  # 12.7° out
     ],
 )
+@pytest.mark.slow  # 18 and 34 CPU-s: the slow tier
 def test_auto_from_a_far_start_on_the_wave_model(snr, offset, budget, locked) -> None:
     reached = {s: _measurements_to_stay_within(s, snr, offset, budget) for s in SEEDS}
     missed = [seed for seed, n in reached.items() if n is None]
@@ -149,6 +150,7 @@ def _sphere_measurements(case) -> int | None:
     return measurements_to_stay_within(result, tilt_errors(result, truth), 0.1)
 
 
+@pytest.mark.slow  # 126 CPU-s (48 of them the lobe profile over the ball): the slow tier
 def test_auto_over_the_sphere_finds_the_central_peak() -> None:
     reached = [_sphere_measurements(case) for case in SPHERE_CASES]
     missed = [case for case, n in zip(SPHERE_CASES, reached, strict=True) if n is None]

@@ -98,10 +98,10 @@ def test_process_killed_by_signal_resumes(reference, tmp_path):
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "echocal.cli", "sweep", "run", str(sweep), "--out", str(out)]
     proc = subprocess.Popen([*cmd, "--workers", "1", "--no-progress"], stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 600  # generous: a stuck sweep, not a loaded machine
     while len(list((out / "parts").glob("runs-*.parquet"))) < 2:
         assert proc.poll() is None, proc.stderr.read().decode()
-        assert time.monotonic() < deadline, "the sweep did not store two runs in 60 s"
+        assert time.monotonic() < deadline, "the sweep stored fewer than two runs in 10 min"
         time.sleep(0.05)
     proc.send_signal(signal.SIGKILL)  # no cleanup at all
     proc.wait()

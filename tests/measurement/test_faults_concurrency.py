@@ -97,7 +97,7 @@ def test_two_sweeps_into_one_folder_at_once(folder):
     (folder / "long.toml").write_text(SWEEP.replace("seeds = 3", "seeds = 40"))
     args = ["sweep", "run", "long.toml", "--out", "out", "--no-progress", "--json"]
     first = echocal([*args, "--workers", "1"], folder)
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 600  # a stuck sweep, not a loaded machine
     while not (folder / "out" / "sweep.json").exists():
         assert first.poll() is None and time.monotonic() < deadline, first.communicate()
         time.sleep(0.02)

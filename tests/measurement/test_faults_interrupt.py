@@ -80,8 +80,9 @@ def run(args: list[str], cwd: Path) -> tuple[int, str, str]:
     return finish(start(args, cwd))
 
 
-def wait_for(condition, process: subprocess.Popen, timeout: float = 120) -> None:
-    """Poll ``condition()`` until true; fail if the process ends first."""
+def wait_for(condition, process: subprocess.Popen, timeout: float = 600) -> None:
+    """Poll ``condition()`` until true; fail if the process ends first (``timeout`` [s]:
+    generous, it only turns a stuck command into a failure on a loaded machine)."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         if condition():
@@ -90,7 +91,7 @@ def wait_for(condition, process: subprocess.Popen, timeout: float = 120) -> None
             pytest.fail(f"the command ended before it could be interrupted: {finish(process)}")
         time.sleep(0.02)
     process.kill()
-    pytest.fail("the command made no progress to interrupt")
+    pytest.fail(f"the command made no progress to interrupt in {timeout:g} s")
 
 
 def interrupt(process: subprocess.Popen, name: str) -> tuple[int, str, str]:

@@ -330,6 +330,7 @@ def test_shell_kirchhoff_flat_steel_plate_paraxial_equivalent(d, h):
     assert abs(V / W - 1) < 0.015
 
 
+@pytest.mark.slow  # 14 CPU-s each: the slow tier
 @pytest.mark.parametrize(("shape", "radius"), [("flat", 0.0), ("sphere", 0.12)])
 def test_shell_kirchhoff_converged(shape, radius):
     """accuracy 1 -> 1.5 at 4 MHz: measured 0.06 % (plate), 0.14 % (120 mm shell)."""
@@ -339,6 +340,7 @@ def test_shell_kirchhoff_converged(shape, radius):
     assert abs(V1 / V2 - 1) < 3e-3
 
 
+@pytest.mark.slow  # 15 CPU-s: the slow tier
 def test_shell_kirchhoff_convex_shell_weaker_than_plate():
     """A diverging convex front face and a convex back wall spread the echo:
     |V_sphere| < |V_flat| (radius 60 mm, 10 mm wall; measured ratio 0.069 at 5 MHz,

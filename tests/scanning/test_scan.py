@@ -135,6 +135,7 @@ def test_scan_points_use_no_lobe_profile_unless_given(monkeypatch):
     grid = ScanGrid.regular(x=(0.0, 2 * MM, 2 * MM), y=(0.0, 0.0, 2 * MM), z=25 * MM)
     setup = _setup("sphere", 3)
     monkeypatch.setattr(detection_radius, "lobe_profile", refuse)
+    monkeypatch.setattr(detection_radius, "cached_lobe_profile", refuse)  # nor a stored one
     assert scan_surface(setup, grid, rng=1, progress=False).summary["found"] == grid.size
     asked = []
     monkeypatch.setattr(SourceObjective, "lobe_template", lambda self: None)

@@ -13,7 +13,9 @@ from typing import Any
 
 from echocal.errors import ConfigError
 
-NOT_RECORDED = ("ctx", "from_file", "out", "plots", "json_output", "token", "overwrite")
+NOT_RECORDED = (
+    "ctx", "from_file", "out", "plots", "map_points", "json_output", "token", "overwrite"
+)  # fmt: skip
 """calibrate parameters that are the rerun's own (where to write, how to print; the token
 is a secret and never written to a file)."""
 
@@ -53,7 +55,8 @@ def rerun_parameters(path: Path, ctx: Any) -> dict[str, Any]:
     if extra:
         raise ConfigError(
             f"--from {path} reruns the recorded calibration as it was; drop {', '.join(extra)}"
-            " (only --out, --plots/--no-plots, --json, --token and --overwrite may change)"
+            " (only --out, --plots/--no-plots, --map-points, --json, --token and --overwrite may"
+            " change)"
         )
     recorded = record.get("parameters")
     if not isinstance(recorded, dict) or not recorded:

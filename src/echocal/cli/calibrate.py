@@ -33,6 +33,8 @@ from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.constants import DEFAULT_SETTLE
+from echocal.constants import MAP_POINTS as DEFAULT_MAP_POINTS
+from echocal.constants import MAP_SECONDS as DEFAULT_MAP_SECONDS
 from echocal.io import refuse_existing_output
 from echocal.locking import hold_output_lock
 
@@ -171,6 +173,21 @@ def register(app: typer.Typer) -> None:
                 "the bench time saved against the plain order is reported.  Simulator only.",
             ),
         ] = False,
+        map_points: Annotated[
+            int | None,
+            typer.Option(
+                "--map-points",
+                min=0,
+                metavar="N",
+                help="The most noiseless A-scans the path plot's cost map may simulate.  "
+                "Near the optimum the map comes from the setup's lobe profile (computed "
+                "once, cached on disk) and costs none; by default nothing is simulated "
+                f"beyond its reach (left blank), or {DEFAULT_MAP_POINTS} points where no "
+                "profile describes the metric (a gate, a two-humped lobe); 0 draws only "
+                f"what the profile gives.  The map also stops after {DEFAULT_MAP_SECONDS:g} "
+                "s (the rest blank, with a note).",
+            ),
+        ] = None,
         final_measure: Annotated[
             bool,
             typer.Option(
@@ -217,7 +234,9 @@ def register(app: typer.Typer) -> None:
             from echocal.cli._rerun import rerun_parameters
 
             recorded = rerun_parameters(from_file, ctx)
-            own: dict[str, Any] = {"out": out, "plots": plots, "json_output": json_output}
+            own: dict[str, Any] = {
+                "out": out, "plots": plots, "map_points": map_points, "json_output": json_output
+            }  # fmt: skip
             return calibrate_command(ctx, **recorded, **own, token=token, overwrite=overwrite)
         from echocal.cli._rerun import recorded_parameters
         from echocal.provenance import start
@@ -279,6 +298,7 @@ def register(app: typer.Typer) -> None:
             provenance=provenance,
             gate=gate,
             motion_aware=motion_aware,
+            map_points=map_points,
         )
 
 
@@ -298,6 +318,7 @@ def _calibrate_simulated(
     provenance: Any = None,
     gate: str | None = None,
     motion_aware: bool = False,
+    map_points: int | None = None,
 ) -> None:
     """Calibrate on a simulated setup and judge the estimate against its true optimum."""
     from echocal.evaluation import evaluate_run
@@ -326,7 +347,11 @@ def _calibrate_simulated(
             gate=chosen,
         ),
     )
-    figures = _save_plots(virtual, where, evaluation, out, chosen) if plots else {}
+    figures = (
+        _save_plots(virtual, where, evaluation, out, chosen, map_points, not json_output)
+        if plots
+        else {}
+    )
     figures.update(save_final_ascan(objective, result, out, plots))
     summary = calibration_summary(
         result,
@@ -352,9 +377,16 @@ def _calibrate_simulated(
     )
 
 
-def _save_plots(virtual, where, evaluation, out: Path, gate=None) -> dict[str, str]:
-    from echocal.evaluation import cost_map
+def _save_plots(
+    virtual, where, evaluation, out: Path, gate=None, map_points=None, talk=True
+) -> dict[str, str]:
+    """The convergence and path figures (the path over a cost map of at most
+    ``map_points`` simulated A-scans: :func:`~echocal.plots.path_map.path_cost_map`, with
+    a progress bar on a terminal when ``talk``)."""
+    import sys
+
     from echocal.plots.calibration import convergence_figure, path_figure
+    from echocal.plots.path_map import path_cost_map
 
     result = evaluation.result
     label = result.method
@@ -367,21 +399,37 @@ def _save_plots(virtual, where, evaluation, out: Path, gate=None) -> dict[str, s
     )
     points = np.vstack([result.iterates, result.points, evaluation.truth[None, :]])
     span = max(3.0, 1.3 * float(np.max(np.abs(points - evaluation.truth))))
-    centre = evaluation.truth
-    cmap = cost_map(
+    drawn = path_cost_map(
         virtual,
         where,
+        evaluation.truth,
+        span,
         parameterization=result.parameterization,
-        a_range=(centre[0] - span, centre[0] + span),
-        b_range=(centre[1] - span, centre[1] + span),
         gate=gate,
+        max_points=map_points,
+        progress=talk and sys.stderr.isatty(),
     )
+    if drawn.stopped and talk:
+        typer.echo(
+            f"path map: stopped after {drawn.seconds:.0f} s at {drawn.simulated} of "
+            f"{drawn.planned} A-scans (the rest is blank; --map-points N sizes the map)",
+            err=True,
+        )
+    empty = not np.any(np.isfinite(drawn.cost_map.values))
     path = path_figure(
-        cmap,
+        None if empty else drawn.cost_map,
         {label: result},
         x0=result.iterates[0],
         truth=evaluation.truth,
         title=f"{label}: path over the cost map (every measured pose in grey)",
         show_measurements=True,
     )
+    if drawn.from_lobe and not drawn.planned and np.any(np.isnan(drawn.cost_map.values)):
+        path.axes[0].text(
+            0.02, 0.02,
+            f"map: the lobe profile, within {drawn.reach:.3g}° of the optimum;\n"
+            "beyond, blank (--map-points N simulates N A-scans there)",
+            transform=path.axes[0].transAxes, fontsize=7, color="0.2", va="bottom",
+            bbox={"fc": "w", "alpha": 0.7, "lw": 0},
+        )  # fmt: skip
     return save_pngs({"convergence": conv, "path": path}, out)

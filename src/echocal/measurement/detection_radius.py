@@ -129,6 +129,8 @@ class LobeProfile:
         (the echo a peak SNR refers to), shape ``(n_samples,)``.
     energies : [a.u.] pseudo-energy of the noiseless A-scan (default energy window),
         shape ``(directions, n)``.
+    centre : [deg] gimbal tilts (α, β) the misalignments are counted from (the best
+        direction of normal incidence), shape ``(2,)``; None when not known.
     """
 
     setup: VirtualSetup
@@ -136,6 +138,7 @@ class LobeProfile:
     peaks: np.ndarray
     reference: np.ndarray
     energies: np.ndarray
+    centre: np.ndarray | None = None
 
     def energy_template(self, absolute: bool = False) -> LobeTemplate | None:
         """The lobe's pseudo-energy relative to normal incidence's, as a
@@ -320,7 +323,12 @@ def lobe_profile(
             break
     profile = np.concatenate(blocks, axis=1)
     return LobeProfile(
-        setup, angles[: profile.shape[1]], profile, reference, np.concatenate(energies, axis=1)
+        setup,
+        angles[: profile.shape[1]],
+        profile,
+        reference,
+        np.concatenate(energies, axis=1),
+        np.asarray(centre, dtype=np.float64),
     )
 
 
@@ -426,7 +434,8 @@ def cached_lobe_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:
     """:func:`lobe_profile` of ``setup`` at ``pos`` [m], computed once per process for the
     same physics objects (a setup rebuilt with another noise level or seed shares them)
     and position.  Keyed by the objects' identities, which the entry keeps alive and
-    checks, so a key is never reused by another object."""
+    checks, so a key is never reused by another object.  Across processes the profile is
+    kept on disk, keyed by the physics' content (:mod:`echocal.measurement.lobe_cache`)."""
     parts = tuple(getattr(setup, f) for f in _PROFILE_FIELDS)
     key = (*(id(p) for p in parts), pos.tobytes())
     with _PROFILES_LOCK:
@@ -436,9 +445,43 @@ def cached_lobe_profile(setup: VirtualSetup, pos: np.ndarray) -> LobeProfile:
             return hit[1]
     # computed outside the lock: two threads may both compute a missing profile (the same
     # result), but no thread waits on another's 2–50 s computation
-    profile = lobe_profile(setup, pos, until_snr_db=max(SEARCH_SNRS))
+    profile = _stored_or_computed(setup, parts, pos)
     with _PROFILES_LOCK:
         _PROFILES[key] = (parts, profile)
         while len(_PROFILES) > _CACHE_SIZE:
             _PROFILES.popitem(last=False)
+    return profile
+
+
+def _stored_or_computed(
+    setup: VirtualSetup, parts: tuple[Any, ...], pos: np.ndarray
+) -> LobeProfile:
+    """The profile :func:`cached_lobe_profile` keeps: from the disk cache when it holds one
+    for the same physics (``parts``, the :data:`_PROFILE_FIELDS` of ``setup``) and
+    position, else computed and stored there."""
+    from echocal.measurement import lobe_cache
+
+    until = max(SEARCH_SNRS)
+    constants = {"until_snr_db": until, "max_angle": 15.0, "directions": 4, "step": _STEP}
+    key = lobe_cache.profile_key(parts, pos, constants)
+    stored = None if key is None else lobe_cache.load(key)
+    if stored is not None:
+        return LobeProfile(
+            setup,
+            stored["angles"],
+            stored["peaks"],
+            stored["reference"],
+            stored["energies"],
+            stored["centre"],
+        )
+    profile = lobe_profile(setup, pos, until_snr_db=until)
+    if key is not None:
+        arrays = {
+            "angles": profile.angles,
+            "peaks": profile.peaks,
+            "reference": profile.reference,
+            "energies": profile.energies,
+            "centre": np.asarray(profile.centre, dtype=np.float64),
+        }
+        lobe_cache.store(key, arrays)
     return profile
