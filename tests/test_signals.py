@@ -38,6 +38,16 @@ def test_a_signal_during_an_import_arrives_after_it(name, expected, tmp_path: Pa
     module = f"echocal_test_self_signalling_{name.lower()}"
     (tmp_path / f"{module}.py").write_text(SELF_SIGNALLING.format(name=name), encoding="utf-8")
     monkeypatch.syspath_prepend(str(tmp_path))
+    # Ctrl-C is taken over only from Python's default handler (a pytest-xdist worker
+    # ignores SIGINT): give the test process the default, as a command line has
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _raise_after_import(module, expected, name)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _raise_after_import(module: str, expected: type[BaseException], name: str) -> None:
     imported = None
     with pytest.raises(expected), terminate_like_ctrl_c() as fired:
         imported = importlib.import_module(module)

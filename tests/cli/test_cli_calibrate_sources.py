@@ -198,6 +198,7 @@ def test_replay_plots_show_the_recordings_own_map(recording, tmp_path, capsys, m
     assert "estimate" in shown and "no truth is known" in shown and "echo found after" in shown
     assert {p.name for p in out.iterdir()} == {
         "result.json",
+        "summary.json",
         "convergence.png",
         "path.png",
         "ascan.nc",
@@ -275,6 +276,7 @@ def test_instrument_plots_the_path_without_a_map(plate, tmp_path, capsys, monkey
     # the rig's final measurement at the estimate: ascan.nc and its plot
     assert {p.name for p in tmp_path.iterdir()} == {
         "result.json",
+        "summary.json",
         "convergence.png",
         "path.png",
         "ascan.nc",

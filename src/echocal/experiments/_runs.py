@@ -140,10 +140,11 @@ class Bench:
                 config.method,
                 config.x0,
                 max_iter=config.max_iter,
-                settle=None,  # the thesis's studies run a fixed number of iterations
                 preset=config.preset,
                 rng=seed,
-                **dict(config.options),
+                # the thesis's studies run a fixed number of iterations unless a config
+                # settles (the wall scenario's, as the CLI does)
+                **{"settle": None, **dict(config.options)},
             )
         evaluation = evaluate_run(self.setup, self.position, result, gate=self.gate)
         estimate_value = float(

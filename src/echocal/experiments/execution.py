@@ -261,7 +261,7 @@ def _dask_outcomes(
     futures = client.map(run_case, list(cases), key=keys, pure=False) if cases else []
 
     def results() -> Iterator[Outcome]:
-        for future in as_completed(futures):
+        for future in as_completed(futures, loop=client.loop):  # not the default client
             yield future.result()
             future.release()
 
