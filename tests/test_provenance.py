@@ -65,7 +65,11 @@ def test_result_json_records_its_origin(folder, first):
     assert record["cwd"] == str(folder)
     # the setup digest: SHA-256 of the resolved configuration, recomputed here
     config, _ = load_setup_config(folder / "tiny.toml")
-    text = json.dumps(config.model_dump(mode="json"), sort_keys=True)
+    data = config.model_dump(mode="json")
+    # tables a setup leaves out by default are left out of the digest (an ideal bench,
+    # one solid): a setup written before they existed keeps its digest
+    assert data.pop("bench") is None and data["specimen"].pop("layers") is None
+    text = json.dumps(data, sort_keys=True)
     assert record["setup"] == {
         "name": str(folder / "tiny.toml"),
         "sha256": hashlib.sha256(text.encode()).hexdigest(),

@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 from echocal.setups import load_setup_config
+from echocal.setups.reading import resolved_data
 
 __all__ = ["setup_digest"]
 
@@ -20,9 +21,6 @@ def setup_digest(setup: str) -> dict[str, str]:
     validated configuration in SI units, as JSON with sorted keys) — the same for a
     built-in name and a copy of its file, different as soon as any value differs."""
     config, _ = load_setup_config(setup)
-    data = config.model_dump(mode="json")
-    if data.get("bench") is None:  # the ideal bench: the digest of a setup without one
-        data.pop("bench", None)
-    text = json.dumps(data, sort_keys=True)
+    text = json.dumps(resolved_data(config), sort_keys=True)
     name = str(Path(setup).resolve()) if Path(setup).is_file() else setup
     return {"name": name, "sha256": hashlib.sha256(text.encode()).hexdigest()}

@@ -163,9 +163,19 @@ def validate_setup_file(name_or_path: str | Path) -> list[str]:
     return []
 
 
-def config_as_json(config: SetupConfig) -> str:
-    """The resolved setup as pretty JSON (SI units, degrees; no ``bench`` on the ideal one)."""
+def resolved_data(config: SetupConfig) -> dict[str, Any]:
+    """The resolved setup as JSON-ready data (SI units, degrees), without the tables a
+    setup leaves out by default (``bench``: the ideal bench; ``specimen.layers``: one
+    solid), so a setup written before they existed reads, and digests, as it did."""
     data = config.model_dump(mode="json")
     if data.get("bench") is None:
         data.pop("bench", None)
-    return json.dumps(data, indent=2)
+    specimen = data.get("specimen")
+    if isinstance(specimen, dict) and specimen.get("layers") is None:
+        specimen.pop("layers", None)
+    return data
+
+
+def config_as_json(config: SetupConfig) -> str:
+    """The resolved setup as pretty JSON (:func:`resolved_data`)."""
+    return json.dumps(resolved_data(config), indent=2)
