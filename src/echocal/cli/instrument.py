@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import typer
 
+from echocal._net import is_loopback
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP
-from echocal.measurement.instrument_server import is_loopback
 
 TOKEN_ENV = "ECHOCAL_INSTRUMENT_TOKEN"
 """Environment variable holding the instrument's shared token (kept out of `ps`)."""

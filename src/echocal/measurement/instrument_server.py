@@ -36,7 +36,7 @@ from echocal.measurement.base import MeasurementSource
 AUTH_CODE = "AUTH"
 """Error code of a connection refused for a missing or wrong token."""
 
-__all__ = ["MALFORMED_KINDS", "Faults", "InstrumentServer", "is_loopback", "serve_forever"]
+__all__ = ["MALFORMED_KINDS", "Faults", "InstrumentServer", "serve_forever"]
 
 MALFORMED_KINDS = ("count", "number", "base64", "nan", "reply")
 """Ways to garble an A-scan: header announces one sample more than sent (``count``), a
@@ -345,17 +345,3 @@ def serve_forever(
         on_ready(server.address)
     with contextlib.suppress(KeyboardInterrupt):
         server.serve_forever()
-
-
-def is_loopback(host: str) -> bool:
-    """Whether every address ``host`` resolves to is this machine's loopback."""
-    import ipaddress
-    import socket
-
-    try:
-        infos = socket.getaddrinfo(host, None)
-    except OSError:
-        return False  # unresolvable: not known to be local (binding will say more)
-    return bool(infos) and all(
-        ipaddress.ip_address(str(info[4][0]).split("%")[0]).is_loopback for info in infos
-    )

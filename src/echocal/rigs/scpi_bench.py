@@ -99,7 +99,7 @@ class ScpiBench:
         gimbal: bool = True,
         full_scale: float | None = None,
     ) -> None:
-        from echocal.measurement.instrument_server import is_loopback
+        from echocal._net import is_loopback
 
         if not is_loopback(host):
             raise EchocalValueError(
