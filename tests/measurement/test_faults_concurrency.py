@@ -94,7 +94,9 @@ def test_a_second_writer_is_refused_in_one_line(command, folder):
 @pytest.mark.slow
 def test_two_sweeps_into_one_folder_at_once(folder):
     """The real race: the second `sweep run` is refused; the first completes untouched."""
-    (folder / "long.toml").write_text(SWEEP.replace("seeds = 3", "seeds = 40"))
+    # long enough that the first is still running while the second process starts (a
+    # calibration settles in a few measurements: 40 seeds once ended first on a busy CI)
+    (folder / "long.toml").write_text(SWEEP.replace("seeds = 3", "seeds = 200"))
     args = ["sweep", "run", "long.toml", "--out", "out", "--no-progress", "--json"]
     first = echocal([*args, "--workers", "1"], folder)
     deadline = time.monotonic() + 600  # a stuck sweep, not a loaded machine
@@ -108,7 +110,7 @@ def test_two_sweeps_into_one_folder_at_once(folder):
     assert second.returncode == 2 and "being written by another echocal process" in err, err
     assert first.returncode == 0, first_err
     summary = json.loads(out)
-    assert summary["n_finished"] == 40 and summary["n_failed"] == 0
+    assert summary["n_finished"] == 200 and summary["n_failed"] == 0
     assert not (folder / "out" / "parts").exists()  # consolidated, no stray part
 
 
