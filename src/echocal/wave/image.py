@@ -28,6 +28,25 @@ direction and come in multiples of four, so the rule is symmetric under the refl
 across the plane through the axis and the tilt direction, and under a half turn: a level
 plane's echo is symmetric in tilt to round-off, and its maximum lies at the normal.
 
+**Band-limited rule (flat discs).** The Nyquist rule above counts only the specular path's
+delay change; a bound on every path's is both safer near the probe and much sparser at large
+tilts.  Moving a face node b by a unit length along its ring moves its image x′ by a unit
+length in the image plane, and the path |x′ − a| to any point a of the face changes by the
+sine of the angle between x′ − a and the image plane's normal: at most sin(α + asin(a/h))
+(h the plane's distance from the face centre: the image of the face centre lies 2h away,
+at angle α from the image plane's normal, and x′ − a deviates from it by at most 2a).  At
+one frequency the integrand along a ring of radius ρ is therefore band-limited to angular
+harmonics |m| ≲ z = k_hi·ρ·sin(α + asin(a/h)), whose coefficients beyond z fall like
+Bessel functions J_m(z); the uniform (trapezoid) rule in φ is exact below its node count
+and :func:`trapezoid_count` takes z + 3z^⅓ + 4 nodes.  After the φ sum the ring mean is an
+even function of ρ of bandwidth k_hi·sin(α + asin(a/h)) (β = that × a across the face), a
+polynomial of degree about β/2 in s = ρ², so Gauss–Legendre in s needs about β/4 nodes:
+:func:`bandwidth_ring_count` takes β/4 + 2β^⅓, with the Fresnel-zone and minimum counts of
+:func:`ring_count`.  :func:`face_quadrature` uses whichever of the two rules has fewer
+nodes (both measured against a rule at 0.3 of the Nyquist spacing, see
+docs/benchmarks/wave.md): the band-limited one from about 3° at 50 mm (8× fewer nodes at
+20°), the Nyquist one at smaller tilts and near the probe.
+
 **Symmetry.** The probe is symmetric under that reflection and the plane's normal lies in
 its mirror plane, so the integrand is even under it: the rule keeps the nodes on one side
 (φ ∈ [0, π] from the tilt direction) and weights those off the mirror twice, half the
@@ -56,6 +75,8 @@ __all__ = [
     "MIN_SIDE_NODES",
     "SIDE_NODES_PER_ZONE",
     "ImagePlane",
+    "angular_bandwidth",
+    "bandwidth_ring_count",
     "face_quadrature",
     "face_samples",
     "find_plane",
@@ -63,6 +84,7 @@ __all__ = [
     "rectangle_samples",
     "ring_count",
     "side_counts",
+    "trapezoid_count",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -130,6 +152,41 @@ def node_spacing(
     return nyquist_fraction * shortest_wavelength / (2.0 * sin_2a)
 
 
+def angular_bandwidth(
+    shortest_wavelength: float, sin_incidence: float, radius: float, distance: float
+) -> float:
+    """[rad/m] k_hi·sin(α + asin(a/h)): a bound on the rate at which the phase of every path
+    from the image face to the face changes per unit length along the image face (see the
+    module's "Band-limited rule"), for a flat face of radius ``radius`` a [m] over a plane
+    ``distance`` h [m] from the face centre (along the plane's normal) at incidence sine
+    ``sin_incidence`` (k_hi = 2π/``shortest_wavelength`` [m])."""
+    alpha = math.asin(min(1.0, sin_incidence))
+    spread = math.asin(min(1.0, radius / max(distance, radius)))
+    k_hi = 2.0 * math.pi / shortest_wavelength
+    return k_hi * math.sin(min(0.5 * math.pi, alpha + spread))
+
+
+def trapezoid_count(z: float) -> int:
+    """Uniform nodes on a full ring for an integrand band-limited to angular harmonics
+    |m| ≲ ``z``: z + 3z^⅓ + 4 (the coefficients beyond z fall like J_m(z), below 10⁻³ of
+    the largest 3z^⅓ past it), rounded up to a multiple of four, at least eight."""
+    nodes = z + 3.0 * z ** (1.0 / 3.0) + 4.0
+    return 4 * max(2, math.ceil(nodes / 4.0))
+
+
+def bandwidth_ring_count(
+    probe: Aperture, distance: float, shortest_wavelength: float, bandwidth: float
+) -> int:
+    """Radial Gauss–Legendre nodes (in s = ρ²) of a flat disc's band-limited rule: β/4 +
+    2β^⅓ with β = ``bandwidth`` [rad/m] × a, the ring mean being a polynomial of degree
+    about β/2 in s; at least :data:`MIN_RINGS` and the Fresnel zones of :func:`ring_count`
+    (``distance`` [m] along the axis, ``shortest_wavelength`` [m])."""
+    beta = bandwidth * probe.radius
+    d = max(distance, shortest_wavelength)
+    zones = probe.radius**2 / (2.0 * d * shortest_wavelength)
+    return max(MIN_RINGS, math.ceil(beta / 4.0 + 2.0 * beta ** (1.0 / 3.0)), math.ceil(zones))
+
+
 def ring_count(probe: Aperture, distance: float, shortest_wavelength: float, spacing: float) -> int:
     """Radial Gauss–Legendre nodes for the probe's face over a plane ``distance`` [m] away
     along the axis: at least :data:`MIN_RINGS`, at least a/``spacing`` (``spacing`` [m]
@@ -156,9 +213,12 @@ def face_samples(
     n_rings: int,
     spacing: float,
     symmetry: tuple[float, float] | None = None,
+    bandwidth: float = 0.0,
 ) -> tuple[FloatArray, FloatArray]:
     """Gauss–Legendre product nodes on the probe's face: ``n_rings`` rings, nodes at most
-    about ``spacing`` [m] apart along each ring.
+    about ``spacing`` [m] apart along each ring, or with ``bandwidth`` [rad/m] > 0 (from
+    :func:`angular_bandwidth`), :func:`trapezoid_count` (``bandwidth`` × ρ) nodes on the
+    ring of radius ρ.
 
     Flat disc: Gauss–Legendre in s = ρ² on [0, a²] (dA = ½ ds dφ) × uniform φ.  Bowl: in
     u = cos θ on [cos θmax, 1] (dA = R_f² du dφ) × uniform φ.  Either way the weights are
@@ -179,7 +239,9 @@ def face_samples(
     points : [m] ``(3, n)`` in the aperture frame (face centre or bowl apex at the origin).
     weights : [m²] ``(n,)``.
     """
-    points, weights = _face_samples(probe.radius, probe.curvature, n_rings, spacing, symmetry)
+    points, weights = _face_samples(
+        probe.radius, probe.curvature, n_rings, spacing, symmetry, bandwidth
+    )
     return points.copy(), weights.copy()
 
 
@@ -190,6 +252,7 @@ def _face_samples(
     n_rings: int,
     spacing: float,
     symmetry: tuple[float, float] | None = None,
+    bandwidth: float = 0.0,
 ) -> tuple[FloatArray, FloatArray]:
     x, w = np.polynomial.legendre.leggauss(n_rings)  # on [−1, 1]
     if curvature is None:
@@ -213,8 +276,11 @@ def _face_samples(
             columns.append(np.array([[rho_i], [0.0], [z_i]]))
             weights.append(np.array([area_i * 2.0 * math.pi]))
             continue
-        along = 2.0 * math.pi * rho_i / (4.0 * spacing) if math.isfinite(spacing) else 0.0
-        n_phi = 4 * max(2, math.ceil(along))
+        if bandwidth > 0.0:
+            n_phi = trapezoid_count(bandwidth * rho_i)
+        else:
+            along = 2.0 * math.pi * rho_i / (4.0 * spacing) if math.isfinite(spacing) else 0.0
+            n_phi = 4 * max(2, math.ceil(along))
         j = np.arange(n_phi if symmetry is None else n_phi // 2 + 1)
         ring_w = np.full(j.size, area_i * 2.0 * math.pi / n_phi)
         if symmetry is not None:
@@ -282,11 +348,15 @@ def face_quadrature(
     shortest_wavelength: float,
     spacing: float,
     symmetry: tuple[float, float] | None = None,
+    bandwidth: float = 0.0,
 ) -> tuple[FloatArray, FloatArray]:
     """The image form's nodes on the probe's face for a plane ``distance`` [m] away along
     the axis, nodes at most about ``spacing`` [m] apart (from :func:`node_spacing`):
     :func:`face_samples` with :func:`ring_count` rings on a disc or a bowl,
-    :func:`rectangle_samples` with :func:`side_counts` on a rectangle.
+    :func:`rectangle_samples` with :func:`side_counts` on a rectangle.  On a flat disc
+    with ``bandwidth`` [rad/m] > 0 (from :func:`angular_bandwidth`) and a tilted plane,
+    the band-limited rule (:func:`bandwidth_ring_count` rings, :func:`trapezoid_count`
+    nodes per ring) instead where it has fewer nodes.
 
     ``symmetry`` (see :func:`face_samples`): the plane's tilt direction (u_x, u_y) in the
     face's plane, or (0, 0) at normal incidence; the rule then keeps one node of each set
@@ -304,7 +374,26 @@ def face_quadrature(
                     points, weights = _fold(points, weights, axis, 1e-12 * half)
         return points, weights
     n_rings = ring_count(probe, distance, shortest_wavelength, spacing)
+    axial = symmetry is not None and symmetry[0] == 0.0 and symmetry[1] == 0.0
+    if probe.curvature is None and bandwidth > 0.0 and not axial:
+        band_rings = bandwidth_ring_count(probe, distance, shortest_wavelength, bandwidth)
+        radii = _ring_radii(probe.radius, band_rings)
+        band_nodes = sum(trapezoid_count(bandwidth * rho) for rho in radii)
+        along = 2.0 * math.pi / (4.0 * spacing) if math.isfinite(spacing) else 0.0
+        nyquist_nodes = sum(
+            4 * max(2, math.ceil(along * rho)) for rho in _ring_radii(probe.radius, n_rings)
+        )
+        if band_nodes < nyquist_nodes:
+            return face_samples(probe, band_rings, spacing, symmetry, bandwidth)
     return face_samples(probe, n_rings, spacing, symmetry)
+
+
+@functools.lru_cache(maxsize=256)
+def _ring_radii(a: float, n_rings: int) -> tuple[float, ...]:
+    """[m] the ring radii of :func:`face_samples`' rule on a flat disc of radius ``a``
+    [m]: Gauss–Legendre nodes in s = ρ² on [0, a²]."""
+    x, _ = np.polynomial.legendre.leggauss(n_rings)
+    return tuple(float(v) for v in np.sqrt(0.5 * (x + 1.0) * a * a))
 
 
 def _fold(

@@ -346,12 +346,19 @@ class WaveEchoModel:
         spacing = image.node_spacing(
             self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
         )
+        bandwidth = image.angular_bandwidth(
+            self._shortest_wavelength,
+            plane.sin_incidence,
+            self.probe.radius,
+            abs(float(plane.normal @ plane.point)),
+        )
         face, weights = image.face_quadrature(
             self.probe,
             plane.axis_distance,
             self._shortest_wavelength,
             spacing,
             _tilt_direction(plane),
+            bandwidth,
         )
         return plane.mirror(face), weights
 
