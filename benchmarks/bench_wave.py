@@ -36,12 +36,13 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import dataclasses  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
+from collections.abc import Callable, Iterator  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -182,7 +183,8 @@ def tilt_table(
     the Kirchhoff sum), and on the plate the compiled direct double Rayleigh sum
     (``_rayleigh_compiled``) over ``n_freq`` frequencies of the pulse's band at the same
     distance and incidence (up to ``max_direct_tilt`` [deg]), with the agreement of |V| at
-    5 MHz."""
+    5 MHz.  Where the image form applies, also the wave model with the Nyquist face rule
+    only (the rule before the band-limited one) and both rules' face nodes."""
     import _rayleigh_compiled as direct
 
     rows: list[dict[str, float | str]] = []
@@ -219,12 +221,30 @@ def tilt_table(
                 "wave_over_ray": t_wave / t_ray,
             }
             plane = model.image_plane(shapes, position, frames[0])
+            if plane is not None:
+                row["face_nodes"] = float(_face_nodes(model, plane))
+                with _nyquist_rule():
+                    row["wave_nyquist_s"] = _cpu_per_call(
+                        lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
+                    )
+                    row["nyquist_nodes"] = float(_face_nodes(model, plane))
             if plane is not None and tilt <= max_direct_tilt:
                 row["incidence_deg"] = math.degrees(math.asin(plane.sin_incidence))
-                row["face_nodes"] = float(_face_nodes(model, plane))
                 row.update(_direct_sum(model, plane, n_freq, direct))
             rows.append(row)
     return rows
+
+
+@contextlib.contextmanager
+def _nyquist_rule() -> Iterator[None]:
+    """The image form with the Nyquist face rule only (the band-limited rule off: its
+    bandwidth 0), for the before/after columns of the tilt table."""
+    band = image.angular_bandwidth
+    image.angular_bandwidth = lambda *args: 0.0  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        image.angular_bandwidth = band
 
 
 def _direct_sum(
@@ -238,6 +258,7 @@ def _direct_sum(
     lo, hi = model.pulse.bandwidth_6db
     step = max(5e6 - 0.7 * lo, 1.3 * hi - 5e6) / max(1, n_freq // 2)
     freqs = 5e6 + step * (np.arange(n_freq) - n_freq // 2)
+    direct.pulse_echo(a, freqs[:1], d, tilt, c)  # compiled (or loaded) before the timing
     start = time.process_time()
     v = direct.pulse_echo(a, freqs, d, tilt, c)
     t_direct = time.process_time() - start
@@ -259,6 +280,7 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
     body = []
     for r in rows:
         direct = r.get("direct_s")
+        before = r.get("wave_nyquist_s")
         agree = (
             "—" if direct is None else f"{float(r['v5_wave']):.4g} / {float(r['v5_direct']):.4g}"
         )
@@ -269,6 +291,9 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
                 fmt_time(float(r["ray_s"])),
                 fmt_time(float(r["wave_s"])),
                 f"{float(r['wave_over_ray']):.1f}x",
+                "—" if before is None else fmt_time(float(before)),
+                "—" if before is None else f"{float(before) / float(r['ray_s']):.1f}x",
+                "—" if before is None else f"{r['face_nodes']:.0f} / {r['nyquist_nodes']:.0f}",
                 "—" if direct is None else fmt_time(float(direct)),
                 "—" if direct is None else f"{float(direct) / float(r['wave_s']):.0f}x",
                 agree,
@@ -280,6 +305,9 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         "ray (CPU)",
         "wave (CPU)",
         "wave / ray",
+        "wave, Nyquist rule (CPU)",
+        "Nyquist rule / ray",
+        "face nodes (rule in use / Nyquist)",
         "direct sum (CPU)",
         "direct / wave",
         "|V(5 MHz)| wave / direct",
