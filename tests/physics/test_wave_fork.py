@@ -27,7 +27,8 @@ never ends) exceeds it, however loaded the machine."""
 
 def _scan() -> np.ndarray:
     """One noiseless wave-model A-scan of the 12.7 mm 5 MHz probe tilted 6° over the plate:
-    several thousand face nodes, so the image form splits them over the pool."""
+    several hundred face nodes, which the image form splits over the pool when the test
+    lowers the nodes per thread."""
     setup = load_setup("immersion-5mhz")
     frame = tilt_frame(np.array([6.0]), np.array([2.0]))
     return setup.ideal_samples(np.asarray(setup.reference_position)[None, :], frame)[0]
@@ -40,6 +41,7 @@ def _child(queue: multiprocessing.Queue) -> None:  # type: ignore[type-arg]
 @pytest.mark.skipif(sys.platform != "linux", reason="the fork start method (Linux)")
 def test_a_child_forked_after_the_pool_was_used_simulates(monkeypatch) -> None:
     monkeypatch.setattr(threads, "cores", lambda: 2)  # the pool even on a one-core runner
+    monkeypatch.setattr(threads, "MIN_NODES_PER_THREAD", 64)  # and for this pose's nodes
     threads.pool.cache_clear()
     parent = _scan()
     assert threads.pool.cache_info().currsize >= 1, "the parent's A-scan did not use the pool"
