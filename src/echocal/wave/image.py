@@ -29,8 +29,9 @@ across the plane through the axis and the tilt direction, and under a half turn:
 plane's echo is symmetric in tilt to round-off, and its maximum lies at the normal.
 
 **Band-limited rule (flat discs).** The Nyquist rule above counts only the specular path's
-delay change; a bound on every path's is both safer near the probe and much sparser at large
-tilts.  Moving a face node b by a unit length along its ring moves its image x′ by a unit
+delay change; a bound on every path's change is much sparser at large tilts (and denser
+than the Nyquist rule near the probe at small tilts, where the edge waves' paths change
+fastest).  Moving a face node b by a unit length along its ring moves its image x′ by a unit
 length in the image plane, and the path |x′ − a| to any point a of the face changes by the
 sine of the angle between x′ − a and the image plane's normal: at most sin(α + asin(a/h))
 (h the plane's distance from the face centre: the image of the face centre lies 2h away,
@@ -44,7 +45,7 @@ polynomial of degree about β/2 in s = ρ², so Gauss–Legendre in s needs abou
 :func:`bandwidth_ring_count` takes β/4 + 2β^⅓, with the Fresnel-zone and minimum counts of
 :func:`ring_count`.  :func:`face_quadrature` uses whichever of the two rules has fewer
 nodes (both measured against a rule at 0.3 of the Nyquist spacing, see
-docs/benchmarks/wave.md): the band-limited one from about 3° at 50 mm (8× fewer nodes at
+docs/benchmarks/wave.md): the band-limited one from about 3° at 50 mm (6× fewer nodes at
 20°), the Nyquist one at smaller tilts and near the probe.
 
 **Symmetry.** The probe is symmetric under that reflection and the plane's normal lies in
