@@ -76,3 +76,14 @@ def test_a_damaged_or_foreign_file_is_a_miss(cache) -> None:
     path.write_bytes(b"PK\x03\x04 not a zip")
     assert lobe_cache.load("k") is None
     assert lobe_cache.load("missing") is None
+
+
+def test_a_change_of_the_code_is_another_key(monkeypatch) -> None:
+    """Profiles computed by other code are not reused: the key holds the source digest."""
+    from echocal import _code_digest
+
+    parts, pos = ("physics",), np.zeros(3)
+    before = lobe_cache.profile_key(parts, pos, {"n": 1})
+    monkeypatch.setattr(_code_digest, "code_digest", lambda: "0" * 64)
+    assert lobe_cache.profile_key(parts, pos, {"n": 1}) != before
+

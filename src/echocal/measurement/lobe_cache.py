@@ -9,7 +9,8 @@ same setup otherwise paid for it again.
 
 Files live in the same folder as the detector cache (``$ECHOCAL_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/echocal``, else ``~/.cache/echocal``), one ``.npz`` per key (a SHA-256
-of the pickled physics objects, the position, the constants and the package version),
+of the pickled physics objects, the position, the constants and the digest of echocal's
+source code, :func:`echocal._code_digest.code_digest`),
 written atomically.  A physics object that cannot be pickled is not cached; a missing,
 unreadable, damaged or inconsistent file is a miss; a folder that cannot be written is
 skipped: the cache can only save time, never change a result.
@@ -38,9 +39,9 @@ def profile_key(
     parts: tuple[Any, ...], position: np.ndarray, constants: dict[str, Any]
 ) -> str | None:
     """SHA-256 of the physics objects ``parts`` (pickled), ``position`` [m] (3,), the
-    profile's ``constants`` and the package version; None when an object cannot be
+    profile's ``constants`` and the package's source code; None when an object cannot be
     pickled (it is then not cached)."""
-    from echocal import __version__
+    from echocal._code_digest import code_digest
 
     try:
         physics = pickle.dumps(parts, protocol=5)
@@ -49,7 +50,7 @@ def profile_key(
     digest = hashlib.sha256(physics)
     digest.update(np.ascontiguousarray(position, dtype=np.float64).tobytes())
     digest.update(repr(sorted(constants.items())).encode())
-    digest.update(__version__.encode())
+    digest.update(code_digest().encode())
     return digest.hexdigest()
 
 

@@ -7,9 +7,9 @@ processes: every ``echocal simulate`` otherwise paid for it again.
 
 Files live in ``$ECHOCAL_CACHE_DIR``, else ``$XDG_CACHE_HOME/echocal``, else
 ``~/.cache/echocal``, one small JSON file per key (a SHA-256 of everything the numbers
-depend on, the package version included), written atomically.  A missing, unreadable or
-damaged file is a miss; a folder that cannot be written is skipped: the cache can only
-save time, never change a result.
+depend on, the digest of the package's source code included), written atomically.  A
+missing, unreadable or damaged file is a miss; a folder that cannot be written is skipped:
+the cache can only save time, never change a result.
 """
 
 from __future__ import annotations
@@ -48,8 +48,9 @@ def _digestible(value: Any) -> Any:
 
 def cache_key(pulse: Any, fs: float, n_samples: int, constants: dict[str, Any]) -> str:
     """SHA-256 of the pulse (name and parameters), the sampling rate [Hz], the A-scan length,
-    the calibration's ``constants`` and the package version."""
-    from echocal import __version__
+    the calibration's ``constants`` and the package's source code
+    (:func:`echocal._code_digest.code_digest`)."""
+    from echocal._code_digest import code_digest
 
     data = {
         "pulse": pulse.name,
@@ -57,7 +58,7 @@ def cache_key(pulse: Any, fs: float, n_samples: int, constants: dict[str, Any]) 
         "fs": float(fs),
         "n_samples": int(n_samples),
         "constants": constants,
-        "version": __version__,
+        "code": code_digest(),
     }
     text = json.dumps(data, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()
