@@ -126,6 +126,8 @@ def _check_documents(docs, n_measurements: int) -> None:
         ("save", 1, "", False),  # the same, after the first event of the run
         ("trigger", 2, "", True),  # one Ctrl-C: pause at the next checkpoint
         ("save", 5, "", True),  # one Ctrl-C after a save: pause at the checkpoint after it
+        ("create", 11, "", True),  # one Ctrl-C inside a bundle: pause after its save
+        ("read", 8, "ascan", True),  # one Ctrl-C after a checkpoint: pause at the next one
     ],
 )
 def test_a_paused_and_resumed_run_equals_an_uninterrupted_one(
