@@ -144,6 +144,8 @@ class Provenance:
     argv: list[str]
     cwd: str
     parameters: dict[str, Any] = field(default_factory=dict)
+    rerun: dict[str, Any] | None = None
+    """For a run repeated from a result file: that file and which setup it ran on."""
 
     def finish(self, **facts: Any) -> dict[str, Any]:
         """The complete record: these ``facts`` (setup, source, position_m, seed, method,
@@ -159,6 +161,8 @@ class Provenance:
             "versions": versions(),
             "parameters": self.parameters,
         }
+        if self.rerun is not None:
+            record["rerun"] = self.rerun
         return _plain(json_ready(record))
 
     def finish_json(self, **facts: Any) -> str:

@@ -3,9 +3,11 @@
 Pauses are injected into the plan's message stream (a ``pause`` message after the n-th
 message of a kind, as a plan's own ``bps.pause`` or ``RE.request_pause`` would do), so
 each test interrupts at a known point: during the move, after the trigger, inside the
-event bundle, and a deferred pause (one Ctrl-C).  Whatever the point, a resumed run has
-one ``primary`` event per measurement, unique ``seq_num``, and the uninterrupted run's
-result; ``stop``, ``abort`` and ``halt`` end the run and the optimizer's thread.
+event bundle, between an event's save and the next checkpoint, and a deferred pause (one
+Ctrl-C); one run pauses after every message of the calibration.  Whatever the point, a
+resumed run has one ``primary`` event per measurement, unique ``seq_num``, and the
+uninterrupted run's result; ``stop``, ``abort`` and ``halt`` end the run and the
+optimizer's thread, with every measurement saved once.
 """
 
 from __future__ import annotations
@@ -65,13 +67,25 @@ def _streams(docs):
     return out
 
 
-def _drive(virtual, wrap=None, then: str = "resume"):
+def _pause_after_every_message(plan):
+    """``plan`` with an immediate ``pause`` after each of its messages."""
+
+    def insert(msg):
+        if msg.command == "pause":
+            return None, None
+        return None, single_gen(Msg("pause", None, defer=False))
+
+    return plan_mutator(plan, insert)
+
+
+def _drive(virtual, wrap=None, then: str = "resume", *, record_interruptions: bool = False):
     """Run the plan (``wrap``-ped), resuming every pause (or ending the run with
     ``then``); returns (the plan's result or None, documents, number of pauses)."""
     probe, detector = simulated_devices(virtual, gimbal=True, seed=7)
     plan = calibrate_plan(probe, detector, **PLAN)
     docs: list[tuple[str, dict]] = []
     engine = RunEngine({}, call_returns_result=True)
+    engine.record_interruptions = record_interruptions
     engine.subscribe(lambda name, doc: docs.append((name, doc)))
     call = lambda: engine(wrap(plan) if wrap else plan)  # noqa: E731
     pauses = 0
@@ -108,16 +122,51 @@ def _check_documents(docs, n_measurements: int) -> None:
         ("read", 9, "ascan", False),  # inside the event bundle (the 5th measurement's)
         ("read", 8, "ascan", False),  # after the 4th event: the plan reads its values back
         ("create", 11, "", False),  # the bundle opened, nothing read
+        ("save", 4, "", False),  # the 4th event saved, before the checkpoint after it
+        ("save", 1, "", False),  # the same, after the first event of the run
         ("trigger", 2, "", True),  # one Ctrl-C: pause at the next checkpoint
+        ("save", 5, "", True),  # one Ctrl-C after a save: pause at the checkpoint after it
+        ("create", 11, "", True),  # one Ctrl-C inside a bundle: pause after its save
+        ("read", 8, "ascan", True),  # one Ctrl-C after a checkpoint: pause at the next one
     ],
 )
 def test_a_paused_and_resumed_run_equals_an_uninterrupted_one(
     virtual, uninterrupted, command, nth, obj_name, defer
 ):
-    reference, reference_docs = uninterrupted
     wrap = lambda plan: _pause_after(plan, command, nth, defer=defer, obj_name=obj_name)  # noqa: E731
     outcome, docs, pauses = _drive(virtual, wrap)
-    assert pauses == 1 and outcome.exit_status == "success"
+    assert pauses == 1
+    _check_resumed_run(outcome, docs, *uninterrupted)
+
+
+def test_a_pause_after_every_message_resumes_to_the_uninterrupted_run(virtual, uninterrupted):
+    """An immediate pause at every point of the calibration, one after another (each
+    resumed): the save of each event and of the result, the checkpoints, the moves,
+    the reads.  The RunEngine's own ``interruptions`` stream records each pause."""
+    outcome, docs, pauses = _drive(virtual, _pause_after_every_message, record_interruptions=True)
+    reference, _ = uninterrupted
+    # every message of the run paused once: at least ~20 per measurement
+    assert pauses > 20 * reference.n_measurements
+    _check_resumed_run(outcome, docs, *uninterrupted)
+    interruptions = _streams(docs)["interruptions"]
+    # each pause inside the run, and its resume (the last pause, after close_run, is
+    # outside the run)
+    assert [e["data"]["interruption"] for e in interruptions] == ["pause", "resume"] * (pauses - 1)
+
+
+def test_a_pause_between_the_result_and_the_stop_document_keeps_one_result(virtual, uninterrupted):
+    """The last save of the run is the ``result`` stream's: a pause after it resumes to
+    one result event."""
+    reference, _ = uninterrupted
+    last_save = reference.n_measurements + 1
+    outcome, docs, pauses = _drive(virtual, lambda plan: _pause_after(plan, "save", last_save))
+    assert pauses == 1
+    _check_resumed_run(outcome, docs, *uninterrupted)
+
+
+def _check_resumed_run(outcome, docs, reference, reference_docs) -> None:
+    """The resumed run's documents and result are the uninterrupted run's."""
+    assert outcome.exit_status == "success"
     result = outcome.plan_result
     _check_documents(docs, result.n_measurements)
     # the same measurements, values and estimate: the retake is the same A-scan and the
@@ -159,15 +208,32 @@ def test_a_deferred_pause_takes_effect_after_the_measurement_in_progress(virtual
 @pytest.mark.parametrize(
     ("then", "exit_status"), [("stop", "success"), ("abort", "abort"), ("halt", "abort")]
 )
-def test_stop_abort_and_halt_after_a_pause_end_the_run(virtual, then, exit_status):
-    wrap = lambda plan: _pause_after(plan, "create", 5)  # noqa: E731
+@pytest.mark.parametrize(
+    ("command", "nth", "obj_name", "n_saved"),
+    [
+        ("create", 5, "", 4),  # the 5th measurement's bundle opened: never saved
+        ("save", 4, "", 4),  # the 4th event saved, before the checkpoint after it
+        ("set", 3, "probe_x", 2),  # the 3rd measurement's move
+        ("read", 8, "ascan", 4),  # after the 4th event's checkpoint
+    ],
+)
+def test_stop_abort_and_halt_after_a_pause_end_the_run(
+    virtual, uninterrupted, then, exit_status, command, nth, obj_name, n_saved
+):
+    wrap = lambda plan: _pause_after(plan, command, nth, obj_name=obj_name)  # noqa: E731
     _, docs, pauses = _drive(virtual, wrap, then=then)
     assert pauses == 1
     stop = [d for n, d in docs if n == "stop"]
     assert len(stop) == 1 and stop[0]["exit_status"] == exit_status
     primary = _streams(docs)["primary"]
-    # measurements 1-4 were saved; the 5th was interrupted in its bundle: never saved
-    assert [e["seq_num"] for e in primary] == [1, 2, 3, 4]
+    # each measurement taken before the pause is saved once; the one interrupted
+    # before its save never is
+    assert [e["seq_num"] for e in primary] == list(range(1, n_saved + 1))
+    assert stop[0]["num_events"]["primary"] == n_saved
+    for ours, theirs in zip(primary, _streams(uninterrupted[1])["primary"], strict=False):
+        np.testing.assert_array_equal(
+            ours["data"]["ascan_samples"], theirs["data"]["ascan_samples"]
+        )
     assert "result" not in _streams(docs)
     assert not [t for t in threading.enumerate() if t.name == "echocal-calibrate-plan"]
 

@@ -30,6 +30,7 @@ from echocal.errors import EchocalValueError
 from echocal.materials import _MARCZAK
 
 __all__ = [
+    "GAIN_DB_RANGE",
     "MAX_AR_POLE",
     "BenchReceiver",
     "ar_burn_in",
@@ -43,6 +44,11 @@ FloatArray = NDArray[np.float64]
 MAX_AR_POLE = 0.999
 """The largest pole radius an AR noise model may have: a pole nearer the unit circle is a
 near-constant drift, not receiver noise (and would need a burn-in of thousands of samples)."""
+
+GAIN_DB_RANGE = (-120.0, 120.0)
+"""[dB] the gains a gain curve may give: a receiver's range (a pulser-receiver's gain spans
+some 0-110 dB).  Beyond it the A-scan's samples overflow (10^(g/20) is inf past ~6000 dB)
+or vanish."""
 
 _BURN_IN_DECAY = 1e-8
 """The AR filter's memory of its zero start left after the burn-in (of its impulse response)."""
@@ -134,6 +140,13 @@ class BenchReceiver:
                 raise EchocalValueError(
                     "bench.receiver.gain_curve: give [time, dB] points in increasing time, "
                     'e.g. [[0, 0], ["30 us", 12]]'
+                )
+            low, high = GAIN_DB_RANGE
+            if np.any(points[:, 1] < low) or np.any(points[:, 1] > high):
+                raise EchocalValueError(
+                    f"bench.receiver.gain_curve: gains must lie in [{low:g}, {high:g}] dB (a "
+                    f"receiver's range; beyond it the A-scan overflows or vanishes); got "
+                    f"{', '.join(f'{g:g}' for g in points[:, 1])} dB"
                 )
             curve = tuple((float(t), float(g)) for t, g in points)
         object.__setattr__(self, "gain_curve", tuple(curve))

@@ -216,6 +216,15 @@ def register(app: typer.Typer) -> None:
                 "recording must be unchanged (their SHA-256 digests are checked).",
             ),
         ] = None,
+        current_setup: Annotated[
+            bool,
+            typer.Option(
+                "--current-setup",
+                help="With --from: rerun on the setup file as it is now, though it changed "
+                "since the run (the new result's provenance records the rerun, with both "
+                "digests, under 'rerun').",
+            ),
+        ] = False,
     ) -> None:
         """Calibrate the orientation at one position: on a simulated setup (and compare
         with its true optimum), on a recording (--replay FILE) or on a rig (--instrument
@@ -233,16 +242,19 @@ def register(app: typer.Typer) -> None:
         if from_file is not None:  # the recorded parameters, then this call's output options
             from echocal.cli._rerun import rerun_parameters
 
-            recorded = rerun_parameters(from_file, ctx)
+            recorded = rerun_parameters(from_file, ctx, current_setup=current_setup)
             own: dict[str, Any] = {
                 "out": out, "plots": plots, "map_points": map_points, "json_output": json_output
             }  # fmt: skip
             return calibrate_command(ctx, **recorded, **own, token=token, overwrite=overwrite)
-        from echocal.cli._rerun import recorded_parameters
+        from echocal.cli._rerun import RERUN_KEY, recorded_parameters
         from echocal.provenance import start
 
+        if current_setup:
+            raise typer.BadParameter("only with --from", param_hint="--current-setup")
         given = {k: v for k, v in locals().items() if k in ctx.params}  # the options only
         provenance = start("calibrate", recorded_parameters(given))
+        provenance.rerun = ctx.meta.get(RERUN_KEY)
         run = _Run.parse(
             method, budget, max_iter, settle, preset, option, search_radius, final_measure
         )

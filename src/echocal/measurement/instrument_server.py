@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import hmac
-import socket
-import socketserver
 import threading
 import time
 import zlib
@@ -32,6 +30,7 @@ from echocal.errors import LimitError
 from echocal.geometry import Pose
 from echocal.measurement import protocol
 from echocal.measurement.base import MeasurementSource
+from echocal.measurement.line_server import LineServer
 
 AUTH_CODE = "AUTH"
 """Error code of a connection refused for a missing or wrong token."""
@@ -76,56 +75,7 @@ class Faults:
         one_of("faults.malformed_kind", self.malformed_kind, MALFORMED_KINDS)
 
 
-class _Handler(socketserver.StreamRequestHandler):
-    server: _TcpServer
-
-    def handle(self) -> None:
-        owner = self.server.owner
-        owner._connections.add(self.request)
-        authenticated = owner.token is None
-        try:
-            while True:
-                raw = self.rfile.readline(protocol.MAX_LINE_BYTES + 1)
-                if not raw or owner._gone:
-                    return
-                if len(raw) > protocol.MAX_LINE_BYTES:  # the rest of it would parse as commands
-                    self.wfile.write(_err("SYNTAX", "command line is too long"))
-                    return
-                if not authenticated:  # the first line must be AUTH <token>: else goodbye
-                    authenticated = owner._authenticate(raw)
-                    self.wfile.write(
-                        protocol.encode_line("OK")
-                        if authenticated
-                        else _err(AUTH_CODE, "this instrument needs its token first: AUTH <token>")
-                    )
-                    if not authenticated:
-                        return
-                    continue
-                reply = owner._dispatch(raw)
-                if reply is None:  # injected drop
-                    return
-                lines, delay, close_after = reply
-                if delay:
-                    time.sleep(delay)
-                self.wfile.write(b"".join(lines))
-                self.wfile.flush()
-                if close_after:
-                    return
-        except OSError:
-            return
-        finally:
-            owner._connections.discard(self.request)
-            with contextlib.suppress(OSError):
-                self.request.shutdown(socket.SHUT_RDWR)
-
-
-class _TcpServer(socketserver.ThreadingTCPServer):
-    daemon_threads = True
-    allow_reuse_address = True
-    owner: InstrumentServer
-
-
-class InstrumentServer:
+class InstrumentServer(LineServer):
     """Serve ``source`` as an instrument over TCP, in a background thread.
 
     Parameters
@@ -141,6 +91,9 @@ class InstrumentServer:
 
     Use as a context manager: ``with InstrumentServer(src) as server: ...server.address``.
     """
+
+    max_line = protocol.MAX_LINE_BYTES
+    thread_name = "echocal-instrument-server"
 
     def __init__(
         self,
@@ -165,52 +118,31 @@ class InstrumentServer:
         self._lock = threading.Lock()
         self._gone = False
         self._fired: set[str] = set()
-        self._connections: set[socket.socket] = set()
-        self._thread: threading.Thread | None = None
-        self._server = _TcpServer((host, int(port)), _Handler, bind_and_activate=True)
-        self._server.owner = self
+        super().__init__(host=host, port=port)
 
-    @property
-    def address(self) -> tuple[str, int]:
-        """(host, port) the server listens on."""
-        host, port = self._server.server_address[:2]
-        return str(host), int(port)
+    def open_session(self) -> dict[str, bool]:
+        """A connection's state: whether it has authenticated (always, without a token)."""
+        return {"authenticated": self.token is None}
 
-    def start(self) -> InstrumentServer:
-        """Serve in a daemon thread; returns self."""
-        if self._thread is None:
-            self._thread = threading.Thread(
-                target=self._server.serve_forever,
-                kwargs={"poll_interval": 0.05},
-                name="echocal-instrument-server",
-                daemon=True,
-            )
-            self._thread.start()
-        return self
-
-    def serve_forever(self) -> None:
-        """Serve in the calling thread until :meth:`close` or KeyboardInterrupt."""
-        try:
-            self._server.serve_forever(poll_interval=0.1)
-        finally:
-            self._server.server_close()
-
-    def close(self) -> None:
-        """Stop serving and close every open connection."""
-        if self._thread is not None:
-            self._server.shutdown()
-            self._thread.join(timeout=5.0)
-            self._thread = None
-        self._server.server_close()
-        for conn in list(self._connections):
-            with contextlib.suppress(OSError):
-                conn.shutdown(socket.SHUT_RDWR)
-
-    def __enter__(self) -> InstrumentServer:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def answer(self, raw: bytes, session: dict[str, bool]) -> tuple[bytes, bool]:
+        """The reply to one command line (the first line of a connection must be
+        ``AUTH <token>`` when the server has a token), and whether to close after it."""
+        if self._gone:
+            return b"", True
+        if len(raw) > protocol.MAX_LINE_BYTES:  # the rest of it would parse as commands
+            return _err("SYNTAX", "command line is too long"), True
+        if not session["authenticated"]:  # the first line must be AUTH <token>: else goodbye
+            session["authenticated"] = self._authenticate(raw)
+            if not session["authenticated"]:
+                return _err(AUTH_CODE, "this instrument needs its token first: AUTH <token>"), True
+            return protocol.encode_line("OK"), False
+        reply = self._dispatch(raw)
+        if reply is None:  # injected drop
+            return b"", True
+        lines, delay, close_after = reply
+        if delay:
+            time.sleep(delay)
+        return b"".join(lines), close_after
 
     def _authenticate(self, raw: bytes) -> bool:
         """Whether ``raw`` is ``AUTH <token>`` with this server's token (constant time)."""

@@ -126,9 +126,10 @@ def _time_axis(raw: RawScan, facts: ScanFacts, n_time: int) -> tuple[float, floa
 
 
 def _positions(
-    axis: str, given: NDArray[np.float64] | None, facts: ScanFacts, n: int
+    axis: str, given: NDArray[np.float64] | None, facts: ScanFacts, n: int, where: str
 ) -> NDArray[np.float64]:
-    """[m] the ``n`` positions along ``axis``: the file's, or start + step × index."""
+    """[m] the ``n`` positions along ``axis``: the file's (``where``: its name), or
+    start + step × index."""
     start = getattr(facts, f"{axis}_start")
     step = getattr(facts, f"{axis}_step")
     end = getattr(facts, f"{axis}_end")
@@ -139,6 +140,12 @@ def _positions(
     if given is not None:
         if given.size != n:
             raise EchocalValueError(f"{axis}: {given.size} positions for {n} traces along {axis}")
+        bad = np.flatnonzero(~np.isfinite(given))
+        if bad.size:
+            raise EchocalValueError(
+                f"{where}: {axis} position {bad[0] + 1} of {n} is {given[bad[0]]} (a missing "
+                f"position?); correct the file's {axis} positions"
+            )
         return given
     if step is None:
         if n > 1:
@@ -193,10 +200,11 @@ def import_scan(
         valid = np.transpose(raw.valid, [rest.index(a) for a in order[:-1]])
     n_time = data.shape[-1]
     fs, start = _time_axis(raw, facts, n_time)
-    x = _positions("x", raw.x, facts, data.shape[-2])
+    where = files[0].name if len(files) == 1 else f"{files[0].name} and {len(files) - 1} more"
+    x = _positions("x", raw.x, facts, data.shape[-2], where)
     y = None
     if data.ndim == 3:
-        y = _positions("y", raw.y, facts, data.shape[0])
+        y = _positions("y", raw.y, facts, data.shape[0], where)
     elif facts.y_start is not None:
         y = np.array([facts.y_start])
     scale = raw.scale_factor if facts.scale_factor is None else facts.scale_factor

@@ -13,13 +13,20 @@ at a time).  The plan returns the :class:`~echocal.calibrate.CalibrationResult`.
 
 Pause and resume follow Bluesky's contract: the plan yields a ``checkpoint`` before and
 right after each measurement, so a deferred pause (one Ctrl-C) stops after the
-measurement in progress, and an immediate pause rewinds to the measurement's start and
-takes it again on ``RE.resume()``.  The optimizer is told each measurement once, with
-the A-scan of its event (read back after the event is saved), so a resumed run has one
-event per measurement, unique ``seq_num``, and the result of an uninterrupted run when
-the detector's retake is the same A-scan (echocal's simulated detector draws the noise
-of measurement ``seq`` from a seed).  ``stop``, ``abort`` and ``halt`` end the
-optimizer's thread with the run.
+measurement in progress, and an immediate pause before the event is saved rewinds to
+the measurement's start and takes it again on ``RE.resume()``.  An immediate pause (or a
+suspension) that lands after the event is saved and before the next checkpoint must not
+rewind: the RunEngine would replay the saved event (a second event with the same
+``seq_num``).  The plan holds a :class:`~bluesky.protocols.Pausable` guard that sees
+each event document of its run and, when the RunEngine pauses in that window, raises
+:class:`bluesky.utils.NoReplayAllowed` from ``pause()`` (Bluesky's way for a device to
+refuse a replay): the RunEngine drops the messages since the checkpoint and resumes
+after the save.  The optimizer is told each measurement once, with the A-scan of its
+event (read back after the event is saved), so a resumed run has one event per
+measurement, unique ``seq_num``, and the result of an uninterrupted run when the
+detector's retake is the same A-scan (echocal's simulated detector draws the noise of
+measurement ``seq`` from a seed).  ``stop``, ``abort`` and ``halt`` end the optimizer's
+thread with the run.
 
 The estimate, the metric of every measurement and the outcome go into the run's
 ``result`` stream (one event after the last measurement); the start document carries
@@ -54,6 +61,8 @@ from echocal.signal import Pulse
 
 try:
     import bluesky.plan_stubs as bps
+    from bluesky import Msg
+    from bluesky.utils import NoReplayAllowed
 except ImportError:  # without the bluesky extra
     raise ImportError(
         "echocal's Bluesky plans need bluesky: pip install 'echocal[bluesky]' (bluesky, ophyd)"
@@ -81,6 +90,36 @@ class _Bridge(BaseSource):
         if isinstance(reply, BaseException):
             raise reply
         return reply
+
+
+class _SavedEventGuard:
+    """Refuses a rewind that would replay a saved event (a :class:`~bluesky.protocols.Pausable`).
+
+    Subscribed to the run's documents, it notes each saved event of the plan's
+    ``streams`` (not the RunEngine's own ``interruptions`` stream, whose events a pause
+    emits); the plan clears the note after the checkpoint that follows.  The RunEngine
+    calls ``pause()`` on every object of the run when it pauses or suspends; while an
+    event is saved and no checkpoint has followed, ``pause()`` raises
+    :class:`~bluesky.utils.NoReplayAllowed`, so the RunEngine forgets the messages since
+    the last checkpoint instead of replaying them on resume."""
+
+    def __init__(self, streams: Sequence[str]) -> None:
+        self.streams = frozenset(streams)
+        self.descriptors: set[str] = set()
+        self.saved = False
+
+    def __call__(self, name: str, doc: Mapping[str, Any]) -> None:
+        if name == "descriptor" and doc.get("name") in self.streams:
+            self.descriptors.add(doc["uid"])
+        elif name == "event" and doc.get("descriptor") in self.descriptors:
+            self.saved = True
+
+    def pause(self) -> None:
+        if self.saved:
+            raise NoReplayAllowed("calibrate_plan: the event is saved; resume after it")
+
+    def resume(self) -> None:
+        """Nothing to do: the plan goes on from where it paused."""
 
 
 class _Aborted(Exception):
@@ -235,7 +274,10 @@ def calibrate_plan(
         **dict(md or {}),
     }
     worker = threading.Thread(target=drive, name="echocal-calibrate-plan", daemon=True)
+    guard = _SavedEventGuard(("primary", "result"))
     yield from bps.open_run(md=start_md)
+    yield from bps.subscribe("all", guard)
+    yield Msg("null", guard)  # a message naming the guard: the RunEngine will pause() it
     worker.start()
     seq = getattr(detector, "seq", None)
     n_measured = 0
@@ -255,8 +297,10 @@ def calibrate_plan(
                 targets = [seq, n_measured, *targets]
             yield from bps.mv(*targets)
             yield from bps.trigger_and_read([detector, *axes])
-            # the event is saved: no rewind may take it again
+            # the event is saved: no rewind may take it again (the guard refuses one
+            # until this checkpoint, which empties the RunEngine's replay cache)
             yield from bps.checkpoint()
+            guard.saved = False
             # the values the event recorded (a read outside the event bundle: the reply a
             # rewound message gives the plan may be incomplete)
             reading: dict[str, Any] = {}

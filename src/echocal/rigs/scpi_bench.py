@@ -20,10 +20,7 @@ The bench has no authentication (SCPI has none): it serves loopback only.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import socket
-import socketserver
 import threading
 from collections.abc import Callable
 from typing import Any, ClassVar
@@ -33,6 +30,7 @@ import numpy as np
 from echocal.errors import EchocalValueError
 from echocal.geometry import Pose
 from echocal.measurement.base import MeasurementSource
+from echocal.measurement.line_server import LineServer
 
 __all__ = ["AXIS_IDS", "ScpiBench", "rig_file_text"]
 
@@ -44,37 +42,9 @@ _SCALE = {"x": 1e3, "y": 1e3, "z": 1e3, "azimuth": 1.0, "coelevation": 1.0}
 _TRAVEL = 1e3
 """[controller units] the travel reported for an axis the source does not bound."""
 _FULL_CODE = 32767
-_MAX_LINE = 4096
 
 
-class _Handler(socketserver.StreamRequestHandler):
-    server: _Server
-
-    def handle(self) -> None:
-        bench = self.server.bench
-        try:
-            while True:
-                raw = self.rfile.readline(_MAX_LINE + 1)
-                if not raw:
-                    return
-                reply = bench.execute(raw.decode("ascii", "replace").strip())
-                if reply is not None:
-                    self.wfile.write(reply)
-                    self.wfile.flush()
-        except OSError:
-            return
-        finally:
-            with contextlib.suppress(OSError):
-                self.request.shutdown(socket.SHUT_RDWR)
-
-
-class _Server(socketserver.ThreadingTCPServer):
-    daemon_threads = True
-    allow_reuse_address = True
-    bench: ScpiBench
-
-
-class ScpiBench:
+class ScpiBench(LineServer):
     """A motion controller and an oscilloscope over SCPI, backed by ``source``.
 
     Parameters
@@ -88,6 +58,9 @@ class ScpiBench:
     full_scale : [a.u.] the amplitude of the largest code; default four times the
         source's reference echo peak (1 when the source has none).
     """
+
+    max_line = 4096
+    thread_name = "echocal-scpi-bench"
 
     def __init__(
         self,
@@ -128,16 +101,7 @@ class ScpiBench:
         self._lock = threading.Lock()
         self.n_acquisitions = 0
         """A-scans measured (each averaged acquisition counts once per average)."""
-        self._server = _Server((host, port), _Handler, bind_and_activate=True)
-        self._server.bench = self
-        self._thread: threading.Thread | None = None
-
-    # -- lifecycle --------------------------------------------------------------------------
-    @property
-    def address(self) -> tuple[str, int]:
-        """(host, port) the bench listens on."""
-        host, port = self._server.server_address[:2]
-        return str(host), int(port)
+        super().__init__(host=host, port=port)
 
     @property
     def resource(self) -> str:
@@ -145,31 +109,10 @@ class ScpiBench:
         host, port = self.address
         return f"TCPIP::{host}::{port}::SOCKET"
 
-    def start(self) -> ScpiBench:
-        """Serve in a background thread."""
-        self._thread = threading.Thread(
-            target=self._server.serve_forever, name="echocal-scpi-bench", daemon=True
-        )
-        self._thread.start()
-        return self
-
-    def serve_forever(self) -> None:
-        """Serve in this thread until :meth:`close` (or Ctrl-C)."""
-        self._server.serve_forever()
-
-    def close(self) -> None:
-        """Stop serving and close the port."""
-        if self._thread is not None:
-            self._server.shutdown()
-            self._thread.join()
-            self._thread = None
-        self._server.server_close()
-
-    def __enter__(self) -> ScpiBench:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def answer(self, raw: bytes, session: Any) -> tuple[bytes, bool]:
+        """The reply to one command line (nothing for a command without one); the
+        connection stays open."""
+        return self.execute(raw.decode("ascii", "replace").strip()) or b"", False
 
     # -- state ------------------------------------------------------------------------------
     def pose(self) -> Pose:

@@ -62,6 +62,11 @@ resolution of the echo (use no noise instead), below -100 dB no echo is measurab
 def check_snr_db(name: str, snr_db: Any) -> float:
     """``snr_db`` [dB] as a float within :data:`SNR_DB_RANGE` (one clear error otherwise)."""
     low, high = SNR_DB_RANGE
+    if isinstance(snr_db, float | np.floating) and not np.isfinite(snr_db):
+        raise EchocalValueError(
+            f"{name} must be finite, a number of dB in [{low:g}, {high:g}] (for a noiseless "
+            f"receiver give 'none'); got {float(snr_db)}"
+        )
     snr = finite_float(name, snr_db)
     if not low <= snr <= high:
         raise EchocalValueError(
@@ -242,6 +247,10 @@ def scan_noise_sigma(samples: np.ndarray) -> tuple[float | None, bool]:
         return None, False
     step = float(np.min(np.diff(levels)))
     near = np.abs(dev) <= 3.0 * step
-    # an ADC's levels lie on a grid of its step; a noiseless float trace's do not
-    on_grid = np.allclose(levels / step, np.round(levels / step), rtol=0.0, atol=1e-6)
-    return float(np.sqrt(np.mean(dev[near] ** 2))), bool(on_grid)
+    with np.errstate(over="ignore", invalid="ignore"):
+        sigma = float(np.sqrt(np.mean(dev[near] ** 2)))
+        # an ADC's levels lie on a grid of its step; a noiseless float trace's do not
+        on_grid = np.allclose(levels / step, np.round(levels / step), rtol=0.0, atol=1e-6)
+    if not np.isfinite(sigma):  # levels so far apart their squares overflow: a fault
+        return None, False
+    return sigma, bool(on_grid)
