@@ -305,8 +305,9 @@ def search_bound(
 
     ``amplitude``: ν(θ), the echo's matched-envelope peak in units of the noise's Rayleigh
     scale at the misalignments ``angles`` [deg] (increasing from 0; the largest over the
-    lobe's directions), taken as its largest sample beyond each angle (the lobe falls
-    between samples) and as its last sample beyond the last angle.  ``cover(r, n)``: at
+    lobe's directions), taken as its largest sample from the one at or before each radius
+    on (the lobe between two samples is at most the larger) and as its last sample
+    beyond the last angle.  ``cover(r, n)``: at
     most the prior mass within r [deg] of n points placed independently of the optimum.
     Zones every ``zone_step_deg``, radii of item 4 every ``hit_step_deg`` degrees out
     to the last angle; item 3's capacities from a table of :func:`rice_capacity` at
@@ -316,7 +317,9 @@ def search_bound(
     tail = np.maximum.accumulate(np.asarray(amplitude, dtype=np.float64)[::-1])[::-1]
 
     def beyond(radii: np.ndarray) -> np.ndarray:
-        return tail[np.minimum(np.searchsorted(angles, radii), len(angles) - 1)]
+        # from the last sample at or before each radius: the lobe between samples is
+        # taken as at most its larger neighbour
+        return tail[np.clip(np.searchsorted(angles, radii, side="right") - 1, 0, len(angles) - 1)]
 
     success_mass = disc_mass(tolerance, band)
     radii = np.arange(zone_step_deg, float(angles[-1]) + 1e-9, zone_step_deg)
