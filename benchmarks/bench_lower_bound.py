@@ -1,8 +1,11 @@
 """How many measurements must a blind search spend — and how many ``auto`` spends.
 
-For a probe, an SNR and a band of start distances, this benchmark prints a **lower bound**
-on the measurements a search needs to reach 0.1° from the optimum in 99 % of the runs,
-beside what ``auto`` achieves on the same starts; their ratio is the figure of merit.
+For a probe, an SNR and a band of start distances, this benchmark prints two **lower
+bounds** on the measurements a search needs to reach 0.1° from the optimum in 99 % of the
+runs, beside what ``auto`` achieves on the same starts: the *detection bound* (items 1–3
+below), which holds for searches that act on threshold detections, and the *any-search
+bound* (:mod:`information_bound`), which holds for every search — adaptive, reading every
+value below the threshold, knowing the probe — under the Rice noise model.
 
 The bound, and the searches it holds for:
 
@@ -33,10 +36,11 @@ The bound, and the searches it holds for:
    not on average over the benchmark's starts (whose distance, not area, is uniform) —
    at 10 dB it was *above* the programme's bound, so it did not hold for the benchmark's
    99 %. A search that also reads the values below the threshold places later points
-   better than a fixed sequence can: for it the bound is a reference, not a proof, and a
-   ratio below 1 is no contradiction. ``auto`` is one since 2026-11-29: beyond x0's first
-   ring it follows the posterior over the optimum, which every significance updates
-   (``echocal.calibrate.posterior_search``). p is taken as measured up
+   better than a fixed sequence can: for it this bound is a reference, not a proof, and a
+   ratio below 1 is no contradiction (``auto`` is one: beyond x0's first ring it follows
+   the posterior over the optimum, which every significance updates,
+   ``echocal.calibrate.posterior_search``); the any-search bound covers it. p is taken
+   as measured up
    to ``--max-angle`` and 0 beyond (choose it where p has fallen to the false-alarm
    level).
 3. Once detected, reaching 0.1° needs at least 3 more measurements: a lobe of known
@@ -52,6 +56,17 @@ reference.  And the best hexagonal lattice (:func:`lattice_search`: spacing opti
 points chosen greedily, each measurement's soft detection p(θ) counted, not just its
 radius) that detects 99 % of the optima in the band, + 3: what an optimized
 non-adaptive covering spends — a design again, the bound's counterpart from above.
+
+The any-search bound (:func:`information_bound.search_bound`) is the larger of two, each
+derived in :mod:`information_bound`: the information recursion (Fano's inequality, the
+chain rule over the measurements, the capacity of the Rice channel at the amplitude the
+lobe has at each distance, capped by how likely a point lands near the optimum given
+what is known so far) and the change of measure (until a measurement comes within r of
+the optimum, every value is within D(Rice(ν_r) ‖ Rayleigh) nats of noise; a search that
+has not come within r cannot place its estimate better than by chance, and N points
+placed by chance hold at most a covering programme's share of the optima within r).  It
+reads the lobe's noiseless matched-envelope peak ν(θ) (the setup's cached lobe profile,
+the largest over its directions) against white noise at the stated SNR.
 
 ``auto`` runs through :mod:`bench_calibration` (the same seeds, starts and budget of 80 as
 the calibration benchmark: uniform distance in the band, uniform direction; ``--budget``
@@ -88,11 +103,16 @@ from _calibration_cases import BUDGET, CASES, GATED_CASES, STARTS  # noqa: E402
 from _common import machine_info, markdown_table  # noqa: E402
 from bench_calibration import measurements_to, run_one  # noqa: E402
 from detection_range import cover, detection_curves, radius  # noqa: E402
+from information_bound import search_bound  # noqa: E402
 from scipy import sparse  # noqa: E402
 from scipy.optimize import linprog  # noqa: E402
 
 from echocal.calibrate.search_pattern import hex_spiral  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
+from echocal.measurement.detection_radius import cached_lobe_profile  # noqa: E402
+from echocal.setups import load_setup  # noqa: E402
+from echocal.signal.detection import shared_detector  # noqa: E402
+from echocal.signal.noise import noise_sigma_for_snr  # noqa: E402
 
 DETECTOR = "matched-filter peak"
 """The acquisition phase's detector (``EchoDetector``: significance g > 4.5)."""
@@ -162,6 +182,48 @@ def _cell_max(values: np.ndarray, fine: int, axis: int) -> np.ndarray:
     return np.moveaxis(np.maximum(body, v[fine::fine]), 0, axis)
 
 
+def _cell_kernel(
+    band: tuple[float, float], angles: np.ndarray, prob: np.ndarray, cell: float, fine: int
+) -> np.ndarray:
+    """P̄⁺: the largest :func:`ring_kernel` value over each bin of ρ in ``band`` × cell of
+    s (both ``cell`` [deg] wide, s out to R₂ + the last angle), sampled ``fine`` times per
+    side, edges included; shape (bins, cells)."""
+    lo, hi = band
+    n_rho = max(1, math.ceil((hi - lo) / cell))
+    n_s = math.ceil((hi + float(angles[-1])) / cell)
+    rho = np.linspace(lo, hi, n_rho * fine + 1)
+    s = np.linspace(0.0, n_s * cell, n_s * fine + 1)
+    return _cell_max(_cell_max(ring_kernel(rho, s, angles, prob), fine, 0), fine, 1)
+
+
+def reach_kernel(band: tuple[float, float], reach: float, *, cell: float = 0.25) -> np.ndarray:
+    """P̄⁺ (:func:`_cell_kernel`) for "within ``reach`` [deg]" (1 up to it, falling
+    linearly to 0 over the next 1e-3°: a superset, so a bound from it holds), for optima
+    at a distance uniform in ``band`` [deg]; ``cell`` [deg]: any width gives a bound (P̄⁺
+    is the largest over each cell), finer is tighter."""
+    angles = np.array([0.0, reach, reach + 1e-3])
+    return _cell_kernel(band, angles, np.array([1.0, 1.0, 0.0]), cell, 2)
+
+
+def covered_mass(kernel: np.ndarray, n: int) -> float:
+    """At most the prior mass within reach of ``n`` points placed independently of the
+    optimum, for the :func:`reach_kernel` ``kernel``: the programme of
+    :func:`covering_bound` turned round (maximize mean(y) subject to Σ w ≤ n)."""
+    n_rho, n_s = kernel.shape
+    rows = sparse.hstack([-sparse.csr_array(kernel), sparse.eye_array(n_rho)])
+    budget_row = sparse.hstack([sparse.csr_array(np.ones((1, n_s))), sparse.csr_array((1, n_rho))])
+    res = linprog(
+        np.r_[np.zeros(n_s), np.full(n_rho, -1.0 / n_rho)],
+        A_ub=sparse.vstack([rows, budget_row]).tocsr(),
+        b_ub=np.r_[np.zeros(n_rho), float(n)],
+        bounds=[(0.0, None)] * n_s + [(0.0, 1.0)] * n_rho,
+        method="highs",
+    )
+    if res.status != 0:
+        raise RuntimeError(f"covered-mass programme: {res.message}")
+    return float(-res.fun)
+
+
 def covering_bound(
     band: tuple[float, float],
     angles: np.ndarray,
@@ -183,14 +245,10 @@ def covering_bound(
     edges included).  Solved by HiGHS (``scipy.optimize.linprog``).  Numerically: at 30 dB
     the value, 16.0146, moves in the fifth digit with 513 or 2049 arc angles instead of
     129 and with 4 samples per side instead of 2; it is as exact as the measured p."""
-    lo, hi = band
     if cell is None:
         cell = bound_cell(radius(angles, prob, 0.9))
-    n_rho = max(1, math.ceil((hi - lo) / cell))
-    n_s = math.ceil((hi + float(angles[-1])) / cell)
-    rho = np.linspace(lo, hi, n_rho * fine + 1)
-    s = np.linspace(0.0, n_s * cell, n_s * fine + 1)
-    upper = _cell_max(_cell_max(ring_kernel(rho, s, angles, prob), fine, 0), fine, 1)
+    upper = _cell_kernel(band, angles, prob, cell, fine)
+    n_rho, n_s = upper.shape
     rows = sparse.hstack([-sparse.csr_array(upper), sparse.eye_array(n_rho)])
     mean_row = sparse.hstack([sparse.csr_array((1, n_s)), np.full((1, n_rho), -1.0 / n_rho)])
     res = linprog(
@@ -259,12 +317,61 @@ def lattice_search(
     return best
 
 
+def echo_amplitude(setup_name: str, snr: float) -> tuple[np.ndarray, np.ndarray]:
+    """The probe's lobe as the information bound reads it: misalignments [deg] and ν(θ),
+    the noiseless matched-envelope peak in units of the noise's Rayleigh scale at peak
+    SNR ``snr`` [dB], the largest over the profile's directions (the setup's cached
+    :func:`~echocal.measurement.detection_radius.cached_lobe_profile` at its reference
+    position, which ends where a 30 dB echo is no longer seen: beyond, the bound takes
+    its last value, more than the lobe has there)."""
+    setup = load_setup(setup_name, seed=0)
+    profile = cached_lobe_profile(setup, np.asarray(setup.reference_position, float))
+    detector = shared_detector(setup.pulse, setup.window.fs, setup.window.n_samples)
+    sigma = float(noise_sigma_for_snr(profile.reference, snr, setup.window, setup.pulse))
+    return profile.angles, profile.peaks.max(axis=0) / (sigma * detector.noise_gain)
+
+
+def any_search_bound(
+    setup_name: str, snr: float, band: tuple[float, float], *, step: float = 0.25
+) -> tuple[int, int]:
+    """The bounds of :func:`information_bound.search_bound` that hold for any search
+    (the information recursion, the change of measure) on this probe at ``snr`` [dB] for
+    optima ``band`` [deg] away, to 0.1° in 99 %, with radii ``step`` [deg] apart (coarser
+    is cheaper and still a bound)."""
+    angles, nu = echo_amplitude(setup_name, snr)
+    kernels: dict[float, np.ndarray] = {}
+
+    def cover(reach: float, n: int) -> float:
+        if reach not in kernels:
+            kernels[reach] = reach_kernel(band, reach)
+        return covered_mass(kernels[reach], n)
+
+    return search_bound(
+        angles,
+        nu,
+        band,
+        cover,
+        tolerance=TOLERANCE,
+        success=SUCCESS,
+        zone_step_deg=step,
+        hit_step_deg=step,
+    )
+
+
 def _percentile(values: list[float], q: float) -> float:
     """The q-th percentile, 'never' (inf) counting as larger than every number."""
     if not values:
         return math.nan
     ordered = np.sort(np.asarray(values, dtype=float))
     return float(ordered[min(len(ordered) - 1, math.ceil(q / 100 * len(ordered)) - 1)])
+
+
+def _ratios(p50: float, p99: float, bound: int) -> str:
+    """The median and p99 over ``bound`` ("–" where a percentile is missing or never
+    reached)."""
+    if not (math.isfinite(p50) and math.isfinite(p99)):
+        return "–"
+    return f"{p50 / bound:.2f} / {p99 / bound:.2f}"
 
 
 def _n(v: float, budget: int) -> str:
@@ -279,7 +386,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--snr", default="30", help="comma-separated SNRs [dB]")
     ap.add_argument("--start", default="far", choices=list(STARTS))
-    ap.add_argument("--runs", type=int, default=100, help="auto runs per SNR")
+    ap.add_argument("--runs", type=int, default=100, help="auto runs per SNR (0: the bounds alone)")
     ap.add_argument("--draws", type=int, default=400, help="noise draws per angle")
     ap.add_argument("--max-angle", type=float, default=10.0, help="p(θ) measured up to [deg]")
     ap.add_argument(
@@ -329,15 +436,19 @@ def main(argv: list[str] | None = None) -> int:
             else (math.inf, math.nan)
         )
         best += REFINE_UNKNOWNS
+        info_n, hit_n = any_search_bound(setup_name, snr, band, step=1.0 if args.smoke else 0.25)
+        any_bound = max(info_n, hit_n)
         tasks = [(args.case, args.start, snr, r, "auto", budget) for r in range(runs)]
-        # spawn, not fork: the wave model's kernels run threads, which a fork can deadlock
-        with ProcessPoolExecutor(args.workers, mp_context=get_context("spawn")) as pool:
-            results: list[dict[str, Any]] = list(pool.map(run_one, tasks))
+        results: list[dict[str, Any]] = []
+        if tasks:  # spawn, not fork: the wave model's threads can deadlock a fork
+            with ProcessPoolExecutor(args.workers, mp_context=get_context("spawn")) as pool:
+                results = list(pool.map(run_one, tasks))
         to_tol = [measurements_to(np.asarray(r["errors"]), TOLERANCE) for r in results]
-        within = np.mean([r["errors"][AT] <= TOLERANCE for r in results])
+        within = np.mean([r["errors"][AT] <= TOLERANCE for r in results]) if results else math.nan
         found = [r["acquisition_measurements"] for r in results]
         found_n = [float(v) for v in found if v is not None]
         p99 = _percentile(to_tol, 99)
+        p50 = _percentile(to_tol, 50)
         rows.append(
             [
                 f"{snr:g}",
@@ -348,20 +459,23 @@ def main(argv: list[str] | None = None) -> int:
                 f"{area}",
                 f"{lattice99:.0f}",
                 f"{best} ({spacing:.2f}°)" if math.isfinite(best) else "–",
-                f"{100 * within:.0f} %",
+                f"{100 * within:.0f} %" if results else "–",
                 " / ".join(_n(_percentile(to_tol, q), budget) for q in (50, 90, 99)),
                 f"{np.median(found_n):.0f}" if found_n else "–",
-                f"{p99 / bound:.2f}" if math.isfinite(p99) else "∞",
-                f"{p99 / lattice99:.2f}" if math.isfinite(p99) else "∞",
+                f"{p99 / bound:.2f}" if math.isfinite(p99) else "∞" if results else "–",
+                f"{p99 / lattice99:.2f}" if math.isfinite(p99) else "∞" if results else "–",
                 f"{p99 / best:.2f}" if math.isfinite(p99 * best) else "–",
+                f"{any_bound} ({info_n} / {hit_n})",
+                _ratios(p50, p99, any_bound),
             ]
         )
         print(
             f"HEADLINE {args.case} {args.start} {snr:g} dB: bound {bound} measurements, auto "
-            f"p99 {_n(p99, budget)} (ratio {rows[-1][-3]}; {rows[-1][-2]} of the r99 lattice, "
-            f"{rows[-1][-1]} of the best lattice), "
+            f"p99 {_n(p99, budget)} (ratio {rows[-1][-5]}; {rows[-1][-4]} of the r99 lattice, "
+            f"{rows[-1][-3]} of the best lattice), "
             f"{100 * within:.0f} % within "
-            f"{TOLERANCE:g}° at {AT}",
+            f"{TOLERANCE:g}° at {AT}; any search needs at least {any_bound} "
+            f"(median / p99 over it: {rows[-1][-1]})",
             flush=True,
         )
     header = [
@@ -379,6 +493,8 @@ def main(argv: list[str] | None = None) -> int:
         "ratio p99 / bound",
         "ratio p99 / r99 lattice",
         "ratio p99 / best lattice",
+        "bound for any search (information / change of measure)",
+        "ratio median / p99 over the any-search bound",
     ]
     table = markdown_table(header, rows)
     elapsed = time.perf_counter() - t0
@@ -393,7 +509,7 @@ def main(argv: list[str] | None = None) -> int:
             f"--runs {runs} --start {args.start} --budget {args.budget}` "
             f"({elapsed:.0f} s; {machine['cpu']}; echocal {machine['echocal_git']}).",
             "",
-            "\n\n".join(__doc__.split("\n\n")[1:7]).strip().rstrip(":"),
+            "\n\n".join(__doc__.split("\n\n")[1:8]).strip().rstrip(":"),
             "",
             f"{runs} auto runs per SNR; p(θ) from {draws} noise draws per angle, 0–"
             f"{args.max_angle:g}° in {step:g}° steps.",

@@ -85,6 +85,10 @@ def test_lower_bound_smoke_runs_and_reports(tmp_path):
     assert text.startswith("# Lower bound on measurements vs `auto`")
     assert "N ≥ 0.99 · A / K" in text and "| 30 |" in text
     assert "--budget 60`" in text  # the run line reruns it with the budget it had
+    # the any-search bound, its derivation's summary, and auto over it
+    assert "any search needs at least" in proc.stdout
+    assert "bound for any search (information / change of measure)" in text
+    assert "The any-search bound (:func:`information_bound.search_bound`)" in text
 
 
 @pytest.mark.parametrize(
