@@ -517,8 +517,22 @@ def main(argv: list[str] | None = None) -> int:
             table,
             "",
         ]
-        atomic_write_text(args.out_md, "\n".join(text) + "\n")
+        atomic_write_text(args.out_md, "\n".join(text) + "\n" + _kept_sections(args.out_md))
     return 0
+
+
+KEEP_MARKER = "<!-- written by hand below: kept when the benchmark rewrites this page -->"
+"""The line after which the page's hand-written sections (reading, derivation) start."""
+
+
+def _kept_sections(path: Path) -> str:
+    """The hand-written tail of the page at ``path`` (from :data:`KEEP_MARKER` on), or ''."""
+    try:
+        old = path.read_text(encoding="utf-8")
+    except OSError:
+        return ""
+    at = old.find(KEEP_MARKER)
+    return "\n" + old[at:] if at >= 0 else ""
 
 
 if __name__ == "__main__":

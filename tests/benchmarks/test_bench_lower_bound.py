@@ -67,8 +67,10 @@ def test_no_lattice_beats_the_union_bound(bench, width):
 
 
 @pytest.mark.slow  # 14 CPU-s: the slow tier
-def test_lower_bound_smoke_runs_and_reports(tmp_path):
+def test_lower_bound_smoke_runs_and_reports(tmp_path, bench):
     out_md = tmp_path / "lb.md"
+    kept = f"{bench.KEEP_MARKER}\n\n**Reading** by hand.\n"
+    out_md.write_text("# an older run's page\n\n| old table |\n\n" + kept)
     proc = subprocess.run(
         [
             *(sys.executable, str(SCRIPT), "--smoke", "--workers", "1", "--budget", "60"),
@@ -89,6 +91,14 @@ def test_lower_bound_smoke_runs_and_reports(tmp_path):
     assert "any search needs at least" in proc.stdout
     assert "bound for any search (information / change of measure)" in text
     assert "The any-search bound (:func:`information_bound.search_bound`)" in text
+    assert text.endswith(kept) and "old table" not in text  # the hand-written part is kept
+
+
+def test_a_page_without_the_marker_keeps_nothing(tmp_path, bench):
+    page = tmp_path / "lb.md"
+    assert bench._kept_sections(page) == ""  # no page yet
+    page.write_text("# generated only\n")
+    assert bench._kept_sections(page) == ""
 
 
 @pytest.mark.parametrize(
