@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
 from echocal.plots._figure import new_figure
-from echocal.plots._style import series_style
+from echocal.plots._style import FEW_TICKS, few_ticks, series_style
 
 __all__ = [
     "MAP_DB_FLOOR",
@@ -41,7 +41,7 @@ def _integer_ticks(*axes: Any) -> None:
     from matplotlib.ticker import MaxNLocator
 
     for ax in axes:
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=FEW_TICKS + 1, integer=True))
 
 
 def convergence_figure(
@@ -236,7 +236,7 @@ def path_figure(
             shading="gouraud" if np.all(np.isfinite(values)) else "auto",
             cmap="viridis",
         )
-        fig.colorbar(mesh, ax=ax, label="metric / max [dB]")
+        few_ticks(fig.colorbar(mesh, ax=ax, label="metric / max [dB]").ax)
     else:
         relative_db([1.0], db_floor)  # the same check of db_floor with or without a map
     # on a map every path has a thin dark outline, so it shows on the bright lobe as on
@@ -288,6 +288,7 @@ def path_figure(
         ax.grid(alpha=0.3)
     ax.set_xlabel(f"{names[0]} [deg]")
     ax.set_ylabel(f"{names[1]} [deg]")
+    few_ticks(ax)
     # below the map, never over a path (a map is light where the paths go)
     handles, labels = ax.get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(3, len(labels)), fontsize=8)
