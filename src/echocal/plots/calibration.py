@@ -335,10 +335,13 @@ def _draw_map(ax: Any, cost_map: CostMap, values: FloatArray, frame: str | None,
         x, y = np.moveaxis(_to_view(nodes, frame, view), -1, 0)
         shading = "gouraud" if smooth else "nearest"
     mesh = ax.pcolormesh(x, y, np.ma.masked_invalid(values), shading=shading, cmap="viridis")
-    ax.set_xlim(float(np.min(x)), float(np.max(x)))
-    ax.set_ylim(float(np.min(y)), float(np.max(y)))
     if view == "tilt" and frame != view:
-        ax.set_aspect("equal", adjustable="box")  # a degree of tilt is a degree each way
+        # a degree of tilt is a degree each way: the panel keeps its size and shows the
+        # converted grid whole, with blank room beside it (limits follow the data)
+        ax.set_aspect("equal", adjustable="datalim")
+    else:
+        ax.set_xlim(float(np.min(x)), float(np.max(x)))
+        ax.set_ylim(float(np.min(y)), float(np.max(y)))
     return mesh
 
 
