@@ -4,14 +4,17 @@ Run from the repository root::
 
     python benchmarks/bench_plots.py            # immersion-5mhz from x0 = 12,8 (a far start)
     python benchmarks/bench_plots.py --repeats 3 --json out.json
+    python benchmarks/bench_plots.py --parameterization azimuth-coelevation  # two-panel maps
 
 In one process, after an untimed warm-up run (numba's kernels, the detector and
 lobe-profile caches on disk, in a fresh cache folder), each repeat runs the same seeded
 ``echocal calibrate --setup SETUP --x0 X0`` twice through the CLI: with ``--no-plots``
 and with the default plots (convergence, the path over its cost map, the final
 A-scan).  Reported: the CPU time of each (``time.process_time``: this process's threads,
-the wave model's pool included; the median over the repeats), their ratio, and the
-wave-model A-scans the path plot's cost map simulated (its ``map`` line).  BLAS is pinned
+the wave model's pool included; the median over the repeats), their ratio, the CPU time
+spent writing the figures (``save_figure``: laying out, drawing and encoding the PNGs;
+median per plotted run), and the wave-model A-scans the path plot's cost map simulated
+(its ``map`` line).  BLAS is pinned
 to one thread (``OPENBLAS_NUM_THREADS=1`` etc., unless set already), as a calibration
 runs.
 """
@@ -62,25 +65,48 @@ def _record_maps(into: list[dict[str, Any]]) -> None:
     path_map.path_cost_map = recorded  # type: ignore[assignment]  # the CLI imports it per call
 
 
-def run(setup: str, x0: str, repeats: int, work: Path) -> dict[str, Any]:
+def _record_saves(into: list[float]) -> None:
+    """Add the CPU time of every ``save_figure`` call to ``into`` (the CLI imports it per
+    call, from :mod:`echocal.plots`)."""
+    import echocal.plots
+
+    inner = echocal.plots.save_figure
+
+    def timed(*args: Any, **kwargs: Any) -> list[Path]:
+        t0 = time.process_time()
+        try:
+            return inner(*args, **kwargs)
+        finally:
+            into.append(time.process_time() - t0)
+
+    echocal.plots.save_figure = timed  # type: ignore[assignment]
+
+
+def run(setup: str, x0: str, repeats: int, work: Path, param: str = "tilt") -> dict[str, Any]:
     """Time ``repeats`` pairs of runs (without plots, with plots) after a warm-up."""
     maps: list[dict[str, Any]] = []
+    saves: list[float] = []
     _record_maps(maps)
-    common = ["--setup", setup, "--x0", x0, "--json", "--overwrite"]
+    _record_saves(saves)
+    common = ["--setup", setup, "--x0", x0, "--parameterization", param, "--json", "--overwrite"]
     _calibrate([*common, "--out", str(work / "warm"), "--no-plots"])
-    bare, plotted = [], []
+    bare, plotted, saving = [], [], []
     for _ in range(repeats):
         bare.append(_calibrate([*common, "--out", str(work / "bare"), "--no-plots"]))
+        saves.clear()
         plotted.append(_calibrate([*common, "--out", str(work / "plots")]))
+        saving.append(sum(saves))
     result = json.loads((work / "plots" / "result.json").read_text(encoding="utf-8"))
     without, with_plots = statistics.median(bare), statistics.median(plotted)
     return {
         "setup": setup,
         "x0": x0,
+        "parameterization": param,
         "repeats": repeats,
         "cpu_s_without_plots": without,
         "cpu_s_with_plots": with_plots,
         "ratio": with_plots / without,
+        "cpu_s_saving_figures": statistics.median(saving),
         "cpu_s_all": {"without_plots": bare, "with_plots": plotted},
         "measurements": result.get("n_measurements"),
         "map": maps[-1] if maps else None,
@@ -91,18 +117,21 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--setup", default="immersion-5mhz")
     parser.add_argument("--x0", default="12,8")
+    parser.add_argument("--parameterization", default="tilt")
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--json", type=Path, default=None, help="write every number here")
     opts = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="echocal-bench-plots-") as tmp:
         os.environ["ECHOCAL_CACHE_DIR"] = str(Path(tmp) / "cache")
-        result = run(opts.setup, opts.x0, max(1, opts.repeats), Path(tmp))
+        result = run(opts.setup, opts.x0, max(1, opts.repeats), Path(tmp), opts.parameterization)
     result["machine"] = machine_info(["numpy", "numba", "matplotlib"])
     print(
-        f"HEADLINE calibrate --setup {opts.setup} --x0 {opts.x0}: "
-        f"{result['cpu_s_without_plots']:.1f} CPU-s without plots, "
-        f"{result['cpu_s_with_plots']:.1f} CPU-s with plots: "
-        f"ratio {result['ratio']:.2f} (median of {result['repeats']})"
+        f"HEADLINE calibrate --setup {opts.setup} --x0 {opts.x0} "
+        f"--parameterization {opts.parameterization}: "
+        f"{result['cpu_s_without_plots']:.2f} CPU-s without plots, "
+        f"{result['cpu_s_with_plots']:.2f} CPU-s with plots: "
+        f"ratio {result['ratio']:.2f} (median of {result['repeats']}); "
+        f"writing the figures {result['cpu_s_saving_figures']:.2f} CPU-s"
     )
     print(f"map: {json.dumps(result['map'])}")
     if opts.json is not None:

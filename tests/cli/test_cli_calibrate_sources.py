@@ -456,7 +456,8 @@ def replayed(recording: Path, plate: Path) -> CalibrationResult:
 
 def test_path_figure_without_a_map_frames_every_point(replayed):
     fig = path_figure(None, {"auto": replayed}, x0=replayed.iterates[0], show_measurements=True)
-    assert len(fig.axes) == 1  # no colour bar: no map
+    # the run's (azimuth, co-elevation) and tilt angles beside them; no colour bar: no map
+    assert len(fig.axes) == 2 and fig.axes[1].get_xlabel() == "tilt_x [deg]"
     ax = fig.axes[0]
     (x_lo, x_hi), (y_lo, y_hi) = ax.get_xlim(), ax.get_ylim()
     points = np.vstack([replayed.points, replayed.iterates])

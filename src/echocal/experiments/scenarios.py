@@ -247,16 +247,10 @@ def _run_table(
         paths = path_figure(
             cmap,
             results,
-            x0=next(iter(starts)) if len(starts) == 1 else None,
+            x0=sorted(starts),  # one marker per initial guess (table-5 has several)
             truth=truth,
             title=f"{scenario.name} [{group}]: paths over the cost map",
         )
-        if len(starts) > 1:  # one marker per initial guess (table-5)
-            ax = paths.axes[0]
-            for x0 in starts:
-                ax.plot(*x0, marker="o", mfc="none", mec="w", ms=9, mew=1.4, ls="")
-            ax.plot([], [], marker="o", mfc="none", mec="k", ls="", label="initial guesses")
-            ax.legend(fontsize=7, loc="upper right", framealpha=0.6)
         slug = _slug(group)
         figures[f"convergence [{group}]"] = write_figure(conv, out, f"convergence_{slug}")
         figures[f"paths [{group}]"] = write_figure(paths, out, f"paths_{slug}")

@@ -8,7 +8,8 @@ notebook shows them inline when the cell ends.  :func:`save_figure` writes them 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from matplotlib.figure import Figure
@@ -67,12 +68,39 @@ def save_figure(
     """
     base = Path(path)
     written = []
-    for fmt in _check_formats(formats):
-        target = base.with_suffix("." + fmt.lstrip("."))
-        with atomic_path(target) as tmp:
-            fig.savefig(tmp, format=fmt.lstrip("."), dpi=dpi, bbox_inches="tight")
-        written.append(target)
+    chosen = _check_formats(formats)
+    with _laid_out(fig) as crop:
+        for fmt in chosen:
+            target = base.with_suffix("." + fmt.lstrip("."))
+            with atomic_path(target) as tmp:
+                fig.savefig(tmp, format=fmt.lstrip("."), dpi=dpi, bbox_inches=crop)
+            written.append(target)
     return written
+
+
+@contextmanager
+def _laid_out(fig: Figure) -> Iterator[str | None]:
+    """Lay ``fig`` out once for all the files written inside the ``with``; yields the
+    ``bbox_inches`` to write them with.
+
+    A figure with a constrained layout is laid out here, once, and written with its layout
+    engine off and its own size (the constrained layout already fits every decoration in
+    the figure): matplotlib's ``savefig`` would otherwise, per file, draw the figure once
+    without rendering to lay it out and again to render it, plus a tight-bbox pass — about
+    twice the drawing.  Any other figure is written as before, cropped to its contents
+    (``"tight"``).  The layout engine is restored afterwards."""
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    engine = fig.get_layout_engine()
+    if not isinstance(engine, ConstrainedLayoutEngine) or not fig.axes:
+        yield "tight"
+        return
+    engine.execute(fig)
+    fig.set_layout_engine(None)  # not "none": savefig lays out any engine again
+    try:
+        yield None
+    finally:
+        fig.set_layout_engine(engine)
 
 
 def __getattr__(name: str):  # lazy: importing echocal.plots stays cheap

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["COLORS", "LINE_STYLES", "MARKERS", "series_style"]
+__all__ = ["COLORS", "FEW_TICKS", "LINE_STYLES", "MARKERS", "few_ticks", "series_style"]
 
 COLORS = (
     "#0072B2",  # blue
@@ -39,3 +39,15 @@ def series_style(k: int) -> dict[str, Any]:
         "ls": LINE_STYLES[k % len(LINE_STYLES)],
         "marker": MARKERS[k % len(MARKERS)],
     }
+
+
+FEW_TICKS = 5
+"""At most this many intervals between major ticks on a figure's busy axes: every tick is a
+label, a mark and a grid line to lay out and draw, most of a saved figure's cost."""
+
+
+def few_ticks(*axes: Any, nbins: int = FEW_TICKS) -> None:
+    """At most ``nbins`` intervals between the major ticks of each of ``axes`` (both of its
+    axes; a colorbar's axes too), at matplotlib's usual round steps."""
+    for ax in axes:
+        ax.locator_params(nbins=nbins)

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike
 
 from echocal.constants import ECHO_THRESHOLD
 from echocal.plots._figure import new_figure
+from echocal.plots._style import few_ticks
 from echocal.signal.gates import TimeGate
 from echocal.signal.processing import Gate, envelope, time_of_flight
 from echocal.signal.pulses import Pulse
@@ -99,6 +100,7 @@ def plot_ascan(
         if tof is not None:
             ax.axvline(tof * 1e6, color="C3", ls="-.", lw=1, label=f"τ = {tof * 1e6:.4f} µs")
         ax.grid(alpha=0.3)
+        few_ticks(ax)
         ax.set_ylabel("amplitude [a.u.]")
         if k == 0:
             ax.set_xlim(t_us[0], t_us[-1])

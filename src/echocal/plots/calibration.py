@@ -22,12 +22,13 @@ from numpy.typing import ArrayLike, NDArray
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
 from echocal.plots._figure import new_figure
-from echocal.plots._style import series_style
+from echocal.plots._style import FEW_TICKS, few_ticks, series_style
 
 __all__ = [
     "MAP_DB_FLOOR",
     "CostMap",
     "convergence_figure",
+    "map_views",
     "measured_convergence_figure",
     "path_figure",
     "relative_db",
@@ -41,7 +42,7 @@ def _integer_ticks(*axes: Any) -> None:
     from matplotlib.ticker import MaxNLocator
 
     for ax in axes:
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=FEW_TICKS + 1, integer=True))
 
 
 def convergence_figure(
@@ -202,16 +203,37 @@ _ESTIMATE: dict[str, Any] = {
 """How a run's final estimate is marked on a path figure."""
 
 
+def map_views(parameterization: str) -> tuple[str, ...]:
+    """The parameterizations a map of a run in ``parameterization`` is drawn in, one panel
+    each: ``("tilt",)`` for a tilt run (no pole); ``("azimuth-coelevation", "tilt")`` for
+    an (azimuth, co-elevation) run — its own angles, and the tilts beside them, where a
+    fraction of a degree near the pole (co-elevation 0, where the azimuth turns freely)
+    stays a fraction of a degree."""
+    from echocal._validate import one_of
+    from echocal.calibrate.objective import PARAMETERIZATIONS
+
+    one_of("parameterization", parameterization, PARAMETERIZATIONS)
+    return ("tilt",) if parameterization == "tilt" else (parameterization, "tilt")
+
+
+_VIEW_TITLES = {
+    "tilt": "in tilt angles (no pole)",
+    "azimuth-coelevation": "in azimuth, co-elevation (the run's angles)",
+}
+
+
 def path_figure(
     cost_map: CostMap | None,
     runs: Mapping[str, CalibrationResult],
     *,
-    x0: Sequence[float] | None = None,
+    x0: ArrayLike | None = None,
     truth: ArrayLike | None = None,
     truth_label: str = "true solution",
     title: str | None = None,
     db_floor: float = MAP_DB_FLOOR,
     show_measurements: bool = False,
+    parameterization: str | None = None,
+    tilt_view: bool = True,
 ) -> Figure:
     """Paths of the iterates over the cost-function heat map, x0 and truth marked.
 
@@ -220,25 +242,124 @@ def path_figure(
     acquisition's search pattern, finite-difference stencils).  NaN in the map
     (orientations it does not cover) is left blank.  ``cost_map=None`` draws the paths
     alone (a rig: no map is known), framed to every point drawn.  ``truth_label`` names
-    the ``truth`` marker (e.g. a recording's best grid pose).
+    the ``truth`` marker (e.g. a recording's best grid pose).  ``x0`` [deg]: one initial
+    guess, shape (2,), or several, shape (k, 2).
+
+    Every angle given (the map's axes, the runs, ``x0``, ``truth``) is in
+    ``parameterization`` (default: the map's, named by its axes, else the first run's).
+    A tilt figure has one panel; an (azimuth, co-elevation) one has two
+    (:func:`map_views`): the run's own angles (``fig.axes[0]``), and, unless
+    ``tilt_view`` is False, everything converted to tilt angles beside it (the map on its
+    grid's nodes, converted), under one colour bar.
     """
-    fig = new_figure(figsize=(6.8, 5.9 + 0.2 * ((len(runs) + 4) // 3)), constrained_layout=True)
-    ax = fig.add_subplot()
-    on_map = cost_map is not None
-    if cost_map is not None:
-        values = relative_db(cost_map.values.T, db_floor)
-        # smooth shading between grid points (a coarse wave-model map stays a picture of
-        # the lobe, not a mosaic); flat cells where some are missing
-        mesh = ax.pcolormesh(
-            cost_map.a,
-            cost_map.b,
-            np.ma.masked_invalid(values),
-            shading="gouraud" if np.all(np.isfinite(values)) else "auto",
-            cmap="viridis",
-        )
-        fig.colorbar(mesh, ax=ax, label="metric / max [dB]")
-    else:
+    frame = _frame(cost_map, runs, parameterization)
+    views = (frame,) if frame is None or not tilt_view else map_views(frame)
+    wide = len(views) > 1
+    tall = 5.9 + 0.2 * ((len(runs) + 4) // 3)
+    fig = new_figure(figsize=(11.6 if wide else 6.8, tall), constrained_layout=True)
+    axes = fig.subplots(1, len(views), squeeze=False)[0]
+    values = None if cost_map is None else relative_db(cost_map.values.T, db_floor)
+    if cost_map is None:
         relative_db([1.0], db_floor)  # the same check of db_floor with or without a map
+    mesh = None
+    for ax, view in zip(axes, views, strict=True):
+        if cost_map is not None and values is not None:
+            mesh = _draw_map(ax, cost_map, values, frame, view)
+        _draw_paths(ax, runs, x0, truth, truth_label, show_measurements, cost_map, frame, view)
+        few_ticks(ax)
+        if wide:
+            ax.set_title(_VIEW_TITLES.get(str(view), str(view)), fontsize=9)
+    if mesh is not None:
+        few_ticks(fig.colorbar(mesh, ax=list(axes), label="metric / max [dB]").ax)
+    # below the map, never over a path (a map is light where the paths go)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(3, len(labels)), fontsize=8)
+    if title:
+        (fig.suptitle if wide else axes[0].set_title)(title)
+    return fig
+
+
+def _frame(
+    cost_map: CostMap | None, runs: Mapping[str, CalibrationResult], given: str | None
+) -> str | None:
+    """The parameterization of a path figure's angles: ``given``, else the map's (by its
+    axes' names), else the first run's; None when nothing names one (a map whose axes
+    have other names: drawn as given, in one panel)."""
+    from echocal._validate import one_of
+    from echocal.calibrate.objective import PARAMETERIZATIONS
+
+    if given is not None:
+        return one_of("parameterization", given, PARAMETERIZATIONS)
+    by_names = {names: key for key, names in PARAMETERIZATIONS.items()}
+    if cost_map is not None:
+        a, b = cost_map.names
+        return by_names.get((str(a), str(b)))
+    first = next(iter(runs.values()), None)
+    return None if first is None else first.parameterization
+
+
+def _to_view(points: ArrayLike, frame: str | None, view: str | None) -> FloatArray:
+    """[deg] orientations ``points`` (..., 2) in ``frame``, converted to ``view``."""
+    p = np.asarray(points, dtype=np.float64)
+    if frame is None or view is None or frame == view:
+        return p
+    from echocal.geometry import convert_angles
+
+    a, b = convert_angles(p[..., 0], p[..., 1], frame, view)
+    return np.stack([np.asarray(a), np.asarray(b)], axis=-1)
+
+
+def _view_names(cost_map: CostMap | None, runs: Mapping[str, Any], view: str | None):
+    """The names of the axes of a panel in ``view``."""
+    from echocal.calibrate.objective import PARAMETERIZATIONS
+
+    if view is not None:
+        return PARAMETERIZATIONS[view]
+    if cost_map is not None:
+        return cost_map.names
+    first = next(iter(runs.values()), None)
+    return first.names if first is not None else ("a", "b")
+
+
+def _draw_map(ax: Any, cost_map: CostMap, values: FloatArray, frame: str | None, view: str | None):
+    """The map (``values``: dB, shape (n_b, n_a)) on ``ax`` in ``view``: on its own grid,
+    or on its grid's nodes converted from ``frame`` (a curvilinear mesh); framed to it."""
+    smooth = bool(np.all(np.isfinite(values)))
+    # smooth shading between grid points (a coarse wave-model map stays a picture of
+    # the lobe, not a mosaic); flat cells where some are missing
+    shading = "gouraud" if smooth else "auto"
+    if frame is None or view is None or frame == view:
+        x, y = cost_map.a, cost_map.b
+    else:
+        nodes = np.stack(np.meshgrid(cost_map.a, cost_map.b, indexing="xy"), axis=-1)
+        x, y = np.moveaxis(_to_view(nodes, frame, view), -1, 0)
+        shading = "gouraud" if smooth else "nearest"
+    mesh = ax.pcolormesh(x, y, np.ma.masked_invalid(values), shading=shading, cmap="viridis")
+    if view == "tilt" and frame != view:
+        # a degree of tilt is a degree each way: the panel keeps its size and shows the
+        # converted grid whole, with blank room beside it (limits follow the data)
+        ax.set_aspect("equal", adjustable="datalim")
+    else:
+        ax.set_xlim(float(np.min(x)), float(np.max(x)))
+        ax.set_ylim(float(np.min(y)), float(np.max(y)))
+    return mesh
+
+
+def _draw_paths(
+    ax: Any,
+    runs: Mapping[str, CalibrationResult],
+    x0: ArrayLike | None,
+    truth: ArrayLike | None,
+    truth_label: str,
+    show_measurements: bool,
+    cost_map: CostMap | None,
+    frame: str | None,
+    view: str | None,
+) -> None:
+    """The runs' paths, estimates (and measured poses), ``x0`` and ``truth`` on ``ax``,
+    converted from ``frame`` to ``view``; the axes' labels; a panel without a map is
+    framed to every point drawn."""
+    on_map = cost_map is not None
     # on a map every path has a thin dark outline, so it shows on the bright lobe as on
     # the dark floor; the markers have dark edges and white faces, visible on both
     dots = "0.85" if on_map else "0.6"
@@ -246,51 +367,43 @@ def path_figure(
     drawn = []
     for i, (name, result) in enumerate(runs.items()):
         if show_measurements and len(result.points):
-            ax.plot(*result.points.T, ls="", marker=".", ms=2.5, color=dots, alpha=0.8)
-            drawn.append(result.points)
-        path = result.iterates
+            points = _to_view(result.points, frame, view)
+            ax.plot(*points.T, ls="", marker=".", ms=2.5, color=dots, alpha=0.8)
+            drawn.append(points)
+        path = _to_view(result.iterates, frame, view)
         # colour, line style and marker together: paths differ for colour-blind readers
         style = series_style(i) | {"ms": 4.5, "lw": 1.3, "mec": "0.1", "mew": 0.6}
         style["markevery"] = max(1, len(path) // 15)
         if on_map and style["color"] == "#000000":
             style["color"] = "w"  # black would vanish into the map's dark floor
         ax.plot(path[:, 0], path[:, 1], label=name, path_effects=halo, **style)
-        ax.plot(*result.x, **_ESTIMATE)
-        drawn += [path, np.asarray(result.x, dtype=float)[None, :]]
+        estimate = _to_view(result.x, frame, view)
+        ax.plot(*estimate, **_ESTIMATE)
+        drawn += [path, estimate[None, :]]
     if show_measurements:
         ax.plot([], [], ls="", marker=".", color=dots, label="measured poses")
     if runs:
         ax.plot([], [], label="final estimate", **_ESTIMATE)
     if x0 is not None:
+        starts = _to_view(np.reshape(np.asarray(x0, dtype=np.float64), (-1, 2)), frame, view)
         ax.plot(
-            *x0, marker="o", mfc="w", mec="k", ms=9, mew=1.2, ls="", zorder=1.9,
-            label="initial guess",
+            *starts.T, marker="o", mfc="w", mec="k", ms=9, mew=1.2, ls="", zorder=1.9,
+            label="initial guess" if len(starts) == 1 else "initial guesses",
         )  # fmt: skip
-        drawn.append(np.asarray(x0, dtype=float)[None, :])
+        drawn.append(starts)
     if truth is not None:
-        t = np.asarray(truth, dtype=float)
+        t = _to_view(truth, frame, view)
         star: dict[str, Any] = {"marker": "*", "color": "r", "mec": "k", "mew": 0.6, "ms": 14}
         ax.plot(t[0], t[1], ls="", label=truth_label, **star)
         drawn.append(t[None, :])
-    if cost_map is not None:
-        ax.set_xlim(cost_map.a[0], cost_map.a[-1])
-        ax.set_ylim(cost_map.b[0], cost_map.b[-1])
-        names = cost_map.names
-    else:
+    if not on_map:
         if drawn:  # frame every point drawn, with a margin (at least 0.5 deg)
             points = np.vstack(drawn)
             low, high = points.min(axis=0), points.max(axis=0)
             pad = np.maximum(0.08 * (high - low), 0.5)
             ax.set_xlim(low[0] - pad[0], high[0] + pad[0])
             ax.set_ylim(low[1] - pad[1], high[1] + pad[1])
-        first = next(iter(runs.values()), None)
-        names = first.names if first is not None else ("a", "b")
         ax.grid(alpha=0.3)
+    names = _view_names(cost_map, runs, view)
     ax.set_xlabel(f"{names[0]} [deg]")
     ax.set_ylabel(f"{names[1]} [deg]")
-    # below the map, never over a path (a map is light where the paths go)
-    handles, labels = ax.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=min(3, len(labels)), fontsize=8)
-    if title:
-        ax.set_title(title)
-    return fig
