@@ -108,6 +108,37 @@ def test_an_azimuth_coelevation_run_is_drawn_in_its_angles_and_in_tilts(azcoel_r
     assert tilt.get_aspect() == 1.0  # a degree of tilt is a degree either way
 
 
+def test_a_map_with_blank_cells_is_drawn_in_tilts_between_converted_edges(azcoel_run):
+    # a lobe-profile map is blank beyond its reach: flat cells between the grid's cell
+    # edges converted (matplotlib cannot infer a curved grid's edges, and warns when asked)
+    import warnings
+
+    result, cmap, truth = azcoel_run
+    values = np.array(cmap.values, dtype=np.float64)
+    values[:, :3] = np.nan
+    blank = CostMap(cmap.a, cmap.b, values, cmap.names)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = path_figure(blank, {"run": result}, truth=truth)
+    tilt_mesh = fig.axes[1].collections[0]
+    step_a, step_b = np.diff(cmap.a)[0], np.diff(cmap.b)[0]
+    a_edges = np.r_[cmap.a - step_a / 2, cmap.a[-1] + step_a / 2]
+    b_edges = np.r_[cmap.b - step_b / 2, cmap.b[-1] + step_b / 2]
+    edges = tilts(*np.meshgrid(a_edges, b_edges, indexing="xy"))
+    np.testing.assert_allclose(tilt_mesh.get_coordinates(), edges, atol=1e-9)
+    # the panel frames the map and the paths (with small margins), not a mesh of guessed
+    # cells: every point drawn is inside, and the frame is at most 1.2x their span + 1 deg
+    # along one axis (equal aspect widens the other to the panel's shape)
+    tilt = fig.axes[1]
+    drawn = np.vstack([np.c_[line.get_xdata(), line.get_ydata()] for line in tilt.lines])
+    # the drawn cells' corners: co-elevation rows 3 on (rows 0-2 are blank)
+    drawn = np.vstack([drawn, tilt_mesh.get_coordinates()[3:].reshape(-1, 2)])
+    for limits, values in ((tilt.get_xlim(), drawn[:, 0]), (tilt.get_ylim(), drawn[:, 1])):
+        assert limits[0] <= values.min() and values.max() <= limits[1]
+    spans = np.ptp([tilt.get_xlim(), tilt.get_ylim()], axis=1)
+    assert np.min(spans - 1.2 * np.ptp(drawn, axis=0)) <= 1.0
+
+
 def test_near_the_pole_the_tilt_panel_shows_the_path_at_its_true_size(azcoel_run):
     # the issue this answers: near the pole a fraction of a degree of beam spans tens of
     # degrees of azimuth; the tilt panel draws the path at its size in beam angle

@@ -331,18 +331,38 @@ def _draw_map(ax: Any, cost_map: CostMap, values: FloatArray, frame: str | None,
     if frame is None or view is None or frame == view:
         x, y = cost_map.a, cost_map.b
     else:
-        nodes = np.stack(np.meshgrid(cost_map.a, cost_map.b, indexing="xy"), axis=-1)
+        # a curvilinear mesh: smooth shading on the grid's nodes converted, or flat cells
+        # between its cell edges converted (matplotlib cannot infer a curved grid's edges)
+        a, b = (cost_map.a, cost_map.b) if smooth else (_edges(cost_map.a), _edges(cost_map.b))
+        nodes = np.stack(np.meshgrid(a, b, indexing="xy"), axis=-1)
         x, y = np.moveaxis(_to_view(nodes, frame, view), -1, 0)
-        shading = "gouraud" if smooth else "nearest"
+        shading = "gouraud" if smooth else "flat"
     mesh = ax.pcolormesh(x, y, np.ma.masked_invalid(values), shading=shading, cmap="viridis")
+    # framed to the map's drawn cells (a lobe-profile map is blank beyond its reach): the
+    # corners of every finite cell, in the view; the paths widen it (_draw_paths)
+    edges = np.stack(np.meshgrid(_edges(cost_map.a), _edges(cost_map.b), indexing="xy"), -1)
+    corners = _to_view(edges, frame, view)
+    finite = np.isfinite(values) if np.any(np.isfinite(values)) else np.ones(values.shape, bool)
+    shown = np.vstack(
+        [corners[i : i + finite.shape[0], j : j + finite.shape[1]][finite]
+         for i in (0, 1) for j in (0, 1)]
+    )  # fmt: skip
+    ax.set_xlim(float(np.min(shown[:, 0])), float(np.max(shown[:, 0])))
+    ax.set_ylim(float(np.min(shown[:, 1])), float(np.max(shown[:, 1])))
     if view == "tilt" and frame != view:
-        # a degree of tilt is a degree each way: the panel keeps its size and shows the
-        # converted grid whole, with blank room beside it (limits follow the data)
+        # a degree of tilt is a degree each way: the panel keeps its size, the limits grow
         ax.set_aspect("equal", adjustable="datalim")
-    else:
-        ax.set_xlim(float(np.min(x)), float(np.max(x)))
-        ax.set_ylim(float(np.min(y)), float(np.max(y)))
     return mesh
+
+
+def _edges(centres: FloatArray) -> FloatArray:
+    """The cell edges of a monotonic grid of ``centres`` (n,), shape (n + 1,): midpoints
+    inside, half a step beyond each end (one cell of width 1 for a single centre)."""
+    c = np.asarray(centres, dtype=np.float64)
+    if c.size == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[2.0 * c[0] - mid[0]], mid, [2.0 * c[-1] - mid[-1]]])
 
 
 def _draw_paths(
@@ -396,13 +416,18 @@ def _draw_paths(
         star: dict[str, Any] = {"marker": "*", "color": "r", "mec": "k", "mew": 0.6, "ms": 14}
         ax.plot(t[0], t[1], ls="", label=truth_label, **star)
         drawn.append(t[None, :])
+    if drawn:  # frame every point drawn, with a margin (at least 0.5 deg), and the map
+        points = np.vstack(drawn)
+        low, high = points.min(axis=0), points.max(axis=0)
+        pad = np.maximum(0.08 * (high - low), 0.5)
+        low, high = low - pad, high + pad
+        if on_map:
+            (x_low, x_high), (y_low, y_high) = ax.get_xlim(), ax.get_ylim()
+            low = np.minimum(low, [x_low, y_low])
+            high = np.maximum(high, [x_high, y_high])
+        ax.set_xlim(low[0], high[0])
+        ax.set_ylim(low[1], high[1])
     if not on_map:
-        if drawn:  # frame every point drawn, with a margin (at least 0.5 deg)
-            points = np.vstack(drawn)
-            low, high = points.min(axis=0), points.max(axis=0)
-            pad = np.maximum(0.08 * (high - low), 0.5)
-            ax.set_xlim(low[0] - pad[0], high[0] + pad[0])
-            ax.set_ylim(low[1] - pad[1], high[1] + pad[1])
         ax.grid(alpha=0.3)
     names = _view_names(cost_map, runs, view)
     ax.set_xlabel(f"{names[0]} [deg]")
