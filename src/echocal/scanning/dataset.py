@@ -45,6 +45,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
+from echocal.angle_columns import record_angles
 from echocal.geometry import convert_angles, orientation_normal
 from echocal.netcdf import NetcdfKind
 from echocal.scanning.grid import ScanGrid
@@ -216,7 +217,7 @@ def surface_dataset(
         warm[iy, ix] = bool(rec.get("warm", False))
         snr[iy, ix] = rec["snr"] if rec["snr"] is not None else np.nan
         if rec["status"] == 0:
-            a[iy, ix], b[iy, ix], tof[iy, ix] = rec["a"], rec["b"], rec["tof"]
+            (a[iy, ix], b[iy, ix]), tof[iy, ix] = record_angles(rec, parameterization), rec["tof"]
     az, coel = _convert(a, b, parameterization, "azimuth-coelevation")
     # canonical (azimuth, co-elevation): co-elevation >= 0
     flip = coel < 0
