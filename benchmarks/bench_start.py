@@ -9,10 +9,12 @@ Run from the repository root::
 Each command runs as a child process (``python -m echocal ...``, this checkout's sources
 first on the path) in a temporary folder, after one untimed run that fills numba's
 on-disk cache, so the numbers are those of a *second* call.  A child's CPU time is the
-growth of ``resource.getrusage(RUSAGE_CHILDREN)`` (user + sys) across its run: it does
-not depend on how busy the machine is, unlike wall time.  The reference row is
-``python -c pass`` (the interpreter alone), measured in the same process; the table
-gives the median CPU seconds and the ratio to that reference.
+growth of ``resource.getrusage(RUSAGE_CHILDREN)`` (user + sys) across its run: it depends
+much less on how busy the machine is than wall time.  The children may write bytecode
+(``PYTHONDONTWRITEBYTECODE`` is removed from their environment), as an installed package
+has: without ``.pyc`` files every call compiles echocal's hundred modules again.  The
+reference row is ``python -c pass`` (the interpreter alone), measured in the same process;
+the table gives the median CPU seconds and the ratio to that reference.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ def child_cpu(args: list[str], cwd: str, src: Path) -> float:
     """[s] user + sys CPU time of one ``python ARGS`` child run in ``cwd``, ``src`` first
     on its path."""
     env = dict(os.environ, PYTHONPATH=str(src))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     subprocess.run([sys.executable, *args], cwd=cwd, env=env, check=True, capture_output=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
