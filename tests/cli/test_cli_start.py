@@ -5,10 +5,10 @@ A module-level import of the measurement package from a CLI module once made eve
 command start by importing scipy.signal and the calibration methods (3.1 CPU-s instead of
 0.8 for `echocal info`); the measurement package's eager ``__init__`` made the simulator
 import the calibration methods, and module-level scipy imports made it import
-scipy.signal, scipy.stats and scipy.optimize (`echocal simulate` 4.7 -> 3.1 CPU-s), and
+scipy.signal, scipy.stats and scipy.optimize (`echocal simulate` 3.9 -> 3.0 CPU-s), and
 `echocal lobe`'s module-level import of the echo models made every command import
-scipy.special (`echocal info` 0.78 -> 0.5 CPU-s; benchmarks/bench_start.py).  These tests
-guard the laziness, not a time.
+scipy.special (`echocal info` 0.69 -> 0.44 CPU-s with the above; benchmarks/bench_start.py).
+These tests guard the laziness, not a time.
 """
 
 from __future__ import annotations
