@@ -26,6 +26,7 @@ import datetime as _dt
 import os
 import sys
 from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,7 @@ __all__ = [
     "CONVENTIONS",
     "ENCODING",
     "UDUNITS",
+    "NetcdfKind",
     "format_version",
     "open_netcdf",
     "schema_problems",
@@ -250,6 +252,61 @@ def format_version(dataset: Any, kind: str, *, legacy_key: str | None = None) ->
     if name != kind or not version.isdigit():
         return 0
     return int(version)
+
+
+@dataclass(frozen=True)
+class NetcdfKind:
+    """One kind of echocal NetCDF file (a surface scan, a position scan): written as
+    ``"<kind>/<version>"`` through :func:`write_netcdf`, read back checked.
+
+    Attributes
+    ----------
+    kind : the ``echocal_format`` kind, ``"position-scan"``.
+    version : the version written (and read).
+    what : the kind in messages, ``"position scan"``.
+    title : the CF ``title`` of every file of this kind.
+    older : further versions :meth:`load` accepts (the caller upgrades them).
+    legacy_key : an older global attribute that held the format (see :func:`format_version`).
+    hint : appended to the refusal of a file of another kind, ``"; import it first"``.
+    """
+
+    kind: str
+    version: int
+    what: str
+    title: str
+    older: tuple[int, ...] = ()
+    legacy_key: str | None = None
+    hint: str = ""
+
+    @property
+    def fmt(self) -> str:
+        """The ``echocal_format`` written: ``"<kind>/<version>"``."""
+        return f"{self.kind}/{self.version}"
+
+    def save(self, dataset: Any, path: str | os.PathLike[str], *, source: str) -> Path:
+        """Write ``dataset`` to ``path`` as this kind (compressed, checksummed), atomically;
+        ``source``: the CF ``source`` (what produced the data).  Returns the path."""
+        return write_netcdf(dataset, path, fmt=self.fmt, title=self.title, source=source)
+
+    def load(self, path: str | os.PathLike[str]) -> tuple[Any, int]:
+        """``(dataset, version)``: the whole file at ``path``, in memory and closed.
+
+        Raises
+        ------
+        DataFileError : missing, unreadable, a failed checksum, or a file of another kind
+            or version (neither :attr:`version` nor one of :attr:`older`).
+        """
+        try:
+            with open_netcdf(path, what=self.what) as ds:
+                data = ds.load()
+        except (OSError, ValueError) as exc:
+            raise DataFileError(f"cannot read {self.what} {str(path)!r}: {exc}") from None
+        version = format_version(data, self.kind, legacy_key=self.legacy_key)
+        if version != self.version and version not in self.older:
+            raise DataFileError(
+                f"{path}: not a {self.what} (format {self.fmt!r} expected{self.hint})"
+            )
+        return data, version
 
 
 def schema_problems(path: str | os.PathLike[str]) -> list[str]:

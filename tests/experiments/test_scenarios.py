@@ -9,12 +9,14 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from echocal.angle_columns import angle_columns
 from echocal.cli import app
 from echocal.errors import DataFileError, UnknownNameError
 from echocal.experiments import _findings as fnd
 from echocal.experiments._ascan import facet_distance
 from echocal.experiments._runs import oscillation_count
 from echocal.experiments.scenarios import get_scenario, run_scenario, scenario_names
+from echocal.experiments.wall_scenario import PARAMETERIZATION
 
 NAMES = scenario_names()
 
@@ -163,7 +165,7 @@ def test_wall_echoes_compares_front_and_back_wall_calibration(results):
     runs = result.runs
     assert set(runs["group"]) == {"front-wall gate", "back-wall gate"}
     # the same starts and seeds in both gates
-    for column in ("seed", "x0_a_deg", "x0_b_deg"):
+    for column in ("seed", *angle_columns(PARAMETERIZATION, "x0")):
         front = runs[runs["group"] == "front-wall gate"][column].tolist()
         assert front == runs[runs["group"] == "back-wall gate"][column].tolist()
     # each run judged against its own gated optimum (normal incidence on the level plate)

@@ -228,7 +228,10 @@ def test_an_offset_inside_the_bounds_passes_and_runs_from_the_drawn_start():
     row, _ = run_case(expand(spec)[2])
     assert row["status"] >= 0, row["message"]
     # the run starts at the drawn distance from the truth (not clipped), 1e-9 deg: round-off
-    distance = np.hypot(row["x0_a"] - row["truth_a"], row["x0_b"] - row["truth_b"])
+    distance = np.hypot(
+        row["x0_tilt_x_deg"] - row["truth_tilt_x_deg"],
+        row["x0_tilt_y_deg"] - row["truth_tilt_y_deg"],
+    )
     assert 20 - 1e-9 <= distance <= 26 + 1e-9
 
 

@@ -61,11 +61,12 @@ def test_run_is_pure_and_consistent():
     assert row["status"] >= 0, row["message"]
     assert len(history) == row["n_measurements"] <= TINY["budget"]
     assert list(history["index"]) == list(range(len(history)))
-    truth = np.array([row["truth_a"], row["truth_b"]])
+    truth = np.array([row["truth_tilt_x_deg"], row["truth_tilt_y_deg"]])
     # the random start lies 1..3 deg from the truth (tilts: deg of the parameterization)
-    assert 1.0 <= np.hypot(row["x0_a"] - truth[0], row["x0_b"] - truth[1]) <= 3.0
+    start = [row["x0_tilt_x_deg"], row["x0_tilt_y_deg"]]
+    assert 1.0 <= np.hypot(start[0] - truth[0], start[1] - truth[1]) <= 3.0
     # the stored error is the beam angle between estimate and truth, recomputed here
-    estimate = [row["estimate_a"], row["estimate_b"]]
+    estimate = [row["estimate_tilt_x_deg"], row["estimate_tilt_y_deg"]]
     assert row["error_deg"] == pytest.approx(float(angular_error(estimate, truth, "tilt")))
     assert row["success"] == (row["error_deg"] <= TINY["tolerance"])
     if row["success"]:

@@ -21,8 +21,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage
-import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_array, finite_float, in_range, nonnegative_float
@@ -91,6 +89,8 @@ def ar_burn_in(coefficients: tuple[float, ...]) -> int:
 def _ar_gain(coefficients: tuple[float, ...]) -> float:
     """The AR filter's stationary output standard deviation for unit white input:
     √Σh[k]² over its impulse response h."""
+    import scipy.signal  # here, not at module level: ~1 CPU-s a CLI start need not pay
+
     impulse = np.zeros(ar_burn_in(coefficients) + 1)
     impulse[0] = 1.0
     h = scipy.signal.lfilter([1.0], np.concatenate([[1.0], -np.asarray(coefficients)]), impulse)
@@ -103,6 +103,8 @@ def ar_noise(
     """Stationary AR noise of unit variance, shape ``shape`` (time on the last axis); white
     standard normal noise for no coefficients.  Each row starts from the filter's
     stationary state (a burn-in of :func:`ar_burn_in` samples is drawn and dropped)."""
+    import scipy.signal  # here, not at module level: ~1 CPU-s a CLI start need not pay
+
     if not coefficients:
         return rng.standard_normal(shape)
     burn = ar_burn_in(coefficients)
@@ -193,6 +195,8 @@ class BenchReceiver:
         """A-scans ``(P, n)`` recorded at ``speed_ratio`` × c₀ and triggered ``delay`` [s]
         late, ``(P,)`` each: ``y(t) = x((t − delay)·ratio)``, resampled by cubic splines
         (zero outside the recording; one row at a time, rows never mix)."""
+        import scipy.ndimage  # here, not at module level: most runs never warp
+
         times = start + np.arange(samples.shape[-1]) / fs
         source = ((times[None, :] - delay[:, None]) * speed_ratio[:, None] - start) * fs
         out = np.empty_like(samples)

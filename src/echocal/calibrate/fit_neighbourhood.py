@@ -21,7 +21,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.stats import chi2
 
 from echocal.calibrate._fd import FloatArray
 from echocal.calibrate.local_model import QuadraticModel, fit_quadratic
@@ -89,6 +88,8 @@ class FitNeighbourhood:
         if sig is None or n <= _LACK_OF_FIT_MIN:
             return False
         resid = (y_all[local] - model.energy(self._x[local])) / sig
+        from scipy.stats import chi2  # lazy: scipy.stats costs a CLI start ~1 CPU-s
+
         return bool(np.sum(resid**2) > chi2.ppf(_LACK_OF_FIT, n - 6))
 
     def _fit_around(self, center: FloatArray, y_all: FloatArray) -> QuadraticModel | None:

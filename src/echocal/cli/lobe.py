@@ -12,7 +12,6 @@ import typer
 from echocal.cli._common import output, write_json
 from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._setup_option import SETUP_HELP, SPECIMEN_HELP, resolve_setup
-from echocal.echo import echo_model_names
 from echocal.errors import EchocalValueError
 from echocal.units import parse_quantity
 
@@ -66,6 +65,7 @@ def register(app: typer.Typer) -> None:
         Prints the −6 dB half-width; with --out, plots the lobe in dB beside the flat
         piston's analytic deep-near-field and far-field limits.
         """
+        from echocal.echo import echo_model_names
         from echocal.lobe import echo_lobe
 
         virtual = resolve_setup(setup, specimen=specimen, snr="none", seed=0)

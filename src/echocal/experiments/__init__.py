@@ -15,7 +15,13 @@ full module path; this package imports only the sweep machinery).
 """
 
 from echocal.experiments.execution import SweepResults, load_results, run_sweep
-from echocal.experiments.runner import HISTORY_COLUMNS, RUN_COLUMNS, run_case
+from echocal.experiments.runner import (
+    HISTORY_COLUMNS,
+    RUN_COLUMNS,
+    history_columns,
+    run_case,
+    run_columns,
+)
 from echocal.experiments.summary import summarize
 from echocal.experiments.sweep import (
     MethodSpec,
@@ -39,9 +45,11 @@ __all__ = [
     "X0Spec",
     "builtin_sweep_names",
     "expand",
+    "history_columns",
     "load_results",
     "load_sweep",
     "run_case",
+    "run_columns",
     "run_problems",
     "run_sweep",
     "spec_hash",

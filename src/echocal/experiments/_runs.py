@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from echocal.angle_columns import angle_columns
 from echocal.calibrate import calibrate
 from echocal.evaluation import RunEvaluation, evaluate_run
 from echocal.measurement.objective import SourceObjective
@@ -164,8 +165,13 @@ class Bench:
             "parameter": config.parameter,
             "value": str(config.value),
             "snr_db": config.snr_db,
-            "x0_a_deg": float(config.x0[0]),
-            "x0_b_deg": float(config.x0[1]),
+            **dict(
+                zip(
+                    angle_columns(self.parameterization, "x0"),
+                    (float(v) for v in config.x0),
+                    strict=True,
+                )
+            ),
             "seed": seed,
             "beyond_thesis": config.beyond_thesis,
             **row,

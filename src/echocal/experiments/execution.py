@@ -78,12 +78,13 @@ class SweepResults:
 
     @cached_property
     def runs(self) -> pd.DataFrame:
-        """One row per finished run (columns: :data:`~echocal.experiments.runner.RUN_COLUMNS`)."""
+        """One row per finished run (columns: :func:`~echocal.experiments.runner.run_columns`)."""
         return storage.read_runs(self.out_dir)
 
     @cached_property
     def history(self) -> pd.DataFrame:
-        """Every measurement of every finished run (case_id, index, a, b, value)."""
+        """Every measurement of every finished run (case_id, index, the two angles [deg]
+        named for the sweep's parameterization, value)."""
         return storage.read_history(self.out_dir)
 
     @property

@@ -22,11 +22,20 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from echocal.angle_columns import ANGLE_ROLES, angle_columns
 from echocal.errors import EchocalError
 from echocal.experiments.sweep import RunCase
 from echocal.experiments.sweep_values import _thawed, offset_start
 
-__all__ = ["HISTORY_COLUMNS", "RUN_COLUMNS", "history_frame", "run_case", "runs_frame"]
+__all__ = [
+    "HISTORY_COLUMNS",
+    "RUN_COLUMNS",
+    "history_columns",
+    "history_frame",
+    "run_case",
+    "run_columns",
+    "runs_frame",
+]
 
 RUN_COLUMNS: dict[str, str] = {
     "case_id": "object",
@@ -38,8 +47,8 @@ RUN_COLUMNS: dict[str, str] = {
     "snr_db": "float64",
     "x0_kind": "object",
     "x0_label": "object",
-    "x0_a": "float64",
-    "x0_b": "float64",
+    "x0_tilt_x_deg": "float64",
+    "x0_tilt_y_deg": "float64",
     "seed": "int64",
     "run_seed": "int64",
     "error_deg": "float64",
@@ -50,17 +59,19 @@ RUN_COLUMNS: dict[str, str] = {
     "n_iterations": "int64",
     "status": "int64",
     "message": "object",
-    "estimate_a": "float64",
-    "estimate_b": "float64",
-    "truth_a": "float64",
-    "truth_b": "float64",
+    "estimate_tilt_x_deg": "float64",
+    "estimate_tilt_y_deg": "float64",
+    "truth_tilt_x_deg": "float64",
+    "truth_tilt_y_deg": "float64",
     "tolerance": "float64",
     "wall_time": "float64",
     "warnings": "object",
 }
-"""Columns of the runs table and their pandas dtypes.
+"""Columns of the runs table of a tilt sweep and their pandas dtypes (:func:`run_columns`
+names the angles of either parameterization).
 
-Angles [deg] in the sweep's parameterization (``x0_*``, ``estimate_*``, ``truth_*``);
+Angles [deg] in the sweep's parameterization (``x0_*``, ``estimate_*``, ``truth_*``: here
+``x0_tilt_x_deg``, ``x0_tilt_y_deg``, ...);
 ``error_deg`` [deg] angle between the estimate's beam and the truth's; ``snr_db`` [dB]
 (NaN = noiseless); ``measurements_to_tol`` / ``iterations_to_tol`` (<NA> if the final
 estimate misses the tolerance); ``status`` from :data:`echocal.calibrate.STATUS_MESSAGES`,
@@ -70,28 +81,53 @@ or -1 when the run raised (``message`` holds the error); ``wall_time`` [s].
 HISTORY_COLUMNS: dict[str, str] = {
     "case_id": "object",
     "index": "int64",
-    "a": "float64",
-    "b": "float64",
+    "tilt_x_deg": "float64",
+    "tilt_y_deg": "float64",
     "value": "float64",
 }
-"""Columns of the history table: every measurement of every run, in order (``a``, ``b``
-[deg]; ``value`` the metric, NaN kept)."""
+"""Columns of the history table of a tilt sweep: every measurement of every run, in order
+(``tilt_x_deg``, ``tilt_y_deg`` [deg]; ``value`` the metric, NaN kept); :func:`history_columns`
+names the angles of either parameterization."""
+
+
+def _renamed(columns: dict[str, str], parameterization: str) -> dict[str, str]:
+    """``columns`` (a tilt sweep's) with the angles named for ``parameterization``."""
+    tilt = {
+        old: new
+        for role in (None, *ANGLE_ROLES)
+        for old, new in zip(
+            angle_columns("tilt", role), angle_columns(parameterization, role), strict=True
+        )
+    }
+    return {tilt.get(name, name): dtype for name, dtype in columns.items()}
+
+
+def run_columns(parameterization: str) -> dict[str, str]:
+    """:data:`RUN_COLUMNS` with the angles named for ``parameterization``."""
+    return _renamed(RUN_COLUMNS, parameterization)
+
+
+def history_columns(parameterization: str) -> dict[str, str]:
+    """:data:`HISTORY_COLUMNS` with the angles named for ``parameterization``."""
+    return _renamed(HISTORY_COLUMNS, parameterization)
+
 
 FAILED = -1
 """``status`` of a run that raised an error (its message is in ``message``)."""
 
 
-def runs_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
-    """Rows of :func:`run_case` as a DataFrame with the :data:`RUN_COLUMNS` dtypes."""
-    frame = pd.DataFrame(rows, columns=list(RUN_COLUMNS))
-    return frame.astype(RUN_COLUMNS)
+def runs_frame(rows: list[dict[str, Any]], parameterization: str) -> pd.DataFrame:
+    """Rows of :func:`run_case` as a DataFrame with the :func:`run_columns` dtypes."""
+    columns = run_columns(parameterization)
+    return pd.DataFrame(rows, columns=list(columns)).astype(columns)
 
 
-def history_frame(frames: list[pd.DataFrame]) -> pd.DataFrame:
-    """Concatenated history parts with the :data:`HISTORY_COLUMNS` dtypes."""
+def history_frame(frames: list[pd.DataFrame], parameterization: str) -> pd.DataFrame:
+    """Concatenated history parts with the :func:`history_columns` dtypes."""
+    columns = history_columns(parameterization)
     if not frames:
-        return pd.DataFrame(columns=list(HISTORY_COLUMNS)).astype(HISTORY_COLUMNS)
-    return pd.concat(frames, ignore_index=True).astype(HISTORY_COLUMNS)
+        return pd.DataFrame(columns=list(columns)).astype(columns)
+    return pd.concat(frames, ignore_index=True).astype(columns)
 
 
 @functools.lru_cache(maxsize=8)
@@ -138,7 +174,9 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
         "run_seed": case.run_seed,
         "tolerance": case.tolerance,
     }
-    history = history_frame([])
+    names = {role: angle_columns(case.parameterization, role) for role in ANGLE_ROLES}
+    angles = angle_columns(case.parameterization)
+    history = history_frame([], case.parameterization)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -167,7 +205,7 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
                 x0 = _random_start(case, truth, objective.bounds)
             else:
                 x0 = np.array(case.x0, dtype=np.float64)
-            row.update(x0_a=float(x0[0]), x0_b=float(x0[1]))
+            row.update(zip(names["x0"], (float(v) for v in x0), strict=True))
             result = calibrate(
                 objective,
                 case.method,
@@ -195,23 +233,21 @@ def run_case(case: RunCase) -> tuple[dict[str, Any], pd.DataFrame]:
                 n_iterations=result.n_iterations,
                 status=result.status,
                 message=result.message,
-                estimate_a=float(result.x[0]),
-                estimate_b=float(result.x[1]),
-                truth_a=float(evaluation.truth[0]),
-                truth_b=float(evaluation.truth[1]),
             )
+            row.update(zip(names["estimate"], (float(v) for v in result.x), strict=True))
+            row.update(zip(names["truth"], (float(v) for v in evaluation.truth), strict=True))
             history = history_frame(
                 [
                     pd.DataFrame(
                         {
                             "case_id": case.case_id,
                             "index": np.arange(result.n_measurements),
-                            "a": result.points[:, 0],
-                            "b": result.points[:, 1],
+                            **dict(zip(angles, result.points.T, strict=True)),
                             "value": result.values,
                         }
                     )
-                ]
+                ],
+                case.parameterization,
             )
     row["warnings"] = "\n".join(sorted({str(w.message) for w in caught}))
     row["wall_time"] = time.perf_counter() - t0
@@ -228,8 +264,4 @@ def _failed(message: str) -> dict[str, Any]:
         "n_iterations": 0,
         "status": FAILED,
         "message": message,
-        "estimate_a": np.nan,
-        "estimate_b": np.nan,
-        "truth_a": np.nan,
-        "truth_b": np.nan,
-    }
+    }  # the angle columns it lacks are NaN in runs_frame

@@ -8,6 +8,10 @@ Layout of ``OUT/``::
     runs.parquet      one row per run (consolidated at the end, in expansion order)
     history.parquet   every measurement of every run
 
+The angle columns are named for the sweep's parameterization (``tilt_x_deg``, ...:
+:mod:`echocal.angle_columns`); tables of older folders, with ``a``/``b``, are read
+with their columns renamed.
+
 A folder whose ``sweep.json`` holds another hash is refused (:func:`prepare_folder`)
 unless ``overwrite=True``, which deletes exactly these files and nothing else.
 """
@@ -23,8 +27,9 @@ from typing import Any
 
 import pandas as pd
 
+from echocal.angle_columns import named_angles
 from echocal.errors import ConfigError, DataFileError
-from echocal.experiments.runner import RUN_COLUMNS, history_frame, runs_frame
+from echocal.experiments.runner import history_frame, run_columns, runs_frame
 from echocal.experiments.sweep import SweepSpec, spec_hash
 from echocal.io import atomic_path, atomic_write_text
 
@@ -37,6 +42,7 @@ __all__ = [
     "read_history",
     "read_runs",
     "read_sweep_json",
+    "sweep_parameterization",
     "write_part",
 ]
 
@@ -63,6 +69,14 @@ def read_sweep_json(out_dir: str | Path) -> dict[str, Any]:
         raise DataFileError(f"{out_dir}: not a sweep results folder (no {SWEEP_JSON})") from None
     except (OSError, json.JSONDecodeError) as exc:
         raise DataFileError(f"{path}: unreadable: {exc}") from None
+
+
+def sweep_parameterization(out_dir: str | Path) -> str:
+    """The parameterization of the sweep whose results are in ``out_dir`` (its sweep.json;
+    ``"tilt"``, the sweeps' default, for a folder without one)."""
+    if not (Path(out_dir) / SWEEP_JSON).exists():
+        return "tilt"
+    return str(read_sweep_json(out_dir).get("spec", {}).get("parameterization", "tilt"))
 
 
 def prepare_folder(
@@ -120,10 +134,11 @@ def write_part(out_dir: str | Path, row: dict[str, Any], history: pd.DataFrame) 
     """Store one finished run atomically (history first, then the row that marks it done)."""
     parts = Path(out_dir) / PARTS
     key = part_key(row["case_id"])
+    parameterization = sweep_parameterization(out_dir)
     with atomic_path(parts / f"history-{key}.parquet") as tmp:
-        history_frame([history]).to_parquet(tmp, index=False)
+        history_frame([history], parameterization).to_parquet(tmp, index=False)
     with atomic_path(parts / f"runs-{key}.parquet") as tmp:
-        runs_frame([row]).to_parquet(tmp, index=False)
+        runs_frame([row], parameterization).to_parquet(tmp, index=False)
 
 
 def _part_files(out: Path, kind: str) -> list[Path]:
@@ -131,11 +146,12 @@ def _part_files(out: Path, kind: str) -> list[Path]:
     return sorted((out / PARTS).glob(f"{kind}-*.parquet")) if (out / PARTS).is_dir() else []
 
 
-def _read(paths: Sequence[Path]) -> list[pd.DataFrame]:
+def _read(paths: Sequence[Path], parameterization: str) -> list[pd.DataFrame]:
+    """The tables at ``paths``, legacy ``a``/``b`` columns named for ``parameterization``."""
     frames = []
     for path in paths:
         try:
-            frames.append(pd.read_parquet(path))
+            frames.append(named_angles(pd.read_parquet(path), parameterization))
         except (OSError, ValueError) as exc:
             raise DataFileError(f"{path}: unreadable results part: {exc}") from None
     return frames
@@ -145,20 +161,22 @@ def read_runs(out_dir: str | Path) -> pd.DataFrame:
     """Every finished run of a results folder (consolidated file plus any parts)."""
     out = Path(out_dir)
     paths = ([out / RUNS] if (out / RUNS).exists() else []) + _part_files(out, "runs")
-    frames = _read(paths)
+    parameterization = sweep_parameterization(out)
+    frames = _read(paths, parameterization)
     if not frames:
-        return runs_frame([])
+        return runs_frame([], parameterization)
     frame = pd.concat(frames, ignore_index=True)
     frame = frame.drop_duplicates("case_id", keep="last")
-    return frame.reindex(columns=list(RUN_COLUMNS)).astype(RUN_COLUMNS).reset_index(drop=True)
+    columns = run_columns(parameterization)
+    return frame.reindex(columns=list(columns)).astype(columns).reset_index(drop=True)
 
 
 def read_history(out_dir: str | Path, case_ids: Sequence[str] | None = None) -> pd.DataFrame:
     """Measurement history of the finished runs (of ``case_ids`` if given)."""
     out = Path(out_dir)
     paths = ([out / HISTORY] if (out / HISTORY).exists() else []) + _part_files(out, "history")
-    frames = _read(paths)
-    frame = history_frame(frames)
+    parameterization = sweep_parameterization(out)
+    frame = history_frame(_read(paths, parameterization), parameterization)
     if case_ids is not None:
         frame = frame[frame["case_id"].isin(set(case_ids))]
     return frame.drop_duplicates(["case_id", "index"], keep="last").reset_index(drop=True)

@@ -13,17 +13,53 @@
 ``HardwareReceiver`` is :class:`echocal.measurement.hardware.Receiver` (the device
 that acquires an A-scan), renamed here so it does not clash with
 :class:`echocal.signal.Receiver` (the noise/ADC model of the simulator).
+
+The names are imported on first use: ``import echocal.measurement.virtual`` (the
+simulator alone) does not import the calibration package behind
+:class:`SourceObjective`, nor the hardware and recording modules.
 """
 
-from echocal.measurement.base import BaseSource, MeasurementSource
-from echocal.measurement.hardware import HardwareSource, Positioner, TcpInstrument
-from echocal.measurement.hardware import Receiver as HardwareReceiver
-from echocal.measurement.instrument_server import Faults, InstrumentServer
-from echocal.measurement.limits import PositionerLimits
-from echocal.measurement.objective import SourceObjective
-from echocal.measurement.recording import RecordingGrid, record, recording_dataset, save_recording
-from echocal.measurement.replay import ReplaySource
-from echocal.measurement.virtual import ReceiverSettings, VirtualSetup
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from echocal._lazy import lazy_attributes
+
+if TYPE_CHECKING:  # the same names, eagerly, for type checkers and IDEs
+    from echocal.measurement.base import BaseSource, MeasurementSource
+    from echocal.measurement.hardware import HardwareSource, Positioner, TcpInstrument
+    from echocal.measurement.hardware import Receiver as HardwareReceiver
+    from echocal.measurement.instrument_server import Faults, InstrumentServer
+    from echocal.measurement.limits import PositionerLimits
+    from echocal.measurement.objective import SourceObjective
+    from echocal.measurement.recording import (
+        RecordingGrid,
+        record,
+        recording_dataset,
+        save_recording,
+    )
+    from echocal.measurement.replay import ReplaySource
+    from echocal.measurement.virtual import ReceiverSettings, VirtualSetup
+
+_WHERE = {
+    "BaseSource": "echocal.measurement.base",
+    "MeasurementSource": "echocal.measurement.base",
+    "HardwareSource": "echocal.measurement.hardware",
+    "Positioner": "echocal.measurement.hardware",
+    "TcpInstrument": "echocal.measurement.hardware",
+    "HardwareReceiver": "echocal.measurement.hardware:Receiver",
+    "Faults": "echocal.measurement.instrument_server",
+    "InstrumentServer": "echocal.measurement.instrument_server",
+    "PositionerLimits": "echocal.measurement.limits",
+    "SourceObjective": "echocal.measurement.objective",
+    "RecordingGrid": "echocal.measurement.recording",
+    "record": "echocal.measurement.recording",
+    "recording_dataset": "echocal.measurement.recording",
+    "save_recording": "echocal.measurement.recording",
+    "ReplaySource": "echocal.measurement.replay",
+    "ReceiverSettings": "echocal.measurement.virtual",
+    "VirtualSetup": "echocal.measurement.virtual",
+}
 
 __all__ = [
     "BaseSource",
@@ -44,3 +80,5 @@ __all__ = [
     "recording_dataset",
     "save_recording",
 ]
+
+__getattr__, __dir__ = lazy_attributes(__name__, _WHERE, __all__)

@@ -43,12 +43,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.stats import rice
 
 from echocal._curves import first_crossing
 from echocal._validate import finite_array, finite_float, in_range, positive_float, positive_int
 from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.posterior_search import EchoLikelihood
+from echocal.calibrate.posterior_search import EchoLikelihood, rice_sf
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
@@ -176,7 +175,7 @@ class LobeProfile:
         sigma = float(noise_sigma_for_snr(self.reference, snr_db, setup.window, setup.pulse))
         level = detector.threshold_peak(sigma, threshold)
         scale = sigma * detector.noise_gain
-        return rice.sf(level / scale, self.peaks / scale)
+        return rice_sf(level / scale, self.peaks / scale)
 
     def echo_likelihood(
         self, noise_sigma: float, threshold: float = ECHO_THRESHOLD

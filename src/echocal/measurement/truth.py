@@ -9,7 +9,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-import scipy.optimize
 from numpy.typing import NDArray
 
 from echocal.errors import EchocalValueError
@@ -89,6 +88,7 @@ def _climb(
 ) -> tuple[FloatArray, float]:
     """Nelder–Mead from ``start`` [deg] to ``xatol`` [deg] (within ``max_evaluations``
     metric calls, if given): (top [deg] (2,), its value)."""
+    import scipy.optimize  # lazy: costs a CLI start 0.3 CPU-s
 
     def negative(v: FloatArray) -> float:
         return -float(metric(np.asarray(v[0]), np.asarray(v[1])))

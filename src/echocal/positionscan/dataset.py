@@ -39,12 +39,22 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import finite_float, positive_float
-from echocal.errors import DataFileError, EchocalValueError
+from echocal.errors import EchocalValueError
+from echocal.netcdf import NetcdfKind
 from echocal.signal.window import RecordingWindow
 
 __all__ = ["FORMAT", "PositionScan", "position_scan"]
 
-FORMAT = "position-scan/1"
+KIND = NetcdfKind(
+    "position-scan",
+    1,
+    what="position scan",
+    title="echocal position scan: A-scans on a line or raster at a fixed orientation",
+    hint="; import foreign files with `echocal import`",
+)
+"""How a position scan is written and read (:class:`~echocal.netcdf.NetcdfKind`)."""
+
+FORMAT = KIND.fmt
 """``echocal_format`` of a position-scan file."""
 
 FloatArray = NDArray[np.float64]
@@ -299,29 +309,14 @@ class PositionScan:
     # ------------------------------------------------------------------ files
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the scan in echocal's NetCDF schema (compressed, checksummed), atomically."""
-        from echocal.netcdf import write_netcdf
-
-        return write_netcdf(
-            self.dataset,
-            path,
-            fmt=FORMAT,
-            title="echocal position scan: A-scans on a line or raster at a fixed orientation",
-            source=str(self.dataset.attrs.get("source_format", "echocal")),
-        )
+        source = str(self.dataset.attrs.get("source_format", "echocal"))
+        return KIND.save(self.dataset, path, source=source)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> PositionScan:
         """Read a file written by :meth:`save`; integer samples come back as the integer
         codes they were stored as.  A damaged file is refused (checksums)."""
-        from echocal.netcdf import format_version, open_netcdf
-
-        with open_netcdf(path, what="position scan") as ds:
-            data = ds.load()
-        if format_version(data, "position-scan") != 1:
-            raise DataFileError(
-                f"{path}: not a position scan (format {FORMAT!r} expected; import foreign "
-                "files with `echocal import`)"
-            )
+        data, _ = KIND.load(path)
         var = data["samples"]
         stored = var.encoding.get("dtype")
         if stored is not None and np.dtype(stored).kind in "iu" and "scale_factor" in var.encoding:

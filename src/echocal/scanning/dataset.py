@@ -45,14 +45,25 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from echocal.errors import DataFileError
+from echocal.angle_columns import record_angles
 from echocal.geometry import convert_angles, orientation_normal
+from echocal.netcdf import NetcdfKind
 from echocal.scanning.grid import ScanGrid
 from echocal.specimen import Specimen
 
 __all__ = ["FORMAT", "STATUS", "SurfaceScan", "surface_dataset"]
 
-FORMAT = "surface-scan/2"
+KIND = NetcdfKind(
+    "surface-scan",
+    2,
+    what="surface scan",
+    title="echocal surface scan: surface normal and distance per scan point",
+    older=(1,),
+    legacy_key="format",
+)
+"""How a surface scan is written and read (:class:`~echocal.netcdf.NetcdfKind`)."""
+
+FORMAT = KIND.fmt
 """``echocal_format`` of a scan file (``surface-scan/1``, before echocal's NetCDF schema,
 still loads)."""
 
@@ -151,33 +162,15 @@ class SurfaceScan:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the Dataset in echocal's NetCDF schema (compressed, checksummed), atomically."""
-        from echocal.netcdf import write_netcdf
-
-        return write_netcdf(
-            self.dataset,
-            path,
-            fmt=FORMAT,
-            title="echocal surface scan: surface normal and distance per scan point",
-            source=str(self.dataset.attrs.get("source", "echocal scan")),
-        )
+        source = str(self.dataset.attrs.get("source", "echocal scan"))
+        return KIND.save(self.dataset, path, source=source)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> SurfaceScan:
         """Read a file written by :meth:`save` (or a ``surface-scan/1`` file of echocal
         before its NetCDF schema).  A damaged file is refused (checksums)."""
-        from echocal.netcdf import format_version, open_netcdf
-
-        try:
-            with open_netcdf(path, what="surface scan") as ds:
-                data = ds.load()
-        except (OSError, ValueError) as exc:
-            raise DataFileError(f"cannot read surface scan {str(path)!r}: {exc}") from None
-        version = format_version(data, "surface-scan", legacy_key="format")
-        if version == 1:
-            data = _upgrade_v1(data)
-        elif version != 2:
-            raise DataFileError(f"{path}: not a surface scan (format {FORMAT!r} expected)")
-        return cls(data)
+        data, version = KIND.load(path)
+        return cls(_upgrade_v1(data) if version == 1 else data)
 
 
 def _upgrade_v1(data: xr.Dataset) -> xr.Dataset:
@@ -224,7 +217,7 @@ def surface_dataset(
         warm[iy, ix] = bool(rec.get("warm", False))
         snr[iy, ix] = rec["snr"] if rec["snr"] is not None else np.nan
         if rec["status"] == 0:
-            a[iy, ix], b[iy, ix], tof[iy, ix] = rec["a"], rec["b"], rec["tof"]
+            (a[iy, ix], b[iy, ix]), tof[iy, ix] = record_angles(rec, parameterization), rec["tof"]
     az, coel = _convert(a, b, parameterization, "azimuth-coelevation")
     # canonical (azimuth, co-elevation): co-elevation >= 0
     flip = coel < 0

@@ -58,6 +58,7 @@ from echocal._validate import (
     positive_float,
     positive_int,
 )
+from echocal.angle_columns import angle_columns, record_angles
 from echocal.calibrate import calibrate
 from echocal.calibrate.result import NO_ECHO_STATUSES, SUCCESS_STATUSES
 from echocal.constants import SOUND_SPEED_WATER
@@ -170,10 +171,11 @@ def _measure_point(
     reseed = getattr(ctx.source, "reseed", None)
     if callable(reseed):
         reseed(np.random.default_rng([*seed, _NOISE_STREAM]))
+    angles = angle_columns(ctx.parameterization)
     record: dict[str, Any] = {
         "status": STATUS["found"],
-        "a": np.nan,
-        "b": np.nan,
+        angles[0]: np.nan,
+        angles[1]: np.nan,
         "tof": np.nan,
         "snr": np.nan,
         "n_measurements": 0,
@@ -206,7 +208,7 @@ def _measure_point(
         return record
     record["n_calibration"] = result.n_measurements
     record["n_measurements"] = result.n_measurements
-    record["a"], record["b"] = (float(v) for v in result.x)
+    record[angles[0]], record[angles[1]] = (float(v) for v in result.x)
     if result.status in NO_ECHO_STATUSES:
         record.update(status=STATUS["no-echo"], message=result.message)
     elif result.status == 8:
@@ -451,7 +453,7 @@ def scan_surface(
     xy = grid.positions()[..., :2]
     positions = grid.positions()
     found: dict[tuple[int, int], FloatArray] = {
-        k: np.array([r["a"], r["b"]]) for k, r in records.items() if r["status"] == 0
+        k: record_angles(r, parameterization) for k, r in records.items() if r["status"] == 0
     }
     radius = 2.5 * grid.spacing
     t_start = time.perf_counter()
@@ -478,7 +480,7 @@ def scan_surface(
             rec.update(iy=key[0], ix=key[1], order=i, warm=bool(warm_start and warm))
             records[key] = rec
             if rec["status"] == 0:
-                found[key] = np.array([rec["a"], rec["b"]])
+                found[key] = record_angles(rec, ctx.parameterization)
             if store is not None:
                 store.append(rec)
             bar.advance()
@@ -527,7 +529,7 @@ def scan_surface(
             rec = demote_weak(rec, ctx.relative_snr, snr_ref)
             records[key] = rec
             if rec["status"] == 0:
-                found[key] = np.array([rec["a"], rec["b"]])
+                found[key] = record_angles(rec, ctx.parameterization)
             if store is not None:
                 store.append(rec)
         for key in records:  # a found echo far below the strong ones is not trusted

@@ -5,7 +5,9 @@ Beside the output ``scan.nc`` lives ``scan.nc.partial/`` with
 * ``manifest.json`` — format, the grid and the settings that define the scan,
   and their hash (written atomically once);
 * ``points.jsonl`` — one record per finished point, appended and flushed to
-  disk (``fsync``) as soon as the point is done.
+  disk (``fsync``) as soon as the point is done; its angles [deg] are named for the
+  scan's parameterization (``tilt_x_deg``, ``tilt_y_deg``: :mod:`echocal.angle_columns`;
+  ``a``, ``b`` in a store of an older echocal, still resumed).
 
 A resumed scan reads the records back and skips those points; a torn last line
 (an interruption in the middle of a write) is ignored and that point measured

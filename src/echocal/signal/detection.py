@@ -32,9 +32,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import brentq
 from scipy.special import ndtri
 
+from echocal._curves import increasing_root
 from echocal._validate import finite_float, nonnegative_float, positive_float
 from echocal.errors import EchocalValueError
 from echocal.signal import detector_cache
@@ -193,7 +193,7 @@ class EchoDetector:
         hi = 4.0
         while excess(hi) < 0.0:
             hi *= 2.0
-        t_level = float(brentq(excess, 1.0, hi, xtol=1e-9)) if excess(1.0) < 0.0 else 1.0
+        t_level = increasing_root(excess, 1.0, hi, 1e-9) if excess(1.0) < 0.0 else 1.0
         return t_level * unit
 
     def significance(self, samples: ArrayLike, sigma: float) -> _F64:

@@ -48,7 +48,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import scipy.signal
 from numpy.typing import NDArray
 
 from echocal.coefficients import (
@@ -57,6 +56,7 @@ from echocal.coefficients import (
     transmission_solid_fluid,
 )
 from echocal.materials import Material
+from echocal.signal.analytic import analytic_signal
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.cylinder import Cylinder
 from echocal.specimen.interior import Flaw, Interior, Layer, SurfaceSamples
@@ -99,7 +99,7 @@ def echo_list(echoes: dict[str, FloatArray], window: RecordingWindow) -> list[La
     samples), in the order given; an echo with no signal (outside the window, or blocked
     beyond the critical angle: below 1e-7 of the strongest echo, the spectral leak of one
     that arrives after the window) has amplitude 0 and time NaN."""
-    envelopes = {label: np.abs(scipy.signal.hilbert(x)) for label, x in echoes.items()}
+    envelopes = {label: np.abs(analytic_signal(x)) for label, x in echoes.items()}
     floor = _NO_ECHO * max((float(e.max()) for e in envelopes.values()), default=0.0)
     out = []
     for label, envelope in envelopes.items():

@@ -54,9 +54,9 @@ from functools import cached_property
 
 import numpy as np
 import scipy.fft
-import scipy.signal
 from numpy.typing import NDArray
 
+from echocal.signal.analytic import analytic_signal
 from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.base import Shape
@@ -482,7 +482,7 @@ class WaveEchoModel:
             # the echo is attenuated over the path c·t of its envelope peak
             _, dt, _, n_fft = self._grid
             echo = scipy.fft.irfft(spectrum, n=n_fft)
-            analytic = scipy.signal.hilbert(echo)
+            analytic = analytic_signal(echo)
             t_echo = self._t0 + dt * float(np.argmax(np.abs(analytic)))
             spectrum *= self.attenuation_factor(self.sound_speed * t_echo)
         return self.samples(spectrum)

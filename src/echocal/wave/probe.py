@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-import scipy.optimize
 from numpy.typing import ArrayLike, NDArray
 
 from echocal._validate import positive_float
@@ -64,6 +63,8 @@ def curvature_for_focus(
         when no bowl of this radius focuses that far (the focus must lie well inside the
         near-field length a²/λ of the flat piston).
     """
+    import scipy.optimize  # lazy: costs a CLI start 0.3 CPU-s
+
     k = 2.0 * math.pi * frequency / sound_speed
     near_field = radius**2 * frequency / sound_speed
 

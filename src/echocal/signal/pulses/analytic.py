@@ -11,7 +11,6 @@ from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import optimize
 
 from echocal._validate import finite_float, in_range, lookup, positive_float, positive_int
 from echocal.constants import DEFAULT_CENTER_FREQUENCY
@@ -276,12 +275,16 @@ class RickerPulse(Pulse):
     @property
     def support(self) -> float:
         # |w| = (2u − 1)e^{−u} with u = (π f_c t)²; solve (2u − 1)e^{−u} = 1e-7 for u > 1.5.
+        from scipy import optimize  # lazy: costs a CLI start 0.3 CPU-s
+
         u = optimize.brentq(lambda u: (2 * u - 1) * math.exp(-u) - SUPPORT_LEVEL, 1.5, 60.0)
         return math.sqrt(u) / (math.pi * self.center_frequency)
 
     @property
     def highest_frequency(self) -> float:
         """[Hz] where (f/f_c)²·exp(1 − f²/f_c²) = 1e-3 above f_c."""
+        from scipy import optimize  # lazy: costs a CLI start 0.3 CPU-s
+
         r = optimize.brentq(
             lambda r: r * r * math.exp(1 - r * r) - HIGHEST_FREQUENCY_LEVEL, 1.0, 10.0
         )
