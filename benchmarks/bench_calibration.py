@@ -90,6 +90,11 @@ objective itself (:class:`~echocal.errors.BudgetExhaustedError` ends a peer's ru
 are optional (``pip install echocal[bench]``; botorch as above); a peer that is not
 installed or fails to import is skipped with a message.
 
+On a bench (``--cases immersion-5mhz-ray-bench``, the cases of ``BENCH_CASES``) each run
+also keeps the bench clock after every measurement, and the tables add the median bench
+time to 0.1° and over the budget; ``--methods auto-motion-aware`` runs ``auto`` on a
+motion-aware objective beside it (docs/bench.md has the measured cells).
+
 Output: a Markdown table per case on stdout (headline lines start with ``HEADLINE``);
 ``--json OUT`` / ``--out-md OUT`` / ``--plot OUT``; ``--render JSON`` writes the page and
 figure again from a run's JSON; ``--update JSON --methods auto`` runs ``auto`` again on
