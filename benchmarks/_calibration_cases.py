@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 BUDGET = 80
-FIXED_BUDGETS = (15, 20, 40, 60, 80)
+FIXED_BUDGETS = (15, 20, 25, 40, 60, 80)
 TOLERANCES = (0.05, 0.1)
 PARAM = "tilt"
 
@@ -61,6 +61,7 @@ REAL_BENCH: dict[str, Any] = {
     "probe": {"squint": (1.5, -1.0), "pivot_offset": (0.002, -0.001, -0.004)},
     "positioner": {
         "acquisition_time": 0.005,
+        "approach": "positive",
         **{
             axis: {"backlash": 0.05, "step": 0.001, "repeatability": 0.002, "speed": 10.0,
                    "settling": 0.05}
@@ -71,7 +72,9 @@ REAL_BENCH: dict[str, Any] = {
 }  # fmt: skip
 """A realistic bench (the ``[bench]`` table as data; issue 47): squint 1.8°, pivot offset
 4.6 mm, 0.05° backlash, 0.001° steps, 0.002° repeatability, 10°/s and 50 ms settling per
-tilt axis, 5 ms per A-scan, AR(1) noise of coefficient 0.6."""
+tilt axis, 5 ms per A-scan, AR(1) noise of coefficient 0.6; the controller compensates
+the backlash (``approach = "positive"``: every point approached from below, at 4 × the
+backlash of extra travel on a move down), as benches do."""
 GRAIN_BENCH: dict[str, Any] = {
     **REAL_BENCH,
     "grain": {"level_db": -30.0, "depth": 0.005, "width": 0.02},
@@ -110,6 +113,10 @@ thesis's block."""
 STARTS: dict[str, tuple[float, float]] = {"near": (1.0, 3.0), "far": (5.0, 20.0)}
 SNRS = (30.0, 20.0, 10.0)
 
+MOTION_AWARE = "auto-motion-aware"
+"""``auto`` on a motion-aware objective (``SourceObjective(motion_aware=True)``): its
+batches measured along short paths, and its posterior search told each candidate's move
+time (on a bench whose tilts take time; elsewhere it is ``auto``)."""
 FRONT_FIRST = "auto-front-first"
 """A workflow, not a method, for a gated case: ``auto`` on the whole recording (the
 interface echo, which keeps the gate's trigger) until it settles (the CLI's default
@@ -140,5 +147,10 @@ AUTO_TARGETS: dict[str, tuple[tuple[str, float, float, int, float], ...]] = {
         ("far", 30.0, 0.1, 60, 0.99),
     ),
 }
+AUTO_TARGETS["immersion-5mhz-ray-bench"] = (
+    ("near", 20.0, 0.1, 25, 0.99),
+    ("far", 30.0, 0.1, 80, 0.99),
+)
 """Targets for auto per case: (start, SNR [dB], tolerance [deg], measurements, fraction of
-runs) — issue 19's on the wave model (``immersion-5mhz``), issue 5's on the ray model."""
+runs) — issue 19's on the wave model (``immersion-5mhz``), issue 5's on the ray model,
+issue 47's on the real bench (``immersion-5mhz-ray-bench``)."""

@@ -19,6 +19,12 @@ def _fmt_n(v: float) -> str:
     return f">{BUDGET}" if not np.isfinite(v) else f"{v:g}"
 
 
+def _bench_cells(s: dict[str, Any]) -> list[str]:
+    """The bench-time columns of a method's row: median to 0.1° (inf: most runs never got
+    there) and over the whole budget [s]."""
+    return [f"{s['median_bench_to_0.1']:.1f}", f"{s['median_bench_time']:.1f}"]
+
+
 def case_table(summary: dict[str, dict[str, Any]]) -> str:
     header = [
         "method",
@@ -30,6 +36,9 @@ def case_table(summary: dict[str, dict[str, Any]]) -> str:
         "≤0.1° at 20 / 40 / 80",
         "median error [°] at 20 / 40 / 80",
     ]
+    timed = all("median_bench_to_0.1" in s for s in summary.values())
+    if timed:  # a bench: what the runs cost in bench time
+        header += ["bench time to 0.1° med [s]", "bench time at 80 med [s]"]
     order = sorted(summary, key=lambda m: (summary[m]["median_n_0.1"], -summary[m]["success_0.1"]))
     rows = []
     for m in order:
@@ -45,6 +54,7 @@ def case_table(summary: dict[str, dict[str, Any]]) -> str:
                 " / ".join(f"{100 * s[f'within_0.1_at_{b}']:.0f} %" for b in (20, 40, 80)),
                 " / ".join(f"{s[f'median_error_at_{b}']:.3g}" for b in (20, 40, 80)),
             ]
+            + (_bench_cells(s) if timed else [])
         )
     return markdown_table(header, rows)
 

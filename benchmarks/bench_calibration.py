@@ -90,6 +90,11 @@ objective itself (:class:`~echocal.errors.BudgetExhaustedError` ends a peer's ru
 are optional (``pip install echocal[bench]``; botorch as above); a peer that is not
 installed or fails to import is skipped with a message.
 
+On a bench (``--cases immersion-5mhz-ray-bench``, the cases of ``BENCH_CASES``) each run
+also keeps the bench clock after every measurement, and the tables add the median bench
+time to 0.1° and over the budget; ``--methods auto-motion-aware`` runs ``auto`` on a
+motion-aware objective beside it (docs/bench.md has the measured cells).
+
 Output: a Markdown table per case on stdout (headline lines start with ``HEADLINE``);
 ``--json OUT`` / ``--out-md OUT`` / ``--plot OUT``; ``--render JSON`` writes the page and
 figure again from a run's JSON; ``--update JSON --methods auto`` runs ``auto`` again on
@@ -128,6 +133,7 @@ from _calibration_cases import (  # noqa: E402
     DEFAULT_CASES,
     FIXED_BUDGETS,
     FRONT_FIRST,
+    MOTION_AWARE,
     OURS,
     PARAM,
     SETTLE,
@@ -297,6 +303,31 @@ def _front_first(
     return est, status, stages[0][0].acquisition_measurements, measured
 
 
+class ClockedObjective(SourceObjective):
+    """A :class:`SourceObjective` that keeps the bench clock [s] after each measurement
+    (:attr:`clock`, one entry per measurement, the batch's end for each of its points;
+    empty where the source reports no bench time)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.clock: list[float] = []
+
+    def __call__(self, points: Any) -> np.ndarray:
+        before = self.n_measurements
+        values = super().__call__(points)
+        if self.bench_time is not None:
+            self.clock += [self.bench_time] * (self.n_measurements - before)
+        return values
+
+
+def bench_time_to(clock: list[float], n_to: float) -> float | None:
+    """[s] the bench time of the first ``n_to`` measurements (the clock after the n-th;
+    0 for n = 0), None when the run never got there (inf) or reports no bench time."""
+    if not clock or not np.isfinite(n_to):
+        return None
+    return 0.0 if n_to == 0 else float(clock[int(n_to) - 1])
+
+
 def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     """One seeded run of one method, ``(case, start, snr, run, method[, budget])`` (budget
     default :data:`BUDGET`); returns its error after each measurement."""
@@ -305,9 +336,10 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     base, pos, truth, optima, gate = _case(case)
     seed = run_seed(case, start, snr, run)
     setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
-    objective = SourceObjective(
-        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup), gate=gate
-    )
+    objective = ClockedObjective(
+        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup), gate=gate,
+        motion_aware=method == MOTION_AWARE,
+    )  # fmt: skip
     x0 = start_point(truth, start, seed, objective.bounds)
     t0 = time.perf_counter()
     status = ""
@@ -315,18 +347,18 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     n_measurements = None
     if method == FRONT_FIRST:
         est, status, acquisition, n_measurements = _front_first(setup, pos, gate, x0, budget)
-    elif method in OURS:
+    elif method in OURS or method == MOTION_AWARE:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = calibrate(
                 objective,
-                method=method,
+                method="auto" if method == MOTION_AWARE else method,
                 x0=x0,
                 budget=budget,
                 max_iter=10_000,
                 settle=None,  # to the budget: the estimate is read after every measurement
                 rng=seed,
-                **OURS[method],
+                **OURS.get(method, {}),
             )
         est = _estimates_ours(res, x0, budget)
         status = str(res.status)
@@ -356,6 +388,8 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
         ),
         "acquisition_measurements": acquisition,
         "bench_time": objective.bench_time,
+        "bench_clock": [round(t, 4) for t in objective.clock],
+        "bench_time_saved": objective.bench_time_saved,
         "status": status,
         "seconds": time.perf_counter() - t0,
     }
@@ -386,6 +420,13 @@ def summarize(runs: list[dict[str, Any]]) -> dict[str, Any]:
             out[f"within_{key}_at_{b}"] = float(np.mean(errs[:, b] <= tol))
     for b in FIXED_BUDGETS:
         out[f"median_error_at_{b}"] = float(np.median(errs[:, b]))
+    clocks = [r.get("bench_clock") or [] for r in runs]
+    if all(clocks):  # every run reports its bench time: to 0.1° (inf: never) and in all
+        n_to = [np.inf if v is None else v for v in out["n_to_0.1"]]
+        to = [bench_time_to(c, n) for c, n in zip(clocks, n_to, strict=True)]
+        out["bench_to_0.1"] = to
+        out["median_bench_to_0.1"] = float(np.median([np.inf if t is None else t for t in to]))
+        out["median_bench_time"] = float(np.median([c[-1] for c in clocks]))
     out["seconds_per_run"] = float(np.mean([r["seconds"] for r in runs]))
     return out
 
@@ -561,14 +602,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.starts:
         cells = [c for c in cells if c[1] in args.starts.split(",")]
     wanted = args.methods.split(",") if args.methods else [*OURS, *PEERS]
-    unknown = sorted(set(wanted) - {*OURS, FRONT_FIRST, *PEERS})
+    workflows = (FRONT_FIRST, MOTION_AWARE)
+    unknown = sorted(set(wanted) - {*OURS, *workflows, *PEERS})
     if unknown:
-        ap.error(f"unknown method(s) {unknown}; choose from {[*OURS, FRONT_FIRST, *PEERS]}")
+        ap.error(f"unknown method(s) {unknown}; choose from {[*OURS, *workflows, *PEERS]}")
     peers, skipped = available_peers([m for m in wanted if m in PEERS])
     for name, why in skipped.items():
         hint = INSTALL_HINT.get(name, "pip install echocal[bench]")
         print(f"SKIPPED peer {name}: not available ({why}); {hint}")
-    methods = [m for m in wanted if m in OURS or m == FRONT_FIRST] + peers
+    methods = [m for m in wanted if m in OURS or m in workflows] + peers
     tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in methods]
     print(
         f"calibration benchmark ({mode}): {len(cells)} cell(s) x {n_runs} runs x "

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from _probe_setups import BENCH, FLAT, SQUINT, write_setup
 
-from echocal.characterize import measure_beam_axis, measure_spectrum
+from echocal.characterize import AxisScan, measure_beam_axis, measure_spectrum
 from echocal.errors import EchocalValueError
 from echocal.geometry import Pose
 from echocal.setups import setup_with_overrides
@@ -31,7 +31,7 @@ def test_the_squint_set_on_the_bench_is_recovered(tmp_path, snr):
 
 def test_no_squint_on_an_ideal_bench(tmp_path):
     virtual = setup_with_overrides(write_setup(tmp_path, FLAT), snr_db=None)
-    axis = measure_beam_axis(virtual, [0.0, 0.0, 0.05], coarse_points=7, fine_points=9)
+    axis = measure_beam_axis(virtual, [0.0, 0.0, 0.05], AxisScan(coarse_points=7, fine_points=9))
     assert np.allclose(axis.squint_deg, 0.0, atol=0.01)
 
 
@@ -49,7 +49,7 @@ def _pulse_band(pulse, fs: float) -> tuple[float, float]:
 
 def test_centre_frequency_and_bandwidth_are_the_pulses(tmp_path):
     virtual = setup_with_overrides(write_setup(tmp_path, FLAT + BENCH), snr_db=30.0)
-    axis = measure_beam_axis(virtual, [0.0, 0.0, 0.05], coarse_points=7, fine_points=9)
+    axis = measure_beam_axis(virtual, [0.0, 0.0, 0.05], AxisScan(coarse_points=7, fine_points=9))
     spectrum = measure_spectrum(virtual, axis.pose, n_ascans=16)
     f_c, band = _pulse_band(virtual.pulse, 400e6)
     # 2 % (the bound): the echo at the axis is the pulse itself on the ray model;
@@ -63,7 +63,9 @@ def test_centre_frequency_and_bandwidth_are_the_pulses(tmp_path):
 def test_bad_arguments_name_the_field(tmp_path):
     virtual = setup_with_overrides(write_setup(tmp_path, FLAT), snr_db=None)
     with pytest.raises(EchocalValueError, match="span"):
-        measure_beam_axis(virtual, [0, 0, 0.05], span_deg=-1)
+        AxisScan(span_deg=-1)
+    with pytest.raises(EchocalValueError, match="fine_points"):
+        AxisScan(fine_points=3)
     with pytest.raises(EchocalValueError, match="position"):
         measure_beam_axis(virtual, [0, 0])
     with pytest.raises(EchocalValueError, match="gate_db"):

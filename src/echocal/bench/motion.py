@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["move_times", "short_order"]
+__all__ = ["move_times", "reach_times", "short_order"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -25,6 +25,16 @@ def _step_costs(origin: FloatArray, targets: FloatArray, speeds: FloatArray, set
     moved = delta > 0.0
     travel = np.where(moved, delta / speeds, 0.0).max(axis=-1)
     return travel + np.where(moved, settling, 0.0).max(axis=-1)
+
+
+def reach_times(
+    origin: FloatArray, targets: FloatArray, speeds: FloatArray, settling: FloatArray
+) -> FloatArray:
+    """[s] the move from ``origin`` [deg] ``(2,)`` to each of ``targets`` [deg] ``(k, 2)``,
+    ``(k,)``: the longer axis's travel / ``speeds`` [deg/s] ``(2,)`` plus the longest
+    ``settling`` [s] ``(2,)`` of the axes that move (0 for the origin itself)."""
+    origin = np.asarray(origin, dtype=np.float64)[None]
+    return np.asarray(_step_costs(origin, targets, speeds, settling), dtype=np.float64)
 
 
 def move_times(

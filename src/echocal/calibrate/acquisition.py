@@ -214,6 +214,12 @@ class Acquisition(Optimizer):
         likely.  The detection test and its confirmation are the lattice's; the search
         gives up (status 4) once the measurements are 1,000 times likelier with no echo
         within ``max_radius`` than with one.  ``replan`` is then not asked.
+    move_time : callable returning the positioner's time [s] to reach each of a set of
+        points [deg] ``(k, 2)`` from where it is, ``(k,)``, or None — e.g.
+        :meth:`~echocal.calibrate.Objective.move_times`, which a motion-aware objective on
+        a simulated bench gives: the posterior search then takes, among its equally good
+        next points, the one reached soonest
+        (:meth:`~echocal.calibrate.posterior_search.PosteriorSearch.next_point`).
     """
 
     def __init__(
@@ -242,6 +248,7 @@ class Acquisition(Optimizer):
         replan: Callable[[], Sequence[float] | None] | None = None,
         echo_likelihood: Callable[[], EchoLikelihood | None] | None = None,
         posterior: bool = False,
+        move_time: Callable[[FloatArray], FloatArray | None] | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -297,6 +304,9 @@ class Acquisition(Optimizer):
             )
         self.echo_likelihood = echo_likelihood
         self.posterior = strict_bool("posterior", posterior)
+        if move_time is not None and not callable(move_time):
+            raise EchocalValueError(f"move_time must be a callable or None; got {move_time!r}")
+        self.move_time = move_time
         self.search: PosteriorSearch | None = None
         """The Bayesian search once it has taken over from the lattice (None: the lattice)."""
         self._search_asked = False
@@ -512,7 +522,7 @@ class Acquisition(Optimizer):
         if self._confirming is not None:
             return self._confirming[None, :]
         if self.search is not None:
-            return self.search.next_point()[None, :]
+            return self.search.next_point(self.move_time)[None, :]
         n = self.batch
         if self._next == 0:
             n = max(n, self._first_ring_size())

@@ -165,6 +165,7 @@ OBJECTIVE_INPUTS = (
     "resolution",
     "detector",
     "echo_likelihood",
+    "move_time",
 )
 """Acquisition options the driver takes from the objective unless they are given."""
 
@@ -181,6 +182,7 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
         objective.resolution(),
         objective.detections,
         objective.echo_likelihood,
+        objective.move_times,
     )
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
 
@@ -192,6 +194,7 @@ CALLABLE_INPUTS = (
     "detector",
     "replan",
     "echo_likelihood",
+    "move_time",
 )
 """Options the objective supplies as callables (the live noise estimate, the probe's lobe
 and best echo, the echo detector, the search replanned for the measured noise): set only

@@ -176,6 +176,13 @@ class Objective:
         does not report one (the default)."""
         return None
 
+    def move_times(self, points: FloatArray) -> FloatArray | None:
+        """[s] the predicted time (motion and settling) to reach each of ``points`` [deg]
+        ``(k, 2)`` from where the positioner is, ``(k,)``, when the objective measures
+        motion-aware and knows its positioner; None otherwise (the default): a method
+        then chooses its points without weighing their moves."""
+        return None
+
     # -- public ------------------------------------------------------------------------
     @property
     def remaining(self) -> int | None:

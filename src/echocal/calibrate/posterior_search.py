@@ -45,6 +45,7 @@ the hexagonal pass of 4.17° sized for the echo (ordered ring by ring); at 30 dB
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,6 +58,7 @@ from echocal.errors import EchocalValueError
 __all__ = [
     "GIVE_UP_EVIDENCE",
     "MIN_SNR_DB",
+    "MOTION_TIE",
     "TIE",
     "EchoLikelihood",
     "PosteriorSearch",
@@ -75,6 +77,13 @@ posterior search against 100 % with the 1° lattice out to 3°)."""
 TIE = 0.05
 """Cells whose detection chance is within this fraction of the best are equally good: the
 one nearest to x0 is measured next (module docstring)."""
+MOTION_TIE = 0.25
+"""A motion-aware search (:meth:`PosteriorSearch.next_point` given the moves' times) takes
+the cell reached soonest among those within this fraction of the best detection chance.
+On the real bench of ``benchmarks/bench_calibration.py`` (10°/s, 50 ms settling; far
+starts at 30 dB, 6 seeded runs) the bench time to 0.1° fell from a median 17.7 s to
+10.6 s (11.8 s within 0.15, 12.1 s within 0.5, where the measurements to 0.1° grew from
+31 to 50), at a median 36.5 measurements to 0.1° instead of 31, every run within 0.1°."""
 _MAX_CELLS = 401
 """Cells per side of the posterior's grid at most (161,000 cells: 10–18 ms per point, the
 FFT about 6 ms; 2–3 ms at ``max_radius`` 20° and a 0.2° cell)."""
@@ -271,10 +280,21 @@ class PosteriorSearch:
         chance = fftconvolve(post, self._kernel, mode="same")
         return np.where(self._candidate, np.clip(chance, 0.0, 1.0), 0.0)
 
-    def next_point(self) -> FloatArray:
+    def next_point(
+        self, move_time: Callable[[FloatArray], FloatArray | None] | None = None
+    ) -> FloatArray:
         """[deg] shape ``(2,)``: of the cells where a detection is most likely (within
-        :data:`TIE` of the best chance), the one nearest to the centre."""
+        :data:`TIE` of the best chance), the one nearest to the centre — or, given
+        ``move_time`` (points [deg] ``(k, 2)`` → the positioner's time [s] to reach each
+        from where it is, ``(k,)``, or None), of the cells within :data:`MOTION_TIE` of
+        the best chance, the one reached soonest."""
         chance = self.detection_chances()
+        if move_time is not None:
+            rows, cols = np.nonzero(chance >= (1.0 - MOTION_TIE) * chance.max())
+            times = move_time(np.column_stack([self._x[0, cols], self._y[rows, 0]]))
+            if times is not None:
+                best = int(np.argmin(times))
+                return np.array([self._x[0, cols[best]], self._y[rows[best], 0]])
         distance = np.where(chance >= (1.0 - TIE) * chance.max(), self._rho, np.inf)
         row, col = np.unravel_index(int(np.argmin(distance)), chance.shape)
         return np.array([self._x[0, col], self._y[row, 0]])

@@ -14,7 +14,7 @@ Every function takes any :class:`~echocal.measurement.base.MeasurementSource`, s
 same code characterizes a simulated probe and one on a rig.
 """
 
-from echocal.characterize.axis import BeamAxis, measure_beam_axis, squint_of
+from echocal.characterize.axis import AxisScan, BeamAxis, measure_beam_axis, squint_of
 from echocal.characterize.probe import ProbeCharacterization, characterize_probe
 from echocal.characterize.profile import (
     BeamProfile,
@@ -26,6 +26,7 @@ from echocal.characterize.profile import (
 from echocal.characterize.spectrum import EchoSpectrum, measure_spectrum, spectrum_band
 
 __all__ = [
+    "AxisScan",
     "BeamAxis",
     "BeamProfile",
     "EchoSpectrum",

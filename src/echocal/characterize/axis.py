@@ -22,7 +22,7 @@ from echocal.geometry import Pose, normal_to_tilt, tilt_frame, tilt_normal
 from echocal.measurement.base import MeasurementSource
 from echocal.signal.processing import envelope
 
-__all__ = ["BeamAxis", "echo_peaks", "measure_beam_axis", "squint_of"]
+__all__ = ["AxisScan", "BeamAxis", "echo_peaks", "measure_beam_axis", "squint_of"]
 
 FloatArray = NDArray[np.float64]
 
@@ -139,14 +139,47 @@ def fit_paraboloid(uv: FloatArray, log_amp: FloatArray) -> tuple[FloatArray, Flo
     return vertex, jac @ cov_c @ jac.T, value
 
 
+@dataclass(frozen=True, kw_only=True)
+class AxisScan:
+    """How :func:`measure_beam_axis` scans the tilts (validated at construction).
+
+    Attributes
+    ----------
+    reflector_tilts_deg : [deg] gimbal tilts of the reflector's normal: the probe's
+        mechanical axis is normal to the reflector there; the coarse grid is centred on it,
+        shape ``(2,)``.
+    span_deg : [deg] half-width of the coarse square grid (> 0).
+    coarse_points, fine_points : grid points per side (odd: one at the centre; at least 3
+        and 5).  The fine grid spans one coarse step either side of the coarse maximum.
+    """
+
+    reflector_tilts_deg: ArrayLike = (0.0, 0.0)
+    span_deg: float = 3.0
+    coarse_points: int = 13
+    fine_points: int = 11
+
+    def __post_init__(self) -> None:
+        reflector = finite_array("reflector_tilts", self.reflector_tilts_deg, shape_tail=(2,))
+        object.__setattr__(self, "reflector_tilts_deg", reflector.reshape(2))
+        object.__setattr__(self, "span_deg", positive_float("span", self.span_deg))
+        coarse = positive_int("coarse_points", self.coarse_points)
+        fine = positive_int("fine_points", self.fine_points)
+        if coarse < 3 or fine < 5:
+            raise EchocalValueError("coarse_points must be >= 3 and fine_points >= 5")
+        object.__setattr__(self, "coarse_points", coarse)
+        object.__setattr__(self, "fine_points", fine)
+
+    @property
+    def reflector(self) -> FloatArray:
+        """[deg] the reflector's normal as gimbal tilts, shape ``(2,)``."""
+        return np.asarray(self.reflector_tilts_deg, dtype=np.float64)
+
+
 def measure_beam_axis(
     source: MeasurementSource,
     position: ArrayLike,
+    scan_plan: AxisScan | None = None,
     *,
-    reflector_tilts_deg: ArrayLike = (0.0, 0.0),
-    span_deg: float = 3.0,
-    coarse_points: int = 13,
-    fine_points: int = 11,
     repeats: int = 1,
 ) -> BeamAxis:
     """Find the beam axis over a flat reflector and the squint against the mechanical axis.
@@ -155,21 +188,15 @@ def measure_beam_axis(
     ----------
     source : any :class:`~echocal.measurement.base.MeasurementSource` (simulator or rig).
     position : [m] probe position (face centre at zero tilt), shape ``(3,)``.
-    reflector_tilts_deg : [deg] gimbal tilts of the reflector's normal: the probe's
-        mechanical axis is normal to the reflector there; the coarse grid is centred on it.
-    span_deg : [deg] half-width of the coarse square grid.
-    coarse_points, fine_points : grid points per side (odd: one at the centre).  The fine
-        grid spans one coarse step either side of the coarse maximum.
+    scan_plan : the reflector's tilts and the grids (:class:`AxisScan`); None: its defaults
+        (a reflector normal to the untilted probe, ±3°, 13 then 11 points per side).
     repeats : A-scans averaged at each tilt.
     """
     where = finite_array("position", position, shape_tail=(3,)).reshape(3)
-    reflector = finite_array("reflector_tilts", reflector_tilts_deg, shape_tail=(2,)).reshape(2)
-    span = positive_float("span", span_deg)
-    n_coarse = positive_int("coarse_points", coarse_points)
-    n_fine = positive_int("fine_points", fine_points)
+    plan = AxisScan() if scan_plan is None else scan_plan
+    reflector, span = plan.reflector, plan.span_deg
+    n_coarse, n_fine = plan.coarse_points, plan.fine_points
     n_rep = positive_int("repeats", repeats)
-    if n_coarse < 3 or n_fine < 5:
-        raise EchocalValueError("coarse_points must be >= 3 and fine_points >= 5")
 
     def scan(tilts: FloatArray) -> FloatArray:
         return echo_peaks(source, [Pose.from_tilt(*where, *t) for t in tilts], n_rep)

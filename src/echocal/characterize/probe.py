@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal._validate import positive_int
-from echocal.characterize.axis import BeamAxis, measure_beam_axis
+from echocal.characterize.axis import AxisScan, BeamAxis, measure_beam_axis
 from echocal.characterize.profile import (
     BeamProfile,
     FocalScan,
@@ -64,10 +64,7 @@ def characterize_probe(
     source: MeasurementSource,
     position: ArrayLike,
     *,
-    reflector_tilts_deg: ArrayLike = (0.0, 0.0),
-    span_deg: float = 3.0,
-    coarse_points: int = 13,
-    fine_points: int = 11,
+    axis_scan: AxisScan | None = None,
     repeats: int = 1,
     n_ascans: int = 16,
     point_source: MeasurementSource | None = None,
@@ -79,10 +76,12 @@ def characterize_probe(
     focus_distances: ArrayLike = (),
 ) -> ProbeCharacterization:
     """Characterize the probe on ``source`` over a flat reflector below ``position`` [m]:
-    :func:`~echocal.characterize.axis.measure_beam_axis` (its keyword arguments), then
+    :func:`~echocal.characterize.axis.measure_beam_axis` (the tilts ``axis_scan`` plans,
+    :class:`~echocal.characterize.axis.AxisScan`; None: its defaults), then
     :func:`~echocal.characterize.spectrum.measure_spectrum` at the axis found, averaging
-    ``n_ascans`` A-scans.  With a ``target`` [m] (a point target on ``point_source``,
-    ``source`` itself by default), at the beam axis's tilts:
+    ``n_ascans`` A-scans; ``repeats`` A-scans averaged at every point of every scan.
+    With a ``target`` [m] (a point target on ``point_source``, ``source`` itself by
+    default), at the beam axis's tilts:
     :func:`~echocal.characterize.profile.measure_beam_profile` at ``distances`` [m] (lines
     of ``line_points`` over ±``half_span`` [m] along ``axes``) and
     :func:`~echocal.characterize.profile.measure_focus` at ``focus_distances`` [m] (either
@@ -92,15 +91,7 @@ def characterize_probe(
     focal = np.asarray(focus_distances, dtype=np.float64).reshape(-1)
     if target is None and (dist.size or focal.size):
         raise EchocalValueError("target: give the point target's position for the distances")
-    axis = measure_beam_axis(
-        source,
-        position,
-        reflector_tilts_deg=reflector_tilts_deg,
-        span_deg=span_deg,
-        coarse_points=coarse_points,
-        fine_points=fine_points,
-        repeats=repeats,
-    )
+    axis = measure_beam_axis(source, position, axis_scan, repeats=repeats)
     spectrum = measure_spectrum(source, axis.pose, n_ascans=n_ascans)
     count = len(axis.amplitude) * repeats + spectrum.n_ascans
     points = source if point_source is None else point_source

@@ -114,6 +114,20 @@ class BeamProfile:
         }
 
 
+def _scan_inputs(
+    target: ArrayLike, distances: ArrayLike, tilts_deg: ArrayLike, repeats: int, least: int
+) -> tuple[FloatArray, FloatArray, FloatArray, int]:
+    """A point-target scan's inputs checked: the target [m] ``(3,)``, at least ``least``
+    distances [m] > 0 ``(d,)``, the tilts [deg] ``(2,)`` and the repeats."""
+    where = finite_array("target", target, shape_tail=(3,)).reshape(3)
+    dist = finite_array("distances", distances).reshape(-1)
+    if dist.size < least or np.any(dist <= 0):
+        many = {1: "one", 3: "three"}.get(least, str(least))
+        raise EchocalValueError(f"distances must be {many} or more lengths > 0")
+    tilts = finite_array("tilts", tilts_deg, shape_tail=(2,)).reshape(2)
+    return where, dist, tilts, positive_int("repeats", repeats)
+
+
 def _noise_sigma(samples: FloatArray) -> float:
     return float(1.4826 * np.median(np.abs(samples - np.median(samples))))
 
@@ -143,16 +157,11 @@ def measure_beam_profile(
     axes : the probe's lateral directions to scan, ``"x"`` and/or ``"y"``.
     repeats : A-scans averaged per point.
     """
-    where = finite_array("target", target, shape_tail=(3,)).reshape(3)
-    dist = finite_array("distances", distances).reshape(-1)
-    if dist.size == 0 or np.any(dist <= 0):
-        raise EchocalValueError("distances must be one or more lengths > 0")
-    tilts = finite_array("tilts", tilts_deg, shape_tail=(2,)).reshape(2)
+    where, dist, tilts, n_rep = _scan_inputs(target, distances, tilts_deg, repeats, 1)
     span = positive_float("half_span", half_span)
     n = positive_int("points", points)
     if n < 5:
         raise EchocalValueError(f"points must be >= 5; got {n}")
-    n_rep = positive_int("repeats", repeats)
     names = tuple(axes)
     if not names or any(a not in _AXES for a in names):
         raise EchocalValueError(f"axes must be one or both of 'x', 'y'; got {list(names)}")
@@ -247,12 +256,8 @@ def measure_focus(
     """The on-axis echo of a point target at each distance [m] (the probe moved along its
     axis, tilts ``tilts_deg``) and the focal distance: the vertex of a parabola through
     the largest echo and up to two neighbours on each side."""
-    where = finite_array("target", target, shape_tail=(3,)).reshape(3)
-    dist = np.sort(finite_array("distances", distances).reshape(-1))
-    if dist.size < 3 or np.any(dist <= 0):
-        raise EchocalValueError("distances must be three or more lengths > 0")
-    tilts = finite_array("tilts", tilts_deg, shape_tail=(2,)).reshape(2)
-    n_rep = positive_int("repeats", repeats)
+    where, dist, tilts, n_rep = _scan_inputs(target, distances, tilts_deg, repeats, 3)
+    dist = np.sort(dist)
     axis = tilt_frame(*tilts)[:, 2]
     amp = echo_peaks(source, [Pose.from_tilt(*(where + d * axis), *tilts) for d in dist], n_rep)
     focus, sigma = focal_distance(dist, amp)

@@ -8,14 +8,15 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
 
-from echocal.errors import DataFileError, EchocalError
+from echocal.errors import DataFileError, EchocalError, EchocalValueError
 from echocal.geometry import Pose
 from echocal.io import atomic_write_text, file_in_the_way, json_ready
-from echocal.units import parse_angle, parse_length
+from echocal.units import parse_angle, parse_length, parse_quantity
 
 try:  # recent typer vendors click as typer._click; older ones use click itself
     from typer._click import exceptions as click_exceptions
@@ -108,6 +109,15 @@ def parse_pose(text: str, option: str = "--pose") -> Pose:
         else (0.0, 0.0)
     )
     return Pose(x, y, z, az, coel)
+
+
+def parse_position(text: str, option: str = "--position") -> np.ndarray:
+    """Parse ``"X,Y,Z"`` as a point [m], shape ``(3,)`` (lengths in mm unless a unit is
+    given): ``"0,0,50"`` is 50 mm above the origin."""
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 3:
+        raise EchocalValueError(f"{option} must be X,Y,Z (mm unless a unit is given); got {text!r}")
+    return np.array([parse_quantity(option, p, "length", "mm") for p in parts])
 
 
 def parse_pair(text: str, option: str) -> tuple[float, float]:

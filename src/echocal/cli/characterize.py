@@ -9,10 +9,9 @@ from typing import TYPE_CHECKING, Annotated
 import numpy as np
 import typer
 
-from echocal.cli._common import output, write_json
+from echocal.cli._common import output, parse_position, write_json
 from echocal.cli._rig_option import RIG_HELP
 from echocal.cli._setup_option import SETUP_HELP, SNR_HELP, SPECIMEN_HELP, resolve_setup
-from echocal.cli.lobe import _position  # X,Y,Z in mm, as `echocal lobe` reads it
 from echocal.errors import EchocalValueError
 from echocal.units import parse_quantity
 
@@ -143,7 +142,7 @@ def register(app: typer.Typer) -> None:
         12668-2 style).  With --rig, on a rig: --position is required, the reflector is
         level unless --reflector-tilts says otherwise, and the point target (--target) is
         on the same rig."""
-        from echocal.characterize import characterize_probe
+        from echocal.characterize import AxisScan, characterize_probe
         from echocal.io import check_out_dir, refuse_existing_output
 
         if out is not None:  # refused before anything is measured
@@ -155,7 +154,7 @@ def register(app: typer.Typer) -> None:
             if focus_distances is None
             else _lengths("--focus-distances", focus_distances)
         )
-        target_at = None if target is None else _position(target)
+        target_at = None if target is None else parse_position(target, "--target")
         with ExitStack() as stack:
             if rig is not None:
                 from echocal.cli._rig_option import (
@@ -167,7 +166,7 @@ def register(app: typer.Typer) -> None:
                 refuse_simulation_options(
                     specimen=specimen, snr=snr, seed=seed, point_setup=point_setup
                 )
-                where = _position(require_position(position, "--rig"))
+                where = parse_position(require_position(position, "--rig"))
                 reflector = np.zeros(2) if reflector_tilts is None else _tilts(reflector_tilts)
                 if target_at is None and (dist.size or focal.size):
                     raise EchocalValueError(
@@ -182,7 +181,7 @@ def register(app: typer.Typer) -> None:
                 where = (
                     np.asarray(virtual.reference_position, float)
                     if position is None
-                    else _position(position)
+                    else parse_position(position)
                 )
                 reflector = (
                     _surface_normal_tilts(virtual, where)
@@ -206,10 +205,12 @@ def register(app: typer.Typer) -> None:
             result = characterize_probe(
                 source,
                 where,
-                reflector_tilts_deg=reflector,
-                span_deg=span,
-                coarse_points=coarse_points,
-                fine_points=fine_points,
+                axis_scan=AxisScan(
+                    reflector_tilts_deg=reflector,
+                    span_deg=span,
+                    coarse_points=coarse_points,
+                    fine_points=fine_points,
+                ),
                 repeats=repeats,
                 n_ascans=averages,
                 point_source=points,

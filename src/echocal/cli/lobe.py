@@ -9,20 +9,10 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from echocal.cli._common import output, write_json
+from echocal.cli._common import output, parse_position, write_json
 from echocal.cli._gate_option import GATE_HELP, gate_for_setup
 from echocal.cli._setup_option import SETUP_HELP, SPECIMEN_HELP, resolve_setup
 from echocal.errors import EchocalValueError
-from echocal.units import parse_quantity
-
-
-def _position(text: str) -> np.ndarray:
-    parts = [p.strip() for p in text.split(",")]
-    if len(parts) != 3:
-        raise EchocalValueError(
-            f"--position must be X,Y,Z (mm unless a unit is given); got {text!r}"
-        )
-    return np.array([parse_quantity("--position", p, "length", "mm") for p in parts])
 
 
 def register(app: typer.Typer) -> None:
@@ -76,7 +66,7 @@ def register(app: typer.Typer) -> None:
                     f"{', '.join(echo_model_names())}"
                 )
             virtual = dataclasses.replace(virtual, reflection=model)
-        where = None if position is None else _position(position)
+        where = None if position is None else parse_position(position)
         chosen = gate_for_setup(gate, virtual)
         result = echo_lobe(virtual, where, max_tilt=max_tilt, n_points=points, gate=chosen)
         data = result.to_dict()

@@ -69,6 +69,7 @@ __all__ = [
     "passes_for_noise",
     "passes_for_snr",
     "search_passes",
+    "white_equivalent_sigma",
 ]
 
 DETECTION_PROBABILITY = 0.9
@@ -178,29 +179,36 @@ class LobeProfile:
         return rice_sf(level / scale, self.peaks / scale)
 
     def echo_likelihood(
-        self, noise_sigma: float, threshold: float = ECHO_THRESHOLD
+        self,
+        noise_sigma: float,
+        threshold: float = ECHO_THRESHOLD,
+        noise_ar: tuple[float, ...] = (),
     ) -> EchoLikelihood | None:
         """How one A-scan's matched-filter peak is distributed versus misalignment against
-        white noise of per-sample σ ``noise_sigma`` [a.u.], for a Bayesian search
-        (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`): the profile's peaks
-        averaged over its directions, in units of σ · the detector's noise gain, and the
-        detection threshold ``threshold`` [σ of significance] on the same scale, and the
-        echo's peak SNR ŝ against that noise.  None when
-        the lobe does not peak at normal incidence (a large probe over a curved part: the
-        optimum is not where the profile is centred)."""
+        noise of per-sample σ ``noise_sigma`` [a.u.] and colour ``noise_ar`` (AR
+        coefficients, :func:`echocal.bench.receiver.ar_noise`; () white), for a Bayesian
+        search (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`): the
+        profile's peaks averaged over its directions, in units of σ · the noise gain of
+        the detector calibrated on that colour, the detection threshold ``threshold`` [σ
+        of significance] on the same scale, and the echo's effective peak SNR ŝ against
+        that noise (:func:`white_equivalent_sigma`).  None when the lobe does not peak at
+        normal incidence (a large probe over a curved part: the optimum is not where the
+        profile is centred)."""
         top = float(np.mean(self.peaks[:, 0]))
         if not top > 0.0 or float(self.peaks.max()) > _PEAK_AT_NORMAL * top:
             return None
         setup = self.setup
-        detector = shared_detector(setup.pulse, setup.window.fs, setup.window.n_samples)
+        window = setup.window
+        detector = shared_detector(setup.pulse, window.fs, window.n_samples, noise_ar)
         sigma = positive_float("noise_sigma", noise_sigma)
         scale = sigma * detector.noise_gain
+        white = white_equivalent_sigma(setup, sigma, noise_ar)
         return EchoLikelihood(
             angles=self.angles,
             echo=self.peaks.mean(axis=0) / scale,
             n_cells=detector.n_cells,
             threshold=detector.threshold_peak(sigma, threshold) / scale,
-            snr_db=float(snr_for_noise_sigma(self.reference, sigma, setup.window, setup.pulse)),
+            snr_db=float(snr_for_noise_sigma(self.reference, white, window, setup.pulse)),
         )
 
     def radius(
@@ -374,16 +382,40 @@ def search_passes(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -
     return tuple(passes)
 
 
+def white_equivalent_sigma(
+    setup: VirtualSetup, noise_sigma: float, noise_ar: tuple[float, ...] = ()
+) -> float:
+    """[a.u. per sample] the σ of white noise that puts as much power through ``setup``'s
+    matched filter as noise of per-sample σ ``noise_sigma`` and colour ``noise_ar`` (AR
+    coefficients; () white: σ itself): σ · g_AR / g_white, the two detectors' measured
+    noise gains (:class:`~echocal.signal.detection.EchoDetector`).  AR(1) noise of
+    coefficient 0.6 at the 5 MHz probe's band and 100 MHz sampling puts 2.9 times the
+    white noise's power density into the band: its white-equivalent σ is 1.7 σ, an SNR
+    4.7 dB lower."""
+    sigma = float(noise_sigma)
+    if not noise_ar:
+        return sigma
+    window = setup.window
+    white = shared_detector(setup.pulse, window.fs, window.n_samples)
+    coloured = shared_detector(setup.pulse, window.fs, window.n_samples, tuple(noise_ar))
+    return sigma * coloured.noise_gain / white.noise_gain
+
+
 def echo_snr_for_noise(
-    setup: VirtualSetup, position: Sequence[float] | np.ndarray, noise_sigma: float
+    setup: VirtualSetup,
+    position: Sequence[float] | np.ndarray,
+    noise_sigma: float,
+    noise_ar: tuple[float, ...] = (),
 ) -> float:
     """[dB] ŝ, the peak SNR of the best echo of ``setup``'s probe at ``position`` [m]
-    against a receiver noise σ [a.u. per sample]: its noiseless A-scan (the lobe
-    profile's reference) through the matched filter, against σ.  NaN where neither has
-    power (σ = 0 and no echo)."""
+    against a receiver noise σ [a.u. per sample] of colour ``noise_ar`` (AR coefficients;
+    () white): its noiseless A-scan (the lobe profile's reference) through the matched
+    filter, against the white-equivalent σ (:func:`white_equivalent_sigma`).  NaN where
+    neither has power (σ = 0 and no echo)."""
     pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
     profile = cached_lobe_profile(setup, pos)
-    return float(snr_for_noise_sigma(profile.reference, noise_sigma, setup.window, setup.pulse))
+    white = white_equivalent_sigma(setup, noise_sigma, noise_ar)
+    return float(snr_for_noise_sigma(profile.reference, white, setup.window, setup.pulse))
 
 
 def passes_for_snr(

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from echocal._validate import finite_array
 from echocal.ascan import AScan
 from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.objective import Objective
+from echocal.calibrate.objective import Objective, as_points
 from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.errors import EchocalError, EchocalValueError
 from echocal.geometry import Pose, convert_angles, pose_from_angles
@@ -113,7 +113,9 @@ class SourceObjective(Objective):
         (:func:`echocal.bench.motion.short_order`, from where the last batch ended) instead
         of in the order asked; values come back in the order asked.  On a simulated bench
         :attr:`bench_time_saved` keeps the motion and settling time this saved against
-        the plain order, predicted from the bench's tilt axes.
+        the plain order, predicted from the bench's tilt axes; and a method that weighs
+        its next point's move (``auto``'s posterior search) is told the moves'
+        times (:meth:`move_times`).
     """
 
     def __init__(
@@ -216,6 +218,20 @@ class SourceObjective(Objective):
             short = move_times(tilts[order], start, speeds, settling).sum()
             self.bench_time_saved = (self.bench_time_saved or 0.0) + float(plain - short)
         return order if len(points) > 1 else None
+
+    def move_times(self, points: np.ndarray) -> np.ndarray | None:
+        """[s] the predicted motion and settling from the last point measured to each of
+        ``points`` [deg] ``(k, 2)``, ``(k,)`` (:func:`echocal.bench.motion.reach_times`),
+        when this objective is motion-aware on a simulated bench whose tilt axes take
+        time; None otherwise, and before the first measurement."""
+        speeds, settling, timed = _tilt_axes(self.source)
+        if not (self.motion_aware and timed) or self._at is None:
+            return None
+        from echocal.bench.motion import reach_times
+
+        pts = as_points("points", points)
+        tilts = np.column_stack(convert_angles(pts[:, 0], pts[:, 1], self.parameterization, "tilt"))
+        return reach_times(self._at, tilts, speeds, settling)
 
     def _measure(self, points: np.ndarray) -> np.ndarray:
         """Measure ``points`` [deg] ``(k, 2)`` in this order; their metric values ``(k,)``."""
@@ -341,7 +357,8 @@ class SourceObjective(Objective):
         against the noise σ measured in its A-scans so far (median of the per-scan robust
         estimates): those of :func:`~echocal.measurement.detection_radius.passes_for_snr`
         for the echo's predicted peak SNR ŝ
-        (:func:`~echocal.measurement.detection_radius.echo_snr_for_noise`), which
+        (:func:`~echocal.measurement.detection_radius.echo_snr_for_noise`, against the
+        white-equivalent σ of a simulated bench's coloured noise), which
         :attr:`search_snr_db` keeps.  None before a noisy A-scan, for a gated metric,
         where the probe cannot see the part, and for a rig's ``twin``: a setup file does
         not give the rig's echo amplitude in the rig's units, so it cannot say how far
@@ -356,7 +373,7 @@ class SourceObjective(Objective):
         if not sigma > 0.0:  # no noise measured yet
             return None
         try:
-            snr = echo_snr_for_noise(twin, self.position, sigma)
+            snr = echo_snr_for_noise(twin, self.position, sigma, self._noise_ar)
             passes = passes_for_snr(twin, self.position, snr)
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
@@ -367,8 +384,10 @@ class SourceObjective(Objective):
     def echo_likelihood(self) -> EchoLikelihood | None:
         """The simulated probe's matched-filter peak versus misalignment at this position,
         against the receiver noise σ measured so far
-        (:meth:`~echocal.measurement.detection_radius.LobeProfile.echo_likelihood`):
-        what a Bayesian search of a lost echo weighs each significance with.  Only for
+        (:meth:`~echocal.measurement.detection_radius.LobeProfile.echo_likelihood`), of
+        the colour of a simulated bench's receiver noise (its AR model: the detector
+        calibrated on it, the echo's effective SNR): what a Bayesian search of a lost echo
+        weighs each significance with.  Only for
         the simulator measured with its own pulse, one A-scan per point, with tilt
         angles (the profile's misalignments), ungated; None otherwise — a rig's twin
         does not give the echo's amplitude in the rig's units — before a noisy A-scan,
@@ -388,7 +407,8 @@ class SourceObjective(Objective):
         if not sigma > 0.0:  # no noise measured yet
             return None
         try:
-            return cached_lobe_profile(twin, self.position).echo_likelihood(sigma)
+            profile = cached_lobe_profile(twin, self.position)
+            return profile.echo_likelihood(sigma, noise_ar=self._noise_ar)
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
 
