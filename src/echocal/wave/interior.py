@@ -64,7 +64,9 @@ from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 from echocal.wave.curved_wall import curved_back_walls, tangent_plane
 from echocal.wave.layered import EchoPath, echo_paths, pp_coefficients
+from echocal.wave.layered_spectrum import band_responses
 from echocal.wave.model import WaveEchoModel
+from echocal.wave.probe import PistonProbe
 from echocal.wave.shell import equivalent_mirror
 
 __all__ = ["FRONT_WALL", "InteriorEchoes", "LabelledEcho", "back_wall_label", "echo_list"]
@@ -173,35 +175,16 @@ class InteriorEchoes:
 
         ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n (beam along −n).
         """
-        out = {FRONT_WALL: self.model.ascans((self.front,), position[None], frame[None])[0]}
         front = self._front(position, frame)
         if front is None:  # the beam axis never meets the face: nothing enters the part
             zero = np.zeros(self.model.window.n_samples)
+            out = {FRONT_WALL: self._front_wall(position, frame)}
             return out | {label: zero for label in self.labels[1:]}
         orders = range(1, self.interior.back_wall_echoes + 1)
         if self.interior.layers:
-            sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
-            unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
-            for path in self.paths(sin_w):
-                key = (round(path.equivalent_depth, 12), round(path.delay, 15))
-                if key not in unit:
-                    unit[key] = self._mirror(
-                        path.equivalent_depth, 1.0, path.delay, position, frame
-                    )
-                spectrum = np.conj(path.coefficient) * unit[key]
-                if self.interior.flaws:
-                    wall = float(self.interior.interfaces[max(path.turns)])
-                    spectrum = spectrum - self._shadows(
-                        wall,
-                        path.equivalent_depth,
-                        path.coefficient,
-                        path.delay,
-                        position,
-                        frame,
-                        front,
-                    )
-                out[path.label] = self._layered(path, spectrum, front)
+            out = self._layered_echoes(position, frame, front)
         elif isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
+            out = {FRONT_WALL: self._front_wall(position, frame)}
             spectra = curved_back_walls(
                 self.model,
                 self.front,
@@ -216,11 +199,57 @@ class InteriorEchoes:
                 depth = k * self.interior.thickness
                 out[back_wall_label(k)] = self._finish(spectrum, front, 2.0 * depth)
         else:
+            out = {FRONT_WALL: self._front_wall(position, frame)}
             for k in orders:
                 out[back_wall_label(k)] = self._back_wall(k, position, frame, front)
         for flaw in self.interior.flaws:
             out[flaw.name] = self._flaw(flaw, position, frame, front)
         return out
+
+    def _layered_echoes(
+        self, position: FloatArray, frame: FloatArray, front: _Front
+    ) -> dict[str, FloatArray]:
+        """A layered plate's front-wall echo and every path's, by label: over the probe's
+        plane-wave spectrum where :meth:`_exact_paths` applies, else on the paraxial
+        equivalent mirrors; each less the flaws' shadows."""
+        out: dict[str, FloatArray] = {}
+        sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
+        paths = self.paths(sin_w)
+        exact = self._exact_paths(paths, position, frame, front)
+        if exact is not None:  # the front face's echo over the same spectrum
+            spectrum = self.model.spectrum_of_response(exact[0])
+            spectrum = spectrum * self.model.attenuation_factor(2.0 * front.water_path)
+            out[FRONT_WALL] = self.model.samples(spectrum)
+        else:
+            out[FRONT_WALL] = self._front_wall(position, frame)
+        unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
+        for j, path in enumerate(paths):
+            if exact is not None:
+                spectrum = self.model.spectrum_of_response(exact[j + 1])
+            else:
+                key = (round(path.equivalent_depth, 12), round(path.delay, 15))
+                if key not in unit:
+                    unit[key] = self._mirror(
+                        path.equivalent_depth, 1.0, path.delay, position, frame
+                    )
+                spectrum = np.conj(path.coefficient) * unit[key]
+            if self.interior.flaws:
+                wall = float(self.interior.interfaces[max(path.turns)])
+                spectrum = spectrum - self._shadows(
+                    wall,
+                    path.equivalent_depth,
+                    path.coefficient,
+                    path.delay,
+                    position,
+                    frame,
+                    front,
+                )
+            out[path.label] = self._layered(path, spectrum, front)
+        return out
+
+    def _front_wall(self, position: FloatArray, frame: FloatArray) -> FloatArray:
+        """The front face's echo by the wave model (its reflection R(θ) at each sample)."""
+        return self.model.ascans((self.front,), position[None], frame[None])[0]
 
     def paths(self, sin_water: float = 0.0) -> list[EchoPath]:
         """The layered plate's echo paths (:func:`echocal.wave.layered.echo_paths`) at the
@@ -255,6 +284,33 @@ class InteriorEchoes:
             host = len(self._flaw_column(flaw).layers)
             out[flaw.name] = {"layer": host, "material": layers[host - 1].material.name}
         return out
+
+    def _exact_paths(
+        self, paths: list[EchoPath], position: FloatArray, frame: FloatArray, front: _Front
+    ) -> ComplexArray | None:
+        """The front face's and every path's exact response V(f) ``(1 + n_paths, n_f)``
+        over the probe's plane-wave spectrum (:mod:`echocal.wave.layered_spectrum`) when it
+        applies: a flat piston over a flat layered plate whose face fills the beam; else
+        None (the paraxial equivalent mirrors)."""
+        probe = self.model.probe
+        if not (isinstance(probe, PistonProbe) and probe.curvature is None):
+            return None
+        if not isinstance(self.front, FinitePlane) or not paths:
+            return None
+        if self.model.image_plane((self.front,), position, frame) is None:
+            return None
+        tilt = math.radians(self._axis_angles(front)[0])
+        f = self.model.frequencies
+        return band_responses(
+            probe.radius,
+            self._medium_at_model_speed,
+            self.interior.layers,
+            [((), ""), *((p.turns, "L" * len(p.legs)) for p in paths)],
+            front.water_path * math.cos(tilt),
+            tilt,
+            f,
+            np.abs(self.model.pulse.spectrum(f)),
+        )
 
     @property
     def _medium_at_model_speed(self) -> Material:

@@ -42,7 +42,15 @@ from numpy.typing import NDArray
 from echocal.materials import Material
 from echocal.specimen.interior import Layer, turn_sequences
 
-__all__ = ["EchoPath", "echo_paths", "path_label", "pp_coefficients"]
+__all__ = [
+    "EchoPath",
+    "echo_paths",
+    "mode_coefficients",
+    "path_factors",
+    "path_label",
+    "pp_coefficient_arrays",
+    "pp_coefficients",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -51,46 +59,79 @@ def pp_coefficients(sin_in: float, upper: Material, lower: Material) -> tuple[co
     """(R, T): a longitudinal plane wave in ``upper`` meeting ``lower`` at incidence sine
     ``sin_in``: the reflected and transmitted longitudinal waves' stress amplitudes per unit
     incident stress (pressure in a fluid), in the e^{−iωt} convention of
-    :mod:`echocal.coefficients`.
+    :mod:`echocal.coefficients` (:func:`pp_coefficient_arrays` at one sine)."""
+    r, t = pp_coefficient_arrays(np.array([sin_in]), upper, lower)
+    return complex(r[0]), complex(t[0])
+
+
+def _vertical(slowness: float, kx: FloatArray) -> NDArray[np.complex128]:
+    """k_z/ω = √(1/c² − k_x²/ω²) with Im ≥ 0 (decaying away from the interface)."""
+    value = np.sqrt((slowness * slowness - kx * kx).astype(np.complex128))
+    return np.where(value.imag < 0, -value, value)
+
+
+def pp_coefficient_arrays(
+    sin_in: FloatArray, upper: Material, lower: Material
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """(R, T) of :func:`pp_coefficients` at every incidence sine of ``sin_in`` ``(n,)``
+    (sines beyond 1, evanescent incident waves, continue analytically), each ``(n,)``
+    (:func:`mode_coefficients` of a longitudinal wave, its longitudinal waves)."""
+    slowness = np.asarray(sin_in, dtype=np.float64) / upper.longitudinal_speed
+    out = mode_coefficients(slowness, upper, lower, "L")
+    return out[("R", "L")], out[("T", "L")]
+
+
+def mode_coefficients(
+    slowness: FloatArray, upper: Material, lower: Material, incident: str
+) -> dict[tuple[str, str], NDArray[np.complex128]]:
+    """A plane wave of mode ``incident`` (``"L"`` longitudinal, ``"S"`` shear (SV), in a
+    solid) in ``upper`` meeting ``lower``, at horizontal slowness ``slowness`` [s/m]
+    ``(n,)`` (sin θ/c, the same on both sides by Snell's law): ``{("R" or "T", mode):
+    (n,)}``, the reflected and transmitted waves' amplitudes per unit incident amplitude,
+    a wave's amplitude being ρω² times its displacement potential (a longitudinal wave's
+    normal stress; a fluid's pressure), in the e^{−iωt} convention of
+    :mod:`echocal.coefficients`.  Shear entries only on a solid's side.
 
     Solved from the boundary conditions of the P–SV problem with displacement potentials
     (u = ∇φ + ∇×(ψŷ)): u_z and σ_zz continuous; between two solids (welded) u_x and σ_xz
-    too; on a solid's face against a fluid σ_xz = 0.  A wave of potential amplitude a has
-    stress amplitude ρω²a, so R = a_r/a_i and T = ρ₂a_t/(ρ₁a_i).  At normal incidence:
-    (Z₂ − Z₁)/(Z₂ + Z₁) and 2Z₂/(Z₁ + Z₂)."""
-    omega = 1.0
-    kx = sin_in / upper.longitudinal_speed
+    too; on a solid's face against a fluid σ_xz = 0.  So R = a_r/a_i and T = ρ₂a_t/(ρ₁a_i)
+    for potential amplitudes a; at normal incidence (L → L): (Z₂ − Z₁)/(Z₂ + Z₁) and
+    2Z₂/(Z₁ + Z₂)."""
+    kx = np.asarray(slowness, dtype=np.float64)  # per unit ω
 
-    def kz(speed: float) -> complex:
-        value = np.sqrt(complex((omega / speed) ** 2 - kx * kx))
-        return -value if value.imag < 0 else value  # decaying away from the interface
-
-    def columns(medium: Material, sign: float) -> list[NDArray[np.complex128]]:
-        """(u_x, u_z, σ_zz, σ_xz)/(ρ₁ω²) of the P (and SV) partial waves travelling along
-        ``sign``·z (z from upper into lower)."""
-        rho, c_l, c_t = medium.density, medium.longitudinal_speed, medium.shear_speed
+    def columns(medium: Material, sign: float) -> dict[str, NDArray[np.complex128]]:
+        """(n, 4) (u_x, u_z, σ_zz, σ_xz)/(ρ₁ω²) of the L (and S) partial waves travelling
+        along ``sign``·z (z from upper into lower), per unit ω."""
+        rho, c_t = medium.density, medium.shear_speed
         mu = rho * c_t * c_t
-        k_t2 = (omega / c_t) ** 2 if c_t > 0 else 0.0
-        kzl = sign * kz(c_l)
-        scale = upper.density * omega * omega
-        p_wave = np.array(
-            [1j * kx, 1j * kzl, -(rho * omega**2 - 2.0 * mu * kx * kx), -2.0 * mu * kx * kzl],
-            dtype=np.complex128,
-        )
-        p_wave[2:] /= scale
-        out = [p_wave]
-        if c_t > 0:
-            kzt = sign * kz(c_t)
-            s_wave = np.array(
-                [-1j * kzt, 1j * kx, -2.0 * mu * kx * kzt, mu * (kzt * kzt - kx * kx)],
-                dtype=np.complex128,
+        kzl = sign * _vertical(1.0 / medium.longitudinal_speed, kx)
+        scale = upper.density
+        zero = np.zeros_like(kzl)
+        out = {
+            "L": np.stack(
+                [
+                    1j * kx + zero,
+                    1j * kzl,
+                    -(rho - 2.0 * mu * kx * kx) / scale + zero,
+                    -2.0 * mu * kx * kzl / scale,
+                ],
+                axis=-1,
             )
-            s_wave[2:] /= scale
-            assert k_t2 > 0
-            out.append(s_wave)
+        }
+        if c_t > 0:
+            kzt = sign * _vertical(1.0 / c_t, kx)
+            out["S"] = np.stack(
+                [
+                    -1j * kzt,
+                    1j * kx + zero,
+                    -2.0 * mu * kx * kzt / scale,
+                    mu * (kzt * kzt - kx * kx) / scale,
+                ],
+                axis=-1,
+            )
         return out
 
-    incident = columns(upper, 1.0)[0]
+    waves = columns(upper, 1.0)[incident]
     reflected = columns(upper, -1.0)
     transmitted = columns(lower, 1.0)
     solid_up, solid_down = not upper.is_fluid, not lower.is_fluid
@@ -98,21 +139,23 @@ def pp_coefficients(sin_in: float, upper: Material, lower: Material) -> tuple[co
     rows = [1, 2]  # u_z, σ_zz
     if solid_up and solid_down:
         rows += [0, 3]  # u_x, σ_xz
-    matrix = [[col[r] for col in reflected] + [-col[r] for col in transmitted] for r in rows]
-    rhs = [-incident[r] for r in rows]
+    unknowns = [*reflected.values(), *(-col for col in transmitted.values())]
+    matrix = [[col[:, r] for col in unknowns] for r in rows]
+    rhs = [-waves[:, r] for r in rows]
     if solid_up != solid_down:  # σ_xz = 0 on the solid's face
-        solid_side = [
-            *(col[3] for col in reflected),
-            *(0.0 * col[3] for col in transmitted),
-        ]
-        if solid_down:
-            solid_side = [*(0.0 * col[3] for col in reflected), *(col[3] for col in transmitted)]
-        matrix.append(solid_side)
-        rhs.append(-incident[3] if solid_up else 0.0)
-    x = np.linalg.solve(np.array(matrix, dtype=np.complex128), np.array(rhs, dtype=np.complex128))
-    r = complex(x[0])
-    t = complex(x[len(reflected)]) * lower.density / upper.density
-    return r, t
+        keep_up, keep_down = float(solid_up), float(solid_down)
+        matrix.append(
+            [keep_up * col[:, 3] for col in reflected.values()]
+            + [keep_down * col[:, 3] for col in transmitted.values()]
+        )
+        rhs.append(-keep_up * waves[:, 3])
+    a = np.moveaxis(np.array(matrix, dtype=np.complex128), (0, 1), (1, 2))  # (n, rows, cols)
+    b = np.moveaxis(np.array(rhs, dtype=np.complex128), 0, 1)[..., None]
+    x = np.linalg.solve(a, b)[..., 0]
+    names = [("R", m) for m in reflected] + [("T", m) for m in transmitted]
+    ratio = lower.density / upper.density
+    scaled = x * np.array([ratio if name[0] == "T" else 1.0 for name in names])
+    return {name: np.asarray(scaled[:, j], dtype=np.complex128) for j, name in enumerate(names)}
 
 
 @dataclass(frozen=True)
@@ -170,34 +213,45 @@ def echo_paths(
     n = len(layers)
     cache_down = {} if blocked else {i: down(i) for i in range(n + 1)}
     cache_up = {} if blocked else {i: up(i) for i in range(n)}
-
-    def factor(table: dict[int, tuple[complex, complex]], i: int, which: int) -> complex:
-        return 1.0 if blocked else table[i][which]
-
     out = []
     for turns in turn_sequences(n, order):
-        coefficient = factor(cache_down, 0, 1)  # into layer 1
-        legs: list[int] = []
-        level, going_down = 0, True  # the last interface met
-        for turn in turns:
-            if going_down:  # layers level+1 … turn, then reflect at turn from above
-                for i in range(level + 1, turn + 1):
-                    legs.append(i)
-                    if i < turn:
-                        coefficient *= factor(cache_down, i, 1)
-                coefficient *= factor(cache_down, turn, 0)
-            else:  # layers level … turn+1 upwards, then reflect at turn from below
-                for i in range(level, turn, -1):
-                    legs.append(i)
-                    if i - 1 > turn:
-                        coefficient *= factor(cache_up, i - 1, 1)
-                coefficient *= factor(cache_up, turn, 0)
-            level, going_down = turn, not going_down
-        for i in range(level, 0, -1):  # back up and out through the front face
-            legs.append(i)
-            coefficient *= factor(cache_up, i - 1, 1)
-        out.append(_path(turns, tuple(legs), 0j if blocked else coefficient, layers, sines, c_w))
+        legs, factors = path_factors(turns)
+        coefficient = 0j
+        if not blocked:
+            coefficient = 1.0 + 0j
+            for going_down, i, which in factors:
+                coefficient *= (cache_down if going_down else cache_up)[i][which]
+        out.append(_path(turns, legs, coefficient, layers, sines, c_w))
     return out
+
+
+def path_factors(
+    turns: Sequence[int],
+) -> tuple[tuple[int, ...], tuple[tuple[bool, int, int], ...]]:
+    """The layers (1 … N) the path that turns at ``turns`` crosses, in order, and the
+    interface coefficients it picks up: ``(from_above, interface, 0 for R / 1 for T)``
+    (the front face's transmission in, every crossing and turn, and out again)."""
+    legs: list[int] = []
+    factors: list[tuple[bool, int, int]] = [(True, 0, 1)]  # into layer 1
+    level, going_down = 0, True  # the last interface met
+    for turn in turns:
+        if going_down:  # layers level+1 … turn, then reflect at turn from above
+            for i in range(level + 1, turn + 1):
+                legs.append(i)
+                if i < turn:
+                    factors.append((True, i, 1))
+            factors.append((True, turn, 0))
+        else:  # layers level … turn+1 upwards, then reflect at turn from below
+            for i in range(level, turn, -1):
+                legs.append(i)
+                if i - 1 > turn:
+                    factors.append((False, i - 1, 1))
+            factors.append((False, turn, 0))
+        level, going_down = turn, not going_down
+    for i in range(level, 0, -1):  # back up and out through the front face
+        legs.append(i)
+        factors.append((False, i - 1, 1))
+    return tuple(legs), tuple(factors)
 
 
 def _path(
