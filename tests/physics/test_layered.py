@@ -136,19 +136,7 @@ def _reference(stack, tilt: float, freqs: np.ndarray) -> np.ndarray:
     [
         pytest.param("acrylic-aluminium", 0.0, marks=pytest.mark.slow),
         pytest.param("thin-coating", 0.0, marks=pytest.mark.slow),
-        pytest.param(
-            "steel-acrylic-aluminium",
-            0.0,
-            marks=[
-                pytest.mark.slow,
-                pytest.mark.xfail(
-                    strict=True,
-                    reason="interface-2 (1.78 µs) measured 12.5 % above the reference: it "
-                    "overlaps the steel's ringing 1.0.1.0.1 (0.26 µs later, as strong), "
-                    "whose legs in the steel (c_L/c_w = 4) the paraxial path maps least well",
-                ),
-            ],
-        ),
+        pytest.param("steel-acrylic-aluminium", 0.0, marks=pytest.mark.slow),
         pytest.param("thin-coating", 1.0, marks=pytest.mark.slow),
         pytest.param("steel-acrylic-aluminium", 1.0, marks=pytest.mark.slow),
     ],
@@ -158,21 +146,25 @@ def test_interface_echoes_and_first_multiples_match_the_exact_stack(
 ) -> None:
     """Each gate around an arrival with at most three reflections (the primaries and the
     first multiples), before any path the model leaves out (seven reflections or more)
-    can arrive, and the front wall's: the model's envelope peak against the reference's.
+    can arrive, and the front wall's: the model's envelope peak against the reference's,
+    both at the model's sample times.
 
-    Tolerances lock the accuracy measured here; they are wider than the issue's 1 %:
+    Tolerances (measured with the plane-wave route, 12.7 mm 5 MHz probe at 60 mm):
 
-    - normal incidence, the front wall and each interface's primary echo: 2.5 % of its own
-      peak (measured: ≤ 0.1 % on acrylic / aluminium, ≤ 0.4 % on the thin coating, 0.4 %,
-      0.9 % and 2.0 % on steel / acrylic / aluminium);
-    - every other gate, and every gate at 1° of tilt: 3.5 % of the train's largest echo
-      (measured at 0°: ≤ 0.6 % on acrylic / aluminium and steel / acrylic / aluminium,
-      3.2 % for the thin coating's first ringing; at 1°: 3.0 % and 1.2 %).
-
-    The multiples ride on the edge waves of the earlier echoes, which cross the fast layers
-    at 20–30°, and the interface coefficients change across the beam's angular spectrum:
-    the model's paraxial equivalent path and its coefficients taken at the beam axis's
-    angle are approximate there."""
+    - normal incidence, the front wall and each interface's primary echo that is at least
+      a tenth of the train's largest: 1 % of its own peak (measured ≤ 0.5 %: 0.10–0.27 %
+      on acrylic / aluminium, 0.01–0.36 % on the thin coating, 0.33 % and 0.50 % on
+      steel / acrylic / aluminium);
+    - normal incidence, every other gate at least a tenth of the largest (the first
+      multiples): 1.5 % of its own peak (measured: the acrylic's ringing −1.24 %, the
+      others ≤ 0.94 %);
+    - every gate, at 0° and 1°: 1.5 % of the train's largest echo.  That is the
+      reference's own floor: 0.5 µs before the front wall's echo its envelope stands
+      0.8 % of the front wall above the pulse's own tail (steel / acrylic / aluminium:
+      the long ringing folded back by its 20 µs period, or its quadrature), of the size
+      of the weak echoes' residuals (steel /
+      acrylic / aluminium: interface-2, 6 % of the front wall, 0.8 % of it off; at 1°
+      1.1 % on the steel's ringing)."""
     layers = STACKS[stack]
     _, echoes, window = _model_train(layers, tilt)
     scan = sum(echoes.values())
@@ -205,8 +197,9 @@ def test_interface_echoes_and_first_multiples_match_the_exact_stack(
     assert len(checked) >= 3
     largest = max(want for _, _, want in checked)
     for arrival, got, want in checked:
-        own = tilt == 0.0 and (arrival == 0.0 or arrival in primaries)
-        bound = 0.025 * want if own else 0.035 * largest
+        bound = 0.015 * largest
+        if tilt == 0.0 and want >= 0.1 * largest:
+            bound = 0.01 * want if arrival == 0.0 or arrival in primaries else 0.015 * want
         assert abs(got - want) <= bound, f"{arrival * 1e6:.3f} µs: {checked}"
 
 

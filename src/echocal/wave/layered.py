@@ -27,7 +27,10 @@ the angle in each layer, sin θ_j = sin θ_w · c_j/c_w):
 - its ray time Σ h/(c cos θ) in the plate and its attenuation Σ α(f)·h/cos θ.
 
 Mode-converted (shear) legs are not listed: the longitudinal paths carry the echo train a
-normal-incidence or slightly tilted probe reads.
+normal-incidence or slightly tilted probe reads.  Under a flat piston, over a plate whose
+face fills the beam, each path is evaluated exactly over the probe's plane-wave spectrum
+instead (:mod:`echocal.wave.layered_spectrum`, with :func:`mode_coefficients` at every
+component's angle); the axis-angle coefficient and equivalent path serve the other probes.
 """
 
 from __future__ import annotations

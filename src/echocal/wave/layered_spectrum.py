@@ -48,7 +48,7 @@ from echocal.materials import Material
 from echocal.specimen.interior import Layer
 from echocal.wave.layered import mode_coefficients, path_factors
 
-__all__ = ["FREQUENCIES", "band_responses", "path_responses"]
+__all__ = ["FREQUENCIES", "Route", "band_responses", "path_responses"]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
