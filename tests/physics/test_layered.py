@@ -21,6 +21,7 @@ import pytest
 import scipy.signal
 
 from echocal.coefficients import reflection_fluid_solid
+from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
 from echocal.materials import WATER, Attenuation, Material
 from echocal.signal.pulses import GaborPulse
@@ -29,7 +30,7 @@ from echocal.specimen.builtins import builtin_specimen
 from echocal.specimen.interior import Interior, Layer
 from echocal.wave import PistonProbe, WaveEchoModel
 from echocal.wave.interior import InteriorEchoes, echo_list
-from echocal.wave.layered import pp_coefficients
+from echocal.wave.layered import echo_paths, path_label, pp_coefficients
 from echocal.wave.layered_spectrum import path_responses
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -283,3 +284,47 @@ def test_the_front_face_over_the_plane_wave_spectrum_is_the_exact_half_space_ech
         reflection=lambda th: ref.fluid_solid_reflection(th, RHO, C, *STEEL),
     )[0]
     assert abs(got - want) <= 1e-4 * abs(want), (got, want)
+
+
+def test_shear_legs_are_listed_reciprocal_and_refused_without_layers() -> None:
+    """With ``shear_legs = 1`` every path comes with each of its legs converted in turn;
+    the path and its reverse (turns and modes reversed: LS and SL, LSLL and LLSL) have
+    equal coefficients at an oblique axis (reciprocity: a pulse-echo path and its time
+    reverse, to rounding: 1e-12), the all-longitudinal paths are unchanged, and a single
+    plate refuses the option in one line naming the field."""
+    layers = _layers(STACKS["acrylic-aluminium"])
+    sin_w = math.sin(math.radians(5.0))
+    paths = {p.label: p for p in echo_paths(layers, MEDIUM, sin_w, 2, 1)}
+    plain = {p.label: p for p in echo_paths(layers, MEDIUM, sin_w, 2, 0)}
+    assert {label for label in paths if ":" not in label} == set(plain)
+    for label, path in plain.items():
+        assert paths[label].coefficient == path.coefficient
+    for label, path in paths.items():
+        if ":" not in label:
+            continue
+        reverse = paths[f"{path_label(path.turns[::-1])}:{path.modes[::-1]}"]
+        assert abs(path.coefficient - reverse.coefficient) <= 1e-12 * abs(path.coefficient)
+        assert 0 < abs(path.coefficient) < abs(plain[label.split(":")[0]].coefficient)
+    assert {"interface-1:LS", "interface-1:SL", "interface-2:LSLL"} <= set(paths)
+    with pytest.raises(GeometryError, match="specimen.shear_legs: needs"):
+        Interior(5e-3, 2, (), (), 1)
+
+
+def test_a_converted_echo_arrives_at_its_ray_time_within_one_sample() -> None:
+    """interface-1:LS and :SL (down in one mode, up in the other) of the acrylic layer at
+    normal incidence: the envelope peak at 2d/c + h/c_L + h/c_T within one sample (10 ns;
+    measured 1.3 ns), equal by reciprocity.  (Deeper converted paths peak up to 2 samples
+    after their axial ray time: on the axis their conversion vanishes, so they form off
+    it.)"""
+    stack = STACKS["acrylic-aluminium"]
+    train, _, window = _model_train(stack, 0.0)
+    train = dataclasses.replace(train, interior=Interior(5e-3, 1, (), train.interior.layers, 1))
+    frame = tilt_frame(np.array([0.0]), np.array([0.0]))[0]
+    echoes = train.echoes(np.array([0.0, 0.0, D]), frame)
+    listed = {e.label: e for e in echo_list(echoes, window)}
+    want = 2 * D / C + 2e-3 / ACRYLIC[1] + 2e-3 / ACRYLIC[2]
+    for label in ("interface-1:LS", "interface-1:SL"):
+        assert listed[label].tof_s == pytest.approx(want, abs=1 / FS), label
+    assert listed["interface-1:LS"].amplitude == pytest.approx(
+        listed["interface-1:SL"].amplitude, rel=1e-9
+    )

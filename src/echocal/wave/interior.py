@@ -27,10 +27,12 @@ water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).  A flaw
 the back wall behind it: its silhouette along the face's normal, on the wall's equivalent
 mirror, is taken out of the wall's echo (:meth:`InteriorEchoes._shadows`).  A plate of
 several layers (:mod:`echocal.wave.layered`, docs/layered-parts.md) has an echo per path
-through its interfaces, each evaluated the same way.
+through its interfaces, each evaluated the same way (with ``shear_legs``, paths with
+mode-converted legs too).
 
-**Left out** (documented in docs/inside-the-specimen.md): mode-converted (L→T) echoes and
-the shear waves' own echoes (the coefficients account for the energy they take), shadowing
+**Left out** (documented in docs/inside-the-specimen.md): a single plate's mode-converted
+(L→T) echoes and the shear waves' own echoes (the coefficients account for the energy
+they take), shadowing
 of flaws by each other, and flaw–wall interactions.  A
 curved front face is modelled for the back wall of a spherical shell
 (:mod:`echocal.wave.shell`: an equivalent water sphere) and of a pipe
@@ -261,6 +263,7 @@ class InteriorEchoes:
             self._medium_at_model_speed,
             sin_water,
             self.interior.back_wall_echoes,
+            self.interior.shear_legs,
         )
 
     def describe(self) -> dict[str, dict[str, object]]:
@@ -276,8 +279,8 @@ class InteriorEchoes:
             out[path.label] = {
                 "reflections": list(path.turns),
                 "legs": [
-                    {"layer": leg, "material": layers[leg - 1].material.name, "mode": "L"}
-                    for leg in path.legs
+                    {"layer": leg, "material": layers[leg - 1].material.name, "mode": mode}
+                    for leg, mode in zip(path.legs, path.modes, strict=True)
                 ],
             }
         for flaw in self.interior.flaws:
@@ -305,7 +308,7 @@ class InteriorEchoes:
             probe.radius,
             self._medium_at_model_speed,
             self.interior.layers,
-            [((), ""), *((p.turns, "L" * len(p.legs)) for p in paths)],
+            [((), ""), *((p.turns, p.modes) for p in paths)],
             front.water_path * math.cos(tilt),
             tilt,
             f,
@@ -327,10 +330,12 @@ class InteriorEchoes:
         attenuated in each layer over the distance the path runs there."""
         f = self.model.frequencies
         loss = np.zeros_like(f)
-        for layer, length in path.attenuation_path:
-            loss += (
-                np.asarray(self.interior.layers[layer - 1].material.attenuation.alpha(f)) * length
-            )
+        for layer, mode, length in path.attenuation_path:
+            material = self.interior.layers[layer - 1].material
+            law = material.attenuation
+            if mode == "S" and material.shear_attenuation is not None:
+                law = material.shear_attenuation
+            loss += np.asarray(law.alpha(f)) * length
         spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
         return self.model.samples(spectrum)
 

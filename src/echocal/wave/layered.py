@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from echocal.materials import Material
-from echocal.specimen.interior import Layer, turn_sequences
+from echocal.specimen.interior import Layer, echo_routes
 
 __all__ = [
     "EchoPath",
@@ -53,6 +53,7 @@ __all__ = [
     "path_label",
     "pp_coefficient_arrays",
     "pp_coefficients",
+    "speed",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -175,7 +176,10 @@ class EchoPath:
         depth below the face of the water mirror that diffracts like it.
     delay : [s] two-way delay correction Σ h·(1/c − c/c_w²) over its legs.
     plate_time : [s] ray time in the plate, Σ h/(c·cos θ).
-    attenuation_path : ((layer, metres), …) the distance it travels in each layer.
+    attenuation_path : ((layer, mode, metres), …) the distance it travels in each layer
+        in each mode.
+    modes : each leg's wave mode, ``"L"`` (longitudinal) or ``"S"`` (shear), one letter
+        per leg; c above is the leg's speed in its mode.
     """
 
     turns: tuple[int, ...]
@@ -184,11 +188,15 @@ class EchoPath:
     equivalent_depth: float
     delay: float
     plate_time: float
-    attenuation_path: tuple[tuple[int, float], ...]
+    attenuation_path: tuple[tuple[int, str, float], ...]
+    modes: str
 
     @property
     def label(self) -> str:
-        """``interface-2`` for a primary echo, ``interface-2.1.2`` for a multiple."""
+        """``interface-2`` for a primary echo, ``interface-2.1.2`` for a multiple; a path
+        with shear legs adds its legs' modes: ``interface-1:LS``."""
+        if "S" in self.modes:
+            return f"{path_label(self.turns)}:{self.modes}"
         return path_label(self.turns)
 
 
@@ -197,34 +205,53 @@ def path_label(turns: Sequence[int]) -> str:
     return "interface-" + ".".join(str(t) for t in turns)
 
 
+def speed(material: Material, mode: str) -> float:
+    """[m/s] ``material``'s speed of mode ``"L"`` or ``"S"``."""
+    return material.longitudinal_speed if mode == "L" else material.shear_speed
+
+
 def echo_paths(
-    layers: Sequence[Layer], medium: Material, sin_water: float, order: int
+    layers: Sequence[Layer],
+    medium: Material,
+    sin_water: float,
+    order: int,
+    shear_legs: int = 0,
 ) -> list[EchoPath]:
-    """Every longitudinal echo path through ``layers`` (top first) in ``medium`` up to
-    ``order`` (module doc), at the beam axis's incidence sine ``sin_water`` in the fluid."""
+    """Every echo path through ``layers`` (top first) in ``medium`` up to ``order``
+    (module doc), with at most ``shear_legs`` shear legs
+    (:func:`~echocal.specimen.interior.echo_routes`), at the beam axis's incidence sine
+    ``sin_water`` in the fluid."""
     c_w = medium.longitudinal_speed
     media = [medium, *(layer.material for layer in layers), medium]  # index = layer number
-    sines = [sin_water * m.longitudinal_speed / c_w for m in media]
-    blocked = any(s >= 1.0 for s in sines[1:-1])
+    slowness = np.array([sin_water / c_w])
+    table: dict[tuple[bool, int, str], dict[tuple[str, str], NDArray[np.complex128]]] = {}
 
-    def down(i: int) -> tuple[complex, complex]:  # at interface i from above: (R, T)
-        return pp_coefficients(sines[i], media[i], media[i + 1])
+    def coefficient(from_above: bool, i: int, incident: str, kind: str, outgoing: str) -> complex:
+        key = (from_above, i, incident)
+        if key not in table:
+            upper, lower = (media[i], media[i + 1]) if from_above else (media[i + 1], media[i])
+            # from below the frame is turned 180° about y (x and z reversed), so that a
+            # shear potential means the same wave on both sides of a leg
+            table[key] = mode_coefficients(
+                slowness if from_above else -slowness, upper, lower, incident
+            )
+        return complex(table[key][(kind, outgoing)][0])
 
-    def up(i: int) -> tuple[complex, complex]:  # at interface i from below
-        return pp_coefficients(sines[i + 1], media[i + 1], media[i])
-
-    n = len(layers)
-    cache_down = {} if blocked else {i: down(i) for i in range(n + 1)}
-    cache_up = {} if blocked else {i: up(i) for i in range(n)}
     out = []
-    for turns in turn_sequences(n, order):
+    for turns, modes in echo_routes(len(layers), order, shear_legs):
         legs, factors = path_factors(turns)
-        coefficient = 0j
-        if not blocked:
-            coefficient = 1.0 + 0j
-            for going_down, i, which in factors:
-                coefficient *= (cache_down if going_down else cache_up)[i][which]
-        out.append(_path(turns, legs, coefficient, layers, sines, c_w))
+        sines = [
+            sin_water * speed(layers[leg - 1].material, m) / c_w
+            for leg, m in zip(legs, modes, strict=True)
+        ]
+        product = 0j
+        if all(s < 1.0 for s in sines):
+            product = 1.0 + 0j
+            for k, (from_above, i, which) in enumerate(factors):
+                incident = modes[k - 1] if k > 0 else "L"
+                outgoing = modes[k] if k < len(legs) else "L"
+                product *= coefficient(from_above, i, incident, "RT"[which], outgoing)
+        out.append(_path(turns, legs, modes, product, layers, sines, c_w))
     return out
 
 
@@ -260,21 +287,30 @@ def path_factors(
 def _path(
     turns: tuple[int, ...],
     legs: tuple[int, ...],
+    modes: str,
     coefficient: complex,
     layers: Sequence[Layer],
     sines: list[float],
     c_w: float,
 ) -> EchoPath:
+    """The path's fields (:class:`EchoPath`); ``sines`` its legs' sines of propagation."""
     equivalent = delay = time = 0.0
-    lengths: dict[int, float] = {}
-    for leg in legs:
+    lengths: dict[tuple[int, str], float] = {}
+    for leg, mode, sine in zip(legs, modes, sines, strict=True):
         layer = layers[leg - 1]
-        c, h = layer.material.longitudinal_speed, layer.thickness
-        cos = math.sqrt(max(1e-12, 1.0 - min(1.0, sines[leg]) ** 2))
+        c, h = speed(layer.material, mode), layer.thickness
+        cos = math.sqrt(max(1e-12, 1.0 - min(1.0, sine) ** 2))
         equivalent += 0.5 * h * c / c_w
         delay += h * (1.0 / c - c / c_w**2)
         time += h / (c * cos)
-        lengths[leg] = lengths.get(leg, 0.0) + h / cos
+        lengths[(leg, mode)] = lengths.get((leg, mode), 0.0) + h / cos
     return EchoPath(
-        turns, legs, coefficient, equivalent, delay, time, tuple(sorted(lengths.items()))
+        turns,
+        legs,
+        coefficient,
+        equivalent,
+        delay,
+        time,
+        tuple((leg, mode, metres) for (leg, mode), metres in sorted(lengths.items())),
+        modes,
     )

@@ -94,7 +94,9 @@ def _path_terms(
         key = (from_above, i, mode)
         if key not in table:
             upper, lower = (media[i], media[i + 1]) if from_above else (media[i + 1], media[i])
-            table[key] = mode_coefficients(p, upper, lower, mode)
+            # from below the frame is turned 180° about y (x and z reversed), so that a
+            # shear potential means the same wave on both sides of a leg
+            table[key] = mode_coefficients(p if from_above else -p, upper, lower, mode)
         return table[key]
 
     def speed(material: Material, mode: str) -> float:
