@@ -31,7 +31,7 @@ from echocal.specimen.interior import Interior, Layer
 from echocal.wave import PistonProbe, WaveEchoModel
 from echocal.wave.interior import InteriorEchoes, echo_list
 from echocal.wave.layered import echo_paths, path_label, pp_coefficients
-from echocal.wave.layered_spectrum import path_responses
+from echocal.wave.layered_spectrum import PistonOverPlate, path_responses
 
 sys.path.insert(0, str(Path(__file__).parent))
 import layered_reference as lref
@@ -274,7 +274,8 @@ def test_the_front_face_over_the_plane_wave_spectrum_is_the_exact_half_space_ech
     layers = _layers(STACKS["steel-acrylic-aluminium"])
     f = 4e6
     t = math.radians(tilt)
-    got = path_responses(A, MEDIUM, layers, [((), "")], D * math.cos(t), t, np.array([f]))[0, 0]
+    setting = PistonOverPlate(A, MEDIUM, layers, D * math.cos(t), t)
+    got = path_responses(setting, [((), "")], np.array([f]))[0, 0]
     want = ref.pulse_echo_plane(
         A,
         f,

@@ -66,7 +66,7 @@ from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 from echocal.wave.curved_wall import curved_back_walls, tangent_plane
 from echocal.wave.layered import EchoPath, echo_paths, pp_coefficients
-from echocal.wave.layered_spectrum import band_responses
+from echocal.wave.layered_spectrum import PistonOverPlate, band_responses
 from echocal.wave.model import WaveEchoModel
 from echocal.wave.probe import PistonProbe
 from echocal.wave.shell import equivalent_mirror
@@ -304,13 +304,16 @@ class InteriorEchoes:
             return None
         tilt = math.radians(self._axis_angles(front)[0])
         f = self.model.frequencies
-        return band_responses(
+        setting = PistonOverPlate(
             probe.radius,
             self._medium_at_model_speed,
             self.interior.layers,
-            [((), ""), *((p.turns, p.modes) for p in paths)],
             front.water_path * math.cos(tilt),
             tilt,
+        )
+        return band_responses(
+            setting,
+            [((), ""), *((p.turns, p.modes) for p in paths)],
             f,
             np.abs(self.model.pulse.spectrum(f)),
         )

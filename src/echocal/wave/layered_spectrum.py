@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,7 +49,7 @@ from echocal.materials import Material
 from echocal.specimen.interior import Layer
 from echocal.wave.layered import mode_coefficients, path_factors
 
-__all__ = ["FREQUENCIES", "Route", "band_responses", "path_responses"]
+__all__ = ["FREQUENCIES", "PistonOverPlate", "Route", "band_responses", "path_responses"]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -162,30 +163,37 @@ def _ring_weight(theta: FloatArray, ka: FloatArray, tilt: float) -> FloatArray:
     return out
 
 
-def path_responses(
-    radius: float,
-    medium: Material,
-    layers: Sequence[Layer],
-    routes: Sequence[Route],
-    distance: float,
-    tilt: float,
-    freqs: FloatArray,
-) -> ComplexArray:
-    """Each path's exact response V(f) ``(n_paths, n_f)`` (module doc; e^{−iωt}, normalized
-    as :meth:`~echocal.wave.WaveEchoModel.spectrum_of_response` takes it).
+@dataclass(frozen=True)
+class PistonOverPlate:
+    """A flat piston over a flat layered plate.
 
-    Parameters
+    Attributes
     ----------
-    radius : [m] the flat piston's radius a.
+    radius : [m] the piston's radius a.
     medium : the coupling fluid (its ``longitudinal_speed`` c_w; density for the
         coefficients).
     layers : the plate's layers, top first.
-    routes : each path's turns (:func:`~echocal.specimen.interior.turn_sequences`) and
-        its legs' wave modes.
     distance : [m] the probe centre's distance to the face along its normal.
     tilt : [rad] the beam axis's angle to the face's normal.
-    freqs : [Hz] ``(n_f,)`` positive.
     """
+
+    radius: float
+    medium: Material
+    layers: Sequence[Layer]
+    distance: float
+    tilt: float
+
+
+def path_responses(
+    setting: PistonOverPlate, routes: Sequence[Route], freqs: FloatArray
+) -> ComplexArray:
+    """Each route's exact response V(f) ``(n_paths, n_f)`` (module doc; e^{−iωt},
+    normalized as :meth:`~echocal.wave.WaveEchoModel.spectrum_of_response` takes it) in
+    ``setting``: ``routes`` each path's turns
+    (:func:`~echocal.specimen.interior.turn_sequences`) and its legs' wave modes, at
+    ``freqs`` [Hz] ``(n_f,)`` (positive)."""
+    radius, medium, layers = setting.radius, setting.medium, setting.layers
+    distance, tilt = setting.distance, setting.tilt
     c_w = medium.longitudinal_speed
     coarse = np.linspace(0.0, 0.5 * math.pi, 2001)
     _, times = _path_terms(layers, medium, routes, np.sin(coarse))
@@ -204,12 +212,8 @@ def path_responses(
 
 
 def band_responses(
-    radius: float,
-    medium: Material,
-    layers: Sequence[Layer],
+    setting: PistonOverPlate,
     routes: Sequence[Route],
-    distance: float,
-    tilt: float,
     freqs: FloatArray,
     pulse_spectrum: FloatArray,
 ) -> ComplexArray:
@@ -223,9 +227,9 @@ def band_responses(
         return out
     fb = freqs[band]
     nodes = np.linspace(float(fb.min()), float(fb.max()), FREQUENCIES)
-    responses = path_responses(radius, medium, layers, routes, distance, tilt, nodes)
-    _, axial = _path_terms(layers, medium, routes, np.zeros(1))
-    delays = 2.0 * distance / medium.longitudinal_speed + axial[:, 0].real
+    responses = path_responses(setting, routes, nodes)
+    _, axial = _path_terms(setting.layers, setting.medium, routes, np.zeros(1))
+    delays = 2.0 * setting.distance / setting.medium.longitudinal_speed + axial[:, 0].real
     for j in range(len(routes)):
         smooth = responses[j] * np.exp(-2j * math.pi * nodes * delays[j])
         values = np.interp(fb, nodes, smooth.real) + 1j * np.interp(fb, nodes, smooth.imag)
