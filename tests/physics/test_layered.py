@@ -21,6 +21,7 @@ import pytest
 import scipy.signal
 
 from echocal.coefficients import reflection_fluid_solid
+from echocal.errors import GeometryError
 from echocal.geometry import tilt_frame
 from echocal.materials import WATER, Attenuation, Material
 from echocal.signal.pulses import GaborPulse
@@ -29,7 +30,8 @@ from echocal.specimen.builtins import builtin_specimen
 from echocal.specimen.interior import Interior, Layer
 from echocal.wave import PistonProbe, WaveEchoModel
 from echocal.wave.interior import InteriorEchoes, echo_list
-from echocal.wave.layered import pp_coefficients
+from echocal.wave.layered import echo_paths, path_label, pp_coefficients
+from echocal.wave.layered_spectrum import PistonOverPlate, path_responses
 
 sys.path.insert(0, str(Path(__file__).parent))
 import layered_reference as lref
@@ -135,19 +137,7 @@ def _reference(stack, tilt: float, freqs: np.ndarray) -> np.ndarray:
     [
         pytest.param("acrylic-aluminium", 0.0, marks=pytest.mark.slow),
         pytest.param("thin-coating", 0.0, marks=pytest.mark.slow),
-        pytest.param(
-            "steel-acrylic-aluminium",
-            0.0,
-            marks=[
-                pytest.mark.slow,
-                pytest.mark.xfail(
-                    strict=True,
-                    reason="interface-2 (1.78 µs) measured 12.5 % above the reference: it "
-                    "overlaps the steel's ringing 1.0.1.0.1 (0.26 µs later, as strong), "
-                    "whose legs in the steel (c_L/c_w = 4) the paraxial path maps least well",
-                ),
-            ],
-        ),
+        pytest.param("steel-acrylic-aluminium", 0.0, marks=pytest.mark.slow),
         pytest.param("thin-coating", 1.0, marks=pytest.mark.slow),
         pytest.param("steel-acrylic-aluminium", 1.0, marks=pytest.mark.slow),
     ],
@@ -157,21 +147,25 @@ def test_interface_echoes_and_first_multiples_match_the_exact_stack(
 ) -> None:
     """Each gate around an arrival with at most three reflections (the primaries and the
     first multiples), before any path the model leaves out (seven reflections or more)
-    can arrive, and the front wall's: the model's envelope peak against the reference's.
+    can arrive, and the front wall's: the model's envelope peak against the reference's,
+    both at the model's sample times.
 
-    Tolerances lock the accuracy measured here; they are wider than the issue's 1 %:
+    Tolerances (measured with the plane-wave route, 12.7 mm 5 MHz probe at 60 mm):
 
-    - normal incidence, the front wall and each interface's primary echo: 2.5 % of its own
-      peak (measured: ≤ 0.1 % on acrylic / aluminium, ≤ 0.4 % on the thin coating, 0.4 %,
-      0.9 % and 2.0 % on steel / acrylic / aluminium);
-    - every other gate, and every gate at 1° of tilt: 3.5 % of the train's largest echo
-      (measured at 0°: ≤ 0.6 % on acrylic / aluminium and steel / acrylic / aluminium,
-      3.2 % for the thin coating's first ringing; at 1°: 3.0 % and 1.2 %).
-
-    The multiples ride on the edge waves of the earlier echoes, which cross the fast layers
-    at 20–30°, and the interface coefficients change across the beam's angular spectrum:
-    the model's paraxial equivalent path and its coefficients taken at the beam axis's
-    angle are approximate there."""
+    - normal incidence, the front wall and each interface's primary echo that is at least
+      a tenth of the train's largest: 1 % of its own peak (measured ≤ 0.5 %: 0.10–0.27 %
+      on acrylic / aluminium, 0.01–0.36 % on the thin coating, 0.33 % and 0.50 % on
+      steel / acrylic / aluminium);
+    - normal incidence, every other gate at least a tenth of the largest (the first
+      multiples): 1.5 % of its own peak (measured: the acrylic's ringing −1.24 %, the
+      others ≤ 0.94 %);
+    - every gate, at 0° and 1°: 1.5 % of the train's largest echo.  That is the
+      reference's own floor: 0.5 µs before the front wall's echo its envelope stands
+      0.8 % of the front wall above the pulse's own tail (steel / acrylic / aluminium:
+      the long ringing folded back by its 20 µs period, or its quadrature), of the size
+      of the weak echoes' residuals (steel /
+      acrylic / aluminium: interface-2, 6 % of the front wall, 0.8 % of it off; at 1°
+      1.1 % on the steel's ringing)."""
     layers = STACKS[stack]
     _, echoes, window = _model_train(layers, tilt)
     scan = sum(echoes.values())
@@ -188,19 +182,25 @@ def test_interface_echoes_and_first_multiples_match_the_exact_stack(
     primaries = {time for time, k in _arrivals(layers, 1)}
     gates = [0.0, *sorted({time for time, k in _arrivals(layers, 3)})]
     checked = []
+    df = freqs[1] - freqs[0]
     for arrival in gates:
         if arrival + 2 * GATE > later:
             continue
         lo, hi = t0 + arrival - GATE, t0 + arrival + GATE
-        want, _ = ref.gated_envelope_peak(v, freqs, spectrum, lo, hi)
-        want = float(want) / plane
-        got = float(env[(t >= lo) & (t <= hi)].max())
+        inside = (t >= lo) & (t <= hi)
+        # the reference's envelope (its analytic signal, references.pulse_echo_envelope_peak)
+        # at the model's own sample times: a gate's largest value often sits on its edge, on
+        # an echo's flank, where 10 ns of edge move the envelope by up to 7 %
+        analytic = 2 * df * np.exp(-2j * np.pi * np.outer(t[inside], freqs)) @ (spectrum * v)
+        want = float(np.abs(analytic).max()) / plane
+        got = float(env[inside].max())
         checked.append((arrival, got, want))
     assert len(checked) >= 3
     largest = max(want for _, _, want in checked)
     for arrival, got, want in checked:
-        own = tilt == 0.0 and (arrival == 0.0 or arrival in primaries)
-        bound = 0.025 * want if own else 0.035 * largest
+        bound = 0.015 * largest
+        if tilt == 0.0 and want >= 0.1 * largest:
+            bound = 0.01 * want if arrival == 0.0 or arrival in primaries else 0.015 * want
         assert abs(got - want) <= bound, f"{arrival * 1e6:.3f} µs: {checked}"
 
 
@@ -258,4 +258,74 @@ def test_the_reference_stack_reduces_to_the_plate_and_to_the_impedance_recursion
     normal = [lref.stack_reflection(f, 0.0, whole, RHO, C) for f in freqs]
     np.testing.assert_allclose(
         normal, lref.normal_incidence_reflection(freqs, whole, RHO, C), atol=1e-9
+    )
+
+
+@pytest.mark.parametrize("tilt", [0.0, 1.0, 3.0])
+def test_the_front_face_over_the_plane_wave_spectrum_is_the_exact_half_space_echo(
+    tilt: float,
+) -> None:
+    """The plane-wave route of the layered model (``layered_spectrum``: θ panels, the ring
+    weight at a tilt) for the front face alone, against the reference's exact
+    angular-spectrum echo of a piston over the fluid–solid half-space (its own quadrature
+    in the probe's frame and its own coefficient formula) at one frequency: to 1e-4 of the
+    echo (the two quadratures converge to 1e-5 at these node counts; the routes differ
+    only in the grazing directions the tilt moves across the quarter circle's edge)."""
+    layers = _layers(STACKS["steel-acrylic-aluminium"])
+    f = 4e6
+    t = math.radians(tilt)
+    setting = PistonOverPlate(A, MEDIUM, layers, D * math.cos(t), t)
+    got = path_responses(setting, [((), "")], np.array([f]))[0, 0]
+    want = ref.pulse_echo_plane(
+        A,
+        f,
+        D,
+        np.array([tilt]),
+        C,
+        reflection=lambda th: ref.fluid_solid_reflection(th, RHO, C, *STEEL),
+    )[0]
+    assert abs(got - want) <= 1e-4 * abs(want), (got, want)
+
+
+def test_shear_legs_are_listed_reciprocal_and_refused_without_layers() -> None:
+    """With ``shear_legs = 1`` every path comes with each of its legs converted in turn;
+    the path and its reverse (turns and modes reversed: LS and SL, LSLL and LLSL) have
+    equal coefficients at an oblique axis (reciprocity: a pulse-echo path and its time
+    reverse, to rounding: 1e-12), the all-longitudinal paths are unchanged, and a single
+    plate refuses the option in one line naming the field."""
+    layers = _layers(STACKS["acrylic-aluminium"])
+    sin_w = math.sin(math.radians(5.0))
+    paths = {p.label: p for p in echo_paths(layers, MEDIUM, sin_w, 2, 1)}
+    plain = {p.label: p for p in echo_paths(layers, MEDIUM, sin_w, 2, 0)}
+    assert {label for label in paths if ":" not in label} == set(plain)
+    for label, path in plain.items():
+        assert paths[label].coefficient == path.coefficient
+    for label, path in paths.items():
+        if ":" not in label:
+            continue
+        reverse = paths[f"{path_label(path.turns[::-1])}:{path.modes[::-1]}"]
+        assert abs(path.coefficient - reverse.coefficient) <= 1e-12 * abs(path.coefficient)
+        assert 0 < abs(path.coefficient) < abs(plain[label.split(":")[0]].coefficient)
+    assert {"interface-1:LS", "interface-1:SL", "interface-2:LSLL"} <= set(paths)
+    with pytest.raises(GeometryError, match="specimen.shear_legs: needs"):
+        Interior(5e-3, 2, (), (), 1)
+
+
+def test_a_converted_echo_arrives_at_its_ray_time_within_one_sample() -> None:
+    """interface-1:LS and :SL (down in one mode, up in the other) of the acrylic layer at
+    normal incidence: the envelope peak at 2d/c + h/c_L + h/c_T within one sample (10 ns;
+    measured 1.3 ns), equal by reciprocity.  (Deeper converted paths peak up to 2 samples
+    after their axial ray time: on the axis their conversion vanishes, so they form off
+    it.)"""
+    stack = STACKS["acrylic-aluminium"]
+    train, _, window = _model_train(stack, 0.0)
+    train = dataclasses.replace(train, interior=Interior(5e-3, 1, (), train.interior.layers, 1))
+    frame = tilt_frame(np.array([0.0]), np.array([0.0]))[0]
+    echoes = train.echoes(np.array([0.0, 0.0, D]), frame)
+    listed = {e.label: e for e in echo_list(echoes, window)}
+    want = 2 * D / C + 2e-3 / ACRYLIC[1] + 2e-3 / ACRYLIC[2]
+    for label in ("interface-1:LS", "interface-1:SL"):
+        assert listed[label].tof_s == pytest.approx(want, abs=1 / FS), label
+    assert listed["interface-1:LS"].amplitude == pytest.approx(
+        listed["interface-1:SL"].amplitude, rel=1e-9
     )

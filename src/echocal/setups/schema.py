@@ -43,7 +43,7 @@ from echocal.setups.fields import (
 )
 from echocal.signal.gates import INTERFACE_THRESHOLD
 from echocal.signal.noise import SNR_DB_RANGE
-from echocal.specimen.interior import MAX_BACK_WALL_ECHOES
+from echocal.specimen.interior import MAX_BACK_WALL_ECHOES, MAX_SHEAR_LEGS
 
 
 class _Model(BaseModel):
@@ -175,6 +175,9 @@ class SpecimenConfig(_Model):
     layers: list[LayerConfig] | None = None
     """A layered plate, top first (instead of ``material`` and ``thickness``); its echo
     train holds every path up to order ``back_wall_echoes`` (2M − 1 reflections)."""
+    shear_legs: Annotated[int, NotBool] = Field(default=0, ge=0, le=MAX_SHEAR_LEGS)
+    """With layers: the most mode-converted (shear) legs an echo path may have; each such
+    path is an echo of its own (0: longitudinal paths only)."""
 
 
 class DirectivityConfig(_Model):

@@ -24,6 +24,7 @@ Each flaw offers its surface as samples (point, outward normal, area) for the ph
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -40,10 +41,13 @@ __all__ = [
     "FLAW_KINDS",
     "INTERIOR_SHAPES",
     "MAX_ECHO_PATHS",
+    "MAX_SHEAR_LEGS",
     "Flaw",
     "Interior",
     "Layer",
     "SurfaceSamples",
+    "echo_routes",
+    "leg_modes",
     "turn_sequences",
 ]
 
@@ -63,6 +67,8 @@ MAX_BACK_WALL_ECHOES = 20
 """The largest back-wall multiple order a setup may ask for."""
 
 MAX_ECHO_PATHS = 400
+MAX_SHEAR_LEGS = 2
+"""The most mode-converted (shear) legs an echo path may have."""
 """The most echo paths a layered plate may list (the count grows as N^(2M−1))."""
 
 
@@ -89,6 +95,36 @@ def turn_sequences(n_layers: int, order: int) -> list[tuple[int, ...]]:
                 f"specimen.back_wall_echoes: order {order} over {n_layers} layers gives more "
                 f"than {MAX_ECHO_PATHS} echo paths; lower the order"
             )
+    return out
+
+
+def leg_modes(turns: tuple[int, ...], shear_legs: int) -> list[str]:
+    """The wave modes of the legs of the path that turns at ``turns``: every string of
+    ``"L"`` (longitudinal) and ``"S"`` (shear) with at most ``shear_legs`` S, the
+    all-longitudinal one first.  The path crosses turns[0] + Σ|Δturns| + turns[−1]
+    layers."""
+    n_legs = turns[0] + sum(abs(b - a) for a, b in itertools.pairwise(turns))
+    n_legs += turns[-1]
+    out = []
+    for k in range(min(shear_legs, n_legs) + 1):
+        for shear in itertools.combinations(range(n_legs), k):
+            out.append("".join("S" if i in shear else "L" for i in range(n_legs)))
+    return out
+
+
+def echo_routes(n_layers: int, order: int, shear_legs: int) -> list[tuple[tuple[int, ...], str]]:
+    """Every echo path's turns (:func:`turn_sequences`) with each of its legs' modes
+    (:func:`leg_modes`).  Raises :class:`GeometryError` beyond :data:`MAX_ECHO_PATHS`."""
+    out = [
+        (turns, modes)
+        for turns in turn_sequences(n_layers, order)
+        for modes in leg_modes(turns, shear_legs)
+    ]
+    if len(out) > MAX_ECHO_PATHS:
+        raise GeometryError(
+            f"specimen.shear_legs: {shear_legs} shear legs at order {order} over {n_layers} "
+            f"layers give {len(out)} echo paths, more than {MAX_ECHO_PATHS}; lower either"
+        )
     return out
 
 
@@ -297,12 +333,15 @@ class Interior:
         one layer of the specimen's material.  With layers, ``back_wall_echoes`` is the
         order M of the echo train: every path with at most 2M − 1 reflections
         (:mod:`echocal.wave.layered`).
+    shear_legs : with layers, the most mode-converted (shear) legs an echo path may have,
+        0 to :data:`MAX_SHEAR_LEGS` (0: longitudinal paths only).
     """
 
     thickness: float
     back_wall_echoes: int = 3
     flaws: tuple[Flaw, ...] = ()
     layers: tuple[Layer, ...] = ()
+    shear_legs: int = 0
 
     def __post_init__(self) -> None:
         t = self.thickness
@@ -327,7 +366,18 @@ class Interior:
                     f"specimen.thickness: {1e3 * t:g} mm is not the layers' total "
                     f"{1e3 * total:g} mm; leave thickness out with layers"
                 )
-            turn_sequences(len(self.layers), n)  # refuses an order with too many paths
+        m = self.shear_legs
+        if isinstance(m, bool) or not isinstance(m, int) or not 0 <= m <= MAX_SHEAR_LEGS:
+            raise GeometryError(
+                f"specimen.shear_legs: must be an integer from 0 to {MAX_SHEAR_LEGS}; got {m!r}"
+            )
+        if m and not self.layers:
+            raise GeometryError(
+                "specimen.shear_legs: needs [[specimen.layers]] (shear legs are listed for "
+                "layered plates); leave it out or give the layers"
+            )
+        if self.layers:
+            echo_routes(len(self.layers), n, m)  # refuses an order with too many paths
 
     @property
     def interfaces(self) -> FloatArray:

@@ -27,10 +27,12 @@ water path: the spectrum is multiplied by exp(−α_w·2d − α_s·2z).  A flaw
 the back wall behind it: its silhouette along the face's normal, on the wall's equivalent
 mirror, is taken out of the wall's echo (:meth:`InteriorEchoes._shadows`).  A plate of
 several layers (:mod:`echocal.wave.layered`, docs/layered-parts.md) has an echo per path
-through its interfaces, each evaluated the same way.
+through its interfaces, each evaluated the same way (with ``shear_legs``, paths with
+mode-converted legs too).
 
-**Left out** (documented in docs/inside-the-specimen.md): mode-converted (L→T) echoes and
-the shear waves' own echoes (the coefficients account for the energy they take), shadowing
+**Left out** (documented in docs/inside-the-specimen.md): a single plate's mode-converted
+(L→T) echoes and the shear waves' own echoes (the coefficients account for the energy
+they take), shadowing
 of flaws by each other, and flaw–wall interactions.  A
 curved front face is modelled for the back wall of a spherical shell
 (:mod:`echocal.wave.shell`: an equivalent water sphere) and of a pipe
@@ -64,7 +66,9 @@ from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 from echocal.wave.curved_wall import curved_back_walls, tangent_plane
 from echocal.wave.layered import EchoPath, echo_paths, pp_coefficients
+from echocal.wave.layered_spectrum import PistonOverPlate, band_responses
 from echocal.wave.model import WaveEchoModel
+from echocal.wave.probe import PistonProbe
 from echocal.wave.shell import equivalent_mirror
 
 __all__ = ["FRONT_WALL", "InteriorEchoes", "LabelledEcho", "back_wall_label", "echo_list"]
@@ -173,35 +177,16 @@ class InteriorEchoes:
 
         ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n (beam along −n).
         """
-        out = {FRONT_WALL: self.model.ascans((self.front,), position[None], frame[None])[0]}
         front = self._front(position, frame)
         if front is None:  # the beam axis never meets the face: nothing enters the part
             zero = np.zeros(self.model.window.n_samples)
+            out = {FRONT_WALL: self._front_wall(position, frame)}
             return out | {label: zero for label in self.labels[1:]}
         orders = range(1, self.interior.back_wall_echoes + 1)
         if self.interior.layers:
-            sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
-            unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
-            for path in self.paths(sin_w):
-                key = (round(path.equivalent_depth, 12), round(path.delay, 15))
-                if key not in unit:
-                    unit[key] = self._mirror(
-                        path.equivalent_depth, 1.0, path.delay, position, frame
-                    )
-                spectrum = np.conj(path.coefficient) * unit[key]
-                if self.interior.flaws:
-                    wall = float(self.interior.interfaces[max(path.turns)])
-                    spectrum = spectrum - self._shadows(
-                        wall,
-                        path.equivalent_depth,
-                        path.coefficient,
-                        path.delay,
-                        position,
-                        frame,
-                        front,
-                    )
-                out[path.label] = self._layered(path, spectrum, front)
+            out = self._layered_echoes(position, frame, front)
         elif isinstance(self.front, Cylinder):  # a pipe: every order in one propagation
+            out = {FRONT_WALL: self._front_wall(position, frame)}
             spectra = curved_back_walls(
                 self.model,
                 self.front,
@@ -216,11 +201,57 @@ class InteriorEchoes:
                 depth = k * self.interior.thickness
                 out[back_wall_label(k)] = self._finish(spectrum, front, 2.0 * depth)
         else:
+            out = {FRONT_WALL: self._front_wall(position, frame)}
             for k in orders:
                 out[back_wall_label(k)] = self._back_wall(k, position, frame, front)
         for flaw in self.interior.flaws:
             out[flaw.name] = self._flaw(flaw, position, frame, front)
         return out
+
+    def _layered_echoes(
+        self, position: FloatArray, frame: FloatArray, front: _Front
+    ) -> dict[str, FloatArray]:
+        """A layered plate's front-wall echo and every path's, by label: over the probe's
+        plane-wave spectrum where :meth:`_exact_paths` applies, else on the paraxial
+        equivalent mirrors; each less the flaws' shadows."""
+        out: dict[str, FloatArray] = {}
+        sin_w = math.sin(math.radians(self._axis_angles(front)[0]))
+        paths = self.paths(sin_w)
+        exact = self._exact_paths(paths, position, frame, front)
+        if exact is not None:  # the front face's echo over the same spectrum
+            spectrum = self.model.spectrum_of_response(exact[0])
+            spectrum = spectrum * self.model.attenuation_factor(2.0 * front.water_path)
+            out[FRONT_WALL] = self.model.samples(spectrum)
+        else:
+            out[FRONT_WALL] = self._front_wall(position, frame)
+        unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
+        for j, path in enumerate(paths):
+            if exact is not None:
+                spectrum = self.model.spectrum_of_response(exact[j + 1])
+            else:
+                key = (round(path.equivalent_depth, 12), round(path.delay, 15))
+                if key not in unit:
+                    unit[key] = self._mirror(
+                        path.equivalent_depth, 1.0, path.delay, position, frame
+                    )
+                spectrum = np.conj(path.coefficient) * unit[key]
+            if self.interior.flaws:
+                wall = float(self.interior.interfaces[max(path.turns)])
+                spectrum = spectrum - self._shadows(
+                    wall,
+                    path.equivalent_depth,
+                    path.coefficient,
+                    path.delay,
+                    position,
+                    frame,
+                    front,
+                )
+            out[path.label] = self._layered(path, spectrum, front)
+        return out
+
+    def _front_wall(self, position: FloatArray, frame: FloatArray) -> FloatArray:
+        """The front face's echo by the wave model (its reflection R(θ) at each sample)."""
+        return self.model.ascans((self.front,), position[None], frame[None])[0]
 
     def paths(self, sin_water: float = 0.0) -> list[EchoPath]:
         """The layered plate's echo paths (:func:`echocal.wave.layered.echo_paths`) at the
@@ -232,6 +263,7 @@ class InteriorEchoes:
             self._medium_at_model_speed,
             sin_water,
             self.interior.back_wall_echoes,
+            self.interior.shear_legs,
         )
 
     def describe(self) -> dict[str, dict[str, object]]:
@@ -247,14 +279,44 @@ class InteriorEchoes:
             out[path.label] = {
                 "reflections": list(path.turns),
                 "legs": [
-                    {"layer": leg, "material": layers[leg - 1].material.name, "mode": "L"}
-                    for leg in path.legs
+                    {"layer": leg, "material": layers[leg - 1].material.name, "mode": mode}
+                    for leg, mode in zip(path.legs, path.modes, strict=True)
                 ],
             }
         for flaw in self.interior.flaws:
             host = len(self._flaw_column(flaw).layers)
             out[flaw.name] = {"layer": host, "material": layers[host - 1].material.name}
         return out
+
+    def _exact_paths(
+        self, paths: list[EchoPath], position: FloatArray, frame: FloatArray, front: _Front
+    ) -> ComplexArray | None:
+        """The front face's and every path's exact response V(f) ``(1 + n_paths, n_f)``
+        over the probe's plane-wave spectrum (:mod:`echocal.wave.layered_spectrum`) when it
+        applies: a flat piston over a flat layered plate whose face fills the beam; else
+        None (the paraxial equivalent mirrors)."""
+        probe = self.model.probe
+        if not (isinstance(probe, PistonProbe) and probe.curvature is None):
+            return None
+        if not isinstance(self.front, FinitePlane) or not paths:
+            return None
+        if self.model.image_plane((self.front,), position, frame) is None:
+            return None
+        tilt = math.radians(self._axis_angles(front)[0])
+        f = self.model.frequencies
+        setting = PistonOverPlate(
+            probe.radius,
+            self._medium_at_model_speed,
+            self.interior.layers,
+            front.water_path * math.cos(tilt),
+            tilt,
+        )
+        return band_responses(
+            setting,
+            [((), ""), *((p.turns, p.modes) for p in paths)],
+            f,
+            np.abs(self.model.pulse.spectrum(f)),
+        )
 
     @property
     def _medium_at_model_speed(self) -> Material:
@@ -271,10 +333,12 @@ class InteriorEchoes:
         attenuated in each layer over the distance the path runs there."""
         f = self.model.frequencies
         loss = np.zeros_like(f)
-        for layer, length in path.attenuation_path:
-            loss += (
-                np.asarray(self.interior.layers[layer - 1].material.attenuation.alpha(f)) * length
-            )
+        for layer, mode, length in path.attenuation_path:
+            material = self.interior.layers[layer - 1].material
+            law = material.attenuation
+            if mode == "S" and material.shear_attenuation is not None:
+                law = material.shear_attenuation
+            loss += np.asarray(law.alpha(f)) * length
         spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
         return self.model.samples(spectrum)
 

@@ -27,7 +27,10 @@ the angle in each layer, sin θ_j = sin θ_w · c_j/c_w):
 - its ray time Σ h/(c cos θ) in the plate and its attenuation Σ α(f)·h/cos θ.
 
 Mode-converted (shear) legs are not listed: the longitudinal paths carry the echo train a
-normal-incidence or slightly tilted probe reads.
+normal-incidence or slightly tilted probe reads.  Under a flat piston, over a plate whose
+face fills the beam, each path is evaluated exactly over the probe's plane-wave spectrum
+instead (:mod:`echocal.wave.layered_spectrum`, with :func:`mode_coefficients` at every
+component's angle); the axis-angle coefficient and equivalent path serve the other probes.
 """
 
 from __future__ import annotations
@@ -40,9 +43,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from echocal.materials import Material
-from echocal.specimen.interior import Layer, turn_sequences
+from echocal.specimen.interior import Layer, echo_routes
 
-__all__ = ["EchoPath", "echo_paths", "path_label", "pp_coefficients"]
+__all__ = [
+    "EchoPath",
+    "echo_paths",
+    "mode_coefficients",
+    "path_factors",
+    "path_label",
+    "pp_coefficient_arrays",
+    "pp_coefficients",
+    "speed",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -51,46 +63,79 @@ def pp_coefficients(sin_in: float, upper: Material, lower: Material) -> tuple[co
     """(R, T): a longitudinal plane wave in ``upper`` meeting ``lower`` at incidence sine
     ``sin_in``: the reflected and transmitted longitudinal waves' stress amplitudes per unit
     incident stress (pressure in a fluid), in the e^{−iωt} convention of
-    :mod:`echocal.coefficients`.
+    :mod:`echocal.coefficients` (:func:`pp_coefficient_arrays` at one sine)."""
+    r, t = pp_coefficient_arrays(np.array([sin_in]), upper, lower)
+    return complex(r[0]), complex(t[0])
+
+
+def _vertical(slowness: float, kx: FloatArray) -> NDArray[np.complex128]:
+    """k_z/ω = √(1/c² − k_x²/ω²) with Im ≥ 0 (decaying away from the interface)."""
+    value = np.sqrt((slowness * slowness - kx * kx).astype(np.complex128))
+    return np.where(value.imag < 0, -value, value)
+
+
+def pp_coefficient_arrays(
+    sin_in: FloatArray, upper: Material, lower: Material
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """(R, T) of :func:`pp_coefficients` at every incidence sine of ``sin_in`` ``(n,)``
+    (sines beyond 1, evanescent incident waves, continue analytically), each ``(n,)``
+    (:func:`mode_coefficients` of a longitudinal wave, its longitudinal waves)."""
+    slowness = np.asarray(sin_in, dtype=np.float64) / upper.longitudinal_speed
+    out = mode_coefficients(slowness, upper, lower, "L")
+    return out[("R", "L")], out[("T", "L")]
+
+
+def mode_coefficients(
+    slowness: FloatArray, upper: Material, lower: Material, incident: str
+) -> dict[tuple[str, str], NDArray[np.complex128]]:
+    """A plane wave of mode ``incident`` (``"L"`` longitudinal, ``"S"`` shear (SV), in a
+    solid) in ``upper`` meeting ``lower``, at horizontal slowness ``slowness`` [s/m]
+    ``(n,)`` (sin θ/c, the same on both sides by Snell's law): ``{("R" or "T", mode):
+    (n,)}``, the reflected and transmitted waves' amplitudes per unit incident amplitude,
+    a wave's amplitude being ρω² times its displacement potential (a longitudinal wave's
+    normal stress; a fluid's pressure), in the e^{−iωt} convention of
+    :mod:`echocal.coefficients`.  Shear entries only on a solid's side.
 
     Solved from the boundary conditions of the P–SV problem with displacement potentials
     (u = ∇φ + ∇×(ψŷ)): u_z and σ_zz continuous; between two solids (welded) u_x and σ_xz
-    too; on a solid's face against a fluid σ_xz = 0.  A wave of potential amplitude a has
-    stress amplitude ρω²a, so R = a_r/a_i and T = ρ₂a_t/(ρ₁a_i).  At normal incidence:
-    (Z₂ − Z₁)/(Z₂ + Z₁) and 2Z₂/(Z₁ + Z₂)."""
-    omega = 1.0
-    kx = sin_in / upper.longitudinal_speed
+    too; on a solid's face against a fluid σ_xz = 0.  So R = a_r/a_i and T = ρ₂a_t/(ρ₁a_i)
+    for potential amplitudes a; at normal incidence (L → L): (Z₂ − Z₁)/(Z₂ + Z₁) and
+    2Z₂/(Z₁ + Z₂)."""
+    kx = np.asarray(slowness, dtype=np.float64)  # per unit ω
 
-    def kz(speed: float) -> complex:
-        value = np.sqrt(complex((omega / speed) ** 2 - kx * kx))
-        return -value if value.imag < 0 else value  # decaying away from the interface
-
-    def columns(medium: Material, sign: float) -> list[NDArray[np.complex128]]:
-        """(u_x, u_z, σ_zz, σ_xz)/(ρ₁ω²) of the P (and SV) partial waves travelling along
-        ``sign``·z (z from upper into lower)."""
-        rho, c_l, c_t = medium.density, medium.longitudinal_speed, medium.shear_speed
+    def columns(medium: Material, sign: float) -> dict[str, NDArray[np.complex128]]:
+        """(n, 4) (u_x, u_z, σ_zz, σ_xz)/(ρ₁ω²) of the L (and S) partial waves travelling
+        along ``sign``·z (z from upper into lower), per unit ω."""
+        rho, c_t = medium.density, medium.shear_speed
         mu = rho * c_t * c_t
-        k_t2 = (omega / c_t) ** 2 if c_t > 0 else 0.0
-        kzl = sign * kz(c_l)
-        scale = upper.density * omega * omega
-        p_wave = np.array(
-            [1j * kx, 1j * kzl, -(rho * omega**2 - 2.0 * mu * kx * kx), -2.0 * mu * kx * kzl],
-            dtype=np.complex128,
-        )
-        p_wave[2:] /= scale
-        out = [p_wave]
-        if c_t > 0:
-            kzt = sign * kz(c_t)
-            s_wave = np.array(
-                [-1j * kzt, 1j * kx, -2.0 * mu * kx * kzt, mu * (kzt * kzt - kx * kx)],
-                dtype=np.complex128,
+        kzl = sign * _vertical(1.0 / medium.longitudinal_speed, kx)
+        scale = upper.density
+        zero = np.zeros_like(kzl)
+        out = {
+            "L": np.stack(
+                [
+                    1j * kx + zero,
+                    1j * kzl,
+                    -(rho - 2.0 * mu * kx * kx) / scale + zero,
+                    -2.0 * mu * kx * kzl / scale,
+                ],
+                axis=-1,
             )
-            s_wave[2:] /= scale
-            assert k_t2 > 0
-            out.append(s_wave)
+        }
+        if c_t > 0:
+            kzt = sign * _vertical(1.0 / c_t, kx)
+            out["S"] = np.stack(
+                [
+                    -1j * kzt,
+                    1j * kx + zero,
+                    -2.0 * mu * kx * kzt / scale,
+                    mu * (kzt * kzt - kx * kx) / scale,
+                ],
+                axis=-1,
+            )
         return out
 
-    incident = columns(upper, 1.0)[0]
+    waves = columns(upper, 1.0)[incident]
     reflected = columns(upper, -1.0)
     transmitted = columns(lower, 1.0)
     solid_up, solid_down = not upper.is_fluid, not lower.is_fluid
@@ -98,21 +143,23 @@ def pp_coefficients(sin_in: float, upper: Material, lower: Material) -> tuple[co
     rows = [1, 2]  # u_z, σ_zz
     if solid_up and solid_down:
         rows += [0, 3]  # u_x, σ_xz
-    matrix = [[col[r] for col in reflected] + [-col[r] for col in transmitted] for r in rows]
-    rhs = [-incident[r] for r in rows]
+    unknowns = [*reflected.values(), *(-col for col in transmitted.values())]
+    matrix = [[col[:, r] for col in unknowns] for r in rows]
+    rhs = [-waves[:, r] for r in rows]
     if solid_up != solid_down:  # σ_xz = 0 on the solid's face
-        solid_side = [
-            *(col[3] for col in reflected),
-            *(0.0 * col[3] for col in transmitted),
-        ]
-        if solid_down:
-            solid_side = [*(0.0 * col[3] for col in reflected), *(col[3] for col in transmitted)]
-        matrix.append(solid_side)
-        rhs.append(-incident[3] if solid_up else 0.0)
-    x = np.linalg.solve(np.array(matrix, dtype=np.complex128), np.array(rhs, dtype=np.complex128))
-    r = complex(x[0])
-    t = complex(x[len(reflected)]) * lower.density / upper.density
-    return r, t
+        keep_up, keep_down = float(solid_up), float(solid_down)
+        matrix.append(
+            [keep_up * col[:, 3] for col in reflected.values()]
+            + [keep_down * col[:, 3] for col in transmitted.values()]
+        )
+        rhs.append(-keep_up * waves[:, 3])
+    a = np.moveaxis(np.array(matrix, dtype=np.complex128), (0, 1), (1, 2))  # (n, rows, cols)
+    b = np.moveaxis(np.array(rhs, dtype=np.complex128), 0, 1)[..., None]
+    x = np.linalg.solve(a, b)[..., 0]
+    names = [("R", m) for m in reflected] + [("T", m) for m in transmitted]
+    ratio = lower.density / upper.density
+    scaled = x * np.array([ratio if name[0] == "T" else 1.0 for name in names])
+    return {name: np.asarray(scaled[:, j], dtype=np.complex128) for j, name in enumerate(names)}
 
 
 @dataclass(frozen=True)
@@ -129,7 +176,10 @@ class EchoPath:
         depth below the face of the water mirror that diffracts like it.
     delay : [s] two-way delay correction Σ h·(1/c − c/c_w²) over its legs.
     plate_time : [s] ray time in the plate, Σ h/(c·cos θ).
-    attenuation_path : ((layer, metres), …) the distance it travels in each layer.
+    attenuation_path : ((layer, mode, metres), …) the distance it travels in each layer
+        in each mode.
+    modes : each leg's wave mode, ``"L"`` (longitudinal) or ``"S"`` (shear), one letter
+        per leg; c above is the leg's speed in its mode.
     """
 
     turns: tuple[int, ...]
@@ -138,11 +188,15 @@ class EchoPath:
     equivalent_depth: float
     delay: float
     plate_time: float
-    attenuation_path: tuple[tuple[int, float], ...]
+    attenuation_path: tuple[tuple[int, str, float], ...]
+    modes: str
 
     @property
     def label(self) -> str:
-        """``interface-2`` for a primary echo, ``interface-2.1.2`` for a multiple."""
+        """``interface-2`` for a primary echo, ``interface-2.1.2`` for a multiple; a path
+        with shear legs adds its legs' modes: ``interface-1:LS``."""
+        if "S" in self.modes:
+            return f"{path_label(self.turns)}:{self.modes}"
         return path_label(self.turns)
 
 
@@ -151,73 +205,112 @@ def path_label(turns: Sequence[int]) -> str:
     return "interface-" + ".".join(str(t) for t in turns)
 
 
+def speed(material: Material, mode: str) -> float:
+    """[m/s] ``material``'s speed of mode ``"L"`` or ``"S"``."""
+    return material.longitudinal_speed if mode == "L" else material.shear_speed
+
+
 def echo_paths(
-    layers: Sequence[Layer], medium: Material, sin_water: float, order: int
+    layers: Sequence[Layer],
+    medium: Material,
+    sin_water: float,
+    order: int,
+    shear_legs: int = 0,
 ) -> list[EchoPath]:
-    """Every longitudinal echo path through ``layers`` (top first) in ``medium`` up to
-    ``order`` (module doc), at the beam axis's incidence sine ``sin_water`` in the fluid."""
+    """Every echo path through ``layers`` (top first) in ``medium`` up to ``order``
+    (module doc), with at most ``shear_legs`` shear legs
+    (:func:`~echocal.specimen.interior.echo_routes`), at the beam axis's incidence sine
+    ``sin_water`` in the fluid."""
     c_w = medium.longitudinal_speed
     media = [medium, *(layer.material for layer in layers), medium]  # index = layer number
-    sines = [sin_water * m.longitudinal_speed / c_w for m in media]
-    blocked = any(s >= 1.0 for s in sines[1:-1])
+    slowness = np.array([sin_water / c_w])
+    table: dict[tuple[bool, int, str], dict[tuple[str, str], NDArray[np.complex128]]] = {}
 
-    def down(i: int) -> tuple[complex, complex]:  # at interface i from above: (R, T)
-        return pp_coefficients(sines[i], media[i], media[i + 1])
-
-    def up(i: int) -> tuple[complex, complex]:  # at interface i from below
-        return pp_coefficients(sines[i + 1], media[i + 1], media[i])
-
-    n = len(layers)
-    cache_down = {} if blocked else {i: down(i) for i in range(n + 1)}
-    cache_up = {} if blocked else {i: up(i) for i in range(n)}
-
-    def factor(table: dict[int, tuple[complex, complex]], i: int, which: int) -> complex:
-        return 1.0 if blocked else table[i][which]
+    def coefficient(from_above: bool, i: int, incident: str, kind: str, outgoing: str) -> complex:
+        key = (from_above, i, incident)
+        if key not in table:
+            upper, lower = (media[i], media[i + 1]) if from_above else (media[i + 1], media[i])
+            # from below the frame is turned 180° about y (x and z reversed), so that a
+            # shear potential means the same wave on both sides of a leg
+            table[key] = mode_coefficients(
+                slowness if from_above else -slowness, upper, lower, incident
+            )
+        return complex(table[key][(kind, outgoing)][0])
 
     out = []
-    for turns in turn_sequences(n, order):
-        coefficient = factor(cache_down, 0, 1)  # into layer 1
-        legs: list[int] = []
-        level, going_down = 0, True  # the last interface met
-        for turn in turns:
-            if going_down:  # layers level+1 … turn, then reflect at turn from above
-                for i in range(level + 1, turn + 1):
-                    legs.append(i)
-                    if i < turn:
-                        coefficient *= factor(cache_down, i, 1)
-                coefficient *= factor(cache_down, turn, 0)
-            else:  # layers level … turn+1 upwards, then reflect at turn from below
-                for i in range(level, turn, -1):
-                    legs.append(i)
-                    if i - 1 > turn:
-                        coefficient *= factor(cache_up, i - 1, 1)
-                coefficient *= factor(cache_up, turn, 0)
-            level, going_down = turn, not going_down
-        for i in range(level, 0, -1):  # back up and out through the front face
-            legs.append(i)
-            coefficient *= factor(cache_up, i - 1, 1)
-        out.append(_path(turns, tuple(legs), 0j if blocked else coefficient, layers, sines, c_w))
+    for turns, modes in echo_routes(len(layers), order, shear_legs):
+        legs, factors = path_factors(turns)
+        sines = [
+            sin_water * speed(layers[leg - 1].material, m) / c_w
+            for leg, m in zip(legs, modes, strict=True)
+        ]
+        product = 0j
+        if all(s < 1.0 for s in sines):
+            product = 1.0 + 0j
+            for k, (from_above, i, which) in enumerate(factors):
+                incident = modes[k - 1] if k > 0 else "L"
+                outgoing = modes[k] if k < len(legs) else "L"
+                product *= coefficient(from_above, i, incident, "RT"[which], outgoing)
+        out.append(_path(turns, legs, modes, product, layers, sines, c_w))
     return out
+
+
+def path_factors(
+    turns: Sequence[int],
+) -> tuple[tuple[int, ...], tuple[tuple[bool, int, int], ...]]:
+    """The layers (1 … N) the path that turns at ``turns`` crosses, in order, and the
+    interface coefficients it picks up: ``(from_above, interface, 0 for R / 1 for T)``
+    (the front face's transmission in, every crossing and turn, and out again)."""
+    legs: list[int] = []
+    factors: list[tuple[bool, int, int]] = [(True, 0, 1)]  # into layer 1
+    level, going_down = 0, True  # the last interface met
+    for turn in turns:
+        if going_down:  # layers level+1 … turn, then reflect at turn from above
+            for i in range(level + 1, turn + 1):
+                legs.append(i)
+                if i < turn:
+                    factors.append((True, i, 1))
+            factors.append((True, turn, 0))
+        else:  # layers level … turn+1 upwards, then reflect at turn from below
+            for i in range(level, turn, -1):
+                legs.append(i)
+                if i - 1 > turn:
+                    factors.append((False, i - 1, 1))
+            factors.append((False, turn, 0))
+        level, going_down = turn, not going_down
+    for i in range(level, 0, -1):  # back up and out through the front face
+        legs.append(i)
+        factors.append((False, i - 1, 1))
+    return tuple(legs), tuple(factors)
 
 
 def _path(
     turns: tuple[int, ...],
     legs: tuple[int, ...],
+    modes: str,
     coefficient: complex,
     layers: Sequence[Layer],
     sines: list[float],
     c_w: float,
 ) -> EchoPath:
+    """The path's fields (:class:`EchoPath`); ``sines`` its legs' sines of propagation."""
     equivalent = delay = time = 0.0
-    lengths: dict[int, float] = {}
-    for leg in legs:
+    lengths: dict[tuple[int, str], float] = {}
+    for leg, mode, sine in zip(legs, modes, sines, strict=True):
         layer = layers[leg - 1]
-        c, h = layer.material.longitudinal_speed, layer.thickness
-        cos = math.sqrt(max(1e-12, 1.0 - min(1.0, sines[leg]) ** 2))
+        c, h = speed(layer.material, mode), layer.thickness
+        cos = math.sqrt(max(1e-12, 1.0 - min(1.0, sine) ** 2))
         equivalent += 0.5 * h * c / c_w
         delay += h * (1.0 / c - c / c_w**2)
         time += h / (c * cos)
-        lengths[leg] = lengths.get(leg, 0.0) + h / cos
+        lengths[(leg, mode)] = lengths.get((leg, mode), 0.0) + h / cos
     return EchoPath(
-        turns, legs, coefficient, equivalent, delay, time, tuple(sorted(lengths.items()))
+        turns,
+        legs,
+        coefficient,
+        equivalent,
+        delay,
+        time,
+        tuple((leg, mode, metres) for (leg, mode), metres in sorted(lengths.items())),
+        modes,
     )
