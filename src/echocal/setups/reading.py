@@ -164,16 +164,24 @@ def validate_setup_file(name_or_path: str | Path) -> list[str]:
 
 
 def resolved_data(config: SetupConfig) -> dict[str, Any]:
-    """The resolved setup as JSON-ready data (SI units, degrees), without the tables a
-    setup leaves out by default (``bench``: the ideal bench; ``specimen.layers``: one
-    solid), so a setup written before they existed reads, and digests, as it did."""
+    """The resolved setup as JSON-ready data (SI units, degrees), without the tables and
+    fields a setup leaves out by default (``bench``: the ideal bench; ``specimen.layers``:
+    one solid; ``specimen.shear_legs`` 0: longitudinal paths only), so a setup written
+    before they existed reads, and digests, as it did."""
     data = config.model_dump(mode="json")
     if data.get("bench") is None:
         data.pop("bench", None)
     specimen = data.get("specimen")
-    if isinstance(specimen, dict) and specimen.get("layers") is None:
-        specimen.pop("layers", None)
+    if isinstance(specimen, dict):
+        for field, default in _SPECIMEN_DEFAULTS_LEFT_OUT.items():
+            if field in specimen and specimen[field] == default:
+                specimen.pop(field)
     return data
+
+
+_SPECIMEN_DEFAULTS_LEFT_OUT: dict[str, Any] = {"layers": None, "shear_legs": 0}
+"""Specimen fields added after setups were first digested, with the default that leaves
+them out of :func:`resolved_data`."""
 
 
 def config_as_json(config: SetupConfig) -> str:
