@@ -99,6 +99,11 @@ def run_one(task: tuple[str, float, int]) -> dict[str, Any]:
         "status": res.status,
         "false_alarms": res.false_alarms,
         "cpu_seconds": time.process_time() - t0,
+        # the run's measurements: its uncertainty can be recomputed from them
+        "x": res.x.tolist(),
+        "points": np.round(res.points, 9).tolist(),
+        "values": res.values.tolist(),
+        "noise": list(objective.noise_estimate()),
     }
 
 

@@ -29,6 +29,12 @@ model-based method does) it receives every acquisition measurement, so none is
 wasted.  If the search passes ``max_radius`` without finding the echo, the
 run stops with status 4 ("acquisition failed").
 
+With a detector, the local method must confirm the echo it was handed: unless one of its
+first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
+significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
+significances of the neighbourhood that passed stop counting, the local method's
+measurements join the search's, and the search resumes where it stood.
+
 With ``posterior`` (``auto``'s default) and an objective that knows how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
 probe), for an echo predicted at 15 dB or more, the search beyond x0's first ring is

@@ -41,7 +41,18 @@ meets them:
    at 15 dB or more, the search follows the posterior over the optimum
    (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): every A-scan's
    significance updates it, and the next point is where a detection is most likely.
-   Below 15 dB, and without a probe model (a recording, a rig), the passes of item 3.
+   Below 15 dB, and without a probe model (a recording, a rig), the passes of item 3;
+10. a detection the local method does not confirm within its first
+   :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN` (8) measurements — none of them,
+   nor all together, significant at the detection threshold — is a false alarm: the
+   search resumes where it stood (the lattice's next point, or the posterior, which
+   keeps every measurement), the false alarm's neighbourhood no longer counting towards
+   a detection (``result.false_alarms`` counts them).
+
+The result reports ``uncertainty``, a radius [deg] around the estimate that holds the
+optimum with 90 % probability (:mod:`echocal.calibrate.uncertainty`: the delta-method
+spread of a log-quadratic's peak fitted to the measurements on the lobe's top, plus the
+estimate's distance to that peak).
 
 Without a probe model the far search spends the 1° lattice first; ``fine_radius=1.0``
 drops it when the SNR is known to be ≥ 20 dB.  When the start is known to be near the
