@@ -63,7 +63,9 @@ benchmarks section (the summary, ``auto``, lower bound, curved parts), which als
 how each number changed with each part.  On ``immersion-5mhz`` (wave model, budget 80,
 tilt parameterization), from 1–3° every run reaches 0.1° within 40 measurements at 30,
 20 and 10 dB; from 5–20° the median / p99 measurements to 0.1° are 17 / 24 at 30 dB,
-27 / 59 at 20 dB and 262 / 535 at 10 dB.
+27 / 59 at 20 dB and 262 / 535 at 10 dB.  On hold-out seeds (``benchmarks/bench_tails.py``,
+300 runs per far cell) 100 % of far starts at 30 dB and 99 % at 20 dB reach 0.1° within
+60 measurements, and the 90 % radius covers the truth in 94–98 % of runs.
 """
 
 from __future__ import annotations
