@@ -133,6 +133,10 @@ def calibrate_json(args: list[str], capsys, monkeypatch) -> dict:
     assert code in (0, 3), err  # converged, or an estimate at the end of the budget
     summary = json.loads(out)
     assert summary["exit_code"] == code and summary["success"] is (code == 0)
+    # the 90 % radius (a positive number when the run found an echo and knows its noise)
+    # and the false alarms the local phase refuted
+    assert summary["uncertainty_level"] == 0.9 and summary["false_alarms"] >= 0
+    assert summary["uncertainty_deg"] is None or summary["uncertainty_deg"] > 0.0
     return summary
 
 

@@ -29,6 +29,12 @@ model-based method does) it receives every acquisition measurement, so none is
 wasted.  If the search passes ``max_radius`` without finding the echo, the
 run stops with status 4 ("acquisition failed").
 
+With a detector, the local method must confirm the echo it was handed: unless one of its
+first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
+significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
+significances of the neighbourhood that passed stop counting, the local method's
+measurements join the search's, and the search resumes where it stood.
+
 With ``posterior`` (``auto``'s default) and an objective that knows how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
 probe), for an echo predicted at 15 dB or more, the search beyond x0's first ring is
@@ -96,6 +102,10 @@ _SURE_MARGIN = 2.0
 """A detection this many σ above ``threshold`` needs no confirmation."""
 _CONFIRM_LEVEL = 1.0
 """The repeat's own significance must exceed this (noise does so 16 % of the time)."""
+CONFIRM_WITHIN = 8
+"""Measurements the local method gets to confirm the echo it was handed: unless one of
+them, or all of them together (Stouffer), is significant at ``threshold``, the detection
+was a false alarm and the search resumes."""
 
 LOCAL_INPUTS = ("noise_model", "lobe_template", "normal_echo", "resolution")
 """Inputs from the objective a local method may take: an acquisition hands its own on to
@@ -324,6 +334,14 @@ class Acquisition(Optimizer):
         """The local optimizer once the echo has been found."""
         self.found_at: int | None = None
         """Measurements spent by the acquisition phase (None while searching)."""
+        self.false_alarms = np.zeros((0, 2))
+        """[deg] (k, 2) the detections the local method did not confirm (the search
+        resumed after each)."""
+        self._local_g: list[float] = []  # the local phase's significances, until confirmed
+        self._local_x = np.zeros((0, 2))
+        self._local_y = np.zeros(0)
+        self._echo_confirmed = False
+        self._handed = self.x0.copy()  # [deg] where the local phase was started
 
     def _search_queue(
         self, fine_radius: float, passes: tuple[float, ...]
@@ -515,6 +533,48 @@ class Acquisition(Optimizer):
         self.local = self._local_cls(best, bounds=self.bounds, rng=self.rng, **opts)
         self._iterate = best.copy()
         self.found_at = self.n_told
+        self._handed = best.copy()
+        self._local_g, self._local_x, self._local_y = [], np.zeros((0, 2)), np.zeros(0)
+        self._echo_confirmed = not self._use_significance  # values alone: not checked
+
+    def _check_local(self, points: FloatArray, values: FloatArray) -> bool:
+        """Whether the local phase's first :data:`CONFIRM_WITHIN` measurements refute the
+        detection it was handed (then the search resumes, see :meth:`_resume`): none of
+        them is significant at ``threshold`` and neither are all of them together
+        (Σg/√n).  An echo, once confirmed, is not checked again."""
+        if self._echo_confirmed:
+            return False
+        sig = self._significances(len(points))
+        if sig is None:  # the detector stopped answering: nothing to check against
+            self._echo_confirmed = True
+            return False
+        ok = ~self.last_nan
+        self._local_x = np.vstack([self._local_x, points[ok]])
+        self._local_y = np.append(self._local_y, values[ok])
+        self._local_g.extend(sig[ok].tolist())
+        g = np.asarray(self._local_g)
+        if g.size and (g.max() > self.threshold or g.sum() / np.sqrt(g.size) > self.threshold):
+            self._echo_confirmed = True
+            return False
+        return g.size >= CONFIRM_WITHIN
+
+    def _resume(self) -> None:
+        """The local phase did not confirm its detection: a false alarm.  The
+        significances of the neighbourhood that passed the test (the points within a
+        lattice spacing of where the local phase started) no longer count towards any
+        test, the local phase's measurements join the search's (its posterior too), and
+        the search goes on from where it stood."""
+        self.false_alarms = np.vstack([self.false_alarms, self._handed[None, :]])
+        self._g[np.hypot(*(self._x - self._handed).T) <= 1.01 * self.spacing] = 0.0
+        dist = np.hypot(*(self._x[:, None, :] - self._x[None, :, :]).transpose(2, 0, 1))
+        self._sum[:, 1] = (dist <= 1.01 * self.spacing) @ self._g
+        g = np.asarray(self._local_g)
+        self._add(self._local_x, self._local_y, g)
+        if self.search is not None:
+            self.search.update(self._local_x, g)
+        self.local = None
+        self.found_at = None
+        self._iterate = self._handed.copy()
 
     def _ask(self) -> FloatArray:
         if self.local is not None:
@@ -533,6 +593,10 @@ class Acquisition(Optimizer):
         if self.local is not None:
             done = self.local.tell(np.where(self.last_nan, np.nan, values))
             self._iterate = self.local.iterate
+            if self._check_local(points, values):
+                self._resume()
+                self._search_on()
+                return False
             if self.local.finished:
                 self.finished, self.finish_status = True, self.local.finish_status
             return done
@@ -561,25 +625,52 @@ class Acquisition(Optimizer):
             self._start_search()
             if self.search is None:
                 self._replan()
+        self._reorder()
+        if detected:
+            self._hand_over()
+        else:
+            self._give_up_if_done()
+        return False
+
+    def _reorder(self) -> None:
+        """Search first where the echo is strongest so far: within each ring of the
+        lattice still to search, the points nearest to the best value come first."""
         if self.search is None and len(self._y) and self._next < len(self._queue):
-            # search first where the echo is strongest so far: within each ring, the points
-            # nearest to the best value come first
             best = self._x[int(np.argmax(self._g if self._use_significance else self._y))]
             rest = self._queue[self._next :]
             order = np.lexsort((np.hypot(*(rest - best).T), self._ring[self._next :]))
             self._queue[self._next :] = rest[order]
             self._ring[self._next :] = self._ring[self._next :][order]
-        if detected:
-            sure = float(np.max(self.scores())) > self.threshold + _SURE_MARGIN
-            if self.confirm and not sure:
-                self._confirming = self._x[int(np.argmax(self.scores()))].copy()
-            else:
-                self._start_local()
-        elif self._search_exhausted() or (self.search is None and self._next >= len(self._queue)):
+
+    def _give_up_if_done(self) -> None:
+        """Status 4 once the posterior gave up or the lattice is searched to its end."""
+        if self._search_exhausted() or (self.search is None and self._next >= len(self._queue)):
             self.finished, self.finish_status = True, 4
             if len(self._y):
                 self._iterate = self._x[int(np.argmax(self._y))]
-        return False
+
+    def _search_on(self) -> None:
+        """After a false alarm: the search as it would have gone on without it (the
+        posterior takes over from the first ring if it had not yet, else the replan);
+        the local phase's measurements may show the echo at once (tested as usual)."""
+        if not self._detected():
+            self._start_search()
+            if self.search is None:
+                self._replan()
+            self._reorder()
+            self._give_up_if_done()
+            return
+        self._reorder()
+        self._hand_over()
+
+    def _hand_over(self) -> None:
+        """A detection: re-measure its best point first when it is marginal (``confirm``),
+        else start the local method there."""
+        sure = float(np.max(self.scores())) > self.threshold + _SURE_MARGIN
+        if self.confirm and not sure:
+            self._confirming = self._x[int(np.argmax(self.scores()))].copy()
+        else:
+            self._start_local()
 
     def _recommend(self) -> FloatArray:
         if self.local is not None:

@@ -41,7 +41,18 @@ meets them:
    at 15 dB or more, the search follows the posterior over the optimum
    (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): every A-scan's
    significance updates it, and the next point is where a detection is most likely.
-   Below 15 dB, and without a probe model (a recording, a rig), the passes of item 3.
+   Below 15 dB, and without a probe model (a recording, a rig), the passes of item 3;
+10. a detection the local method does not confirm within its first
+   :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN` (8) measurements — none of them,
+   nor all together, significant at the detection threshold — is a false alarm: the
+   search resumes where it stood (the lattice's next point, or the posterior, which
+   keeps every measurement), the false alarm's neighbourhood no longer counting towards
+   a detection (``result.false_alarms`` counts them).
+
+The result reports ``uncertainty``, a radius [deg] around the estimate that holds the
+optimum with 90 % probability (:mod:`echocal.calibrate.uncertainty`: the delta-method
+spread of a log-quadratic's peak fitted to the measurements on the lobe's top, plus the
+estimate's distance to that peak).
 
 Without a probe model the far search spends the 1° lattice first; ``fine_radius=1.0``
 drops it when the SNR is known to be ≥ 20 dB.  When the start is known to be near the
@@ -52,7 +63,9 @@ benchmarks section (the summary, ``auto``, lower bound, curved parts), which als
 how each number changed with each part.  On ``immersion-5mhz`` (wave model, budget 80,
 tilt parameterization), from 1–3° every run reaches 0.1° within 40 measurements at 30,
 20 and 10 dB; from 5–20° the median / p99 measurements to 0.1° are 17 / 24 at 30 dB,
-27 / 59 at 20 dB and 262 / 535 at 10 dB.
+27 / 59 at 20 dB and 262 / 535 at 10 dB.  On hold-out seeds (``benchmarks/bench_tails.py``,
+300 runs per far cell) 100 % of far starts at 30 dB and 99 % at 20 dB reach 0.1° within
+60 measurements, and the 90 % radius covers the truth in 94–98 % of runs.
 """
 
 from __future__ import annotations

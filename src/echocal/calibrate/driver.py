@@ -29,7 +29,13 @@ from echocal.calibrate.evidence import judge
 from echocal.calibrate.objective import Objective
 from echocal.calibrate.presets import method_options, presets
 from echocal.calibrate.registry import get_method
-from echocal.calibrate.result import STATUS_MESSAGES, SUCCESS_STATUSES, CalibrationResult
+from echocal.calibrate.result import (
+    NO_ECHO_STATUSES,
+    STATUS_MESSAGES,
+    SUCCESS_STATUSES,
+    CalibrationResult,
+)
+from echocal.calibrate.uncertainty import UNCERTAINTY_LEVEL, estimate_radius
 from echocal.constants import DEFAULT_SETTLE
 from echocal.errors import BudgetExhaustedError, EchocalValueError, UnknownNameError
 from echocal.geometry import angle_between, convert_angles, orientation_normal
@@ -469,6 +475,9 @@ def calibrate(
         message += f"; {n_nan} measurement(s) returned NaN (treated as the worst value seen)"
     uncertainty = objective.bench_uncertainty()
     message += _unresolved(uncertainty, settle, xtol)
+    radius = None
+    if status not in NO_ECHO_STATUSES:
+        radius = estimate_radius(x, pts_all, vals_all, objective.noise_estimate())
     return CalibrationResult(
         x=x,
         fun=fun,
@@ -496,6 +505,9 @@ def calibrate(
         bench_time=_bench_time(objective.bench_time, bench_start),
         bench_time_saved=_bench_time(getattr(objective, "bench_time_saved", None), saved_start),
         bench_uncertainty=uncertainty,
+        false_alarms=len(getattr(opt, "false_alarms", ())),
+        uncertainty=radius,
+        uncertainty_level=UNCERTAINTY_LEVEL,
     )
 
 

@@ -51,6 +51,7 @@ _OPTIONAL_NUMBERS = (
     "bench_time",
     "bench_time_saved",
     "bench_uncertainty",
+    "uncertainty",
 )
 """Fields that are a number or None; a non-finite one is stored as None."""
 
@@ -99,6 +100,14 @@ class CalibrationResult:
         when the source reports none (the ideal bench, a recording).
     bench_time_saved : [s] the motion and settling time a motion-aware objective's order
         saved against the plain order (predicted from the bench's axes), None without one.
+    uncertainty : [deg] the radius around ``x`` that holds the optimum with probability
+        ``uncertainty_level``, from the measurements on the lobe's top
+        (:mod:`echocal.calibrate.uncertainty`); None when the run found no echo, the
+        noise is unknown or those measurements show no peak.  Measurement noise only: the
+        positioner's error is ``bench_uncertainty``.
+    uncertainty_level : the confidence level of ``uncertainty`` (0.9).
+    false_alarms : detections the local method did not confirm (the acquisition's search
+        resumed after each, see :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN`).
     bench_uncertainty : [deg] the RMS angle between a commanded and a reached orientation
         of the source's positioner (backlash, steps, repeatability), which the estimate, a
         commanded orientation, carries besides the measurement noise; None when the source
@@ -131,6 +140,9 @@ class CalibrationResult:
     bench_time: float | None = None
     bench_time_saved: float | None = None
     bench_uncertainty: float | None = None
+    false_alarms: int = 0
+    uncertainty: float | None = None
+    uncertainty_level: float = 0.9
 
     @property
     def nfev(self) -> int:

@@ -219,6 +219,9 @@ def calibration_summary(
         "bench_time_s": result.bench_time,
         "bench_time_saved_s": result.bench_time_saved,
         "bench_uncertainty_deg": result.bench_uncertainty,
+        "uncertainty_deg": result.uncertainty if found else None,
+        "uncertainty_level": result.uncertainty_level,
+        "false_alarms": result.false_alarms,
         "n_iterations": result.n_iterations,
         "status": result.status,
         "message": result.message,
@@ -261,7 +264,8 @@ def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> No
     search = "" if found is None else f" (echo found after {found})"
     output.print(
         f"[bold]{escape(result.method)}[/] on {escape(virtual.description)}\n"
-        f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
+        f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°"
+        f"{_radius(result)}\n"
         f"  truth     {names[0]} = {evaluation.truth[0]:8.3f}°, "
         f"{names[1]} = {evaluation.truth[1]:8.3f}°\n"
         f"  error     {evaluation.error:.4f}°   measurements {result.n_measurements}"
@@ -269,6 +273,14 @@ def _print_estimate(result: Any, evaluation: Any, virtual: Any, out: Path) -> No
         f"  stopped:  {escape(result.message)}\n"
         f"  saved to  {escape(str(out))}/"
     )
+
+
+def _radius(result: Any) -> str:
+    """``   within 0.012° (90 %)``: the uncertainty the run reported, else ``""``."""
+    radius = getattr(result, "uncertainty", None)
+    if radius is None:
+        return ""
+    return f"   within {radius:.3g}° ({result.uncertainty_level:.0%})"
 
 
 def _bench_line(result: Any) -> str:
