@@ -15,7 +15,11 @@ scipy's ``success``) **and** the data support the estimate:
   (by ``5 σ`` of the difference, σ the noise of an energy at that level, see
   :func:`energy_sigma`, and by 0.1 %) — a quadratic model fitted over a double-humped
   lobe, as a large probe sees over a cylinder, puts its maximum between the humps
-  (status 10 otherwise).
+  (status 10 otherwise);
+- where the objective knows a floor the optimum's echo exceeds
+  (:meth:`~echocal.calibrate.objective.Objective.echo_floor`: half a simulator's echo at
+  normal incidence), the echo at the estimate is above it — not a side lobe's or the
+  grains' (status 10 otherwise).
 """
 
 from __future__ import annotations
@@ -164,8 +168,8 @@ def judge(
             return 10, (
                 f" ({STATUS_CLAIMS[status]}, but the echo at the estimate ({level:.4g}) is "
                 f"less than half the probe's echo at normal incidence ({2.0 * floor:.4g}): "
-                "the peak found is not the surface's (grain noise?); gate the front-wall "
-                "echo or start nearer"
+                "the peak found is not the surface's main lobe (a side lobe, grain noise); "
+                "start nearer or gate the front-wall echo"
             )
     if status in (0, 7):
         reason = unsupported_claim(

@@ -159,10 +159,10 @@ class Objective:
         return None
 
     def echo_floor(self) -> float | None:
-        """[objective units] a level the echo at the optimum is known to exceed where the
-        objective's measurements also hold peaks that are not the surface's (a simulated
-        bench's grain noise), so that an estimate below it has found such a peak; None
-        otherwise (the default)."""
+        """[objective units] a level the echo at the optimum is known to exceed (half a
+        simulator's noiseless echo at normal incidence), so that an estimate below it has
+        found a peak that is not the surface's main lobe (a side lobe, grain noise); None
+        when the objective cannot know it (the default)."""
         return None
 
     def bench_uncertainty(self) -> float | None:

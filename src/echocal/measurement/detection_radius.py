@@ -301,15 +301,7 @@ def lobe_profile(
     directions = positive_int("directions", directions)
     pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
     detector = shared_detector(setup.pulse, setup.window.fs, setup.window.n_samples)
-    candidates = setup.normal_incidence_directions(pos)  # tilts [deg], best first
-    if not len(candidates):
-        raise GeometryError(
-            f"no direction from position {tuple(pos)} m meets the surface at normal "
-            "incidence; move the probe over the part"
-        )
-    at_normal = _scans(setup, pos, candidates[:, 0], candidates[:, 1])
-    best = int(np.argmax(detector.peak(at_normal)))
-    centre, reference = candidates[best], at_normal[best]
+    centre, reference = _normal_reference(setup, pos)
     stop = 0.0
     if until_snr_db is not None:
         until_snr_db = finite_float("until_snr_db", until_snr_db)
@@ -337,6 +329,32 @@ def lobe_profile(
         np.concatenate(energies, axis=1),
         np.asarray(centre, dtype=np.float64),
     )
+
+
+def _normal_reference(setup: VirtualSetup, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The best direction of normal incidence from ``pos`` [m] (tilts [deg], (2,)) and its
+    noiseless A-scan (n_samples,); raises GeometryError when there is none."""
+    candidates = setup.normal_incidence_directions(pos)  # tilts [deg], best first
+    if not len(candidates):
+        raise GeometryError(
+            f"no direction from position {tuple(pos)} m meets the surface at normal "
+            "incidence; move the probe over the part"
+        )
+    detector = shared_detector(setup.pulse, setup.window.fs, setup.window.n_samples)
+    at_normal = _scans(setup, pos, candidates[:, 0], candidates[:, 1])
+    best = int(np.argmax(detector.peak(at_normal)))
+    return candidates[best], at_normal[best]
+
+
+def normal_incidence_energy(setup: VirtualSetup, position: Sequence[float] | np.ndarray) -> float:
+    """[a.u.] pseudo-energy (default energy window, whole recording) of ``setup``'s
+    noiseless A-scan at its best direction of normal incidence from ``position`` [m]: the
+    lobe profile's energy at 0° (:attr:`LobeProfile.energies`), for a few A-scans instead
+    of a profile's hundreds.  Raises GeometryError where no direction meets the surface at
+    normal incidence."""
+    pos = finite_array("position", position, shape_tail=(3,)).reshape(3)
+    _, reference = _normal_reference(setup, pos)
+    return float(np.asarray(pseudo_energy(reference[None, :], setup.window, setup.pulse))[0])
 
 
 def _scans(setup: VirtualSetup, pos: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:

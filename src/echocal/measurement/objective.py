@@ -171,6 +171,7 @@ class SourceObjective(Objective):
         self._warned_coarse = False
         self._gate_window: RecordingWindow | None = None
         self._spent: float | None = None
+        self._normal_energy: float | None = None  # normal_echo()'s, once computed
         self._noise_ar = _noise_colour(source)
         self.motion_aware = bool(motion_aware)
         self.bench_time_saved: float | None = None
@@ -251,13 +252,11 @@ class SourceObjective(Objective):
 
     def echo_floor(self) -> float | None:
         """[pseudo-energy units] half the simulator's noiseless echo at normal incidence
-        (:meth:`normal_echo`), on a bench with grain noise: the grains' backscatter peaks at
-        any tilt, and an estimate whose echo is below half the one at normal incidence is
-        off the main lobe (the optimum's echo is at least the normal one).  None without
-        grains or without :meth:`normal_echo`."""
-        bench = getattr(self.source, "bench", None)
-        if bench is None or bench.grain is None:
-            return None
+        (:meth:`normal_echo`): the optimum's echo is at least the normal one, so an
+        estimate whose echo is below half of it sits off the main lobe — on a side lobe
+        (a square probe's, 8° out at 0.14 of the peak) or on the grains' backscatter,
+        which peaks at any tilt.  None without :meth:`normal_echo` (a rig, a gate, another
+        metric)."""
         echo = self.normal_echo()
         return None if echo is None else 0.5 * echo
 
@@ -445,9 +444,29 @@ class SourceObjective(Objective):
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
         if not np.any(np.all((normal >= lo) & (normal <= hi), axis=1)):
             return None
-        profile = self._lobe_profile()
-        echo = 0.0 if profile is None else float(np.mean(profile.energies[:, 0]))
+        if self._normal_energy is None:
+            self._normal_energy = self._normal_incidence_energy()
+        echo = self._normal_energy
         return echo if echo > 0.0 else None
+
+    def _normal_incidence_energy(self) -> float:
+        """[pseudo-energy units] the twin's noiseless echo at normal incidence
+        (:func:`~echocal.measurement.detection_radius.normal_incidence_energy`), 0.0 where
+        the lobe profile would not apply (a gate, another metric or window) or the probe
+        cannot see the part."""
+        from echocal.measurement.detection_radius import normal_incidence_energy
+
+        if (
+            self.twin is None
+            or self.gate is not None
+            or self.metric != "pseudo-energy"
+            or self.window_length is not None
+        ):
+            return 0.0
+        try:
+            return normal_incidence_energy(self.twin, self.position)
+        except EchocalError:  # no normal incidence, no echo in the window, ...
+            return 0.0
 
     def _own_units(self) -> bool:
         """Whether the measurements are the simulated twin's own, in its units: the
