@@ -57,3 +57,40 @@ def _raise_after_import(module: str, expected: type[BaseException], name: str) -
     if expected is Terminated:
         assert fired == [getattr(signal, name)]
     del sys.modules[module]
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [("SIGHUP", Terminated), ("SIGTERM", Terminated), ("SIGINT", KeyboardInterrupt)],
+)
+def test_a_signal_while_saving_arrives_when_the_data_is_safe(name, expected) -> None:
+    # a partial recording's chunk is written whole: the signal waits for the section's end
+    import os
+
+    from echocal._signals import saving
+
+    written: list[int] = []
+    with pytest.raises(expected), terminate_like_ctrl_c():
+        with saving():
+            os.kill(os.getpid(), getattr(signal, name))
+            deadline = time.monotonic() + 0.2
+            while time.monotonic() < deadline:  # the handler runs here: it must hold
+                pass
+            written.append(1)
+        written.append(2)  # never reached: the held signal is raised as the section ends
+    assert written == [1]
+
+
+def test_saving_that_ends_by_an_exception_keeps_that_exception() -> None:
+    import os
+
+    from echocal._signals import saving
+
+    with pytest.raises(OSError, match="disk full"), terminate_like_ctrl_c():
+        with saving():
+            os.kill(os.getpid(), signal.SIGTERM)
+            deadline = time.monotonic() + 0.2
+            while time.monotonic() < deadline:
+                pass
+            raise OSError("disk full")

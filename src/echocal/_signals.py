@@ -16,6 +16,10 @@ on a rig) is delivered again :data:`IMPORT_RETRY` later, once the import is over
 exception raised inside an import leaves the module half-imported, and the cleanup that
 saves the measurements would then fail on it (``module 'numba' has no attribute 'core'``).
 The same holds for Ctrl-C (SIGINT) while the context is active.
+
+Nor does a signal interrupt the saving of what was measured: inside :func:`saving` (a
+partial recording's chunk being written) it is held, then raised the moment the section
+ends, so a chunk is either written whole or not started.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from types import FrameType
@@ -33,6 +38,7 @@ __all__ = [
     "Terminated",
     "exit_code",
     "how",
+    "saving",
     "terminate_like_ctrl_c",
 ]
 
@@ -102,6 +108,39 @@ def _deliver_later(signum: int) -> None:
     timer.start()
 
 
+_held: list[int] = []
+"""Signals that arrived inside :func:`saving`, raised again when it ends (main thread)."""
+_saving_depth = 0
+"""How many :func:`saving` sections are open (handlers run in the main thread only)."""
+
+
+@contextlib.contextmanager
+def saving() -> Iterator[None]:
+    """A section that no signal of :func:`terminate_like_ctrl_c` interrupts (writing what
+    was measured): a signal that arrives meanwhile is raised again as soon as the section
+    ends normally (if it ends by an exception, that exception stands)."""
+    global _saving_depth
+    _saving_depth += 1
+    try:
+        yield
+    finally:
+        _saving_depth -= 1
+        held = list(_held) if _saving_depth == 0 else []
+        if _saving_depth == 0:
+            _held.clear()
+    if held and sys.exc_info()[1] is None:
+        signal.raise_signal(held[0])  # its handler raises here, now that the data is safe
+
+
+def _hold(signum: int) -> bool:
+    """Keep ``signum`` for the end of the open :func:`saving` section; False when none is open."""
+    if _saving_depth == 0:
+        return False
+    if not _held:
+        _held.append(signum)
+    return True
+
+
 @contextlib.contextmanager
 def terminate_like_ctrl_c() -> Iterator[list[int]]:
     """While active, SIGTERM and SIGHUP raise :class:`Terminated` in the main thread and
@@ -123,6 +162,8 @@ def terminate_like_ctrl_c() -> Iterator[list[int]]:
     def handler(signum: int, frame: FrameType | None) -> None:
         if fired:
             return  # already stopping: let the cleanup finish
+        if _hold(signum):
+            return  # raised when the measurements are saved
         if importing(frame):
             _deliver_later(signum)  # never leave a module half-imported
             return
@@ -130,6 +171,8 @@ def terminate_like_ctrl_c() -> Iterator[list[int]]:
         raise Terminated(signum)
 
     def interrupt(signum: int, frame: FrameType | None) -> None:
+        if _hold(signum):
+            return
         if importing(frame):
             _deliver_later(signum)
             return

@@ -1,6 +1,6 @@
 """Every signal keeps every measurement, on every driver: ``record --rig`` through the TCP
-driver (the emulator) and through the VISA drivers (the simulated SCPI bench, pyvisa-py)
-is stopped by SIGINT, SIGTERM or SIGHUP after a few A-scans, then run again: it resumes
+driver (the emulator), the VISA drivers (the simulated SCPI bench, pyvisa-py) and the
+python driver (a lab's own classes, here over the simulator in this process) is stopped by SIGINT, SIGTERM or SIGHUP after a few A-scans, then run again: it resumes
 and the file holds every A-scan the rig delivered, once, in order.
 
 The instruments serve from a recording proxy of the simulator, so the test knows every
@@ -72,13 +72,86 @@ def _visa(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float
     return bench, rig, 0.51 * bench.y_increment  # 16-bit codes: half a code
 
 
+LAB_MODULE = """
+from echocal.geometry import Pose
+
+SOURCE = None  # the test's simulator (a Served), set before the rig is built
+POSE = Pose(0.0, 0.0, 0.016)  # where the stage was last sent
+
+
+class Stage:
+    \"\"\"A lab's own stage over the simulator: remembers where it was sent.\"\"\"
+
+    def __init__(self):
+        self.limits = SOURCE.limits
+
+    def move_to(self, pose):
+        global POSE
+        POSE = self.limits.check(pose)
+        return POSE
+
+    def position(self):
+        return POSE
+
+    def close(self):
+        pass
+
+
+class Pulser:
+    \"\"\"A lab's own pulser-receiver: one simulated A-scan at the stage's pose.\"\"\"
+
+    def acquire(self):
+        return SOURCE.measure(POSE)
+
+    def close(self):
+        pass
+"""
+
+
+class _InProcess:
+    """The python driver's devices live in this process: nothing to serve; on exit the
+    lab's module leaves the import path."""
+
+    def __init__(self, module: Any, folder: str) -> None:
+        self._served = module.SOURCE
+        self._folder = folder
+
+    def __enter__(self) -> _InProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        import sys
+
+        if self._folder in sys.path:
+            sys.path.remove(self._folder)
+
+
+def _python(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float]:
+    import importlib
+    import sys
+
+    name = f"lab_sim_devices_{tmp_path.name}"
+    (tmp_path / f"{name}.py").write_text(LAB_MODULE, encoding="utf-8")
+    sys.path.insert(0, str(tmp_path))
+    module = importlib.import_module(name)
+    module.SOURCE = source
+    rig = tmp_path / "python-rig.toml"
+    rig.write_text(
+        f'[rig]\nsetup = "{setup.as_posix()}"\n'
+        f'[rig.positioner]\ndriver = "python"\nclass = "{name}:Stage"\n'
+        f'[rig.receiver]\ndriver = "python"\nclass = "{name}:Pulser"\n',
+        encoding="utf-8",
+    )
+    return _InProcess(module, str(tmp_path)), rig, 0.0  # in process: the very samples
+
+
 def _count(instrument: Any) -> int:
     return len(instrument._served.samples)
 
 
 @pytest.mark.slow  # six record runs and six resumes over sockets: about 25 s
 @pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
-@pytest.mark.parametrize("driver", [_tcp, _visa], ids=["tcp", "visa"])
+@pytest.mark.parametrize("driver", [_tcp, _visa, _python], ids=["tcp", "visa", "python"])
 @pytest.mark.parametrize("name", list(EXIT))
 def test_a_signal_keeps_every_ascan_and_the_run_resumes(
     name, driver, tmp_path, capsys, monkeypatch
@@ -104,8 +177,10 @@ def test_a_signal_keeps_every_ascan_and_the_run_resumes(
         assert code == EXIT[name], err
         assert "Traceback" not in err and "run the same command again to resume" in flat(err)
         assert not out.exists()
+        first_err = err
         code, _, err = run_main(args, capsys, monkeypatch)
         assert code == 0, err
+    assert "resumed after" in err, (first_err, err)
     resumed_after = int(flat(err).split("resumed after ")[1].split(")")[0])
     # every A-scan delivered before the signal is kept (the one in flight, if any, is
     # measured again on resume)
@@ -119,7 +194,7 @@ def test_a_signal_keeps_every_ascan_and_the_run_resumes(
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
-@pytest.mark.parametrize("driver", [_tcp, _visa], ids=["tcp", "visa"])
+@pytest.mark.parametrize("driver", [_tcp, _visa, _python], ids=["tcp", "visa", "python"])
 @pytest.mark.parametrize("name", list(EXIT))
 def test_a_signal_during_calibrate_on_a_rig_saves_every_measurement(
     name, driver, tmp_path, capsys, monkeypatch

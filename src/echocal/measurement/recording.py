@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from echocal._signals import saving
 from echocal._validate import finite_array, positive_int
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import Pose
@@ -522,11 +523,13 @@ def record(
                     index = batch[-1] + 1
                     bar.update(task, completed=index)
                     if len(rows) >= chunk_size:
-                        partial.write_chunk(row_start, rows)
+                        with saving():  # a signal waits until the chunk is whole
+                            partial.write_chunk(row_start, rows)
                         row_start, rows = index, []
             finally:
                 if rows:  # keep what was measured, also on KeyboardInterrupt or a source error
-                    partial.write_chunk(row_start, rows)
+                    with saving():
+                        partial.write_chunk(row_start, rows)
                 elif partial.n_done == 0 and isinstance(sys.exc_info()[1], Exception):
                     # failed (not interrupted) before saving anything: nothing to resume
                     shutil.rmtree(sidecar, ignore_errors=True)
