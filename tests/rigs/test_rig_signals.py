@@ -1,7 +1,8 @@
 """Every signal keeps every measurement, on every driver: ``record --rig`` through the TCP
 driver (the emulator), the VISA drivers (the simulated SCPI bench, pyvisa-py) and the
-python driver (a lab's own classes, here over the simulator in this process) is stopped by SIGINT, SIGTERM or SIGHUP after a few A-scans, then run again: it resumes
-and the file holds every A-scan the rig delivered, once, in order.
+python driver (a lab's own classes, here over the simulator in this process) is stopped
+by SIGINT, SIGTERM or SIGHUP after a few A-scans, then run again: it resumes and the file
+holds every A-scan the rig delivered, once, in order.
 
 The instruments serve from a recording proxy of the simulator, so the test knows every
 A-scan the rig sent; the signal is sent to this process (the CLI runs in-process in the
