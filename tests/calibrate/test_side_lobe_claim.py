@@ -29,12 +29,13 @@ def test_a_side_lobe_is_not_claimed(tmp_path, capsys, monkeypatch) -> None:
     assert abs(result["estimate_deg"][1]) > 5.0  # it did settle on the side lobe (the case is real)
     assert result["status"] == 10 and result["success"] is False
     assert "side lobe" in result["message"]
+    assert result["uncertainty_deg"] is None  # no radius around an unsupported estimate
 
 
 def test_the_main_lobe_is_still_claimed(tmp_path, capsys, monkeypatch) -> None:
     result = calibrate_json(tmp_path, capsys, monkeypatch, "0.5,1.0")
     assert max(abs(v) for v in result["estimate_deg"]) < 0.1
-    assert result["success"] is True
+    assert result["success"] is True and result["uncertainty_deg"] > 0.0
 
 
 def test_the_normal_echo_is_the_lobe_profiles_energy_at_zero() -> None:

@@ -33,6 +33,7 @@ from echocal.calibrate.result import (
     NO_ECHO_STATUSES,
     STATUS_MESSAGES,
     SUCCESS_STATUSES,
+    UNSUPPORTED_STATUSES,
     CalibrationResult,
 )
 from echocal.calibrate.uncertainty import UNCERTAINTY_LEVEL, estimate_radius
@@ -476,7 +477,7 @@ def calibrate(
     uncertainty = objective.bench_uncertainty()
     message += _unresolved(uncertainty, settle, xtol)
     radius = None
-    if status not in NO_ECHO_STATUSES:
+    if status not in NO_ECHO_STATUSES | UNSUPPORTED_STATUSES:
         radius = estimate_radius(x, pts_all, vals_all, objective.noise_estimate())
     return CalibrationResult(
         x=x,

@@ -43,6 +43,11 @@ last estimate, with ``success`` False."""
 NO_ECHO_STATUSES = frozenset({4, 6, 9})
 """Statuses of a run that found no echo: ``x`` is not an estimate of anything."""
 
+UNSUPPORTED_STATUSES = frozenset({8, 10})
+"""Statuses of a run whose estimate the measurements do not support as the optimum (on the
+positioner's limits; a side lobe, a point stronger than the estimate): no uncertainty
+radius is reported around it."""
+
 _ARRAYS = ("x", "points", "values", "iterates", "iteration_measurements", "times")
 _OPTIONAL_NUMBERS = (
     "fun",
@@ -102,8 +107,9 @@ class CalibrationResult:
         saved against the plain order (predicted from the bench's axes), None without one.
     uncertainty : [deg] the radius around ``x`` that holds the optimum with probability
         ``uncertainty_level``, from the measurements on the lobe's top
-        (:mod:`echocal.calibrate.uncertainty`); None when the run found no echo, the
-        noise is unknown or those measurements show no peak.  Measurement noise only: the
+        (:mod:`echocal.calibrate.uncertainty`); None when the run found no echo or its
+        estimate is not supported (:data:`UNSUPPORTED_STATUSES`), the noise is unknown or
+        those measurements show no peak.  Measurement noise only: the
         positioner's error is ``bench_uncertainty``.
     uncertainty_level : the confidence level of ``uncertainty`` (0.9).
     false_alarms : detections the local method did not confirm (the acquisition's search
