@@ -107,13 +107,14 @@ class CalibrationResult:
         saved against the plain order (predicted from the bench's axes), None without one.
     uncertainty : [deg] the radius around ``x`` that holds the optimum with probability
         ``uncertainty_level``, from the measurements on the lobe's top
-        (:mod:`echocal.calibrate.uncertainty`); None when the run found no echo or its
+        (``echocal.calibrate.uncertainty``); None when the run found no echo or its
         estimate is not supported (:data:`UNSUPPORTED_STATUSES`), the noise is unknown or
         those measurements show no peak.  Measurement noise only: the
         positioner's error is ``bench_uncertainty``.
     uncertainty_level : the confidence level of ``uncertainty`` (0.9).
-    false_alarms : detections the local method did not confirm (the acquisition's search
-        resumed after each, see :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN`).
+    false_alarms : detections the local method did not confirm within its first 8
+        measurements (``echocal.calibrate.acquisition.CONFIRM_WITHIN``); the acquisition's
+        search resumed after each.
     bench_uncertainty : [deg] the RMS angle between a commanded and a reached orientation
         of the source's positioner (backlash, steps, repeatability), which the estimate, a
         commanded orientation, carries besides the measurement noise; None when the source

@@ -10,7 +10,7 @@ same setup otherwise paid for it again.
 Files live in the same folder as the detector cache (``$ECHOCAL_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/echocal``, else ``~/.cache/echocal``), one ``.npz`` per key (a SHA-256
 of the pickled physics objects, the position, the constants and the digest of echocal's
-source code, :func:`echocal._code_digest.code_digest`),
+source code, ``echocal._code_digest.code_digest``),
 written atomically.  A physics object that cannot be pickled is not cached; a missing,
 unreadable, damaged or inconsistent file is a miss; a folder that cannot be written is
 skipped: the cache can only save time, never change a result.

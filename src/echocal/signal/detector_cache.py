@@ -49,7 +49,7 @@ def _digestible(value: Any) -> Any:
 def cache_key(pulse: Any, fs: float, n_samples: int, constants: dict[str, Any]) -> str:
     """SHA-256 of the pulse (name and parameters), the sampling rate [Hz], the A-scan length,
     the calibration's ``constants`` and the package's source code
-    (:func:`echocal._code_digest.code_digest`)."""
+    (``echocal._code_digest.code_digest``)."""
     from echocal._code_digest import code_digest
 
     data = {
