@@ -71,14 +71,19 @@ def test_a_signal_while_saving_arrives_when_the_data_is_safe(name, expected) -> 
     from echocal._signals import saving
 
     written: list[int] = []
-    with pytest.raises(expected), terminate_like_ctrl_c():
-        with saving():
-            os.kill(os.getpid(), getattr(signal, name))
-            deadline = time.monotonic() + 0.2
-            while time.monotonic() < deadline:  # the handler runs here: it must hold
-                pass
-            written.append(1)
-        written.append(2)  # never reached: the held signal is raised as the section ends
+    # Python's default Ctrl-C handler, as a command line has (an xdist worker ignores it)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(expected), terminate_like_ctrl_c():
+            with saving():
+                os.kill(os.getpid(), getattr(signal, name))
+                deadline = time.monotonic() + 0.2
+                while time.monotonic() < deadline:  # the handler runs here: it must hold
+                    pass
+                written.append(1)
+            written.append(2)  # never reached: the held signal is raised as the section ends
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert written == [1]
 
 
