@@ -13,9 +13,11 @@ from __future__ import annotations
 import sys
 from typing import Any
 
+import numpy as np
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["in_ipython", "new_figure", "release"]
+__all__ = ["cell_edges", "in_ipython", "new_figure", "release"]
 
 
 def in_ipython() -> bool:
@@ -42,3 +44,13 @@ def release(fig: Figure) -> None:
         import matplotlib.pyplot as plt
 
         plt.close(fig)
+
+
+def cell_edges(centres: ArrayLike) -> NDArray[np.float64]:
+    """The cell edges of a monotonic grid of ``centres`` (n,), shape (n + 1,): midpoints
+    inside, half a step beyond each end (one cell of width 1 for a single centre)."""
+    c = np.asarray(centres, dtype=np.float64)
+    if c.size == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[2.0 * c[0] - mid[0]], mid, [2.0 * c[-1] - mid[-1]]])

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal.calibrate.result import CalibrationResult
 from echocal.evaluation import CostMap
-from echocal.plots._figure import new_figure
+from echocal.plots._figure import cell_edges, new_figure
 from echocal.plots._style import FEW_TICKS, few_ticks, series_style
 
 __all__ = [
@@ -333,14 +333,16 @@ def _draw_map(ax: Any, cost_map: CostMap, values: FloatArray, frame: str | None,
     else:
         # a curvilinear mesh: smooth shading on the grid's nodes converted, or flat cells
         # between its cell edges converted (matplotlib cannot infer a curved grid's edges)
-        a, b = (cost_map.a, cost_map.b) if smooth else (_edges(cost_map.a), _edges(cost_map.b))
+        a, b = (
+            (cost_map.a, cost_map.b) if smooth else (cell_edges(cost_map.a), cell_edges(cost_map.b))
+        )
         nodes = np.stack(np.meshgrid(a, b, indexing="xy"), axis=-1)
         x, y = np.moveaxis(_to_view(nodes, frame, view), -1, 0)
         shading = "gouraud" if smooth else "flat"
     mesh = ax.pcolormesh(x, y, np.ma.masked_invalid(values), shading=shading, cmap="viridis")
     # framed to the map's drawn cells (a lobe-profile map is blank beyond its reach): the
     # corners of every finite cell, in the view; the paths widen it (_draw_paths)
-    edges = np.stack(np.meshgrid(_edges(cost_map.a), _edges(cost_map.b), indexing="xy"), -1)
+    edges = np.stack(np.meshgrid(cell_edges(cost_map.a), cell_edges(cost_map.b), indexing="xy"), -1)
     corners = _to_view(edges, frame, view)
     finite = np.isfinite(values) if np.any(np.isfinite(values)) else np.ones(values.shape, bool)
     shown = np.vstack(
@@ -353,16 +355,6 @@ def _draw_map(ax: Any, cost_map: CostMap, values: FloatArray, frame: str | None,
         # a degree of tilt is a degree each way: the panel keeps its size, the limits grow
         ax.set_aspect("equal", adjustable="datalim")
     return mesh
-
-
-def _edges(centres: FloatArray) -> FloatArray:
-    """The cell edges of a monotonic grid of ``centres`` (n,), shape (n + 1,): midpoints
-    inside, half a step beyond each end (one cell of width 1 for a single centre)."""
-    c = np.asarray(centres, dtype=np.float64)
-    if c.size == 1:
-        return np.array([c[0] - 0.5, c[0] + 0.5])
-    mid = 0.5 * (c[1:] + c[:-1])
-    return np.concatenate([[2.0 * c[0] - mid[0]], mid, [2.0 * c[-1] - mid[-1]]])
 
 
 def _draw_paths(

@@ -13,6 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from echocal.plots._figure import cell_edges
 from echocal.plots._style import series_style
 from echocal.positionscan.dataset import PositionScan
 from echocal.signal.analytic import analytic_signal
@@ -27,14 +28,6 @@ def _db(env: NDArray[np.float64], reference: float, floor_db: float) -> NDArray[
     with np.errstate(divide="ignore"):
         out = 20.0 * np.log10(env / reference) if reference > 0 else np.full(env.shape, -np.inf)
     return np.maximum(out, -abs(floor_db))
-
-
-def _edges(values: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Cell edges around sorted cell centres (half a step beyond the ends)."""
-    if values.size == 1:
-        return np.array([values[0] - 0.5, values[0] + 0.5])
-    mid = 0.5 * (values[1:] + values[:-1])
-    return np.concatenate([[2 * values[0] - mid[0]], mid, [2 * values[-1] - mid[-1]]])
 
 
 def bscan_figure(
@@ -78,7 +71,12 @@ def bscan_figure(
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     mesh = ax.pcolormesh(
-        _edges(pos * _MM), _edges(vertical), db.T, cmap="viridis", vmin=-dynamic_range_db, vmax=0
+        cell_edges(pos * _MM),
+        cell_edges(vertical),
+        db.T,
+        cmap="viridis",
+        vmin=-dynamic_range_db,
+        vmax=0,
     )
     ax.invert_yaxis()
     ax.set_xlabel(f"probe position {along} [mm]")
@@ -129,8 +127,8 @@ def cscan_figure(
     )
     if scan.is_raster:
         mesh = ax.pcolormesh(
-            _edges(scan.x * _MM),
-            _edges(scan.y * _MM),
+            cell_edges(scan.x * _MM),
+            cell_edges(scan.y * _MM),
             np.ma.masked_invalid(shown),
             cmap=cmap,
             vmin=span[0],
@@ -204,8 +202,8 @@ def residual_map_figure(scan: PositionScan, fit: Any) -> Figure:
         head = f"{fit.shape}: radius {p['radius'] * _MM:.3f} ± {s['radius'] * _MM:.3f} mm"
     if scan.is_raster:
         mesh = ax.pcolormesh(
-            _edges(scan.x * _MM),
-            _edges(scan.y * _MM),
+            cell_edges(scan.x * _MM),
+            cell_edges(scan.y * _MM),
             np.ma.masked_invalid(res),
             cmap="RdBu_r",
             vmin=-lim,
