@@ -620,16 +620,7 @@ class Acquisition(Optimizer):
             if own and self.scores()[-1] > self._threshold():
                 self._start_local(self._x[-1].copy())
                 return False
-        detected = self._detected()
-        if not confirming and not detected:
-            self._start_search()
-            if self.search is None:
-                self._replan()
-        self._reorder()
-        if detected:
-            self._hand_over()
-        else:
-            self._give_up_if_done()
+        self._search_on(confirming)
         return False
 
     def _reorder(self) -> None:
@@ -649,19 +640,21 @@ class Acquisition(Optimizer):
             if len(self._y):
                 self._iterate = self._x[int(np.argmax(self._y))]
 
-    def _search_on(self) -> None:
-        """After a false alarm: the search as it would have gone on without it (the
-        posterior takes over from the first ring if it had not yet, else the replan);
-        the local phase's measurements may show the echo at once (tested as usual)."""
-        if not self._detected():
+    def _search_on(self, confirming: bool = False) -> None:
+        """The search's next step after a batch (or after a false alarm, whose local
+        measurements may show the echo at once): a detection is handed over; without one,
+        unless a confirmation just failed, the posterior takes over from the first ring if
+        it had not yet (else the replan), and the search gives up once it is done."""
+        detected = self._detected()
+        if not confirming and not detected:
             self._start_search()
             if self.search is None:
                 self._replan()
-            self._reorder()
-            self._give_up_if_done()
-            return
         self._reorder()
-        self._hand_over()
+        if detected:
+            self._hand_over()
+        else:
+            self._give_up_if_done()
 
     def _hand_over(self) -> None:
         """A detection: re-measure its best point first when it is marginal (``confirm``),

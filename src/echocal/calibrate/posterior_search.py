@@ -79,11 +79,8 @@ TIE = 0.05
 one nearest to x0 is measured next (module docstring)."""
 MOTION_TIE = 0.25
 """A motion-aware search (:meth:`PosteriorSearch.next_point` given the moves' times) takes
-the cell reached soonest among those within this fraction of the best detection chance.
-On the real bench of ``benchmarks/bench_calibration.py`` (10°/s, 50 ms settling; far
-starts at 30 dB, 6 seeded runs) the bench time to 0.1° fell from a median 17.7 s to
-10.6 s (11.8 s within 0.15, 12.1 s within 0.5, where the measurements to 0.1° grew from
-31 to 50), at a median 36.5 measurements to 0.1° instead of 31, every run within 0.1°."""
+the cell reached soonest among those within this fraction of the best detection chance
+(the bench time it saves and the measurements it costs: ``docs/bench.md``)."""
 _MAX_CELLS = 401
 """Cells per side of the posterior's grid at most (161,000 cells: 10–18 ms per point, the
 FFT about 6 ms; 2–3 ms at ``max_radius`` 20° and a 0.2° cell)."""
