@@ -99,3 +99,46 @@ def test_saving_that_ends_by_an_exception_keeps_that_exception() -> None:
             while time.monotonic() < deadline:
                 pass
             raise OSError("disk full")
+
+
+class _SignalsWhenCollected:
+    """An object whose finalizer receives the signal: Python ignores an exception raised
+    there ("Exception ignored in ..."), as it did for a weakref callback on a rig run."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+
+    def __del__(self) -> None:
+        import os
+
+        os.kill(os.getpid(), self.signum)
+        deadline = time.monotonic() + 0.2
+        while time.monotonic() < deadline:  # the handler runs here, inside the finalizer
+            pass
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [("SIGHUP", Terminated), ("SIGTERM", Terminated), ("SIGINT", KeyboardInterrupt)],
+)
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_signal_lost_in_a_finalizer_stops_the_work_at_the_next_checkpoint(
+    name, expected
+) -> None:
+    from echocal._signals import checkpoint
+
+    measured: list[int] = []
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(expected), terminate_like_ctrl_c():
+            for k in range(3):
+                checkpoint()  # before each measurement
+                measured.append(k)
+                if k == 0:
+                    obj = _SignalsWhenCollected(getattr(signal, name))
+                    del obj  # the signal's exception is swallowed in __del__
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert measured == [0]  # the second measurement never started
+    checkpoint()  # outside the context nothing is pending

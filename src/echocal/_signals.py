@@ -17,6 +17,11 @@ exception raised inside an import leaves the module half-imported, and the clean
 saves the measurements would then fail on it (``module 'numba' has no attribute 'core'``).
 The same holds for Ctrl-C (SIGINT) while the context is active.
 
+A signal whose exception is lost (Python ignores an exception raised inside a finalizer or a
+weak-reference callback, where a handler can land when the garbage collector runs) still
+stops the command: :func:`checkpoint`, called before every measurement on a rig, raises it
+again.
+
 Nor does a signal interrupt the saving of what was measured: inside :func:`saving` (a
 partial recording's chunk being written) it is held, then raised the moment the section
 ends, so a chunk is either written whole or not started.
@@ -36,6 +41,7 @@ __all__ = [
     "INTERRUPTED",
     "TERMINATION_SIGNALS",
     "Terminated",
+    "checkpoint",
     "exit_code",
     "how",
     "saving",
@@ -108,6 +114,19 @@ def _deliver_later(signum: int) -> None:
     timer.start()
 
 
+_stopped: list[int] = []
+"""The stop signal received while :func:`terminate_like_ctrl_c` is active (at most one)."""
+
+
+def checkpoint() -> None:
+    """Raise again the stop signal already received, if any (a point where stopping is safe:
+    before a measurement).  Normally the signal's exception has ended the work long before;
+    this catches one that Python swallowed (raised inside a finalizer or weakref callback)."""
+    if _stopped:
+        signum = _stopped[0]
+        raise KeyboardInterrupt if signum == int(signal.SIGINT) else Terminated(signum)
+
+
 _held: list[int] = []
 """Signals that arrived inside :func:`saving`, raised again when it ends (main thread)."""
 _saving_depth = 0
@@ -168,6 +187,7 @@ def terminate_like_ctrl_c() -> Iterator[list[int]]:
             _deliver_later(signum)  # never leave a module half-imported
             return
         fired.append(signum)
+        _stopped.append(signum)
         raise Terminated(signum)
 
     def interrupt(signum: int, frame: FrameType | None) -> None:
@@ -176,6 +196,8 @@ def terminate_like_ctrl_c() -> Iterator[list[int]]:
         if importing(frame):
             _deliver_later(signum)
             return
+        if not _stopped:
+            _stopped.append(signum)
         raise KeyboardInterrupt
 
     previous = {sig: signal.signal(sig, handler) for sig in TERMINATION_SIGNALS}
@@ -183,8 +205,10 @@ def terminate_like_ctrl_c() -> Iterator[list[int]]:
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, interrupt)
     if hasattr(signal, "SIGXFSZ"):
         previous[signal.SIGXFSZ] = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    _stopped.clear()
     try:
         yield fired
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old)
+        _stopped.clear()

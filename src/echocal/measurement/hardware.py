@@ -40,6 +40,7 @@ import time
 from collections.abc import Callable
 from typing import Protocol, TypeVar, runtime_checkable
 
+from echocal._signals import checkpoint
 from echocal._validate import capped_float, nonnegative_float
 from echocal.ascan import AScan
 from echocal.errors import EchocalValueError, InstrumentError, LimitError
@@ -418,6 +419,7 @@ class HardwareSource(BaseSource):
         """Move to ``pose``, acquire, and return the A-scan with the pose reached."""
         if self._closed:
             raise InstrumentError(f"{self.description}: source is closed")
+        checkpoint()  # a stop signal whose exception was lost stops before the next move
         self.limits.check(pose)
         clock = [time.perf_counter()]
         reached = self.positioner.move_to(pose)
