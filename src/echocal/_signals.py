@@ -24,7 +24,10 @@ again.
 
 Nor does a signal interrupt the saving of what was measured: inside :func:`saving` (a
 partial recording's chunk being written) it is held, then raised the moment the section
-ends, so a chunk is either written whole or not started.
+ends, so a chunk is either written whole or not started.  Inside :func:`measuring` (one
+measurement on a rig and the saving of its A-scan) the first signal is held the same way,
+so the A-scan the rig is delivering is kept and never taken twice; a second signal stops
+at once (a rig that hangs still stops on a second Ctrl-C).
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ __all__ = [
     "checkpoint",
     "exit_code",
     "how",
+    "measuring",
     "saving",
     "terminate_like_ctrl_c",
 ]
@@ -128,35 +132,62 @@ def checkpoint() -> None:
 
 
 _held: list[int] = []
-"""Signals that arrived inside :func:`saving`, raised again when it ends (main thread)."""
-_saving_depth = 0
-"""How many :func:`saving` sections are open (handlers run in the main thread only)."""
+"""Signals that arrived inside :func:`saving` or :func:`measuring`, raised again when the
+outermost section ends (main thread)."""
+_sections: list[str] = []
+"""The open sections, outermost first: ``"saving"`` or ``"measuring"`` (handlers run in the
+main thread only)."""
+
+HELD_MESSAGE = (
+    b"echocal: stopping after the measurement in progress (it is kept); "
+    b"press Ctrl-C again to stop at once\n"
+)
+"""What stderr says when a signal waits for the measurement in progress."""
 
 
 @contextlib.contextmanager
-def saving() -> Iterator[None]:
-    """A section that no signal of :func:`terminate_like_ctrl_c` interrupts (writing what
-    was measured): a signal that arrives meanwhile is raised again as soon as the section
-    ends normally (if it ends by an exception, that exception stands)."""
-    global _saving_depth
-    _saving_depth += 1
+def _section(kind: str) -> Iterator[None]:
+    """A section of ``kind`` in which :func:`_hold` keeps the signals of
+    :func:`terminate_like_ctrl_c`; the one held is raised again as soon as the outermost
+    section ends normally (if it ends by an exception, that exception stands)."""
+    _sections.append(kind)
     try:
         yield
     finally:
-        _saving_depth -= 1
-        held = list(_held) if _saving_depth == 0 else []
-        if _saving_depth == 0:
+        _sections.pop()
+        held = [] if _sections else list(_held)
+        if not _sections:
             _held.clear()
     if held and sys.exc_info()[1] is None:
         signal.raise_signal(held[0])  # its handler raises here, now that the data is safe
 
 
+def saving() -> contextlib.AbstractContextManager[None]:
+    """A section that no signal of :func:`terminate_like_ctrl_c` interrupts (writing what
+    was measured): a signal that arrives meanwhile is raised again as soon as the section
+    ends normally (if it ends by an exception, that exception stands)."""
+    return _section("saving")
+
+
+def measuring() -> contextlib.AbstractContextManager[None]:
+    """A section for one measurement on a rig and the saving of its A-scan: the first
+    signal of :func:`terminate_like_ctrl_c` waits for its end, as in :func:`saving` (the
+    A-scan being delivered is kept, never measured twice); a second one, outside any
+    :func:`saving` section, is raised at once (a hung instrument still stops)."""
+    return _section("measuring")
+
+
 def _hold(signum: int) -> bool:
-    """Keep ``signum`` for the end of the open :func:`saving` section; False when none is open."""
-    if _saving_depth == 0:
+    """Keep ``signum`` for the end of the open section; False when none is open, or when a
+    signal already waits for a measurement (a second Ctrl-C stops at once)."""
+    if not _sections:
         return False
-    if not _held:
-        _held.append(signum)
+    if _held:
+        return "saving" in _sections  # a second signal: held only while data is written
+    _held.append(signum)
+    if "saving" not in _sections:
+        with contextlib.suppress(OSError):
+            os.write(2, HELD_MESSAGE)  # async-signal-safe, unlike print()
     return True
 
 

@@ -326,7 +326,9 @@ def test_rig_failing_mid_run_saves_what_was_measured(
     assert "failed after 4 attempts" in err
     assert f"stopped after {acquired} measurements" in err
     assert str(out / "partial_log.json") in err
-    assert {p.name for p in out.iterdir()} == {"partial_log.json"}  # no result.json
+    # no result.json; the A-scans, for a resume
+    assert {p.name for p in out.iterdir()} == {"partial_log.json", "partial_ascans"}
+    assert len(list((out / "partial_ascans").glob("*.npz"))) == acquired
     log = json.loads((out / "partial_log.json").read_text())
     assert log["status"] == "interrupted" and "failed after 4 attempts" in log["error"]
     assert log["n_measurements"] == acquired == len(log["values"]) == len(log["times"])

@@ -229,3 +229,80 @@ def test_a_signal_during_calibrate_on_a_rig_saves_every_measurement(
     delivered = len(served.samples)
     assert delivered - 1 <= log["n_measurements"] <= delivered  # one may be in flight
     assert len(log["values"]) == log["n_measurements"] >= STOP_AFTER - 1
+
+
+CALIBRATE = ["--position", "0,0,16", "--x0", "2,-1", "--method", "model-based"]
+CALIBRATE += ["--budget", "200", "--no-plots", "--json"]
+
+
+def _calibrate(served: Served, driver: Any, folder: Path, setup: Path, capsys, monkeypatch):
+    """An uninterrupted ``calibrate --rig`` on ``served`` behind ``driver``: (exit code,
+    result.json)."""
+    folder.mkdir()
+    instrument, rig, _ = driver(served, folder, setup)
+    with instrument:
+        code, _, err = run_main(
+            ["calibrate", "--rig", str(rig), *CALIBRATE, "--out", str(folder / "cal")],
+            capsys,
+            monkeypatch,
+        )
+    assert code in (0, 3), err
+    return code, json.loads((folder / "cal" / "result.json").read_text())
+
+
+@pytest.mark.slow  # nine interrupted runs, their resumes and references: about 40 s
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize("driver", [_tcp, _visa, _python], ids=["tcp", "visa", "python"])
+@pytest.mark.parametrize("name", list(EXIT))
+def test_calibrate_on_a_rig_resumes_after_a_signal_with_nothing_measured_twice(
+    name, driver, tmp_path, capsys, monkeypatch
+):
+    """``calibrate --rig`` stopped by each signal on each driver, then run again: it
+    resumes from the saved A-scans, the rig serves every A-scan once (the runs together
+    serve exactly the uninterrupted run's A-scans), and the result is the uninterrupted
+    run's, measurement for measurement."""
+    setup = tmp_path / "tiny.toml"
+    setup.write_text(tiny_setup_toml(), encoding="utf-8")
+    reference = Served(load_setup(setup))  # the same simulator, seed and noise stream
+    ref_code, expected = _calibrate(
+        reference, driver, tmp_path / f"{tmp_path.name}_ref", setup, capsys, monkeypatch
+    )
+    served = Served(load_setup(setup))
+    folder = tmp_path / f"{tmp_path.name}_run"
+    folder.mkdir()
+    instrument, rig, _ = driver(served, folder, setup)
+    out = folder / "cal"
+    args = ["calibrate", "--rig", str(rig), *CALIBRATE, "--out", str(out)]
+
+    def send_signal() -> None:
+        while len(served.samples) < STOP_AFTER:
+            time.sleep(0.005)
+        os.kill(os.getpid(), getattr(signal, name))
+
+    with instrument:
+        killer = threading.Thread(target=send_signal, daemon=True)
+        killer.start()
+        code, _, err = run_main(args, capsys, monkeypatch)
+        killer.join()
+        first = len(served.samples)
+        assert code == EXIT[name], err
+        assert "Traceback" not in err and "run the same command again to resume" in flat(err)
+        log = json.loads((out / "partial_log.json").read_text())
+        # every A-scan the rig delivered is kept, the one in flight at the signal too
+        assert log["n_measurements"] == first >= STOP_AFTER
+        assert len(list((out / "partial_ascans").glob("*.npz"))) == first
+        code, stdout, err = run_main(args, capsys, monkeypatch)
+    assert code == ref_code, err
+    assert f"resuming: {first} measurements" in flat(err)
+    # the rig served no A-scan twice: both runs together served the uninterrupted run's
+    assert len(served.samples) == len(reference.samples) > first
+    for got, sent in zip(served.samples, reference.samples, strict=True):
+        np.testing.assert_array_equal(got, sent)
+    result = json.loads((out / "result.json").read_text())
+    for key in ("x", "n_measurements", "status", "success", "values", "points", "message"):
+        assert result[key] == expected[key], key
+    said = json.loads(stdout)
+    now = len(served.samples) - first
+    assert said["resumed"] == {"measurements_from_log": first, "measured_now": now}
+    assert result["provenance"]["resumed"] == said["resumed"]
+    assert not (out / "partial_log.json").exists() and not (out / "partial_ascans").exists()

@@ -6,8 +6,6 @@ grid turned into bounds and a map, the run saved and printed without a truth.
 from __future__ import annotations
 
 import json
-import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,6 +23,7 @@ from echocal.cli._calibrate_common import (
     save_final_ascan,
     save_pngs,
 )
+from echocal.cli._calibrate_resume import JOURNAL, Tally
 from echocal.cli._common import console, output, parse_pair
 from echocal.cli._gate_option import gate_for_source
 from echocal.cli._measured_pulse import _replay_pulse, _setup_pulse
@@ -35,7 +34,6 @@ from echocal.cli._replay_grid import (
     tilt_bounds_in_recording,
 )
 from echocal.locking import hold_output_lock
-from echocal.measurement.base import BaseSource
 
 
 def _check_measured_options(
@@ -107,8 +105,11 @@ def _calibrate_measured(
     token: str | None = None,
     provenance: Any = None,
     gate: str | None = None,
+    overwrite: bool = False,
 ) -> None:
-    """Calibrate on a recording or a rig: the same objective and call, no truth known."""
+    """Calibrate on a recording or a rig: the same objective and call, no truth known
+    (on a rig, a run cut short resumes; ``overwrite`` discards one made with other
+    settings)."""
     from echocal._validate import one_of
     from echocal.geometry import PARAMETERIZATIONS
 
@@ -139,6 +140,7 @@ def _calibrate_measured(
             plots=plots,
             token=token,
             provenance=provenance,
+            overwrite=overwrite,
             **common,
         )
     else:
@@ -192,13 +194,23 @@ def _on_instrument(
     token: str | None = None,
     provenance: Any = None,
     gate: str | None = None,
+    overwrite: bool = False,
 ) -> _Measured:
     """Check the rig's options, connect, calibrate, save: ``--instrument HOST:PORT`` or
-    ``--rig FILE``."""
+    ``--rig FILE``.  Every A-scan is saved in ``out/partial_ascans/`` as it arrives; a
+    run cut short resumes from there when the same command is run again
+    (:mod:`echocal.cli._calibrate_resume`)."""
+    from echocal.cli._calibrate_resume import (
+        AScanJournal,
+        ResumedRig,
+        ResumeMismatch,
+        fingerprint,
+    )
     from echocal.cli._rig_option import open_rig, require_position, rig_setup
     from echocal.errors import EchocalError
     from echocal.measurement.hardware import HardwareSource
     from echocal.measurement.objective import SourceObjective
+    from echocal.provenance import file_digest
 
     option = "--rig" if rig is not None else "--instrument"
     host, port = _parse_address(instrument) if instrument is not None else ("", 0)
@@ -209,7 +221,32 @@ def _on_instrument(
     wait: dict[str, Any] = {}
     if timeout is not None:
         wait["timeout"] = _check_timeout(timeout)
+    x0 = (0.0, 0.0) if start is None else start
+    where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
+    which = (
+        {"file": str(Path(rig).resolve()), "sha256": file_digest(rig)}
+        if rig is not None
+        else where_from
+    )
+    print_ = fingerprint(
+        run,
+        setup=setup,
+        source=which,
+        position=where,
+        parameterization=parameterization,
+        x0=x0,
+        seed=seed,
+        gate=chosen,
+    )
     hold_output_lock(out)  # one writer per --out (made here, the options checked)
+    journal = AScanJournal.open(out / JOURNAL, print_, overwrite=overwrite)
+    if journal.saved:
+        console.print(
+            f"resuming: {journal.n_saved} measurements saved in {escape(str(journal.folder))} "
+            "are handed to the calibration again (not measured again)",
+            highlight=False,
+            soft_wrap=True,
+        )
     connect = (
         (lambda: open_rig(rig))
         if rig is not None
@@ -217,7 +254,8 @@ def _on_instrument(
     )
     with connect() as hardware:
         _check_reachable(hardware.limits, where)
-        tally = _Tally(hardware)
+        resumed = ResumedRig(hardware, journal.saved, journal.folder)
+        tally = Tally(resumed, journal)
         objective = SourceObjective(
             tally,
             where,
@@ -226,15 +264,15 @@ def _on_instrument(
             gate=chosen,
         )
         tally.logged = lambda: objective.n_measurements
-        where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
         source = {
             "kind": "rig" if rig is not None else "instrument",
             **where_from,
             "description": hardware.description,
         }
-        x0 = (0.0, 0.0) if start is None else start
         try:
             result = run(objective, x0, seed)
+        except ResumeMismatch:
+            raise  # nothing new measured: the saved measurements stay as they are
         except (EchocalError, KeyboardInterrupt) as exc:  # the rig failed, or Ctrl-C
             context = {
                 "method": run.method,
@@ -243,6 +281,9 @@ def _on_instrument(
                 "source": source,
                 "pulse": {"name": pulse.name, "center_frequency_hz": pulse.center_frequency},
                 "x0_deg": list(x0),
+                "fingerprint": print_,
+                "ascans": JOURNAL,
+                "resumed_from": resumed.n_replayed,
             }
             note = _save_interrupted(exc, objective, tally, out, context)
             if note is None:  # nothing measured: nothing to save
@@ -253,6 +294,7 @@ def _on_instrument(
                 )
                 raise
             raise _with_note(exc, note) from exc
+        from_log = resumed.n_replayed
         record = run.provenance(
             provenance,
             result,
@@ -262,14 +304,25 @@ def _on_instrument(
             seed=seed,
             gate=chosen,
         )
+        resumption = (
+            {"measurements_from_log": from_log, "measured_now": tally.n_measurements - from_log}
+            if journal.saved
+            else None
+        )
+        if record is not None and resumption is not None:
+            record["resumed"] = resumption
         figures = _save_measured(result, out, None, plots, objective, record)
+        journal.discard()  # the result is written: nothing left to resume
+        extra: dict[str, Any] = {"gate": None if chosen is None else chosen.describe()}
+        if resumption is not None:
+            extra["resumed"] = resumption
         return _Measured(
             result=result,
             where=where,
             pulse=pulse,
             pulse_from=f"--setup {setup}",
             source=source,
-            extra={"gate": None if chosen is None else chosen.describe()},
+            extra=extra,
             figures=figures,
         )
 
@@ -364,37 +417,8 @@ PARTIAL_LOG = "partial_log.json"
 """What a run on a rig measured before the rig failed (or Ctrl-C), in ``--out``."""
 
 
-class _Tally(BaseSource):
-    """A rig that keeps the A-scans its objective has not logged yet, with their poses and
-    arrival times: an objective logs a batch of poses only once all of it is measured, so
-    the A-scans of a batch cut short by a fault would be lost."""
-
-    def __init__(self, rig: Any) -> None:
-        self.rig = rig
-        self.limits = rig.limits
-        self.description = rig.description
-        self.logged: Callable[[], int] = lambda: 0  # measurements the objective has logged
-        self.n_measurements = 0
-        """A-scans delivered so far."""
-        self._unlogged: list[tuple[float, Any, Any]] = []  # (time [s], pose, A-scan)
-
-    def measure(self, pose: Any) -> Any:
-        """Measure ``pose`` on the rig; keep the A-scan until the objective logs it."""
-        scan = self.rig.measure(pose)
-        self.n_measurements += 1
-        keep = self.n_measurements - 1 - self.logged()  # earlier A-scans still unlogged
-        self._unlogged = self._unlogged[len(self._unlogged) - keep :] if keep > 0 else []
-        self._unlogged.append((time.time(), pose, scan))
-        return scan
-
-    def unlogged(self, n_logged: int) -> list[tuple[float, Any, Any]]:
-        """The A-scans delivered after the first ``n_logged`` ones, in order."""
-        n = self.n_measurements - n_logged
-        return self._unlogged[len(self._unlogged) - n :] if n > 0 else []
-
-
 def _save_interrupted(
-    exc: BaseException, objective: Any, tally: _Tally, out: Path, context: dict[str, Any]
+    exc: BaseException, objective: Any, tally: Tally, out: Path, context: dict[str, Any]
 ) -> str | None:
     """Write ``out/partial_log.json`` — every measurement made so far, in order, with its
     point, pose, value and time — and return the sentence that says so; None (nothing
@@ -462,11 +486,12 @@ def _save_interrupted(
         a, b = (float(v) for v in best["point_deg"])
         where = (
             f"; the largest value was at {names[0]}={a:.3f}, {names[1]}={b:.3f} deg "
-            f"(a new run can start there: --x0 {a:.3f},{b:.3f})"
+            f"(a new run could start there instead: --x0 {a:.3f},{b:.3f})"
         )
     return (
         f"the run stopped after {n} measurements; they are saved, with their poses, values "
-        f"and times, to {path}{where}"
+        f"and times, to {path}, and their A-scans in {out / JOURNAL}: run the same command "
+        f"again to resume (nothing is measured twice){where}"
     )
 
 

@@ -258,8 +258,12 @@ def register(app: typer.Typer) -> None:
         run = _Run.parse(
             method, budget, max_iter, settle, preset, option, search_radius, final_measure
         )
-        refuse_existing_output(out, overwrite=overwrite)  # --out is locked once the inputs pass
-        if replay is not None or instrument is not None or rig is not None:
+        from echocal.cli._calibrate_resume import resumable
+
+        on_rig = instrument is not None or rig is not None
+        if not (on_rig and resumable(out)):  # a rig's run cut short resumes in its --out
+            refuse_existing_output(out, overwrite=overwrite)  # locked once the inputs pass
+        if replay is not None or on_rig:
             if motion_aware:
                 raise typer.BadParameter(
                     "orders the simulator's moves only; drop it with --replay, "
@@ -290,6 +294,7 @@ def register(app: typer.Typer) -> None:
                 rig=rig,
                 provenance=provenance,
                 gate=gate,
+                overwrite=overwrite,
             )
             return
         _check_source_options(replay, replay_mode, instrument, timeout)
