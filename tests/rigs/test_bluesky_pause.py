@@ -279,3 +279,109 @@ def test_the_simulated_devices_start_at_the_reference_pose(virtual):
     assert (pose.azimuth, pose.coelevation) == (0.0, 0.0)
     detector.trigger()
     assert detector.peak.get() > 0.0  # an echo: something is measured where it starts
+
+
+# -- suspenders -------------------------------------------------------------------------
+def _drive_suspended(virtual, trip):
+    """Run the plan under a :class:`~bluesky.suspenders.SuspendBoolHigh` watching an ophyd
+    ``Signal`` (a beam-loss interlock) that ``trip(engine, beam)`` sets high; the
+    interlock is released 50 ms into the suspension.  Returns (outcome, documents, number
+    of suspensions, of resumptions, of detector triggers)."""
+    from bluesky.suspenders import SuspendBoolHigh
+    from ophyd import Signal
+
+    probe, detector = simulated_devices(virtual, gimbal=True, seed=7)
+    beam = Signal(name="beam_lost", value=0)
+    counts = {"suspended": 0, "resumed": 0, "triggers": 0}
+
+    def pre_plan():
+        counts["suspended"] += 1
+        threading.Timer(0.05, beam.put, (0,)).start()  # the beam comes back
+        return iter(())
+
+    def post_plan():
+        counts["resumed"] += 1
+        return iter(())
+
+    trigger = detector.trigger
+
+    def counted_trigger():
+        counts["triggers"] += 1
+        return trigger()
+
+    detector.trigger = counted_trigger
+    docs: list[tuple[str, dict]] = []
+    engine = RunEngine({}, call_returns_result=True)
+    engine.subscribe(lambda name, doc: docs.append((name, doc)))
+    engine.install_suspender(SuspendBoolHigh(beam, sleep=0, pre_plan=pre_plan, post_plan=post_plan))
+    trip(engine, beam)
+    outcome = engine(calibrate_plan(probe, detector, **PLAN))
+    return outcome, docs, counts
+
+
+def _trip_at(command: str, nth: int, obj_name: str = ""):
+    """Set the interlock high as the RunEngine takes the ``nth`` ``command`` message (on
+    the object named ``obj_name``, if given)."""
+    seen = {"n": 0}
+
+    def trip(engine, beam):
+        def hook(msg):
+            if msg.command == command and (not obj_name or msg.obj.name == obj_name):
+                seen["n"] += 1
+                if seen["n"] == nth:
+                    beam.put(1)
+
+        engine.msg_hook = hook
+
+    return trip
+
+
+@pytest.mark.parametrize(
+    ("command", "nth", "obj_name", "retakes"),
+    [
+        ("open_run", 1, "", 0),  # before the first measurement
+        ("set", 7, "probe_azimuth", 0),  # during a move: moved again, nothing measured yet
+        ("trigger", 3, "", 1),  # after the trigger, before the event: measured again
+        ("create", 5, "", 1),  # the bundle opened, nothing read: measured again
+        ("read", 9, "ascan", 1),  # inside the event bundle: measured again
+        ("save", 4, "", 0),  # the event saved, before the checkpoint: not replayed
+        ("save", 1, "", 0),  # the same, after the run's first event
+        ("read", 8, "ascan", 0),  # after the checkpoint, the values read back
+        ("save", 15, "", 0),  # the result's event (after the 14 measurements)
+    ],
+)
+def test_a_suspender_tripped_mid_calibration_resumes_to_the_uninterrupted_run(
+    virtual, uninterrupted, command, nth, obj_name, retakes
+):
+    """A suspender on an ophyd signal, tripped at each point of a measurement and released:
+    the RunEngine suspends once (its pre- and post-plans run once), rewinds to the last
+    checkpoint (a measurement whose event was not saved is taken again, one whose event
+    was saved is not) and resumes on its own; the run has one event per measurement,
+    unique seq_nums, and the uninterrupted run's result."""
+    outcome, docs, counts = _drive_suspended(virtual, _trip_at(command, nth, obj_name))
+    assert counts["suspended"] == counts["resumed"] == 1
+    _check_resumed_run(outcome, docs, *uninterrupted)
+    assert counts["triggers"] == outcome.plan_result.n_measurements + retakes
+
+
+def test_a_suspender_tripped_from_another_thread_resumes_to_the_uninterrupted_run(
+    virtual, uninterrupted
+):
+    """The interlock set high from another thread (as a control system's monitor does),
+    at whatever point of the 4th measurement that lands."""
+
+    def trip(engine, beam):
+        seen = {"events": 0}
+
+        def on_event(name, doc):
+            seen["events"] += 1
+            if seen["events"] == 3:
+                threading.Thread(target=beam.put, args=(1,)).start()
+
+        engine.subscribe(on_event, "event")
+
+    outcome, docs, counts = _drive_suspended(virtual, trip)
+    assert counts["suspended"] == counts["resumed"] == 1
+    _check_resumed_run(outcome, docs, *uninterrupted)
+    n = outcome.plan_result.n_measurements
+    assert n <= counts["triggers"] <= n + 1

@@ -14,7 +14,10 @@ at a time).  The plan returns the :class:`~echocal.calibrate.CalibrationResult`.
 Pause and resume follow Bluesky's contract: the plan yields a ``checkpoint`` before and
 right after each measurement, so a deferred pause (one Ctrl-C) stops after the
 measurement in progress, and an immediate pause before the event is saved rewinds to
-the measurement's start and takes it again on ``RE.resume()``.  An immediate pause (or a
+the measurement's start and takes it again on ``RE.resume()``.  A suspender
+(``RE.install_suspender``) suspends the run the same way and resumes it on its own once
+its signal is back; the plan also checkpoints after the ``result`` event, so a suspender
+tripped by that event's save suspends inside the run.  An immediate pause (or a
 suspension) that lands after the event is saved and before the next checkpoint must not
 rewind: the RunEngine would replay the saved event (a second event with the same
 ``seq_num``).  The plan holds a :class:`~bluesky.protocols.Pausable` guard that sees
@@ -316,6 +319,10 @@ def calibrate_plan(
         raise outcome
     yield from bps.checkpoint()
     yield from bps.trigger_and_read(_result_signals(outcome), name="result")
+    # a suspender tripped by the result's save suspends here, inside the run (the
+    # RunEngine cannot suspend a plan that has ended), and resumes after the save
+    yield from bps.checkpoint()
+    guard.saved = False
     yield from bps.close_run(exit_status="success", reason=outcome.message)
     return outcome
 
