@@ -15,10 +15,10 @@ pytest.importorskip("bluesky")
 
 
 def test_the_doc_has_runnable_examples() -> None:
-    assert len(BLOCKS) == 2, f"expected the rig-file and the Bluesky examples in {DOC}"
+    assert len(BLOCKS) == 3, f"expected the rig-file, Bluesky and suspender examples in {DOC}"
 
 
-@pytest.mark.parametrize("code", BLOCKS, ids=["rig-file", "bluesky"])
+@pytest.mark.parametrize("code", BLOCKS, ids=["rig-file", "bluesky", "suspender"])
 def test_example_runs(code: str) -> None:
     exec(compile(code, str(DOC), "exec"), {"__name__": "docs_rigs"})
 
