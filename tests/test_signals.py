@@ -142,3 +142,42 @@ def test_a_signal_lost_in_a_finalizer_stops_the_work_at_the_next_checkpoint(
         signal.signal(signal.SIGINT, previous)
     assert measured == [0]  # the second measurement never started
     checkpoint()  # outside the context nothing is pending
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [("SIGHUP", Terminated), ("SIGTERM", Terminated), ("SIGINT", KeyboardInterrupt)],
+)
+def test_a_signal_during_a_measurement_waits_for_it_and_a_second_stops_at_once(
+    name, expected
+) -> None:
+    import os
+
+    from echocal._signals import measuring
+
+    done: list[str] = []
+
+    def wait_for_the_handler() -> None:
+        deadline = time.monotonic() + 0.2
+        while time.monotonic() < deadline:  # the handler runs here
+            pass
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(expected), terminate_like_ctrl_c():
+            with measuring():  # the first signal waits for the measurement's end
+                os.kill(os.getpid(), getattr(signal, name))
+                wait_for_the_handler()
+                done.append("measured and saved")
+            done.append("next measurement")  # never reached
+        with pytest.raises(expected), terminate_like_ctrl_c():
+            with measuring():  # a rig that hangs: the second signal stops at once
+                os.kill(os.getpid(), getattr(signal, name))
+                wait_for_the_handler()
+                os.kill(os.getpid(), getattr(signal, name))
+                wait_for_the_handler()
+                done.append("never measured")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert done == ["measured and saved"]

@@ -605,6 +605,12 @@ def _print_measured_estimate(done: _Measured, out: Path) -> None:
             f"  recording's best grid pose {names[0]} = {best[0]:.3f}°, {names[1]} = "
             f"{best[1]:.3f}° (no truth is known for a recording)"
         )
+    resumed = extra.get("resumed")
+    if resumed is not None:
+        reference += (
+            f"\n  resumed   {resumed['measurements_from_log']} measurements from the "
+            f"interrupted run, {resumed['measured_now']} measured now"
+        )
     output.print(
         f"[bold]{escape(result.method)}[/] on {escape(done.source['description'])}\n"
         f"  estimate  {names[0]} = {result.x[0]:8.3f}°, {names[1]} = {result.x[1]:8.3f}°\n"
