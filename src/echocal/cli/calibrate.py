@@ -204,7 +204,9 @@ def register(app: typer.Typer) -> None:
             bool,
             typer.Option(
                 "--overwrite",
-                help="Replace the result and plots in an --out that already holds files.",
+                help="Replace the result and plots in an --out that already holds files; on a "
+                "rig, also discard measurements saved there by a run with other settings "
+                "(the same settings resume it).",
             ),
         ] = False,
         from_file: Annotated[
@@ -234,9 +236,10 @@ def register(app: typer.Typer) -> None:
         "success": true); 1 when no echo was found (the acquisition search failed, every
         measurement failed, or the estimate shows no echo); 2 for bad input or a rig that
         failed mid-run (what was measured before the fault is saved to partial_log.json
-        in --out); 3 when the run ended on its budget or iteration limit, or its
-        convergence was not supported by the measurements (an estimate is reported, not
-        a converged one); 4 when the estimate lies on the positioner's angle limits.
+        and partial_ascans/ in --out, and the same command resumes); 3 when the run
+        ended on its budget or iteration limit, or its convergence was not supported by
+        the measurements (an estimate is reported, not a converged one); 4 when the
+        estimate lies on the positioner's angle limits.
         The result files are written in every case but 2.
         """
         if from_file is not None:  # the recorded parameters, then this call's output options
