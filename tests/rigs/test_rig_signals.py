@@ -250,10 +250,21 @@ def _calibrate(served: Served, driver: Any, folder: Path, setup: Path, capsys, m
     return code, json.loads((folder / "cal" / "result.json").read_text())
 
 
-@pytest.mark.slow  # nine interrupted runs, their resumes and references: about 40 s
+RESUME_CASES = [
+    pytest.param(
+        name,
+        driver,
+        id=f"{name}-{label}",
+        # SIGTERM on the python driver in the fast tier (3 s); all nine: about 90 s
+        marks=() if (name, label) == ("SIGTERM", "python") else pytest.mark.slow,
+    )
+    for name in EXIT
+    for driver, label in ((_tcp, "tcp"), (_visa, "visa"), (_python, "python"))
+]
+
+
 @pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
-@pytest.mark.parametrize("driver", [_tcp, _visa, _python], ids=["tcp", "visa", "python"])
-@pytest.mark.parametrize("name", list(EXIT))
+@pytest.mark.parametrize(("name", "driver"), RESUME_CASES)
 def test_calibrate_on_a_rig_resumes_after_a_signal_with_nothing_measured_twice(
     name, driver, tmp_path, capsys, monkeypatch
 ):
