@@ -228,7 +228,7 @@ def _on_instrument(
         if rig is not None
         else where_from
     )
-    print_ = fingerprint(
+    stamp = fingerprint(
         run,
         setup=setup,
         source=which,
@@ -239,7 +239,7 @@ def _on_instrument(
         gate=chosen,
     )
     hold_output_lock(out)  # one writer per --out (made here, the options checked)
-    journal = AScanJournal.open(out / JOURNAL, print_, overwrite=overwrite)
+    journal = AScanJournal.open(out / JOURNAL, stamp, overwrite=overwrite)
     if journal.saved:
         console.print(
             f"resuming: {journal.n_saved} measurements saved in {escape(str(journal.folder))} "
@@ -281,7 +281,7 @@ def _on_instrument(
                 "source": source,
                 "pulse": {"name": pulse.name, "center_frequency_hz": pulse.center_frequency},
                 "x0_deg": list(x0),
-                "fingerprint": print_,
+                "fingerprint": stamp,
                 "ascans": JOURNAL,
                 "resumed_from": resumed.n_replayed,
             }

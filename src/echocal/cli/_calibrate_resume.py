@@ -117,20 +117,21 @@ class AScanJournal:
     folder is made with the first measurement.
     """
 
-    def __init__(self, folder: Path, print_: dict[str, Any]) -> None:
+    def __init__(self, folder: Path, stamp: dict[str, Any]) -> None:
         self.folder = folder
         self.manifest_path = folder / "manifest.json"
-        self.fingerprint = print_
+        self.fingerprint = stamp
         self.entries: list[dict[str, Any]] = []
         self.saved: list[tuple[np.ndarray, AScan]] = []
 
     @classmethod
-    def open(cls, folder: Path, print_: dict[str, Any], *, overwrite: bool) -> AScanJournal:
-        """The journal in ``folder`` for the run ``print_``: the saved A-scans read back
-        and checked when the folder was made by the same run; with another fingerprint a
-        :class:`~echocal.errors.DataFileError` naming what differs, unless ``overwrite``
-        (then it is discarded and the run starts from the beginning)."""
-        journal = cls(folder, print_)
+    def open(cls, folder: Path, stamp: dict[str, Any], *, overwrite: bool) -> AScanJournal:
+        """The journal in ``folder`` for the run whose :func:`fingerprint` is ``stamp``:
+        the saved A-scans read back and checked when the folder was made by the same run;
+        with another fingerprint a :class:`~echocal.errors.DataFileError` naming what
+        differs, unless ``overwrite`` (then it is discarded and the run starts from the
+        beginning)."""
+        journal = cls(folder, stamp)
         if not journal.manifest_path.exists():
             return journal
         fix = f"delete {folder} (and partial_log.json beside it) to start over"
@@ -141,7 +142,7 @@ class AScanJournal:
             raise DataFileError(
                 f"cannot resume: {journal.manifest_path} is unreadable ({exc}); {fix}"
             ) from None
-        differ = sorted(k for k in print_.keys() | old.keys() if print_.get(k) != old.get(k))
+        differ = sorted(k for k in stamp.keys() | old.keys() if stamp.get(k) != old.get(k))
         if differ and overwrite:
             journal.discard()
             return journal
