@@ -118,6 +118,22 @@ def _interrupted(lab: Lab, out: Path, capsys, monkeypatch) -> None:
     lab.module.BREAK_AT = None
 
 
+_REFERENCE: list[tuple[int, list[np.ndarray], dict[str, Any]]] = []
+"""The uninterrupted run (exit code, A-scans served, result.json), computed once."""
+
+
+def _reference(lab: Lab, tmp_path: Path, capsys, monkeypatch):
+    """The uninterrupted run on a fresh simulator (the same seed and noise stream as every
+    :meth:`Lab.restart`): its exit code, the A-scans it was served and its result."""
+    if not _REFERENCE:
+        code, _, err = _run(lab, tmp_path / "reference", capsys, monkeypatch)
+        assert code in (0, 3), err
+        result = json.loads((tmp_path / "reference" / "result.json").read_text())
+        _REFERENCE.append((code, list(lab.served), result))
+        lab.restart()
+    return _REFERENCE[0]
+
+
 @pytest.mark.parametrize("keep_log", [True, False], ids=["with-log", "killed-before-log"])
 def test_after_a_rig_fault_the_same_command_resumes_to_the_uninterrupted_result(
     lab, keep_log, tmp_path, capsys, monkeypatch
@@ -126,11 +142,7 @@ def test_after_a_rig_fault_the_same_command_resumes_to_the_uninterrupted_result(
     the rig, and ends with the uninterrupted run's result; the rig served each A-scan
     once.  Without partial_log.json (a process killed before writing it) the saved
     A-scans suffice."""
-    code, _, err = _run(lab, tmp_path / "reference", capsys, monkeypatch)
-    assert code in (0, 3), err
-    reference = list(lab.served)
-    expected = json.loads((tmp_path / "reference" / "result.json").read_text())
-    lab.restart()
+    code, reference, expected = _reference(lab, tmp_path, capsys, monkeypatch)
     out = tmp_path / "cal"
     _interrupted(lab, out, capsys, monkeypatch)
     if not keep_log:
