@@ -5,8 +5,8 @@ by SIGINT, SIGTERM or SIGHUP after a few A-scans, then run again: it resumes and
 holds every A-scan the rig delivered, once, in order.
 
 The instruments serve from a recording proxy of the simulator, so the test knows every
-A-scan the rig sent; the signal is sent to this process (the CLI runs in-process in the
-main thread, where the handlers are) by a thread watching the instrument's count.
+A-scan the rig sent; the proxy itself sends the signal to this process (the CLI runs
+in-process in the main thread, where the handlers are) as it serves the third A-scan.
 """
 
 from __future__ import annotations
@@ -14,8 +14,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import threading
-import time
 from pathlib import Path
 from typing import Any
 
@@ -37,11 +35,15 @@ EXIT = {"SIGINT": 130, "SIGTERM": 143, "SIGHUP": 129}
 
 
 class Served:
-    """A measurement source that keeps every A-scan it serves (delegates the rest)."""
+    """A measurement source that keeps every A-scan it serves (delegates the rest), and
+    sends its process a signal once :data:`STOP_AFTER` A-scans are served (``stop_with``):
+    from the serving thread, right then, so the command is always stopped mid-run however
+    loaded the machine is (a watching thread may only get to run after the last one)."""
 
     def __init__(self, source: Any) -> None:
         self._source = source
         self.samples: list[np.ndarray] = []
+        self.stop_with: str | None = None  # the signal's name
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._source, name)
@@ -52,7 +54,19 @@ class Served:
     def measure_many(self, poses: list[Pose]) -> list[Any]:
         scans = self._source.measure_many(poses)
         self.samples += [np.asarray(s.samples) for s in scans]
+        if self.stop_with is not None and len(self.samples) >= STOP_AFTER:
+            name, self.stop_with = self.stop_with, None
+            os.kill(os.getpid(), getattr(signal, name))
         return scans
+
+
+def run_until_signal(
+    served: Served, name: str, args: list[str], capsys: Any, monkeypatch: Any
+) -> tuple[int, str, str]:
+    """Run the CLI in this process (its main thread holds the handlers) with ``name`` sent
+    once ``served`` has delivered :data:`STOP_AFTER` A-scans."""
+    served.stop_with = name
+    return run_main(args, capsys, monkeypatch)
 
 
 def _tcp(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float]:
@@ -164,16 +178,8 @@ def test_a_signal_keeps_every_ascan_and_the_run_resumes(
     out = tmp_path / "rec.nc"
     args = ["record", "--rig", str(rig), *GRID, "--out", str(out), "--no-progress"]
 
-    def send_signal() -> None:
-        while len(served.samples) < STOP_AFTER:
-            time.sleep(0.005)
-        os.kill(os.getpid(), getattr(signal, name))
-
     with instrument:
-        killer = threading.Thread(target=send_signal, daemon=True)
-        killer.start()
-        code, _, err = run_main(args, capsys, monkeypatch)
-        killer.join()
+        code, _, err = run_until_signal(served, name, args, capsys, monkeypatch)
         first = list(served.samples)
         assert code == EXIT[name], err
         assert "Traceback" not in err and "run the same command again to resume" in flat(err)
@@ -211,16 +217,8 @@ def test_a_signal_during_calibrate_on_a_rig_saves_every_measurement(
     args += ["--method", "model-based", "--budget", "200", "--no-plots", "--out", "cal"]
     monkeypatch.chdir(tmp_path)
 
-    def send_signal() -> None:
-        while len(served.samples) < STOP_AFTER:
-            time.sleep(0.005)
-        os.kill(os.getpid(), getattr(signal, name))
-
     with instrument:
-        killer = threading.Thread(target=send_signal, daemon=True)
-        killer.start()
-        code, _, err = run_main(args, capsys, monkeypatch)
-        killer.join()
+        code, _, err = run_until_signal(served, name, args, capsys, monkeypatch)
     assert code == EXIT[name], err
     assert "Traceback" not in err
     log = json.loads((tmp_path / "cal" / "partial_log.json").read_text())
@@ -285,16 +283,8 @@ def test_calibrate_on_a_rig_resumes_after_a_signal_with_nothing_measured_twice(
     out = folder / "cal"
     args = ["calibrate", "--rig", str(rig), *CALIBRATE, "--out", str(out)]
 
-    def send_signal() -> None:
-        while len(served.samples) < STOP_AFTER:
-            time.sleep(0.005)
-        os.kill(os.getpid(), getattr(signal, name))
-
     with instrument:
-        killer = threading.Thread(target=send_signal, daemon=True)
-        killer.start()
-        code, _, err = run_main(args, capsys, monkeypatch)
-        killer.join()
+        code, _, err = run_until_signal(served, name, args, capsys, monkeypatch)
         first = len(served.samples)
         assert code == EXIT[name], err
         assert "Traceback" not in err and "run the same command again to resume" in flat(err)
