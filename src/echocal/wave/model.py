@@ -61,7 +61,7 @@ from echocal.signal.pulses import Pulse
 from echocal.signal.window import RecordingWindow
 from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
-from echocal.wave import image, sir
+from echocal.wave import image, pairs, sir
 from echocal.wave.probe import Aperture
 from echocal.wave.threads import one_way_grid, two_way_grid
 
@@ -343,24 +343,23 @@ class WaveEchoModel:
         """The image form's quadrature over the probe's mirror image across ``plane``:
         points [m] ``(3, n)`` in the aperture frame and weights [m²] ``(n,)`` (see
         :func:`echocal.wave.image.face_quadrature`)."""
+        face, weights = self._face_rule(plane)
+        return plane.mirror(face), weights
+
+    def _face_rule(self, plane: image.ImagePlane) -> tuple[FloatArray, FloatArray]:
+        """The face nodes [m] ``(3, n)`` (before the mirror) and weights [m²] ``(n,)`` of
+        :meth:`image_nodes`."""
         spacing = image.node_spacing(
             self._shortest_wavelength, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION
         )
-        bandwidth = image.angular_bandwidth(
-            self._shortest_wavelength,
-            plane.sin_incidence,
-            self.probe.radius,
-            abs(float(plane.normal @ plane.point)),
-        )
-        face, weights = image.face_quadrature(
+        return image.face_quadrature(
             self.probe,
             plane.axis_distance,
             self._shortest_wavelength,
             spacing,
             _tilt_direction(plane),
-            bandwidth,
+            self._plane_bandwidth(plane),
         )
-        return plane.mirror(face), weights
 
     def image_spectrum(
         self,
@@ -383,6 +382,8 @@ class WaveEchoModel:
         The one-sided spectrum on :attr:`frequencies` and the weighted mean two-way time [s]
         (as :meth:`spectrum`).
         """
+        if (coefficient is not None or self.reflection is None) and self._pairs_pay(plane):
+            return self._pair_spectrum(plane, 1.0 if coefficient is None else coefficient, delay)
         points, weights = self.image_nodes(plane)
         if coefficient is not None:
             r = np.full(weights.shape, complex(coefficient), dtype=np.complex128)
@@ -415,6 +416,64 @@ class WaveEchoModel:
                 path_time = swt / sw
             spectrum += factor * scipy.fft.rfft(grid)
         return spectrum * self._image_transfer, path_time
+
+    def _plane_bandwidth(self, plane: image.ImagePlane) -> float:
+        """[rad/m] :func:`echocal.wave.image.angular_bandwidth` at ``plane``."""
+        return image.angular_bandwidth(
+            self._shortest_wavelength,
+            plane.sin_incidence,
+            self.probe.radius,
+            abs(float(plane.normal @ plane.point)),
+        )
+
+    def _pairs_pay(self, plane: image.ImagePlane) -> bool:
+        """Whether the pair rule (:mod:`echocal.wave.pairs`) takes ``plane``'s echo: a flat
+        disc over a tilted plane, where its estimated cost is below the face rule's
+        (:func:`echocal.wave.pairs.pays`)."""
+        if self.probe.kind != sir.DISC or _tilt_direction(plane) == (0.0, 0.0):
+            return False
+        bandwidth = self._plane_bandwidth(plane)
+        if bandwidth <= 0.0:
+            return False
+        _, dt, _, _ = self._grid
+        face_nodes = int(self._face_rule(plane)[1].size)
+        return pairs.pays(
+            self.probe.radius,
+            abs(float(plane.normal @ plane.point)),
+            plane.sin_incidence,
+            bandwidth,
+            face_nodes,
+            self.sound_speed * dt,
+        )
+
+    def _pair_spectrum(
+        self, plane: image.ImagePlane, coefficient: complex, delay: float
+    ) -> tuple[NDArray[np.complex128], float]:
+        """:meth:`image_spectrum` by the pair rule (one reflection ``coefficient`` for the
+        whole plane, ``delay`` [s] added to every path)."""
+        a, c = self.probe.radius, self.sound_speed
+        distance = abs(float(plane.normal @ plane.point))
+        _, dt, _, n_fft = self._grid
+        grid = pairs.pair_grid(
+            a,
+            distance,
+            plane.sin_incidence,
+            self._plane_bandwidth(plane),
+            c,
+            self._t0,
+            dt,
+            n_fft,
+            delay,
+        )
+        spectrum = np.conj(complex(coefficient)) * scipy.fft.rfft(grid) * self._pair_transfer
+        path = pairs.mean_image_distance(a, distance, plane.sin_incidence)
+        return spectrum, path / c + delay
+
+    @cached_property
+    def _pair_transfer(self) -> NDArray[np.complex128]:
+        """:attr:`_image_transfer` for the pair rule's higher-degree B-splines."""
+        _, dt, _, _ = self._grid
+        return self._image_transfer / pairs.smoothing(self._frequencies, dt)
 
     def surface_samples(
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
