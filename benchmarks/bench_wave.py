@@ -11,9 +11,11 @@ thread), the others as wall-clock medians (``_common.measure``):
 
 1. the tilt table: one noiseless A-scan of the wave and the ray model at 0, 2, 5, 10, 20
    and 30° off the normal, on ``immersion-5mhz`` (12.7 mm 5 MHz probe, 50 mm water path,
-   4096 samples at 100 MHz) and with the same probe 50 mm above a 25 mm ball; on the plate
-   also the compiled direct double Rayleigh sum (``_rayleigh_compiled``, numba) at the
-   same distance and incidence, and |V(5 MHz)| from both;
+   4096 samples at 100 MHz), with the same probe 50 mm above the level ``flat-plate``
+   (where the beam stays on the plate at 30°) and 50 mm above a 25 mm ball; where the
+   image form applies also the wave model with the face rule only (the pair rule off), and
+   on ``immersion-5mhz`` the compiled direct double Rayleigh sum (``_rayleigh_compiled``,
+   numba) at the same distance and incidence, and |V(5 MHz)| from both;
 2. one noiseless A-scan of ``immersion-5mhz`` near the optimum on the wave model against
    the ray model, its stages, and the Kirchhoff sum over the lit surface;
 3. the wave model against the compiled direct double Rayleigh sum for a piston over a
@@ -61,7 +63,7 @@ from echocal.signal.pulses import GaborPulse  # noqa: E402
 from echocal.signal.window import RecordingWindow  # noqa: E402
 from echocal.specimen.builtins import builtin_specimen  # noqa: E402
 from echocal.specimen.casting import _as_shapes  # noqa: E402
-from echocal.wave import PistonProbe, WaveEchoModel, image, threads  # noqa: E402
+from echocal.wave import PistonProbe, WaveEchoModel, image, pairs, threads  # noqa: E402
 
 C = 1480.0
 
@@ -183,15 +185,18 @@ def tilt_table(
     the Kirchhoff sum), and on the plate the compiled direct double Rayleigh sum
     (``_rayleigh_compiled``) over ``n_freq`` frequencies of the pulse's band at the same
     distance and incidence (up to ``max_direct_tilt`` [deg]), with the agreement of |V| at
-    5 MHz.  Where the image form applies, also the wave model with the Nyquist face rule
-    only (the rule before the band-limited one) and both rules' face nodes."""
+    5 MHz; and the same probe 50 mm above the level ``flat-plate``.  Where the image form
+    applies, also the wave model with the face rule only (the pair rule off: the model
+    before it), the face rule's nodes and the pair rule's pairs."""
     import _rayleigh_compiled as direct
 
     rows: list[dict[str, float | str]] = []
     plate_ray = load_setup("immersion-5mhz-ray")
     sphere_ray = setup_with_overrides("immersion-5mhz-ray", specimen="sphere")
+    level_ray = setup_with_overrides("immersion-5mhz-ray", specimen="flat-plate")
     cases = (
         ("immersion-5mhz", plate_ray, plate_ray.reference_position),
+        ("12.7 mm over a level plate", level_ray, np.array([0.0, 0.0, 0.05])),
         ("12.7 mm over a sphere", sphere_ray, np.array([0.0, 0.0, 0.05])),
     )
     for label, ray, position in cases:
@@ -223,12 +228,13 @@ def tilt_table(
             plane = model.image_plane(shapes, position, frames[0])
             if plane is not None:
                 row["face_nodes"] = float(_face_nodes(model, plane))
-                with _nyquist_rule():
-                    row["wave_nyquist_s"] = _cpu_per_call(
+                row["pairs"] = float(_pairs(model, plane)) if model._pairs_pay(plane) else 0.0
+                with _face_rule():
+                    row["wave_face_s"] = _cpu_per_call(
                         lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
                     )
-                    row["nyquist_nodes"] = float(_face_nodes(model, plane))
-            if plane is not None and tilt <= max_direct_tilt:
+            with_direct = label == "immersion-5mhz" and tilt <= max_direct_tilt
+            if plane is not None and with_direct:
                 row["incidence_deg"] = math.degrees(math.asin(plane.sin_incidence))
                 row.update(_direct_sum(model, plane, n_freq, direct))
             rows.append(row)
@@ -236,15 +242,21 @@ def tilt_table(
 
 
 @contextlib.contextmanager
-def _nyquist_rule() -> Iterator[None]:
-    """The image form with the Nyquist face rule only (the band-limited rule off: its
-    bandwidth 0), for the before/after columns of the tilt table."""
-    band = image.angular_bandwidth
-    image.angular_bandwidth = lambda *args: 0.0  # type: ignore[assignment]
+def _face_rule() -> Iterator[None]:
+    """The image form with the face rule only (the pair rule off), for the before/after
+    columns of the tilt table."""
+    pays = pairs.pays
+    pairs.pays = lambda *args: False  # type: ignore[assignment]
     try:
         yield
     finally:
-        image.angular_bandwidth = band
+        pairs.pays = pays
+
+
+def _pairs(model: WaveEchoModel, plane: image.ImagePlane) -> int:
+    """The pair rule's number of pairs at ``plane``."""
+    half = pairs.pair_count(model._plane_bandwidth(plane), model.probe.radius) // 2
+    return half * (half + 1) // 2
 
 
 def _direct_sum(
@@ -280,7 +292,7 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
     body = []
     for r in rows:
         direct = r.get("direct_s")
-        before = r.get("wave_nyquist_s")
+        before = r.get("wave_face_s")
         agree = (
             "—" if direct is None else f"{float(r['v5_wave']):.4g} / {float(r['v5_direct']):.4g}"
         )
@@ -293,7 +305,7 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
                 f"{float(r['wave_over_ray']):.1f}x",
                 "—" if before is None else fmt_time(float(before)),
                 "—" if before is None else f"{float(before) / float(r['ray_s']):.1f}x",
-                "—" if before is None else f"{r['face_nodes']:.0f} / {r['nyquist_nodes']:.0f}",
+                "—" if before is None else f"{r['pairs']:.0f} / {r['face_nodes']:.0f}",
                 "—" if direct is None else fmt_time(float(direct)),
                 "—" if direct is None else f"{float(direct) / float(r['wave_s']):.0f}x",
                 agree,
@@ -305,9 +317,9 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         "ray (CPU)",
         "wave (CPU)",
         "wave / ray",
-        "wave, Nyquist rule (CPU)",
-        "Nyquist rule / ray",
-        "face nodes (rule in use / Nyquist)",
+        "wave, face rule (CPU)",
+        "face rule / ray",
+        "pairs / face nodes",
         "direct sum (CPU)",
         "direct / wave",
         "|V(5 MHz)| wave / direct",

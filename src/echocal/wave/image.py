@@ -378,23 +378,24 @@ def face_quadrature(
     axial = symmetry is not None and symmetry[0] == 0.0 and symmetry[1] == 0.0
     if probe.curvature is None and bandwidth > 0.0 and not axial:
         band_rings = bandwidth_ring_count(probe, distance, shortest_wavelength, bandwidth)
-        radii = _ring_radii(probe.radius, band_rings)
-        band_nodes = sum(trapezoid_count(bandwidth * rho) for rho in radii)
+        z = bandwidth * _ring_radii(probe.radius, band_rings)
+        band_nodes = np.sum(4 * np.maximum(2, np.ceil((z + 3.0 * np.cbrt(z) + 4.0) / 4.0)))
         along = 2.0 * math.pi / (4.0 * spacing) if math.isfinite(spacing) else 0.0
-        nyquist_nodes = sum(
-            4 * max(2, math.ceil(along * rho)) for rho in _ring_radii(probe.radius, n_rings)
-        )
+        rho = _ring_radii(probe.radius, n_rings)
+        nyquist_nodes = np.sum(4 * np.maximum(2, np.ceil(along * rho)))
         if band_nodes < nyquist_nodes:
             return face_samples(probe, band_rings, spacing, symmetry, bandwidth)
     return face_samples(probe, n_rings, spacing, symmetry)
 
 
 @functools.lru_cache(maxsize=256)
-def _ring_radii(a: float, n_rings: int) -> tuple[float, ...]:
-    """[m] the ring radii of :func:`face_samples`' rule on a flat disc of radius ``a``
-    [m]: Gauss–Legendre nodes in s = ρ² on [0, a²]."""
+def _ring_radii(a: float, n_rings: int) -> FloatArray:
+    """[m] the ring radii ``(n_rings,)`` of :func:`face_samples`' rule on a flat disc of
+    radius ``a`` [m]: Gauss–Legendre nodes in s = ρ² on [0, a²] (cached: do not modify)."""
     x, _ = np.polynomial.legendre.leggauss(n_rings)
-    return tuple(float(v) for v in np.sqrt(0.5 * (x + 1.0) * a * a))
+    radii: FloatArray = np.sqrt(0.5 * (x + 1.0) * a * a)
+    radii.flags.writeable = False
+    return radii
 
 
 def _fold(

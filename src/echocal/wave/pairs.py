@@ -121,10 +121,17 @@ def _power_basis(degree: int) -> FloatArray:
 
 
 _BASIS = _power_basis(_DEGREE)
+_NODE_POWERS = np.concatenate([_GL2_X, _GL3_X])[:, None] ** np.arange(_DEGREE + 1)
+_NODE_BASIS = _NODE_POWERS @ _BASIS.T
+"""``(5, _DEGREE + 1)``: the B-splines overlapping a bin at the fixed nodes of its smooth
+bins (the 2- then the 3-point Gauss–Legendre nodes)."""
 _CURVED_BINS = 8
-"""A pair's first bins (from its start) where the time is far from linear in w: their
-pieces take 3 Gauss–Legendre nodes in w (2 nodes there left 2–8·10⁻³ of the local echo at
-20–30°, 50 mm, against a dense face rule; 8 bins 0.9–4.5·10⁻³)."""
+"""A pair's first bins (from its start), where its response 1/√(t − t_start) curves most:
+3 Gauss–Legendre nodes per piece (2 nodes there left 2–8·10⁻³ of the local echo at 20–30°,
+50 mm, against a dense face rule; 8 bins 0.9–4.5·10⁻³)."""
+_START_BINS = 2
+"""A pair's first bins, integrated in w (smooth there, where the response in time is not);
+from the third on the bins take fixed nodes in time (the start a whole bin or more away)."""
 
 
 @_jit
@@ -165,13 +172,15 @@ def _accumulate_pairs(x, half_chord, weight, distance, s, c, t0, dt, delay, mome
     """Add the pairs' T(w)/(πR) projected onto the degree-:data:`_DEGREE` B-splines centred
     on the grid points (grid point g at t0 + gΔ); see the module.
 
-    Bins near a pair's start (:data:`_CURVED_BINS`), at T's kink and at its end are cut
-    into pieces between their edges and the kink, each integrated in w by Gauss–Legendre
-    (3 nodes near the start, where the time is quadratic in w, else 2), their moments
-    Σ value·uᵐ (u the node's place in the bin) added to ``moments`` ``(n, _DEGREE + 1)``.
-    Every other bin is smooth in time: 2-point Gauss–Legendre in R at the bin's fixed
-    nodes, the integrand T(w)/(πw) dR, added to ``nodes`` ``(n, 2)`` (turned into moments
-    by :func:`_moments_to_grid`)."""
+    A pair's first :data:`_START_BINS` bins (where the time is quadratic in w), the bin of
+    T's kink and its last bin are cut into pieces between their edges and the kink, each
+    integrated in w by Gauss–Legendre (3 nodes within :data:`_CURVED_BINS` of the start,
+    else 2); their moments Σ value·uᵐ (u the node's place in the bin) go to ``moments``
+    ``(n, _DEGREE + 1)``.  Every other bin is smooth in time: Gauss–Legendre in R at the
+    bin's fixed nodes (3 within :data:`_CURVED_BINS` of the start, else 2) of the integrand
+    T(w)/(πw) dR, the sums at each node going to ``nodes`` ``(n, 5)`` (see
+    :data:`_NODE_BASIS`).  Both become B-spline coefficients in :func:`_moments_to_grid`.
+    Returns the first and the last bin touched."""
     n = x.shape[0]
     n_bins = moments.shape[0]
     cos2 = 1.0 - s * s
@@ -179,6 +188,8 @@ def _accumulate_pairs(x, half_chord, weight, distance, s, c, t0, dt, delay, mome
     shift = (delay - t0) / dt + 0.5  # a path r lies at u = r/step + shift − g in bin g
     u_shift = np.zeros(2)
     u_shift[0] = 1.0 / step
+    g_first = n_bins
+    g_last = -1
     for i in range(n):
         for j in range(i, n):
             w_pair = weight[i] * weight[j] / (math.pi * dt)
@@ -197,12 +208,21 @@ def _accumulate_pairs(x, half_chord, weight, distance, s, c, t0, dt, delay, mome
             r_kink = math.sqrt(q + kink * kink)
             r_end = math.sqrt(q + top * top)
             g = int(math.floor(r_start / step + shift))  # noqa: RUF046 (numba)
+            g_first = min(g_first, g)
+            g_last = max(g_last, int(math.floor(r_end / step + shift)))  # noqa: RUF046
             bins = 0
             r_lo = r_start
             while r_lo < r_end:
                 r_hi = min(r_end, (g + 1.0 - shift) * step)
                 inside = 0 <= g < n_bins
-                if inside and bins >= _CURVED_BINS and r_hi < r_end and not (r_lo < r_kink < r_hi):
+                smooth = bins >= _START_BINS and r_hi < r_end and not (r_lo < r_kink < r_hi)
+                if inside and smooth and bins < _CURVED_BINS:
+                    for k in range(3):
+                        r = (g - shift + _GL3_X[k]) * step
+                        w = math.sqrt(r * r - q)
+                        chord = flat if w <= kink else top - w
+                        nodes[g, 2 + k] += w_pair * _GL3_W[k] * step * chord / w
+                elif inside and smooth:
                     for k in range(2):
                         r = (g - shift + _GL2_X[k]) * step
                         w = math.sqrt(r * r - q)
@@ -224,24 +244,24 @@ def _accumulate_pairs(x, half_chord, weight, distance, s, c, t0, dt, delay, mome
                 bins += 1
                 r_lo = r_hi
                 g += 1
+    return max(0, g_first), min(n_bins - 1, g_last)
 
 
 @_jit
-def _moments_to_grid(moments, nodes, grid):
+def _moments_to_grid(moments, nodes, first, last, grid):
     """Add the B-spline coefficients of every bin's ``moments`` ``(n, _DEGREE + 1)`` and of
     its fixed-node sums ``nodes`` ``(n, 2)`` (at u = the 2-point Gauss–Legendre nodes; see
-    :func:`_accumulate_pairs`) to ``grid`` ``(n,)``: bin g's spline b is centred on grid
-    point g − _DEGREE/2 + b."""
+    :func:`_accumulate_pairs`) of bins ``first`` … ``last`` to ``grid`` ``(n,)``: bin g's
+    spline b is centred on grid point g − _DEGREE/2 + b."""
     half = _DEGREE // 2
     n = grid.shape[0]
-    total = np.zeros(_DEGREE + 1)
-    for g in range(half, n - half):
-        for m in range(_DEGREE + 1):
-            total[m] = moments[g, m] + nodes[g, 0] * _GL2_X[0] ** m + nodes[g, 1] * _GL2_X[1] ** m
+    for g in range(max(half, first), min(n - half, last + 1)):
         for b in range(_DEGREE + 1):
             acc = 0.0
             for m in range(_DEGREE + 1):
-                acc += _BASIS[b, m] * total[m]
+                acc += _BASIS[b, m] * moments[g, m]
+            for k in range(_NODE_POWERS.shape[0]):
+                acc += _NODE_BASIS[k, b] * nodes[g, k]
             grid[g - half + b] += acc
 
 
@@ -302,12 +322,12 @@ def pair_grid(
     """
     x, half_chord, weight = _abscissae(radius, pair_count(bandwidth, radius))
     moments = np.zeros((n_grid, _DEGREE + 1))
-    nodes = np.zeros((n_grid, 2))
-    _accumulate_pairs(
+    nodes = np.zeros((n_grid, 5))
+    first, last = _accumulate_pairs(
         x, half_chord, weight, distance, sin_incidence, sound_speed, t0, dt, delay, moments, nodes
     )
     grid = np.zeros(n_grid)
-    _moments_to_grid(moments, nodes, grid)
+    _moments_to_grid(moments, nodes, first, last, grid)
     return grid
 
 
