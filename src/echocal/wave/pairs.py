@@ -331,12 +331,13 @@ def pair_grid(
     return grid
 
 
-_PAIR_COST = (100.0, 1.0)
-_FACE_COST = (300.0, 1.0, 1.0 / 30.0)
-"""Cost models [≈ µs of CPU] of the two rules for :func:`pays`: a fixed cost plus, for the
-pair rule, one unit per pair; for the face rule, per face node one unit plus 1/30 per bin of
-its SIR.  Fitted to the CPU time of both rules on one thread (3 and 12.7 mm probes at
-10–100 mm, 0.5–30°: docs/benchmarks/wave.md), where each unit is about 1 µs."""
+_PAIR_COST = (80.0, 0.24, 0.0072)
+_FACE_COST = (230.0, 1.34, 0.027)
+"""Cost models [µs of CPU on one thread] of the two rules for :func:`pays`: a fixed cost,
+and per pair (per face node) a cost and one per bin of its response: a pair's lasts at
+most a²/(2h) of path, a face node's SIR about 2a·sin α + a²/(2h).  Fitted to both rules'
+CPU time for 3 and 12.7 mm probes at 10–100 mm and 0.5–30° (44 poses: measured 0.7–1.3×
+the model; it takes the cheaper rule at all but one, a tie, docs/benchmarks/wave.md)."""
 
 
 def pays(
@@ -350,11 +351,11 @@ def pays(
     """Whether the pair rule is estimated cheaper than the face rule's ``face_nodes`` nodes
     (:data:`_PAIR_COST`, :data:`_FACE_COST`): a flat disc of radius ``radius`` [m] over a
     plane ``distance`` [m] away at incidence sine ``sin_incidence``, path phase rate bound
-    ``bandwidth`` [rad/m], time bins ``step`` [m] of path long.  A face node's SIR lasts
-    about (2a·sin α + a²/(2h))/c; the pair rule's cost barely depends on its pairs' length
-    (their first bins, their kink's and their end's take most of it)."""
+    ``bandwidth`` [rad/m], time bins ``step`` [m] of path long."""
     half = pair_count(bandwidth, radius) // 2
     n_pairs = half * (half + 1) // 2
-    sir_bins = (2.0 * radius * sin_incidence + radius * radius / (2.0 * distance)) / step
+    near = radius * radius / (2.0 * distance) / step
+    sir_bins = 2.0 * radius * sin_incidence / step + near
+    pair = _PAIR_COST[0] + n_pairs * (_PAIR_COST[1] + _PAIR_COST[2] * near)
     face = _FACE_COST[0] + face_nodes * (_FACE_COST[1] + _FACE_COST[2] * sir_bins)
-    return _PAIR_COST[0] + _PAIR_COST[1] * n_pairs < face
+    return pair < face
