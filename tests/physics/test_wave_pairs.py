@@ -50,15 +50,20 @@ def _plane(model: WaveEchoModel, d: float, tilt: float) -> image.ImagePlane:
     return plane
 
 
-@pytest.mark.parametrize(("d_mm", "tilt"), [(50, 10.0), (50, 20.0), (50, 30.0), (20, 30.0)])
+@pytest.mark.parametrize(
+    ("d_mm", "tilt", "tolerance"),
+    [(50, 10.0, 5e-3), (50, 20.0, 5e-3), (50, 30.0, 1e-2), (20, 30.0, 1e-2)],
+)
 def test_pair_rule_equals_the_exact_angular_spectrum_at_large_tilts(
-    d_mm: float, tilt: float
+    d_mm: float, tilt: float, tolerance: float
 ) -> None:
     """|V(f)| at 4, 5 and 6 MHz of a 12.7 mm probe ``d`` above a plane, tilted 10–30°
     (the echo 10⁻³–10⁻⁴·⁵ of the normal one), against the exact angular spectrum at the
-    axis distance d/cos α.  Tolerance 5·10⁻³ of the largest of the three local |V|
-    (measured ≤ 2.9·10⁻³, at 30° and 6 MHz near a null of |V|, ≤ 8·10⁻⁴ at 10–20°; the
-    face rule it replaces: 1.5·10⁻³ at 20°, 2.8·10⁻³ at 30°)."""
+    axis distance d/cos α.  Tolerance 5·10⁻³ of the largest of the three local |V| at
+    10–20° (measured ≤ 1.1·10⁻³; the face rule it replaces: 1.5·10⁻³ at 20°), 10⁻² at 30°
+    (measured 4.2·10⁻³ and 4.3·10⁻³, at 6 MHz near a null of |V|: 2·10⁻⁷ of the normal
+    |V|; the face rule: 2.8·10⁻³).  The model's tolerance on |V| elsewhere is 5·10⁻³ of
+    the normal |V|."""
     d = d_mm * 1e-3
     model = _model(d)
     plane = _plane(model, d, tilt)
@@ -69,7 +74,7 @@ def test_pair_rule_equals_the_exact_angular_spectrum_at_large_tilts(
     got = np.abs(spectrum[idx] * model._grid[1] / model.pulse.spectrum(f[idx]))
     along = d / math.cos(math.radians(tilt))
     want = np.abs([ref.pulse_echo_plane(RADIUS, fi, along, tilt, C) for fi in f[idx]])
-    assert np.abs(got - want).max() < 5e-3 * want.max(), f"{got} vs exact {want}"
+    assert np.abs(got - want).max() < tolerance * want.max(), f"{got} vs exact {want}"
 
 
 def _envelope(x: np.ndarray) -> float:
