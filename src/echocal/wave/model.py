@@ -34,10 +34,11 @@ keep visibility.
 
 **Planes.** Over a plane that fills the beam, the same physics is evaluated exactly and far
 more cheaply by the image form (:mod:`echocal.wave.image`): the probe's SIR integrated over
-its mirror image, a few hundred face nodes at most near normal incidence (0.8 ms per A-scan
-there).  Each hit carries the area of its
-ray tube on the surface, ΔS = dΩ·L²/|cos θ|, and a smooth taper towards the edge of the
-fan so that the cut-off edge does not diffract.
+its mirror image, a few hundred face nodes at most near normal incidence (0.5 ms per A-scan
+there); for a flat disc off the normal, the same double integral over pairs of the two
+faces' abscissae, their ordinates in closed form (:mod:`echocal.wave.pairs`).  Each hit
+of the Kirchhoff sum carries the area of its ray tube on the surface, ΔS = dΩ·L²/|cos θ|,
+and a smooth taper towards the edge of the fan so that the cut-off edge does not diffract.
 
 **Materials.** Rₛ is the specimen's plane-wave reflection coefficient at the local angle
 of incidence (1 for a perfect reflector); the medium's attenuation α(f) multiplies the
@@ -367,7 +368,10 @@ class WaveEchoModel:
         coefficient: complex | None = None,
         delay: float = 0.0,
     ) -> tuple[NDArray[np.complex128], float]:
-        """The echo spectrum of an infinite plane, by the image form (before attenuation).
+        """The echo spectrum of an infinite plane, by the image form (before attenuation):
+        over the face's nodes (:meth:`image_nodes`), or for a flat disc with one
+        coefficient for the whole plane by the pair rule (:mod:`echocal.wave.pairs`) where
+        that is estimated cheaper.
 
         Parameters
         ----------

@@ -22,8 +22,9 @@ form in time, and smooth in w:
     H(t) dt = Σ_pairs ∫₀^{Y_a+Y_b} T(w) / (π R(w)) · [R(w)/c ∈ dt] dw.
 
 Each pair's response lasts (√(Q + (Y_a + Y_b)²) − √Q)/c ≤ a²/(h c) whatever the tilt
-(0.5 µs for a 12.7 mm probe at 50 mm), where a face node's SIR lasts 2a·sin 2α/c
-(5.5 µs at 20°): that is the saving at large tilts.
+(0.5 µs for a 12.7 mm probe at 50 mm), where a face node's SIR lasts about 2a·sin α/c
+(2.9 µs at 20°), and the pairs are about as many as the face rule's nodes: that is the
+saving at large tilts.
 
 **Nodes.** a_x = a cos φ (dA's chord 2Y_a = 2a sin φ): the integrand, continued evenly in
 φ, is smooth and 2π-periodic, and at one frequency its φ-harmonics are bounded by
@@ -127,8 +128,8 @@ _NODE_BASIS = _NODE_POWERS @ _BASIS.T
 bins (the 2- then the 3-point Gauss–Legendre nodes)."""
 _CURVED_BINS = 8
 """A pair's first bins (from its start), where its response 1/√(t − t_start) curves most:
-3 Gauss–Legendre nodes per piece (2 nodes there left 2–8·10⁻³ of the local echo at 20–30°,
-50 mm, against a dense face rule; 8 bins 0.9–4.5·10⁻³)."""
+3 Gauss–Legendre nodes per piece (3 in the first 4 bins only left 2.2·10⁻³ and 8.2·10⁻³ of
+the local echo at 20° and 30°, 50 mm, against a dense face rule; 8 bins 0.9 and 4.5·10⁻³)."""
 _START_BINS = 2
 """A pair's first bins, integrated in w (smooth there, where the response in time is not);
 from the third on the bins take fixed nodes in time (the start a whole bin or more away)."""
