@@ -34,11 +34,13 @@ rule with :func:`echocal.wave.image.trapezoid_count` (β) nodes on the full circ
 exact below its harmonics; by the evenness half of them (φ in (0, π)) carry the sum.  R is
 symmetric in a ↔ b, so the pairs i ≤ j carry it, those off the diagonal weighted twice.
 
-**Time grid.** Each pair's T(w)/(πR) is projected onto the quadratic B-splines of
-:func:`echocal.wave.sir.accumulate_one_way` (the same grid, the same sinc³ correction
-downstream) by 3-point Gauss–Legendre in w on every piece between the bins' edges and T's
-kink: the integrand is smooth in w there (near w = 0 the time is quadratic in w, and the
-piece's integrand a polynomial of degree about 5).
+**Time grid.** The pairs go onto the grid of :func:`echocal.wave.sir.accumulate_one_way`
+(grid point g at t₀ + gΔ), projected onto B-splines of degree :data:`_DEGREE` rather than
+2: each pair's response starts like 1/√(t − t_start), whose aliases the quadratic splines
+do not hold down (the extra sinc^(degree − 2)(fΔ) is divided out downstream,
+:func:`smoothing`).  The projection is Gauss–Legendre: in w (where the integrand is smooth)
+on the pieces between the bins' edges and T's kink in a pair's first bins, its kink's bin
+and its last; at fixed nodes in time in every other bin (:func:`_accumulate_pairs`).
 """
 
 from __future__ import annotations
