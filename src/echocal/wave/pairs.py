@@ -51,7 +51,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from echocal.wave import image
+from echocal.wave import image, threads
 from echocal.wave.sir import _jit
 
 __all__ = ["abscissae", "mean_image_distance", "pair_count", "pair_grid", "pays", "smoothing"]
@@ -171,9 +171,10 @@ def _w_piece(q, flat, kink, top, w_lo, w_hi, n_nodes, scale, u_shift):
 
 
 @_jit
-def _accumulate_pairs(x, half_chord, weight, distance, s, c, t0, dt, delay, moments, nodes):
+def _accumulate_pairs(x, half_chord, weight, rows, distance, s, c, t0, dt, delay, moments, nodes):
     """Add the pairs' T(w)/(πR) projected onto the degree-:data:`_DEGREE` B-splines centred
-    on the grid points (grid point g at t0 + gΔ); see the module.
+    on the grid points (grid point g at t0 + gΔ); see the module: the pairs (i, j ≥ i) of
+    the abscissae i in ``rows``.
 
     A pair's first :data:`_START_BINS` bins (where the time is quadratic in w), the bin of
     T's kink and its last bin are cut into pieces between their edges and the kink, each
@@ -193,7 +194,7 @@ def _accumulate_pairs(x, half_chord, weight, distance, s, c, t0, dt, delay, mome
     u_shift[0] = 1.0 / step
     g_first = n_bins
     g_last = -1
-    for i in range(n):
+    for i in rows:
         for j in range(i, n):
             w_pair = weight[i] * weight[j] / (math.pi * dt)
             if i != j:
@@ -319,18 +320,41 @@ def pair_grid(
     n_grid : grid points.
     delay : [s] a delay added to every path (an interior's equivalent path).
 
+    The abscissae's rows of pairs are split over threads like the face rule's nodes
+    (:func:`echocal.wave.threads.split`), from :data:`echocal.wave.threads.PAIRS_PER_NODE`
+    × :data:`echocal.wave.threads.MIN_NODES_PER_THREAD` pairs a thread.
+
     Returns
     -------
     [m³/s] ``(n_grid,)``.
     """
     x, half_chord, weight = _abscissae(radius, pair_count(bandwidth, radius))
-    moments = np.zeros((n_grid, _DEGREE + 1))
-    nodes = np.zeros((n_grid, 5))
-    first, last = _accumulate_pairs(
-        x, half_chord, weight, distance, sin_incidence, sound_speed, t0, dt, delay, moments, nodes
+
+    def kernel(grid: FloatArray, rows: NDArray[np.intp]) -> tuple[float, float]:
+        moments = np.zeros((n_grid, _DEGREE + 1))
+        nodes = np.zeros((n_grid, 5))
+        first, last = _accumulate_pairs(
+            x,
+            half_chord,
+            weight,
+            np.ascontiguousarray(rows),
+            distance,
+            sin_incidence,
+            sound_speed,
+            t0,
+            dt,
+            delay,
+            moments,
+            nodes,
+        )
+        _moments_to_grid(moments, nodes, first, last, grid)
+        return 0.0, 0.0
+
+    # rows i carry n − i pairs each: about n/2 on average
+    rows_per_thread = max(
+        1, round(threads.PAIRS_PER_NODE * threads.MIN_NODES_PER_THREAD / (0.5 * x.size))
     )
-    grid = np.zeros(n_grid)
-    _moments_to_grid(moments, nodes, first, last, grid)
+    grid, _, _ = threads.split(weight, n_grid, kernel, rows_per_thread)
     return grid
 
 
