@@ -220,3 +220,20 @@ def test_a_resumed_run_asking_for_another_pose_is_refused(lab, tmp_path, capsys,
     assert "diverged" in err and "saved one" in err
     assert len(lab.served) == BREAK_AT - 1  # the rig measured nothing
     assert len(list(folder.glob("*.npz"))) == BREAK_AT - 1
+
+
+def test_a_run_off_the_rig_with_overwrite_leaves_nothing_to_resume(
+    lab, tmp_path, capsys, monkeypatch
+):
+    """A simulated calibration written over a rig run's folder with --overwrite removes
+    its saved A-scans: a later rig run starts afresh instead of resuming from them."""
+    out = tmp_path / "cal"
+    _interrupted(lab, out, capsys, monkeypatch)
+    args = ["calibrate", "--setup", str(lab.setup), "--position", "0,0,16"]
+    args += ["--x0", "2,-1", "--budget", "30", "--no-plots", "--out", str(out), "--overwrite"]
+    code, _, err = run_main(args, capsys, monkeypatch)
+    assert code in (0, 3), err
+    assert not (out / "partial_ascans").exists()
+    code, _, err = _run(lab, out, capsys, monkeypatch, "--overwrite")
+    assert code in (0, 3), err
+    assert "resuming" not in err

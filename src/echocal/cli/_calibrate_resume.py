@@ -44,6 +44,7 @@ __all__ = [
     "ResumeMismatch",
     "ResumedRig",
     "Tally",
+    "discard_journal",
     "fingerprint",
     "resumable",
 ]
@@ -102,6 +103,13 @@ def resumable(out: Path) -> bool:
     """Whether ``out`` holds the saved measurements of a calibration on a rig (the same
     command resumes it, though the folder is not empty)."""
     return (out / JOURNAL / "manifest.json").is_file()
+
+
+def discard_journal(out: Path) -> None:
+    """Remove the saved measurements of a calibration on a rig from ``out`` (another run
+    replaces that folder's contents with ``--overwrite``: a later rig run must not resume
+    from them)."""
+    shutil.rmtree(out / JOURNAL, ignore_errors=True)
 
 
 def _short(value: Any, limit: int = 60) -> str:

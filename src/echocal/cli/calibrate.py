@@ -261,11 +261,13 @@ def register(app: typer.Typer) -> None:
         run = _Run.parse(
             method, budget, max_iter, settle, preset, option, search_radius, final_measure
         )
-        from echocal.cli._calibrate_resume import resumable
+        from echocal.cli._calibrate_resume import discard_journal, resumable
 
         on_rig = instrument is not None or rig is not None
         if not (on_rig and resumable(out)):  # a rig's run cut short resumes in its --out
             refuse_existing_output(out, overwrite=overwrite)  # locked once the inputs pass
+            if resumable(out):  # --overwrite by a run off the rig: nothing to resume later
+                discard_journal(out)
         if replay is not None or on_rig:
             if motion_aware:
                 raise typer.BadParameter(
