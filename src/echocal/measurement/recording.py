@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from echocal._signals import checkpoint, saving
+from echocal._signals import checkpoint, measuring, saving
 from echocal._validate import finite_array, positive_int
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import Pose
@@ -514,13 +514,16 @@ def record(
                     checkpoint()  # a stop signal whose exception was lost stops here
                     batch = list(range(index, min(index + batch_size, total)))
                     batch_poses = [poses[i // repeats] for i in batch]
-                    if len(batch) == 1:
-                        ascans = [source.measure(batch_poses[0])]
+                    if len(batch) == 1:  # one A-scan (a rig): a signal waits for it
+                        with measuring():
+                            ascans = [source.measure(batch_poses[0])]
+                            partial.check_format(ascans[0], batch[0])
+                            rows.append(ascans[0].samples)
                     else:
                         ascans = list(source.measure_many(batch_poses))
-                    for i, ascan in zip(batch, ascans, strict=True):
-                        partial.check_format(ascan, i)
-                        rows.append(ascan.samples)
+                        for i, ascan in zip(batch, ascans, strict=True):
+                            partial.check_format(ascan, i)
+                            rows.append(ascan.samples)
                     index = batch[-1] + 1
                     bar.update(task, completed=index)
                     if len(rows) >= chunk_size:
