@@ -9,6 +9,8 @@ Run from the repository root::
     # CI: --quick on one cell
     python benchmarks/bench_calibration.py --quick --cases thesis --starts near --snr 30 --runs 2
     python benchmarks/bench_calibration.py --methods auto,model-based --runs 20
+    # hold-out seeds: runs 100-199 (a run's seed is its case, start, SNR and run index)
+    python benchmarks/bench_calibration.py --methods auto --runs 100 --seed-offset 100
 
 Cases (the simulator knows the truth; the methods do not):
 
@@ -516,6 +518,7 @@ def _update(path: Path, rerun: list[str], workers: int, argv: list[str] | None) 
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
         methods, n_runs, raw = list(data["methods"]), int(data["runs_per_cell"]), data["raw"]
+        offset = int(data.get("seed_offset", 0))
         cells = [(c, s, float(snr)) for c, s, snr in (k.split("|") for k in data["cells"])]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         print(f"error: --update {path}: not a calibration benchmark's JSON ({exc!r})")
@@ -527,7 +530,8 @@ def _update(path: Path, rerun: list[str], workers: int, argv: list[str] | None) 
     if unknown:
         print(f"error: --methods {unknown}: not in {path}'s methods {methods}")
         return 2
-    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in rerun]
+    runs = range(offset, offset + n_runs)
+    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in runs for m in rerun]
     print(f"calibration benchmark (update {path}): {len(tasks)} runs of {rerun}", flush=True)
     machine = machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize", "botorch", "torch"])
     t0 = time.perf_counter()
@@ -555,6 +559,13 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--quick", action="store_true", help="~10 runs per cell, SNR 30 and 10 dB")
     g.add_argument("--smoke", action="store_true", help="2 runs of one cell")
     ap.add_argument("--runs", type=int, default=None, help="runs per cell")
+    ap.add_argument(
+        "--seed-offset",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run indices N, N+1, ...: seeds no run with the default 0 used (hold-out runs)",
+    )
     ap.add_argument("--methods", default=None, help="comma-separated subset of methods")
     ap.add_argument("--cases", default=None, help="comma-separated subset of cases")
     ap.add_argument("--snr", default=None, help="comma-separated subset of SNRs [dB]")
@@ -580,7 +591,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.update is not None:
         chosen = (args.cases, args.snr, args.starts, args.runs, args.json, args.out_md, args.plot)
-        if not args.methods or args.quick or args.smoke or any(v is not None for v in chosen):
+        fixed = args.quick or args.smoke or args.seed_offset != 0
+        if not args.methods or fixed or any(v is not None for v in chosen):
             ap.error(
                 "--update JSON takes --methods (and --workers) only: the JSON's cells and runs"
             )
@@ -611,7 +623,10 @@ def main(argv: list[str] | None = None) -> int:
         hint = INSTALL_HINT.get(name, "pip install echocal[bench]")
         print(f"SKIPPED peer {name}: not available ({why}); {hint}")
     methods = [m for m in wanted if m in OURS or m in workflows] + peers
-    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in methods]
+    if args.seed_offset < 0:
+        ap.error(f"--seed-offset must be >= 0; got {args.seed_offset}")
+    runs = range(args.seed_offset, args.seed_offset + n_runs)
+    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in runs for m in methods]
     print(
         f"calibration benchmark ({mode}): {len(cells)} cell(s) x {n_runs} runs x "
         f"{len(methods)} methods = {len(tasks)} runs, budget {BUDGET}, {args.workers} worker(s)",
@@ -642,6 +657,7 @@ def main(argv: list[str] | None = None) -> int:
         "mode": mode,
         "budget": BUDGET,
         "runs_per_cell": n_runs,
+        "seed_offset": args.seed_offset,
         "workers": args.workers,
         "methods": methods,
         "skipped_peers": skipped,
@@ -651,7 +667,9 @@ def main(argv: list[str] | None = None) -> int:
         "raw": results,
     }
     json_path, md_path, png_path = args.json, args.out_md, args.plot
-    subset = any(v is not None for v in (args.methods, args.cases, args.snr, args.starts))
+    subset = args.seed_offset != 0 or any(
+        v is not None for v in (args.methods, args.cases, args.snr, args.starts)
+    )
     if mode == "full" and not subset:  # every cell and method (any --runs) refreshes the docs
         DOCS.mkdir(parents=True, exist_ok=True)
         json_path = json_path or DOCS / "calibration.json"
