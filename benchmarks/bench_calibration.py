@@ -34,8 +34,9 @@ echocal's methods the iterate after the last iteration completed within n measur
 (``iterates`` and ``iteration_measurements`` of the result; for the model-based methods
 this is the fitted model's maximum); for the peers the best point evaluated so far (what
 scipy, Py-BOBYQA and scikit-optimize return), or, for nevergrad, its own
-``provide_recommendation()``, or, for BoTorch, the measured point of highest posterior mean
-(below).  Per (case, method) the report gives
+``provide_recommendation()``, or, for CMA-ES, its distribution's mean after the last
+generation told, or, for BoTorch, the measured point of highest posterior mean (below).
+Per (case, method) the report gives
 
 * success within 0.05° / 0.1°: the estimate at the budget (80) is within the tolerance;
 * measurements to 0.05° / 0.1° (median and 90th percentile over the runs, ``>80`` when
@@ -51,8 +52,9 @@ with Levenberg damping, BFGS from a calibrated identity) — the thesis's fixed 
 (preset ``thesis``) stalls far from the peak of a narrow lobe; model-based and auto with
 their defaults.  Peers: scipy Nelder–Mead (initial simplex of 1°, bounds), Py-BOBYQA
 (``objfun_has_noise=True``, ``seek_global_minimum=False``, ``rhobeg=1``), scikit-optimize's
-GP minimizer, nevergrad ``NGOpt`` told that the function is noisy, and BoTorch's noisy
-expected improvement.  The GP peer is
+GP minimizer, nevergrad ``NGOpt`` told that the function is noisy, pycma's CMA-ES (σ₀ = 1°,
+its default population of 6, inside the box below), and BoTorch's noisy expected
+improvement.  The GP peer is
 ``gp_minimize``'s loop written out with ``skopt.Optimizer`` ask/tell: the same surrogate
 (``cook_estimator("GP", noise="gaussian")``, a Matérn-5/2 GP whose white-noise term learns the
 noise level), the same random stream, x0 as the first point then 10 random ones, ``gp_hedge``
@@ -85,7 +87,7 @@ with a CPU-only torch it adds ~0.9 GB.  Install it with
 ``pip install "torch==2.13.0+cpu" botorch`` where pip finds a CPU-only torch wheel (on the
 project's machines, in its local wheel directory), else install torch from PyTorch's CPU
 wheel index first and then ``pip install botorch``.  The bounded peers (BOBYQA, the GP
-peer, nevergrad, BoTorch) search the box x0 ± (the start band's outer distance + 1°),
+peer, nevergrad, CMA-ES, BoTorch) search the box x0 ± (the start band's outer distance + 1°),
 clipped to the positioner's limits — information the echocal methods are not given.  Each
 peer minimizes −metric (BoTorch maximizes the metric); the budget is enforced by the
 objective itself (:class:`~echocal.errors.BudgetExhaustedError` ends a peer's run).  Peers
