@@ -23,13 +23,22 @@ import numpy as np
 from echocal.errors import BudgetExhaustedError
 from echocal.measurement import SourceObjective
 
-PEERS = ("scipy-nelder-mead", "py-bobyqa", "skopt-gp", "nevergrad-ngopt", "botorch-qlognei")
+PEERS = (
+    "scipy-nelder-mead",
+    "py-bobyqa",
+    "skopt-gp",
+    "nevergrad-ngopt",
+    "cma-es",
+    "botorch-qlognei",
+)
 """The peers of a default run, each run when it imports (``available_peers``)."""
 GP_REFIT_EVERY = 5
 """The GP peer fits its hyperparameters by maximum likelihood (with restarts) at every this
 many-th model update and keeps them in between (see ``bench_calibration.py``'s docstring)."""
 GP_N_POINTS = 2000
 """Candidates sampled per step at which the GP peer evaluates its acquisition functions."""
+CMA_SIGMA0 = 1.0
+"""[deg] CMA-ES's initial step size σ₀ (as Nelder–Mead's simplex and BOBYQA's rhobeg)."""
 BOTORCH_N_SOBOL = 10
 """The BoTorch peer's initial design: x0, then this many scrambled Sobol points in the box."""
 BOTORCH_RESTARTS = 4
@@ -43,6 +52,7 @@ _PEER_MODULES = {
     "py-bobyqa": "pybobyqa",
     "skopt-gp": "skopt",
     "nevergrad-ngopt": "nevergrad",
+    "cma-es": "cma",
     "botorch-qlognei": "botorch",
 }
 INSTALL_HINT = {
@@ -190,6 +200,36 @@ def _peer_nevergrad(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) ->
             recommended.append(np.asarray(opt.provide_recommendation().value, float))
 
 
+def _peer_cma(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
+    """pycma's CMA-ES (default population, 6 in 2-D) from x0 with σ₀ = :data:`CMA_SIGMA0`
+    inside ``box``; the estimate is the distribution's mean (``xfavorite``, pycma's
+    recommendation on a noisy function) after each completed generation, x0 before."""
+    import cma
+
+    opts = {
+        "bounds": [list(box[:, 0]), list(box[:, 1])],
+        "seed": seed % (2**32 - 1) + 1,  # pycma draws a random seed for 0
+        "maxfevals": tr.budget,
+        "verbose": -9,
+    }
+    recommended: list[np.ndarray] = []
+    tr.history_override = recommended
+    estimate = np.asarray(x0, dtype=float)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        es = cma.CMAEvolutionStrategy(list(x0), CMA_SIGMA0, opts)
+        while not es.stop():
+            xs = es.ask()
+            fs = []
+            for x in xs:
+                f = tr(x)  # _Stop when the budget is spent
+                fs.append(f if np.isfinite(f) else 0.0)  # no value: no echo (-metric <= 0)
+                recommended.append(estimate.copy())
+            es.tell(xs, fs)
+            estimate = np.asarray(es.result.xfavorite, dtype=float)
+            recommended[-1] = estimate.copy()  # the generation's mean, once it is told
+
+
 def _peer_botorch(tr: _Tracker, x0: np.ndarray, box: np.ndarray, seed: int) -> None:
     """Noisy-EI Bayesian optimization with BoTorch, maximizing the metric: a SingleTaskGP
     (inferred homoskedastic noise, inputs normalized to the box, outcomes standardized)
@@ -273,6 +313,7 @@ _PEER_FUNCS: dict[str, Callable[..., None]] = {
     "py-bobyqa": _peer_bobyqa,
     "skopt-gp": _peer_skopt,
     "nevergrad-ngopt": _peer_nevergrad,
+    "cma-es": _peer_cma,
     "botorch-qlognei": _peer_botorch,
 }
 

@@ -9,6 +9,8 @@ Run from the repository root::
     # CI: --quick on one cell
     python benchmarks/bench_calibration.py --quick --cases thesis --starts near --snr 30 --runs 2
     python benchmarks/bench_calibration.py --methods auto,model-based --runs 20
+    # hold-out seeds: runs 100-199 (a run's seed is its case, start, SNR and run index)
+    python benchmarks/bench_calibration.py --methods auto --runs 100 --seed-offset 100
 
 Cases (the simulator knows the truth; the methods do not):
 
@@ -32,8 +34,9 @@ echocal's methods the iterate after the last iteration completed within n measur
 (``iterates`` and ``iteration_measurements`` of the result; for the model-based methods
 this is the fitted model's maximum); for the peers the best point evaluated so far (what
 scipy, Py-BOBYQA and scikit-optimize return), or, for nevergrad, its own
-``provide_recommendation()``, or, for BoTorch, the measured point of highest posterior mean
-(below).  Per (case, method) the report gives
+``provide_recommendation()``, or, for CMA-ES, its distribution's mean after the last
+generation told, or, for BoTorch, the measured point of highest posterior mean (below).
+Per (case, method) the report gives
 
 * success within 0.05° / 0.1°: the estimate at the budget (80) is within the tolerance;
 * measurements to 0.05° / 0.1° (median and 90th percentile over the runs, ``>80`` when
@@ -49,8 +52,9 @@ with Levenberg damping, BFGS from a calibrated identity) — the thesis's fixed 
 (preset ``thesis``) stalls far from the peak of a narrow lobe; model-based and auto with
 their defaults.  Peers: scipy Nelder–Mead (initial simplex of 1°, bounds), Py-BOBYQA
 (``objfun_has_noise=True``, ``seek_global_minimum=False``, ``rhobeg=1``), scikit-optimize's
-GP minimizer, nevergrad ``NGOpt`` told that the function is noisy, and BoTorch's noisy
-expected improvement.  The GP peer is
+GP minimizer, nevergrad ``NGOpt`` told that the function is noisy, pycma's CMA-ES (σ₀ = 1°,
+its default population of 6, inside the box below), and BoTorch's noisy expected
+improvement.  The GP peer is
 ``gp_minimize``'s loop written out with ``skopt.Optimizer`` ask/tell: the same surrogate
 (``cook_estimator("GP", noise="gaussian")``, a Matérn-5/2 GP whose white-noise term learns the
 noise level), the same random stream, x0 as the first point then 10 random ones, ``gp_hedge``
@@ -83,7 +87,7 @@ with a CPU-only torch it adds ~0.9 GB.  Install it with
 ``pip install "torch==2.13.0+cpu" botorch`` where pip finds a CPU-only torch wheel (on the
 project's machines, in its local wheel directory), else install torch from PyTorch's CPU
 wheel index first and then ``pip install botorch``.  The bounded peers (BOBYQA, the GP
-peer, nevergrad, BoTorch) search the box x0 ± (the start band's outer distance + 1°),
+peer, nevergrad, CMA-ES, BoTorch) search the box x0 ± (the start band's outer distance + 1°),
 clipped to the positioner's limits — information the echocal methods are not given.  Each
 peer minimizes −metric (BoTorch maximizes the metric); the budget is enforced by the
 objective itself (:class:`~echocal.errors.BudgetExhaustedError` ends a peer's run).  Peers
@@ -516,6 +520,7 @@ def _update(path: Path, rerun: list[str], workers: int, argv: list[str] | None) 
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
         methods, n_runs, raw = list(data["methods"]), int(data["runs_per_cell"]), data["raw"]
+        offset = int(data.get("seed_offset", 0))
         cells = [(c, s, float(snr)) for c, s, snr in (k.split("|") for k in data["cells"])]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         print(f"error: --update {path}: not a calibration benchmark's JSON ({exc!r})")
@@ -527,7 +532,8 @@ def _update(path: Path, rerun: list[str], workers: int, argv: list[str] | None) 
     if unknown:
         print(f"error: --methods {unknown}: not in {path}'s methods {methods}")
         return 2
-    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in rerun]
+    runs = range(offset, offset + n_runs)
+    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in runs for m in rerun]
     print(f"calibration benchmark (update {path}): {len(tasks)} runs of {rerun}", flush=True)
     machine = machine_info(["nevergrad", "Py-BOBYQA", "scikit-optimize", "botorch", "torch"])
     t0 = time.perf_counter()
@@ -555,6 +561,13 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--quick", action="store_true", help="~10 runs per cell, SNR 30 and 10 dB")
     g.add_argument("--smoke", action="store_true", help="2 runs of one cell")
     ap.add_argument("--runs", type=int, default=None, help="runs per cell")
+    ap.add_argument(
+        "--seed-offset",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run indices N, N+1, ...: seeds no run with the default 0 used (hold-out runs)",
+    )
     ap.add_argument("--methods", default=None, help="comma-separated subset of methods")
     ap.add_argument("--cases", default=None, help="comma-separated subset of cases")
     ap.add_argument("--snr", default=None, help="comma-separated subset of SNRs [dB]")
@@ -580,7 +593,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.update is not None:
         chosen = (args.cases, args.snr, args.starts, args.runs, args.json, args.out_md, args.plot)
-        if not args.methods or args.quick or args.smoke or any(v is not None for v in chosen):
+        fixed = args.quick or args.smoke or args.seed_offset != 0
+        if not args.methods or fixed or any(v is not None for v in chosen):
             ap.error(
                 "--update JSON takes --methods (and --workers) only: the JSON's cells and runs"
             )
@@ -611,7 +625,10 @@ def main(argv: list[str] | None = None) -> int:
         hint = INSTALL_HINT.get(name, "pip install echocal[bench]")
         print(f"SKIPPED peer {name}: not available ({why}); {hint}")
     methods = [m for m in wanted if m in OURS or m in workflows] + peers
-    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in range(n_runs) for m in methods]
+    if args.seed_offset < 0:
+        ap.error(f"--seed-offset must be >= 0; got {args.seed_offset}")
+    runs = range(args.seed_offset, args.seed_offset + n_runs)
+    tasks = [(c, s, snr, r, m) for (c, s, snr) in cells for r in runs for m in methods]
     print(
         f"calibration benchmark ({mode}): {len(cells)} cell(s) x {n_runs} runs x "
         f"{len(methods)} methods = {len(tasks)} runs, budget {BUDGET}, {args.workers} worker(s)",
@@ -642,6 +659,7 @@ def main(argv: list[str] | None = None) -> int:
         "mode": mode,
         "budget": BUDGET,
         "runs_per_cell": n_runs,
+        "seed_offset": args.seed_offset,
         "workers": args.workers,
         "methods": methods,
         "skipped_peers": skipped,
@@ -651,7 +669,9 @@ def main(argv: list[str] | None = None) -> int:
         "raw": results,
     }
     json_path, md_path, png_path = args.json, args.out_md, args.plot
-    subset = any(v is not None for v in (args.methods, args.cases, args.snr, args.starts))
+    subset = args.seed_offset != 0 or any(
+        v is not None for v in (args.methods, args.cases, args.snr, args.starts)
+    )
     if mode == "full" and not subset:  # every cell and method (any --runs) refreshes the docs
         DOCS.mkdir(parents=True, exist_ok=True)
         json_path = json_path or DOCS / "calibration.json"

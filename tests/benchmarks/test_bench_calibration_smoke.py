@@ -62,6 +62,7 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
         "py-bobyqa",
         "skopt-gp",
         "nevergrad-ngopt",
+        "cma-es",
         "botorch-qlognei",
     ):
         assert (peer in data["methods"]) + (peer in data["skipped_peers"]) == 1, peer

@@ -77,10 +77,13 @@ posterior search against 100 % with the 1° lattice out to 3°)."""
 TIE = 0.05
 """Cells whose detection chance is within this fraction of the best are equally good: the
 one nearest to x0 is measured next (module docstring)."""
-MOTION_TIE = 0.25
+MOTION_TIE = 0.15
 """A motion-aware search (:meth:`PosteriorSearch.next_point` given the moves' times) takes
-the cell reached soonest among those within this fraction of the best detection chance
-(the bench time it saves and the measurements it costs: ``docs/bench.md``)."""
+the cell reached soonest among those within this fraction of the best detection chance.
+The cells reached soonest lie next to the one just measured, whose chance it lowered, so
+the walk takes a cell near the bottom of this window at nearly every step: the fraction
+is the chance it gives up per measurement, and the loss compounds over a search (the bench
+time it saves and the measurements it costs: ``docs/bench.md``)."""
 _MAX_CELLS = 401
 """Cells per side of the posterior's grid at most (161,000 cells: 10–18 ms per point, the
 FFT about 6 ms; 2–3 ms at ``max_radius`` 20° and a 0.2° cell)."""
