@@ -199,6 +199,7 @@ def _on_instrument(
     from echocal.errors import EchocalError
     from echocal.measurement.hardware import HardwareSource
     from echocal.measurement.objective import SourceObjective
+    from echocal.setups import load_setup
 
     option = "--rig" if rig is not None else "--instrument"
     host, port = _parse_address(instrument) if instrument is not None else ("", 0)
@@ -224,6 +225,7 @@ def _on_instrument(
             pulse=pulse,
             parameterization=parameterization,
             gate=chosen,
+            twin=load_setup(setup),  # the lobe's shape for the posterior search
         )
         tally.logged = lambda: objective.n_measurements
         where_from = {"file": str(rig)} if rig is not None else {"address": f"{host}:{port}"}
@@ -320,6 +322,7 @@ def _on_replay(
             parameterization=parameterization,
             bounds=bounds,
             gate=chosen,
+            twin=recording.recorded_setup(),  # the lobe's shape for the posterior search
         )
         result = run(objective, start, seed)
         maps = RecordingMap(recording, index, pulse, objective.metric, parameterization, chosen)
