@@ -18,7 +18,8 @@ far (5–20°) and near (1–3°) starts from the true optimum, 30 and 20 dB, wi
 * ``rig``: the same setup behind :class:`~echocal.measurement.InstrumentServer` (the
   emulated rig, over TCP), measured through a :class:`~echocal.measurement.HardwareSource`
   whose objective knows the setup only as its ``twin`` (the lobe's shape; the amplitude
-  unknown);
+  unknown); ``rig-no-setup``: the same without a twin (Lorentzian lobes of unknown
+  width);
 * ``replay``: a recording of the setup (``random-repeat``, seeded by the run), whose
   objective's twin is the setup the file stores
   (:meth:`~echocal.measurement.ReplaySource.recorded_setup`).
@@ -80,7 +81,7 @@ BUDGET = 100
 """Measurements per run (the estimate is read after each)."""
 BOX = np.array([[-10.0, 10.0], [-10.0, 10.0]])
 """[deg] the tilt box the recording covers (co-elevation up to 14.1°)."""
-SOURCES = ("simulator", "rig", "simulator-box", "replay")
+SOURCES = ("simulator", "rig", "rig-no-setup", "simulator-box", "replay")
 
 
 def _setup(snr: float, seed: int) -> Any:
@@ -114,8 +115,8 @@ def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -
         warnings.simplefilter("ignore")
         if source in ("simulator", "simulator-box"):
             res = calibrate(SourceObjective(setup, pos, **kw), "auto", **call)
-        elif source == "rig":
-            twin = _setup(snr, 0)
+        elif source in ("rig", "rig-no-setup"):
+            twin = _setup(snr, 0) if source == "rig" else None
             with InstrumentServer(setup, initial_pose=Pose(*pos)) as server:
                 with HardwareSource.connect(*server.address) as rig:
                     objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)

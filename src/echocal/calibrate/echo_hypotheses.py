@@ -4,8 +4,9 @@ A simulated probe measured in its own units says exactly how strong its echo is 
 the noise it measures (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`).  A
 recording or a rig does not: the receiver's gain, the coupling and the part's
 reflectivity set the echo's amplitude, and without a setup even the lobe's shape is
-unknown.  :class:`EchoHypotheses` keeps one :class:`EchoLikelihood` per hypothesis on
-these nuisance parameters, with prior weights; the posterior search carries a posterior
+unknown.  :class:`EchoHypotheses` keeps one
+:class:`~echocal.calibrate.posterior_search.EchoLikelihood` per hypothesis on these
+nuisance parameters, with prior weights; the posterior search carries a posterior
 over (optimum, hypothesis) and marginalizes the hypotheses
 (:class:`~echocal.calibrate.posterior_search.PosteriorSearch`).
 
@@ -28,7 +29,7 @@ Model (what both constructors assume):
   diffraction lobe, tails included: the 12.7 mm 5 MHz probe's matched-filter peak on the
   wave model falls to 0.5 / 0.1 / 0.03 / 0.01 at 0.6 / 1.6 / 3.7 / 6.3°, a Lorentzian of
   w = 0.6° to 0.5 / 0.12 / 0.026 / 0.009 (a Gaussian of the same half width to
-  0.5 / 0.007 / 10⁻¹⁷ / 0: no tail, where a far search sees the echo first).  A lobe
+  0.5 / 0.007 / 4·10⁻¹² / 10⁻³³: no tail, where a far search sees the echo first).  A lobe
   without tails (the ray model) is broader under this model than it is.
 """
 
@@ -56,8 +57,8 @@ _LORENTZ_ANGLES = np.arange(0.0, 15.05, 0.1)
 
 @dataclass(frozen=True, eq=False)
 class EchoHypotheses:
-    """One :class:`EchoLikelihood` per hypothesis on the echo's unknown amplitude (and
-    lobe width), and the hypotheses' prior weights.
+    """One :class:`~echocal.calibrate.posterior_search.EchoLikelihood` per hypothesis on
+    the echo's unknown amplitude (and lobe width), and the hypotheses' prior weights.
 
     Attributes
     ----------
@@ -133,7 +134,7 @@ def scaled_lobe(
     """The hypotheses for a known lobe shape ``shape`` (s(θ) at ``angles`` [deg], shape
     ``(n,)``, normalized here to 1 at θ = 0) of unknown amplitude: one per 20·log10 A in
     ``amplitudes_db`` [dB], equally likely; ``n_cells`` and ``threshold`` as
-    :class:`EchoLikelihood`'s (the detector's)."""
+    :class:`~echocal.calibrate.posterior_search.EchoLikelihood`'s (the detector's)."""
     s = np.asarray(shape, dtype=np.float64)
     if s.ndim != 1 or not s.size or not s[0] > 0.0:
         raise EchocalValueError("shape must be 1-D and > 0 at 0 deg (the lobe's peak)")
