@@ -82,6 +82,7 @@ BUDGET = 100
 BOX = np.array([[-10.0, 10.0], [-10.0, 10.0]])
 """[deg] the tilt box the recording covers (co-elevation up to 14.1°)."""
 SOURCES = ("simulator", "rig", "rig-no-setup", "simulator-box", "replay")
+_ORDER = (*SOURCES, "rig-before")  # the table also shows runs of an earlier version
 
 
 def _setup(snr: float, seed: int) -> Any:
@@ -154,7 +155,7 @@ def summarize(runs: list[dict[str, Any]]) -> str:
         "| final error (median / p90) | CPU-s/run |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    order = {s: i for i, s in enumerate(SOURCES)}
+    order = {s: i for i, s in enumerate(_ORDER)}
     for (source, start, snr), rs in sorted(
         cells.items(), key=lambda kv: (kv[0][1], -kv[0][2], order[kv[0][0]])
     ):
