@@ -35,9 +35,10 @@ significant at ``threshold``, the detection was a false alarm (``false_alarms``)
 significances of the neighbourhood that passed stop counting, the local method's
 measurements join the search's, and the search resumes where it stood.
 
-With ``posterior`` (``auto``'s default) and an objective that knows how its echo's
+With ``posterior`` (``auto``'s default) and an objective that says how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
-probe), for an echo predicted at 15 dB or more, the search beyond x0's first ring is
+probe, for an echo predicted at 15 dB or more; a recording or a rig, whose echo
+amplitude is unknown, at any SNR), the search beyond x0's first ring is
 Bayesian instead
 (:mod:`echocal.calibrate.posterior_search`): every significance — below the threshold
 too — updates a posterior over where the optimum is, the next point is where a detection
@@ -72,6 +73,7 @@ from echocal.calibrate._options import (
     suggestion,
 )
 from echocal.calibrate.base import Optimizer
+from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.posterior_search import (
     GIVE_UP_EVIDENCE,
@@ -212,12 +214,13 @@ class Acquisition(Optimizer):
         start's echo is, and is searched beyond it by the passes returned, in place of
         planned passes too coarse to see it.  Called once.
     echo_likelihood : callable returning how the detector's significance is distributed
-        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`)
-        or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`, which the
-        simulator gives.
+        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`,
+        or :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
+        amplitude) or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`.
     posterior : (true or false) once x0 and its first ring saw no echo, and given a
         ``detector``, an ``echo_likelihood`` (asked then, once) whose echo's predicted SNR
-        is at least :data:`~echocal.calibrate.posterior_search.MIN_SNR_DB` (15 dB) and
+        is at least :data:`~echocal.calibrate.posterior_search.MIN_SNR_DB` (15 dB) or not
+        known (hypotheses over its amplitude) and
         ``batch`` 1, search by the posterior over the optimum instead of the lattice
         (:mod:`echocal.calibrate.posterior_search`): every significance, below the
         threshold too, updates it, and the next point is where a detection is most
@@ -256,7 +259,7 @@ class Acquisition(Optimizer):
         max_spacing: float | None = None,
         passes: Sequence[float] = (),
         replan: Callable[[], Sequence[float] | None] | None = None,
-        echo_likelihood: Callable[[], EchoLikelihood | None] | None = None,
+        echo_likelihood: Callable[[], EchoLikelihood | EchoHypotheses | None] | None = None,
         posterior: bool = False,
         move_time: Callable[[FloatArray], FloatArray | None] | None = None,
         bounds: ArrayLike | None = None,

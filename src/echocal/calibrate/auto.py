@@ -41,7 +41,10 @@ meets them:
    at 15 dB or more, the search follows the posterior over the optimum
    (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): every A-scan's
    significance updates it, and the next point is where a detection is most likely.
-   Below 15 dB, and without a probe model (a recording, a rig), the passes of item 3;
+   On a recording or a rig, whose echo amplitude is unknown, at any SNR, over
+   hypotheses on that amplitude (and on the lobe's width where no setup gives its shape:
+   :mod:`echocal.calibrate.echo_hypotheses`).  Below 15 dB on the simulator, the
+   passes of item 3;
 10. a detection the local method does not confirm within its first
    :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN` (8) measurements — none of them,
    nor all together, significant at the detection threshold — is a false alarm: the
@@ -54,9 +57,11 @@ optimum with 90 % probability (:mod:`echocal.calibrate.uncertainty`: the delta-m
 spread of a log-quadratic's peak fitted to the measurements on the lobe's top, plus the
 estimate's distance to that peak).
 
-Without a probe model the far search spends the 1° lattice first; ``fine_radius=1.0``
-drops it when the SNR is known to be ≥ 20 dB.  When the start is known to be near the
-echo, ``method="model-based"`` saves the acquisition.
+In tilt angles a recording or a rig is searched by the posterior too (item 9); in
+(azimuth, co-elevation), or with ``posterior=False``, a search without a probe model spends
+the 1° lattice first; ``fine_radius=1.0`` drops it when the SNR is known to be ≥ 20 dB.
+When the start is known to be near the echo, ``method="model-based"`` saves the
+acquisition.
 
 Evidence: ``benchmarks/bench_calibration.py`` and the pages of the documentation's
 benchmarks section (the summary, ``auto``, lower bound, curved parts), which also record
@@ -97,7 +102,8 @@ AUTO_SEARCH: dict[str, Any] = {
 """auto's search [deg] — its only difference from ``acquisition``: the 1° lattice
 within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the
 evidence above and :func:`~echocal.calibrate.search_pattern.search_rings`), or, on a
-simulated probe with an echo of 15 dB or more, the posterior search (item 9), unless the
+simulated probe with an echo of 15 dB or more, or a recording or a rig, the posterior
+search (item 9), unless the
 caller sets where to search (``passes``, ``growth``, ``max_spacing`` or ``fine_radius``
 without ``posterior=True``).  The passes are
 the default for an objective that cannot size them from its probe

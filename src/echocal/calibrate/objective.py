@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, finite_float, nonnegative_float, one_of, positive_int
+from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.posterior_search import EchoLikelihood
 from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
@@ -233,12 +234,13 @@ class Objective:
         probe)."""
         return None
 
-    def echo_likelihood(self) -> EchoLikelihood | None:
+    def echo_likelihood(self) -> EchoLikelihood | EchoHypotheses | None:
         """How each measurement's echo significance is distributed versus misalignment
-        (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`), against the noise
-        measured so far, when the objective knows its probe and its units — for a
-        Bayesian search of a lost echo — else None (the base class: an analytic function
-        has no probe)."""
+        (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`, or
+        :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
+        amplitude), against the noise measured so far, when the objective measures A-scans
+        — for a Bayesian search of a lost echo — else None (the base class: an analytic
+        function has no echo)."""
         return None
 
     def lobe_template(self) -> LobeTemplate | None:

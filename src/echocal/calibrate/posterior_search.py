@@ -47,6 +47,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -54,6 +55,9 @@ from scipy.special import chndtr, i0e, log_ndtr, logsumexp
 
 from echocal.calibrate._fd import FloatArray
 from echocal.errors import EchocalValueError
+
+if TYPE_CHECKING:
+    from echocal.calibrate.echo_hypotheses import EchoHypotheses
 
 __all__ = [
     "GIVE_UP_EVIDENCE",
@@ -188,7 +192,11 @@ class PosteriorSearch:
     ----------
     centre : [deg] x0, shape ``(2,)``.
     max_radius : [deg] the optimum lies within this distance of ``centre`` (the prior).
-    likelihood : the echo's :class:`EchoLikelihood`.
+    likelihood : the echo's :class:`EchoLikelihood`, or
+        :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` when its amplitude (and
+        lobe width) are unknown: the posterior is then over the optimum and the
+        hypothesis, every measurement updates each hypothesis's likelihood, and the
+        detection chance and the evidence sum over the hypotheses.
     bounds : [deg] shape ``(2, 2)``: the next point lies inside, and the evidence counts
         the optima inside (:meth:`log_evidence`).
     """
@@ -197,10 +205,16 @@ class PosteriorSearch:
         self,
         centre: FloatArray,
         max_radius: float,
-        likelihood: EchoLikelihood,
+        likelihood: EchoLikelihood | EchoHypotheses,
         bounds: FloatArray,
     ) -> None:
         self.likelihood = likelihood
+        if isinstance(likelihood, EchoLikelihood):
+            self._models: tuple[EchoLikelihood, ...] = (likelihood,)
+            self._log_weights = np.zeros(1)
+        else:
+            self._models = likelihood.likelihoods
+            self._log_weights = likelihood.log_weights
         detect = likelihood.detection_probability()
         half = likelihood.angles[detect >= 0.5]
         cell = min(_CELL, 0.25 * float(half[-1])) if half.size else _CELL
@@ -218,7 +232,7 @@ class PosteriorSearch:
         self._candidate = inside_x & inside_y
         log_prior = np.where(rho <= max_radius, -np.log(np.maximum(rho, cell)), -np.inf)
         self._log_prior = log_prior - _logsumexp(log_prior)
-        self._log_like = np.zeros_like(rho)
+        self._log_like = np.zeros((len(self._models), *rho.shape))  # per hypothesis
         # the evidence counts the optima inside the bounds: mass beyond them is never
         # measured, so it would neither deplete nor let the search give up
         self._measurable = np.where(self._candidate, self._log_prior, -np.inf)
@@ -228,28 +242,35 @@ class PosteriorSearch:
                 "bounds: move the start inside them"
             )
         self._measurable -= _logsumexp(self._measurable)
-        reach = likelihood.angles[detect > _KERNEL_FLOOR]
+        self._kernels = [self._kernel_of(model, cell) for model in self._models]
+        self._reach = float(likelihood.angles[-1])
+
+    @staticmethod
+    def _kernel_of(model: EchoLikelihood, cell: float) -> FloatArray:
+        """P_detect at each offset [cells] from the optimum out to its reach, square."""
+        detect = model.detection_probability()
+        reach = model.angles[detect > _KERNEL_FLOOR]
         k = int(np.ceil((float(reach[-1]) if reach.size else cell) / cell))
         offsets = np.arange(-k, k + 1) * cell
         kernel_distance = np.hypot(*np.meshgrid(offsets, offsets))
-        self._kernel = np.interp(kernel_distance, likelihood.angles, detect, right=0.0)
-        self._reach = float(likelihood.angles[-1])
+        return np.asarray(np.interp(kernel_distance, model.angles, detect, right=0.0))
 
     def update(self, points: FloatArray, significances: FloatArray) -> None:
         """Fold measurements in: ``points`` [deg] shape ``(k, 2)``, their detection
         significances ``(k,)`` [σ] (NaN: no evidence, skipped)."""
-        like = self.likelihood
+        models = self._models
         for (px, py), g in zip(np.asarray(points), np.asarray(significances), strict=True):
             if not np.isfinite(g):
                 continue
-            ratio = like.log_ratio(like.peak_of_significance(float(g)))
+            peak = models[0].peak_of_significance(float(g))  # one detector for all
             cols = np.abs(self._x[0] - px) <= self._reach
             rows = np.abs(self._y[:, 0] - py) <= self._reach
             if not (cols.any() and rows.any()):
                 continue
             dist = np.hypot(self._x[0, cols][None, :] - px, self._y[rows, 0][:, None] - py)
             block = np.ix_(rows, cols)
-            self._log_like[block] += np.interp(dist, like.angles, ratio, right=0.0)
+            for log_like, like in zip(self._log_like, models, strict=True):
+                log_like[block] += np.interp(dist, like.angles, like.log_ratio(peak), right=0.0)
 
     def exclude(self, point: FloatArray) -> None:
         """Never propose the cell of ``point`` [deg] (2,) again (it measured NaN: out of
@@ -258,26 +279,46 @@ class PosteriorSearch:
         row = int(np.argmin(np.abs(self._y[:, 0] - point[1])))
         self._candidate[row, col] = False
 
+    def _log_joint(self) -> FloatArray:
+        """ln of the posterior over (hypothesis, cell), normalized, shape ``(k, m, m)``."""
+        log_joint = self._log_weights[:, None, None] + self._log_prior + self._log_like
+        return np.asarray(log_joint - _logsumexp(log_joint), dtype=np.float64)
+
     def log_posterior(self) -> FloatArray:
-        """ln of the posterior over the grid's cells (normalized), shape ``(m, m)``."""
-        log_post = self._log_prior + self._log_like
-        return np.asarray(log_post - _logsumexp(log_post), dtype=np.float64)
+        """ln of the posterior over the grid's cells (normalized; the hypotheses on the
+        echo's amplitude marginalized), shape ``(m, m)``."""
+        if len(self._models) == 1:
+            log_post = self._log_prior + self._log_like[0]
+            return np.asarray(log_post - _logsumexp(log_post), dtype=np.float64)
+        return np.asarray(logsumexp(self._log_joint(), axis=0), dtype=np.float64)
 
     def log_evidence(self) -> float:
-        """ln Σ_c π(c) Π LR(c) over the cells inside the bounds (π the prior restricted
-        to them): the log Bayes factor of a measurable optimum drawn from the prior against
-        no echo within reach of any measurement."""
-        return _logsumexp(self._measurable + self._log_like)
+        """ln Σ_h w_h Σ_c π(c) Π LR_h(c) over the cells inside the bounds (π the prior
+        restricted to them, w_h the hypotheses' prior weights): the log Bayes factor of a
+        measurable optimum drawn from the prior against no echo within reach of any
+        measurement."""
+        if len(self._models) == 1:
+            return _logsumexp(self._measurable + self._log_like[0])
+        return _logsumexp(self._log_weights[:, None, None] + self._measurable + self._log_like)
 
     def detection_chances(self) -> FloatArray:
         """P(detect) of a measurement at each cell under the posterior, shape ``(m, m)``
-        (0 outside the bounds)."""
+        (0 outside the bounds): the posterior convolved with each hypothesis's detection
+        kernel, summed (hypotheses holding below 10⁻⁶ of the posterior left out)."""
         from scipy.signal import fftconvolve  # lazy: scipy.signal costs a start ~1 CPU-s
 
-        log_post = self.log_posterior()
-        post = np.exp(log_post - log_post.max())
-        post /= post.sum()
-        chance = fftconvolve(post, self._kernel, mode="same")
+        if len(self._models) == 1:
+            log_post = self.log_posterior()
+            post = np.exp(log_post - log_post.max())
+            post /= post.sum()
+            chance = fftconvolve(post, self._kernels[0], mode="same")
+        else:
+            joint = np.exp(self._log_joint())
+            mass = joint.sum(axis=(1, 2))
+            chance = sum(
+                fftconvolve(joint[h], self._kernels[h], mode="same")
+                for h in np.flatnonzero(mass >= 1e-6 * mass.max())
+            )
         return np.where(self._candidate, np.clip(chance, 0.0, 1.0), 0.0)
 
     def next_point(

@@ -96,7 +96,7 @@ class CalibrationResult:
         for which ``search_passes`` are sized; None when ``search_passes`` is.
     posterior_search : the acquisition searched beyond x0's first ring by the posterior
         over the optimum (:mod:`echocal.calibrate.posterior_search`: ``auto`` on a
-        simulated probe), not on passes.
+        simulated probe, a recording or a rig), not on passes.
     final_value : [energy units] the mean of the final measurements at ``x`` (counted in
         ``n_measurements``; ``final_check`` of them), None when the run did not measure
         its estimate.

@@ -211,6 +211,7 @@ def _on_instrument(
     from echocal.measurement.hardware import HardwareSource
     from echocal.measurement.objective import SourceObjective
     from echocal.provenance import file_digest
+    from echocal.setups import load_setup
 
     option = "--rig" if rig is not None else "--instrument"
     host, port = _parse_address(instrument) if instrument is not None else ("", 0)
@@ -262,6 +263,7 @@ def _on_instrument(
             pulse=pulse,
             parameterization=parameterization,
             gate=chosen,
+            twin=load_setup(setup),  # the lobe's shape for the posterior search
         )
         tally.logged = lambda: objective.n_measurements
         source = {
@@ -373,6 +375,7 @@ def _on_replay(
             parameterization=parameterization,
             bounds=bounds,
             gate=chosen,
+            twin=recording.recorded_setup(),  # the lobe's shape for the posterior search
         )
         result = run(objective, start, seed)
         maps = RecordingMap(recording, index, pulse, objective.metric, parameterization, chosen)

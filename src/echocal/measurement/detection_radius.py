@@ -211,6 +211,16 @@ class LobeProfile:
             snr_db=float(snr_for_noise_sigma(self.reference, white, window, setup.pulse)),
         )
 
+    def peak_shape(self) -> np.ndarray | None:
+        """The profile's peaks averaged over its directions, relative to normal
+        incidence's, shape ``(n,)`` (1 at 0°): the lobe's shape for a source whose echo
+        amplitude is unknown (:func:`~echocal.calibrate.echo_hypotheses.scaled_lobe`).
+        None when the lobe does not peak at normal incidence (as :meth:`echo_likelihood`)."""
+        top = float(np.mean(self.peaks[:, 0]))
+        if not top > 0.0 or float(self.peaks.max()) > _PEAK_AT_NORMAL * top:
+            return None
+        return np.asarray(self.peaks.mean(axis=0) / top, dtype=np.float64)
+
     def radius(
         self,
         snr_db: float,

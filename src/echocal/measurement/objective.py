@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 
 from echocal._validate import finite_array
 from echocal.ascan import AScan
+from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.objective import Objective, as_points
 from echocal.calibrate.posterior_search import EchoLikelihood
@@ -380,36 +381,65 @@ class SourceObjective(Objective):
             self.search_snr_db = snr
         return passes
 
-    def echo_likelihood(self) -> EchoLikelihood | None:
-        """The simulated probe's matched-filter peak versus misalignment at this position,
-        against the receiver noise σ measured so far
-        (:meth:`~echocal.measurement.detection_radius.LobeProfile.echo_likelihood`), of
-        the colour of a simulated bench's receiver noise (its AR model: the detector
-        calibrated on it, the echo's effective SNR): what a Bayesian search of a lost echo
-        weighs each significance with.  Only for
-        the simulator measured with its own pulse, one A-scan per point, with tilt
-        angles (the profile's misalignments), ungated; None otherwise — a rig's twin
-        does not give the echo's amplitude in the rig's units — before a noisy A-scan,
-        and where the probe cannot see the part."""
-        from echocal.measurement.detection_radius import cached_lobe_profile
+    def echo_likelihood(self) -> EchoLikelihood | EchoHypotheses | None:
+        """How each A-scan's matched-filter peak is distributed versus misalignment, against
+        the receiver noise σ measured so far: what a Bayesian search of a lost echo weighs
+        each significance with.  Only with tilt angles (the lobe's misalignments), one
+        A-scan per point, ungated, and after a noisy A-scan; None otherwise.
 
-        twin = self.twin
-        if (
-            twin is None
-            or not self._own_units()
-            or self.gate is not None
-            or self.repeats != 1
-            or self.parameterization != "tilt"
-        ):
+        * The simulator measured with its own pulse: its probe's lobe at its known
+          amplitude
+          (:meth:`~echocal.measurement.detection_radius.LobeProfile.echo_likelihood`), of
+          the colour of a simulated bench's receiver noise (its AR model: the detector
+          calibrated on it, the echo's effective SNR); None where the probe cannot see
+          the part or its lobe does not peak at normal incidence.
+        * A rig or a recording (any other source): the echo's amplitude in its units is
+          unknown, so :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over it —
+          the lobe's shape from the ``twin``'s physics when there is one
+          (:func:`~echocal.calibrate.echo_hypotheses.scaled_lobe`; None where the twin's
+          lobe does not peak at normal incidence), else a Lorentzian of unknown width
+          (:func:`~echocal.calibrate.echo_hypotheses.lorentzian_lobes`) — with the
+          detector of the A-scans' own sampling and length."""
+        if self.gate is not None or self.repeats != 1 or self.parameterization != "tilt":
             return None
         sigma = self._receiver_sigma()
         if not sigma > 0.0:  # no noise measured yet
             return None
+        if not self._own_units():
+            return self._unknown_amplitude(sigma)
+        from echocal.measurement.detection_radius import cached_lobe_profile
+
+        assert self.twin is not None
         try:
-            profile = cached_lobe_profile(twin, self.position)
+            profile = cached_lobe_profile(self.twin, self.position)
             return profile.echo_likelihood(sigma, noise_ar=self._noise_ar)
         except EchocalError:  # no normal incidence, no echo in the window, ...
             return None
+
+    def _unknown_amplitude(self, sigma: float) -> EchoHypotheses | None:
+        """:meth:`echo_likelihood` for a source whose echo amplitude is unknown (a rig, a
+        recording), against per-sample noise σ [a.u.]."""
+        from echocal.calibrate.echo_hypotheses import lorentzian_lobes, scaled_lobe
+        from echocal.constants import ECHO_THRESHOLD
+
+        scan = self._last_scan
+        if scan is None:
+            return None
+        detector = _detector(self.pulse, scan.fs, scan.n_samples, self._noise_ar)
+        scale = sigma * detector.noise_gain
+        threshold = detector.threshold_peak(sigma, ECHO_THRESHOLD) / scale
+        if self.twin is None:
+            return lorentzian_lobes(detector.n_cells, threshold)
+        from echocal.measurement.detection_radius import cached_lobe_profile
+
+        try:
+            profile = cached_lobe_profile(self.twin, self.position)
+        except EchocalError:  # the twin cannot see the part from here: shape unknown
+            return lorentzian_lobes(detector.n_cells, threshold)
+        shape = profile.peak_shape()
+        if shape is None:  # the lobe does not peak at normal incidence (two humps)
+            return None
+        return scaled_lobe(profile.angles, shape, detector.n_cells, threshold)
 
     def lobe_template(self) -> LobeTemplate | None:
         """The simulated probe's pseudo-energy lobe at this position (the source, or the

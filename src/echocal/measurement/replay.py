@@ -53,7 +53,7 @@ import json
 import os
 from collections.abc import Callable, Hashable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,6 +66,9 @@ from echocal.geometry import PARAMETERIZATIONS, Pose, orientation_to_tilt
 from echocal.measurement.base import BaseSource
 from echocal.measurement.limits import PositionerLimits
 from echocal.netcdf import open_netcdf
+
+if TYPE_CHECKING:
+    from echocal.measurement.virtual import VirtualSetup
 
 __all__ = ["DIMS", "FORMAT", "MODES", "REQUIRED_COORDS", "VARIABLES", "ReplaySource"]
 
@@ -329,6 +332,36 @@ class ReplaySource(BaseSource):
                     )
             self._metric_cache[key] = out
         return self._metric_cache[key]
+
+    def recorded_setup(self) -> VirtualSetup | None:
+        """The simulated setup the recording was made with, rebuilt from the configuration
+        ``echocal record`` stores (``source_info["setup"]["config"]``; a setup file's
+        relative paths resolved next to it): the ``twin`` of an objective on this
+        recording, whose physics gives the lobe's shape.  None when the file stores no
+        configuration, or one that no longer builds."""
+        import warnings
+
+        from echocal.errors import EchocalError
+        from echocal.setups import SetupConfig, build_setup
+
+        stored = self.source_info.get("setup")
+        config = stored.get("config") if isinstance(stored, dict) else None
+        if not isinstance(config, dict):
+            return None
+        # JSON stores an unbounded positioner axis as nulls: left out, it takes the default
+        # (unbounded) again; limits do not shape the lobe
+        axes = config.get("positioner")
+        if isinstance(axes, dict):
+            kept = {k: v for k, v in axes.items() if not (isinstance(v, list) and None in v)}
+            config = {**config, "positioner": kept}
+        name = stored.get("setup") if isinstance(stored, dict) else None
+        base = Path(name).parent if isinstance(name, str) and name.endswith(".toml") else Path.cwd()
+        try:
+            with warnings.catch_warnings():  # the stored config lists every default field
+                warnings.simplefilter("ignore")
+                return build_setup(SetupConfig.model_validate(config), base_dir=base)
+        except (EchocalError, ValueError):
+            return None
 
     def grid_step(self, parameterization: str) -> float | None:
         """[deg] the largest step between neighbouring recorded orientations, in the angles

@@ -1,0 +1,215 @@
+"""``auto``'s posterior search on a recording and on the emulated rig, against the
+simulator on the same seeds (issue 44).
+
+Run from the repository root (record the grid first: 16,762 A-scans, a 0.49 GB file,
+11 minutes on a busy 2-core machine)::
+
+    echocal record --setup immersion-5mhz --snr 30 --seed 30 \\
+        --azimuth -180:180:289 --coelevation 0:14.25:58 --out rec30.nc
+    nice -n 10 python benchmarks/bench_posterior_sources.py --replay30 rec30.nc \\
+        --runs 50 --jsonl sources.jsonl
+    python benchmarks/bench_posterior_sources.py --summarize sources.jsonl
+
+Cells: ``immersion-5mhz`` (wave model) at its reference position, tilt parameterization,
+far (5–20°) and near (1–3°) starts from the true optimum, 30 and 20 dB, with
+:mod:`bench_calibration`'s seeding rule (run indices 0..N−1).  Each run is made on
+
+* ``simulator``: the setup itself (its probe's lobe at its known amplitude);
+* ``rig``: the same setup behind :class:`~echocal.measurement.InstrumentServer` (the
+  emulated rig, over TCP), measured through a :class:`~echocal.measurement.HardwareSource`
+  whose objective knows the setup only as its ``twin`` (the lobe's shape; the amplitude
+  unknown); ``rig-no-setup``: the same without a twin (Lorentzian lobes of unknown
+  width);
+* ``replay``: a recording of the setup (``random-repeat``, seeded by the run), whose
+  objective's twin is the setup the file stores
+  (:meth:`~echocal.measurement.ReplaySource.recorded_setup`).
+
+The simulator and the rig use :mod:`bench_calibration`'s tilt box (±21.5°); the replay
+and its own ``simulator-box`` runs use the ±10° tilt box the recording covers (its grid:
+co-elevation 0–14.25° in 0.25° steps, azimuth in 1.25° steps — 0.09° of arc at the
+optimum's 4°, 0.31° at the box's corner — one A-scan per pose, the nearest grid pose
+answers).
+Per cell: share within 0.1° at the budget and in at most 60 measurements, measurements to
+0.1° (median / p90 / max), the measurements until the acquisition handed an echo to the
+local method (``echo found after``: the search's own count), the final error, and the
+share of runs the posterior search ran in (``posterior``; the others saw the echo from
+x0's first ring).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # before numpy is imported
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _calibration_cases import PARAM  # noqa: E402
+from bench_calibration import (  # noqa: E402
+    _case,
+    _estimates_ours,
+    measurements_to,
+    run_seed,
+    start_point,
+    tilt_bounds,
+)
+
+from echocal.calibrate import calibrate  # noqa: E402
+from echocal.evaluation import angular_error  # noqa: E402
+from echocal.geometry import Pose  # noqa: E402
+from echocal.measurement import (  # noqa: E402
+    HardwareSource,
+    InstrumentServer,
+    ReceiverSettings,
+    ReplaySource,
+    SourceObjective,
+)
+
+CASE = "immersion-5mhz"
+BUDGET = 100
+"""Measurements per run (the estimate is read after each)."""
+BOX = np.array([[-10.0, 10.0], [-10.0, 10.0]])
+"""[deg] the tilt box the recording covers (co-elevation up to 14.1°)."""
+SOURCES = ("simulator", "rig", "rig-no-setup", "simulator-box", "replay")
+_ORDER = (*SOURCES, "rig-before")  # the table also shows runs of an earlier version
+
+
+def _setup(snr: float, seed: int) -> Any:
+    base = _case(CASE).setup
+    return dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
+
+
+_REPLAYS: dict[str, tuple[ReplaySource, Any]] = {}
+
+
+def _replay(path: str) -> tuple[ReplaySource, Any]:
+    """The recording at ``path`` (``random-repeat``), opened once per process (its A-scans
+    are read into memory at the first measurement), and the setup it stores."""
+    if path not in _REPLAYS:
+        recording = ReplaySource.open(path, mode="random-repeat")
+        _REPLAYS[path] = (recording, recording.recorded_setup())
+    return _REPLAYS[path]
+
+
+def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -> dict[str, Any]:
+    """One seeded run of ``auto`` on ``source``; its error after each measurement."""
+    _, pos, truth, optima, _ = _case(CASE)
+    seed = run_seed(CASE, start, snr, run)
+    setup = _setup(snr, seed)
+    bounds = BOX if source in ("simulator-box", "replay") else tilt_bounds(setup)
+    x0 = start_point(truth, start, seed, bounds)
+    t0 = time.process_time()
+    kw: dict[str, Any] = {"parameterization": PARAM, "budget": BUDGET, "bounds": bounds}
+    call = {"x0": x0, "budget": BUDGET, "max_iter": 10_000, "settle": None, "rng": seed}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if source in ("simulator", "simulator-box"):
+            res = calibrate(SourceObjective(setup, pos, **kw), "auto", **call)
+        elif source in ("rig", "rig-no-setup"):
+            twin = _setup(snr, 0) if source == "rig" else None
+            with InstrumentServer(setup, initial_pose=Pose(*pos)) as server:
+                with HardwareSource.connect(*server.address) as rig:
+                    objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)
+                    res = calibrate(objective, "auto", **call)
+        else:
+            assert replay is not None
+            recording, twin = _replay(replay)
+            recording.reseed(seed)
+            objective = SourceObjective(recording, pos, pulse=setup.pulse, twin=twin, **kw)
+            res = calibrate(objective, "auto", **call)
+    est = _estimates_ours(res, x0, BUDGET)
+    errors = np.min([angular_error(est, t, PARAM) for t in optima], axis=0)
+    return {
+        "source": source,
+        "start": start,
+        "snr": snr,
+        "run": run,
+        "errors": [round(float(e), 6) for e in errors],
+        "posterior": bool(res.posterior_search),
+        "found_at": res.acquisition_measurements,
+        "status": int(res.status),
+        "false_alarms": int(res.false_alarms),
+        "cpu_s": time.process_time() - t0,
+    }
+
+
+def summarize(runs: list[dict[str, Any]]) -> str:
+    """The Markdown table of the runs, one row per (source, start, SNR)."""
+    cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
+    for r in runs:
+        cells.setdefault((r["source"], r["start"], r["snr"]), []).append(r)
+    lines = [
+        "| source | start | SNR | runs | posterior | within 0.1° at 100 | in ≤ 60 "
+        "| median / p90 / max to 0.1° | echo found after (median / p90) "
+        "| final error (median / p90) | CPU-s/run |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    order = {s: i for i, s in enumerate(_ORDER)}
+    for (source, start, snr), rs in sorted(
+        cells.items(), key=lambda kv: (kv[0][1], -kv[0][2], order[kv[0][0]])
+    ):
+        errs = np.array([r["errors"] for r in rs])
+        n_to = np.array([measurements_to(e, 0.1) for e in errs])
+        med, p90 = np.median(n_to), np.percentile(n_to, 90, method="higher")
+        fmt = "/".join("∞" if not np.isfinite(v) else f"{v:g}" for v in (med, p90, n_to.max()))
+        found = np.array([np.inf if r["found_at"] is None else r["found_at"] for r in rs])
+        seen = "/".join(
+            "∞" if not np.isfinite(v) else f"{v:g}"
+            for v in (np.median(found), np.percentile(found, 90, method="higher"))
+        )
+        lines.append(
+            f"| {source} | {start} | {snr:g} dB | {len(rs)} "
+            f"| {np.mean([r['posterior'] for r in rs]):.0%} "
+            f"| {np.mean(errs[:, -1] <= 0.1):.1%} | {np.mean(n_to <= 60):.1%} | {fmt} | {seen} "
+            f"| {np.median(errs[:, -1]):.3f}° / {np.percentile(errs[:, -1], 90):.3f}° "
+            f"| {np.mean([r['cpu_s'] for r in rs]):.1f} |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=50)
+    parser.add_argument("--first", type=int, default=0, help="first run index")
+    parser.add_argument("--sources", default=",".join(SOURCES))
+    parser.add_argument("--starts", default="far,near")
+    parser.add_argument("--snr", default="30,20")
+    parser.add_argument("--replay30", help="the recording at 30 dB (for source replay)")
+    parser.add_argument("--replay20", help="the recording at 20 dB (for source replay)")
+    parser.add_argument("--jsonl", type=Path, help="append every run here as it ends")
+    parser.add_argument("--summarize", type=Path, help="print the table of a JSONL and stop")
+    args = parser.parse_args(argv)
+    if args.summarize is not None:
+        lines = args.summarize.read_text(encoding="utf-8").splitlines()
+        print(summarize([json.loads(line) for line in lines if line.strip()]))
+        return 0
+    replays = {30.0: args.replay30, 20.0: args.replay20}
+    runs = []
+    for run in range(args.first, args.first + args.runs):
+        for start in args.starts.split(","):
+            for snr in (float(s) for s in args.snr.split(",")):
+                for source in args.sources.split(","):
+                    if source == "replay" and replays.get(snr) is None:
+                        continue
+                    r = run_one(source, start, snr, run, replays.get(snr))
+                    runs.append(r)
+                    if args.jsonl is not None:
+                        with args.jsonl.open("a", encoding="utf-8") as f:
+                            f.write(json.dumps(r) + "\n")
+    print(summarize(runs))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
