@@ -163,7 +163,8 @@ def test_interface_echoes_and_first_multiples_match_the_exact_stack(
     - every gate, at 0° and 1°: 1.5 % of the train's largest echo.  That is the
       reference's own floor: 0.5 µs before the front wall's echo its envelope stands
       0.8 % of the front wall above the pulse's own tail (steel / acrylic / aluminium:
-      the long ringing folded back by its 20 µs period, or its quadrature), of the size
+      the long ringing folded back by its 20 µs period; the damped comparison below
+      removes it), of the size
       of the weak echoes' residuals (steel /
       acrylic / aluminium: interface-2, 6 % of the front wall, 0.8 % of it off; at 1°
       1.1 % on the steel's ringing)."""
@@ -344,7 +345,7 @@ def test_a_converted_echo_arrives_at_its_ray_time_within_one_sample() -> None:
 NEAR = 0.015  # [m] the probe's distance: the damped sum needs 1/Δf ≥ 2 · 2d/c (below)
 DAMPING = 3e5  # [1/s] ε: e^{−ε/Δf} = e^{−12} on what folds back
 STEP = 25e3  # [Hz] Δf: a period of 40 µs, twice the front wall's time
-MARGIN = 0.6e-6  # [s] a gate ends this long (4σ_t) before the first path the model leaves out
+MARGIN = 0.5e-6  # [s] a gate ends this long (3.3σ_t) before the first path the model leaves out
 
 
 def _damped_scans(
@@ -439,9 +440,11 @@ def _legs_of(turns: tuple[int, ...]) -> list[int]:
     ("stack", "tilt", "order", "shear_legs", "per_gate"),
     [
         pytest.param("acrylic-aluminium", 0.0, 3, 1, False, marks=pytest.mark.slow),
-        pytest.param("acrylic-aluminium", 1.0, 2, 2, False, marks=pytest.mark.slow),
+        pytest.param("acrylic-aluminium", 1.0, 3, 2, False, marks=pytest.mark.slow),
         pytest.param("coating-on-steel", 0.0, 3, 1, False, marks=pytest.mark.slow),
+        pytest.param("coating-on-steel", 1.0, 3, 2, False, marks=pytest.mark.slow),
         pytest.param("thin-coating", 0.0, 3, 1, True, marks=pytest.mark.slow),
+        pytest.param("thin-coating", 1.0, 3, 2, True, marks=pytest.mark.slow),
     ],
 )
 def test_every_echo_matches_the_exact_stack_within_one_percent_of_its_own_peak(
