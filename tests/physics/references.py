@@ -255,12 +255,12 @@ def pulse_echo_plane(
     al = np.deg2rad(tilt)
     if np.any(a * np.tan(np.abs(al)) >= d):
         raise ValueError("tilt too large: the face would cross the plane")
-    k = 2.0 * np.pi * f / c
+    k = 2.0 * np.pi * f / c  # complex at a complex frequency
     ka, kd = k * a, k * d
     s2a_max = float(np.max(np.abs(np.sin(2 * al))))
 
     # phi nodes: trapezoid on [0, pi] (half-weight ends) == periodic rule on 2pi
-    zphi = k * s2a_max * (d + 2 * a)
+    zphi = abs(k) * s2a_max * (d + 2 * a)
     n_full = int(accuracy * (zphi + 12.0 * zphi ** (1 / 3) + 16)) + 1
     n_half = max(8, (n_full + 1) // 2)
     phi = np.linspace(0.0, np.pi, n_half + 1)
@@ -272,7 +272,8 @@ def pulse_echo_plane(
 
     # theta panels of equal (over-estimated) phase, 16 GL nodes per 2 cycles
     th_f = np.linspace(0.0, np.pi / 2, 4001)
-    Phi = 2 * kd * (1 - np.cos(th_f)) + (4 * ka + kd * s2a_max) * np.sin(th_f) + 20 * th_f
+    ka_r, kd_r = abs(ka), abs(kd)
+    Phi = 2 * kd_r * (1 - np.cos(th_f)) + (4 * ka_r + kd_r * s2a_max) * np.sin(th_f) + 20 * th_f
     Phi = Phi + extra_phase * np.sin(th_f)
     n_pan = max(4, math.ceil(accuracy * Phi[-1] / (4 * np.pi)))
     edges = np.interp(np.linspace(0, Phi[-1], n_pan + 1), Phi, th_f)
@@ -298,12 +299,14 @@ def pulse_echo_plane(
         if reflection is not None:
             sa = np.sin(al)[:, None, None]
             ca = np.cos(al)[:, None, None]
-            cos_inc = np.abs(kx * sa + kz * ca) / k
+            # the direction cosine K.n/k (real, also at a complex frequency)
+            st_, ct_ = np.sin(t_)[None, :, None], np.cos(t_)[None, :, None]
+            cos_inc = np.abs(st_ * cphi[None, None, :] * sa + ct_ * ca)
             integ = integ * reflection(np.degrees(np.arccos(np.clip(cos_inc, 0.0, 1.0))))
         j0 = jinc(ka * np.sin(t_))
         out += np.einsum("tij,i,j->t", integ, w_ * j0, wphi)
 
-    if evanescent and reflection is None:
+    if evanescent and reflection is None and not np.iscomplexobj(f):
         vmax = np.arcsinh(20.0 / kd)
         v, wv = _gauss_legendre_panels(np.linspace(0, vmax, 5), 16)
         kap = k * np.cosh(v)[None, :, None]

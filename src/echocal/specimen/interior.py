@@ -66,10 +66,11 @@ INTERIOR_SHAPES = (
 MAX_BACK_WALL_ECHOES = 20
 """The largest back-wall multiple order a setup may ask for."""
 
-MAX_ECHO_PATHS = 400
+MAX_ECHO_PATHS = 800
+"""The most echo paths a layered plate may list (the count grows as N^(2M−1)); two layers
+at order 3 with two shear legs list 732."""
 MAX_SHEAR_LEGS = 2
 """The most mode-converted (shear) legs an echo path may have."""
-"""The most echo paths a layered plate may list (the count grows as N^(2M−1))."""
 
 
 def turn_sequences(n_layers: int, order: int) -> list[tuple[int, ...]]:
