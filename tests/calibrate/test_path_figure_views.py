@@ -179,3 +179,16 @@ def test_the_cli_draws_an_azimuth_coelevation_run_in_both(tmp_path, capsys, monk
     native, tilt = figures["path.png"].axes[:2]
     assert labels(native) == ("azimuth [deg]", "coelevation [deg]")
     assert labels(tilt) == ("tilt_x [deg]", "tilt_y [deg]")
+
+
+def test_drawing_the_tilt_panel_logs_no_limit_notice(azcoel_run, caplog):
+    # the tilt panel widens its set limits to keep a degree a degree (by design):
+    # matplotlib's notice of that ("Ignoring fixed x limits ...") reached the demo's screen
+    import io
+    import logging
+
+    result, cmap, truth = azcoel_run
+    fig = path_figure(cmap, {"run": result}, x0=result.iterates[0], truth=truth)
+    with caplog.at_level(logging.INFO, logger="matplotlib"):
+        fig.savefig(io.BytesIO(), format="png")
+    assert not [r for r in caplog.records if "fixed data aspect" in r.getMessage()]

@@ -11,6 +11,7 @@ or over no map at all.  They only read results.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -355,6 +356,20 @@ def _draw_map(ax: Any, cost_map: CostMap, values: FloatArray, frame: str | None,
         # a degree of tilt is a degree each way: the panel keeps its size, the limits grow
         ax.set_aspect("equal", adjustable="datalim")
     return mesh
+
+
+class _AspectNotice(logging.Filter):
+    """Drops matplotlib's notice "Ignoring fixed x limits to fulfill fixed data aspect with
+    adjustable data limits": the tilt view asks exactly that (its limits are set to the
+    map's cells, then widened so a degree of tilt is a degree each way), so on a report's
+    or the demo's screen it reads as a fault that is not there.  Every other matplotlib
+    message passes."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "to fulfill fixed data aspect" not in record.getMessage()
+
+
+logging.getLogger("matplotlib.axes._base").addFilter(_AspectNotice())
 
 
 def _draw_paths(
