@@ -47,7 +47,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -56,15 +56,13 @@ from scipy.special import chndtr, i0e, log_ndtr, logsumexp
 from echocal.calibrate._fd import FloatArray
 from echocal.errors import EchocalValueError
 
-if TYPE_CHECKING:
-    from echocal.calibrate.echo_hypotheses import EchoHypotheses
-
 __all__ = [
     "GIVE_UP_EVIDENCE",
     "MIN_SNR_DB",
     "MOTION_TIE",
     "TIE",
     "EchoLikelihood",
+    "Hypotheses",
     "PosteriorSearch",
     "rice_cdf",
     "rice_sf",
@@ -185,6 +183,31 @@ class EchoLikelihood:
         return rice_sf(self.threshold, self.echo)
 
 
+class Hypotheses(Protocol):
+    """Echo likelihoods under hypotheses on what a source does not say (its amplitude, the
+    lobe's width), with prior weights: what
+    :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` gives."""
+
+    @property
+    def likelihoods(self) -> tuple[EchoLikelihood, ...]:
+        """One likelihood per hypothesis, all on the same angles and threshold."""
+        ...
+
+    @property
+    def log_weights(self) -> FloatArray:
+        """ln of the hypotheses' prior weights, shape ``(k,)``, normalized."""
+        ...
+
+    @property
+    def angles(self) -> FloatArray:
+        """[deg] the misalignments the likelihoods are tabulated at, shape ``(n,)``."""
+        ...
+
+    def detection_probability(self) -> FloatArray:
+        """P(detection) at each angle under the prior, shape ``(n,)``."""
+        ...
+
+
 class PosteriorSearch:
     """The posterior over the optimum on a grid around ``centre``, and the next point.
 
@@ -205,7 +228,7 @@ class PosteriorSearch:
         self,
         centre: FloatArray,
         max_radius: float,
-        likelihood: EchoLikelihood | EchoHypotheses,
+        likelihood: EchoLikelihood | Hypotheses,
         bounds: FloatArray,
     ) -> None:
         self.likelihood = likelihood
