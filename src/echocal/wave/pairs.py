@@ -34,7 +34,7 @@ rule with :func:`echocal.wave.image.trapezoid_count` (β) nodes on the full circ
 exact below its harmonics; by the evenness half of them (φ in (0, π)) carry the sum.  R is
 symmetric in a ↔ b, so the pairs i ≤ j carry it, those off the diagonal weighted twice.
 
-**Time grid.** The pairs go onto the grid of :func:`echocal.wave.sir.accumulate_one_way`
+**Time grid.** The pairs go onto the grid of ``echocal.wave.sir.accumulate_one_way``
 (grid point g at t₀ + gΔ), projected onto B-splines of degree :data:`_DEGREE` rather than
 2: each pair's response starts like 1/√(t − t_start), whose aliases the quadratic splines
 do not hold down (the extra sinc^(degree − 2)(fΔ) is divided out downstream,
@@ -271,7 +271,7 @@ def _moments_to_grid(moments, nodes, first, last, grid):
 
 def smoothing(frequencies: FloatArray, dt: float) -> FloatArray:
     """The pair grid's B-spline transform relative to the quadratic B-splines of
-    :func:`echocal.wave.sir.accumulate_one_way`: sinc^(degree − 2)(fΔ) at ``frequencies``
+    ``echocal.wave.sir.accumulate_one_way``: sinc^(degree − 2)(fΔ) at ``frequencies``
     [Hz] (Δ = ``dt`` [s]); divide a pair grid's spectrum by it before the image form's
     transfer."""
     return np.asarray(np.sinc(frequencies * dt) ** (_DEGREE - 2), dtype=np.float64)
@@ -306,8 +306,11 @@ def pair_grid(
     delay: float = 0.0,
 ) -> FloatArray:
     """H(t) of a flat disc over a plane by the pair rule, on the image form's one-way
-    B-spline grid: the same grid as :func:`echocal.wave.sir.accumulate_one_way` summed
-    over the image face's nodes with unit weights would give.
+    B-spline grid: the same grid as ``echocal.wave.sir.accumulate_one_way`` summed
+    over the image face's nodes with unit weights would give.  The abscissae's rows of
+    pairs are split over threads like the face rule's nodes
+    (``echocal.wave.threads.split``), from ``echocal.wave.threads.PAIRS_PER_NODE``
+    × ``echocal.wave.threads.MIN_NODES_PER_THREAD`` pairs a thread.
 
     Parameters
     ----------
@@ -319,10 +322,6 @@ def pair_grid(
     t0, dt : [s] the time of grid point 0 and the spacing Δ.
     n_grid : grid points.
     delay : [s] a delay added to every path (an interior's equivalent path).
-
-    The abscissae's rows of pairs are split over threads like the face rule's nodes
-    (:func:`echocal.wave.threads.split`), from :data:`echocal.wave.threads.PAIRS_PER_NODE`
-    × :data:`echocal.wave.threads.MIN_NODES_PER_THREAD` pairs a thread.
 
     Returns
     -------
