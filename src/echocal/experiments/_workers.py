@@ -75,6 +75,7 @@ def stop_workers(pool: ProcessPoolExecutor, *, interrupted: bool) -> None:
         return
     processes = list(getattr(pool, "_processes", {}).values())  # no public API before 3.14
     results = getattr(pool, "_result_queue", None)  # shutdown() forgets it
+    manager = getattr(pool, "_executor_manager_thread", None)  # and this
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         with contextlib.suppress(OSError, ValueError):
@@ -83,6 +84,11 @@ def stop_workers(pool: ProcessPoolExecutor, *, interrupted: bool) -> None:
         with contextlib.suppress(OSError, ValueError, AssertionError):
             process.join(timeout=5)
     _unblock_result_reader(results)
+    # let the pool's manager thread end (and close its wake-up pipe) now: at exit,
+    # concurrent.futures wakes every manager thread still alive, and one closing its pipe
+    # meanwhile made that wake-up print "Exception ignored ... Bad file descriptor"
+    if isinstance(manager, threading.Thread) and manager is not threading.current_thread():
+        manager.join(timeout=5)
 
 
 def _unblock_result_reader(results: object) -> None:
