@@ -262,6 +262,37 @@ def case_setup(case: str, snr: float, seed: int) -> Any:
     return dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
 
 
+class SeededRun(NamedTuple):
+    """One run of a cell made ready by :func:`seeded_run` (every method of the cell gets
+    the same: common random numbers)."""
+
+    setup: Any
+    """the case's setup at the cell's SNR, with the run's noise stream"""
+    seed: int
+    position: np.ndarray
+    """[m] (3,)"""
+    bounds: np.ndarray
+    """[deg] (2, 2) the tilt box x0 lies in"""
+    x0: np.ndarray
+    """[deg] (2,) the start"""
+    optima: np.ndarray
+    """[deg] (k, 2) every equal optimum"""
+    gate: TimeGate | None
+
+
+def seeded_run(
+    case: str, start: str, snr: float, run: int, bounds: np.ndarray | None = None
+) -> SeededRun:
+    """Run ``run`` of the cell ``(case, start, snr)``: its seed (:func:`run_seed`), setup
+    (:func:`case_setup`) and start (:func:`start_point`) inside ``bounds`` [deg] (2, 2)
+    (default :func:`tilt_bounds`)."""
+    _, pos, truth, optima, gate = _case(case)
+    seed = run_seed(case, start, snr, run)
+    setup = case_setup(case, snr, seed)
+    box = tilt_bounds(setup) if bounds is None else bounds
+    return SeededRun(setup, seed, pos, box, start_point(truth, start, seed, box), optima, gate)
+
+
 # ----------------------------------------------------------------------------- one run
 def run_ours(
     objective: Any,
@@ -293,6 +324,13 @@ def error_history(estimates: np.ndarray, optima: np.ndarray) -> np.ndarray:
     """[deg] (n,): the angle between each estimate of ``estimates`` [deg] (n, 2) and the
     nearest of the equal ``optima`` [deg] (k, 2)."""
     return np.min([angular_error(estimates, t, PARAM) for t in optima], axis=0)
+
+
+def auto_errors(objective: Any, run: SeededRun, budget: int) -> tuple[Any, np.ndarray]:
+    """``auto`` on ``objective`` from ``run``'s start, to the ``budget``: (its result, its
+    error after n = 0..budget measurements [deg] (budget + 1,))."""
+    res = run_ours(objective, "auto", run.x0, budget, run.seed)
+    return res, error_history(_estimates_ours(res, run.x0, budget), run.optima)
 
 
 def rounded(errors: np.ndarray) -> list[float]:
@@ -376,14 +414,11 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     default :data:`BUDGET`); returns its error after each measurement."""
     case, start, snr, run, method, *rest = task
     budget = int(rest[0]) if rest else BUDGET
-    _, pos, truth, optima, gate = _case(case)
-    seed = run_seed(case, start, snr, run)
-    setup = case_setup(case, snr, seed)
+    setup, seed, pos, bounds, x0, optima, gate = seeded_run(case, start, snr, run)
     objective = ClockedObjective(
-        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup), gate=gate,
+        setup, pos, parameterization=PARAM, budget=budget, bounds=bounds, gate=gate,
         motion_aware=method == MOTION_AWARE,
     )  # fmt: skip
-    x0 = start_point(truth, start, seed, objective.bounds)
     t0 = time.perf_counter()
     status = ""
     acquisition = None

@@ -46,6 +46,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from contextlib import ExitStack  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -55,16 +56,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _calibration_cases import PARAM  # noqa: E402
 from _common import add_cell_arguments, append_jsonl, cell_runs, read_jsonl  # noqa: E402
 from bench_calibration import (  # noqa: E402
-    _case,
-    _estimates_ours,
+    auto_errors,
     case_setup,
-    error_history,
     measurements_to,
     rounded,
-    run_ours,
-    run_seed,
-    start_point,
-    tilt_bounds,
+    seeded_run,
 )
 
 from echocal.geometry import Pose  # noqa: E402
@@ -98,28 +94,25 @@ def _replay(path: str) -> tuple[ReplaySource, Any]:
 
 def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -> dict[str, Any]:
     """One seeded run of ``auto`` on ``source``; its error after each measurement."""
-    _, pos, truth, optima, _ = _case(CASE)
-    seed = run_seed(CASE, start, snr, run)
-    setup = case_setup(CASE, snr, seed)
-    bounds = BOX if source in ("simulator-box", "replay") else tilt_bounds(setup)
-    x0 = start_point(truth, start, seed, bounds)
+    box = BOX if source in ("simulator-box", "replay") else None
+    ready = seeded_run(CASE, start, snr, run, box)
+    setup, pos = ready.setup, ready.position
     t0 = time.process_time()
-    kw: dict[str, Any] = {"parameterization": PARAM, "budget": BUDGET, "bounds": bounds}
-    if source in ("simulator", "simulator-box"):
-        res = run_ours(SourceObjective(setup, pos, **kw), "auto", x0, BUDGET, seed)
-    elif source in ("rig", "rig-no-setup"):
-        twin = case_setup(CASE, snr, 0) if source == "rig" else None
-        with InstrumentServer(setup, initial_pose=Pose(*pos)) as server:
-            with HardwareSource.connect(*server.address) as rig:
-                objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)
-                res = run_ours(objective, "auto", x0, BUDGET, seed)
-    else:
-        assert replay is not None
-        recording, twin = _replay(replay)
-        recording.reseed(seed)
-        objective = SourceObjective(recording, pos, pulse=setup.pulse, twin=twin, **kw)
-        res = run_ours(objective, "auto", x0, BUDGET, seed)
-    errors = error_history(_estimates_ours(res, x0, BUDGET), optima)
+    kw: dict[str, Any] = {"parameterization": PARAM, "budget": BUDGET, "bounds": ready.bounds}
+    with ExitStack() as connected:
+        if source in ("simulator", "simulator-box"):
+            objective = SourceObjective(setup, pos, **kw)
+        elif source in ("rig", "rig-no-setup"):
+            twin = case_setup(CASE, snr, 0) if source == "rig" else None
+            server = connected.enter_context(InstrumentServer(setup, initial_pose=Pose(*pos)))
+            rig = connected.enter_context(HardwareSource.connect(*server.address))
+            objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)
+        else:
+            assert replay is not None
+            recording, twin = _replay(replay)
+            recording.reseed(ready.seed)
+            objective = SourceObjective(recording, pos, pulse=setup.pulse, twin=twin, **kw)
+        res, errors = auto_errors(objective, ready, BUDGET)
     return {
         "source": source,
         "start": start,

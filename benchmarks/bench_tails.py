@@ -44,18 +44,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _calibration_cases import BUDGET, PARAM  # noqa: E402
 from _common import add_cell_arguments, append_jsonl, cell_runs, read_jsonl  # noqa: E402
-from bench_calibration import (  # noqa: E402
-    _case,
-    _estimates_ours,
-    case_setup,
-    error_history,
-    measurements_to,
-    rounded,
-    run_ours,
-    run_seed,
-    start_point,
-    tilt_bounds,
-)
+from bench_calibration import auto_errors, measurements_to, rounded, seeded_run  # noqa: E402
 
 from echocal.calibrate.uncertainty import coverage  # noqa: E402
 from echocal.measurement import SourceObjective  # noqa: E402
@@ -73,16 +62,13 @@ def run_one(task: tuple[str, float, int]) -> dict[str, Any]:
     """One seeded ``auto`` run of a cell ``(start, snr, run)``: its error after each
     measurement, final error, reported uncertainty, status and false alarms."""
     start, snr, run = task
-    _, pos, truth, optima, gate = _case(CASE)
-    seed = run_seed(CASE, start, snr, run)
-    setup = case_setup(CASE, snr, seed)
+    ready = seeded_run(CASE, start, snr, run)
     objective = SourceObjective(
-        setup, pos, parameterization=PARAM, budget=BUDGET, bounds=tilt_bounds(setup), gate=gate
-    )
-    x0 = start_point(truth, start, seed, objective.bounds)
+        ready.setup, ready.position, parameterization=PARAM, budget=BUDGET, bounds=ready.bounds,
+        gate=ready.gate,
+    )  # fmt: skip
     t0 = time.process_time()
-    res = run_ours(objective, "auto", x0, BUDGET, seed)
-    errors = error_history(_estimates_ours(res, x0, BUDGET), optima)
+    res, errors = auto_errors(objective, ready, BUDGET)
     return {
         "start": start,
         "snr": snr,
