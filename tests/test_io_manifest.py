@@ -97,6 +97,8 @@ def test_the_keys_that_differ_from_the_recorded_fingerprint(tmp_path):
         "gate",
         "seed",
     ]
+    assert found.recorded(["budget", "gate", "x0"]) == 'budget=null; gate="front"; x0=[2.0, -1.0]'
+    assert found.recorded(["x0"], limit=6) == "x0=[2.0,…"  # a long value is cut
 
 
 def test_a_failed_write_lists_nothing_and_leaves_no_file(tmp_path):

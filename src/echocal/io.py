@@ -308,6 +308,18 @@ class ChecksummedManifest:
         keys = fingerprint.keys() | old.keys()
         return sorted(k for k in keys if fingerprint.get(k) != old.get(k))
 
+    def recorded(self, keys: list[str], limit: int = 60) -> str:
+        """The recorded fingerprint's values of ``keys``, for a message: ``"k=value;
+        k=value"``, each value as JSON (``repr`` where JSON has none) cut to ``limit``
+        characters (a grid's angle lists run to kilobytes)."""
+        old = self.data["fingerprint"]
+
+        def short(value: Any) -> str:
+            text = json.dumps(value, sort_keys=True, default=repr)
+            return text if len(text) <= limit else text[: limit - 1] + "…"
+
+        return "; ".join(f"{k}={short(old.get(k))}" for k in keys)
+
     def save(self) -> None:
         """Write the manifest atomically."""
         atomic_write_text(self.path, json.dumps(self.data, indent=1))

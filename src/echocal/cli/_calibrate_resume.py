@@ -112,11 +112,6 @@ def discard_journal(out: Path) -> None:
     shutil.rmtree(out / JOURNAL, ignore_errors=True)
 
 
-def _short(value: Any, limit: int = 60) -> str:
-    text = json.dumps(value, sort_keys=True)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
-
-
 class AScanJournal:
     """The A-scans of one calibration on a rig, one file each, in ``folder``.
 
@@ -153,12 +148,11 @@ class AScanJournal:
             journal.discard()
             return journal
         if differ:
-            old = found.data["fingerprint"]
-            recorded = "; ".join(f"{k}={_short(old.get(k))}" for k in differ)
             raise DataFileError(
                 f"cannot resume: {folder} holds the measurements of a calibration with "
-                f"another {', '.join(differ)} (recorded {recorded}); run it with those "
-                "settings to resume it, pass --overwrite to discard it, or choose another --out"
+                f"another {', '.join(differ)} (recorded {found.recorded(differ)}); run it with "
+                "those settings to resume it, pass --overwrite to discard it, or choose another "
+                "--out"
             )
         journal.files = found
         journal.saved = [journal._load(i, entry) for i, entry in enumerate(found.entries)]

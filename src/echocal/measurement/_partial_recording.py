@@ -26,12 +26,6 @@ PARTIAL_FORMAT = "replay-partial/1"
 """Format name in the manifest of a partial recording."""
 
 
-def _short(value: Any, limit: int = 60) -> str:
-    """``repr(value)``, cut to ``limit`` characters (a grid's angle lists run to kilobytes)."""
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
-
-
 class _Partial:
     """The sidecar directory: chunk files plus a manifest (private)."""
 
@@ -43,11 +37,9 @@ class _Partial:
             self.files = found
             differ = found.differing(fingerprint)
             if differ:
-                old = found.data["fingerprint"]
-                recorded = ", ".join(f"{k}={_short(old.get(k))}" for k in differ)
                 raise DataFileError(
                     f"cannot resume: partial recording {directory} was made with a different "
-                    f"{', '.join(differ)} (recorded {recorded}); "
+                    f"{', '.join(differ)} (recorded {found.recorded(differ)}); "
                     "record to another path, pass overwrite=True (CLI: --overwrite) to discard "
                     "it, or delete the partial directory"
                 )
