@@ -1,4 +1,5 @@
-"""Shared helpers of the benchmark scripts: timing, machine description, Markdown tables.
+"""Shared helpers of the benchmark scripts: timing, machine description, Markdown tables,
+the run-cell arguments and JSONL logs of the seeded calibration benchmarks.
 
 Not a package (no ``__init__.py``): the scripts run as ``python benchmarks/NAME.py`` and
 import this module from their own directory.
@@ -6,13 +7,16 @@ import this module from their own directory.
 
 from __future__ import annotations
 
+import argparse
+import json
 import os
 import platform
 import statistics
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from importlib import metadata
+from pathlib import Path
 from typing import Any
 
 
@@ -114,3 +118,41 @@ def fmt_time(seconds: float) -> str:
 def fmt_rate(per_second: float) -> str:
     """A rate with thousands separators: ``1,234/s``."""
     return f"{per_second:,.0f}/s"
+
+
+# ------------------------------------------------------- seeded cells of calibration runs
+def add_cell_arguments(ap: argparse.ArgumentParser, *, runs: int, starts: str) -> None:
+    """The options every seeded run-cell benchmark takes: ``--runs`` (per cell, default
+    ``runs``), ``--snr`` (comma-separated [dB], default 30,20), ``--starts`` (comma-separated
+    subset of far,near, default ``starts``), ``--jsonl`` (append every run there as it
+    ends) and ``--summarize`` (only print a JSONL's table)."""
+    ap.add_argument("--runs", type=int, default=runs, help="runs per cell")
+    ap.add_argument("--snr", default="30,20", help="comma-separated SNRs [dB]")
+    ap.add_argument("--starts", default=starts, help="comma-separated subset of far,near")
+    ap.add_argument("--jsonl", type=Path, default=None, help="append every run here as it ends")
+    ap.add_argument("--summarize", type=Path, default=None, help="only print a JSONL's table")
+
+
+def cell_runs(args: argparse.Namespace, first: int) -> Iterator[tuple[str, float, int]]:
+    """``(start, snr, run)`` of :func:`add_cell_arguments`'s ``args`` for runs ``first`` ..
+    ``first + args.runs - 1``, interleaved (run-major): a benchmark cut short has about as
+    many runs in every cell."""
+    starts = args.starts.split(",")
+    snrs = [float(s) for s in args.snr.split(",")]
+    for run in range(first, first + args.runs):
+        for start in starts:
+            for snr in snrs:
+                yield start, snr, run
+
+
+def read_jsonl(path: Path) -> list[dict[str, Any]]:
+    """The rows of a JSONL log (blank lines skipped)."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    return [json.loads(line) for line in lines if line.strip()]
+
+
+def append_jsonl(path: Path | None, row: dict[str, Any]) -> None:
+    """Append ``row`` to the JSONL log at ``path`` as one line (nothing when None)."""
+    if path is not None:
+        with path.open("a", encoding="utf-8") as fh:
+            fh.write(json.dumps(row) + "\n")

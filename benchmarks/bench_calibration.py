@@ -256,7 +256,88 @@ def start_point(truth: np.ndarray, start: str, seed: int, bounds: np.ndarray) ->
     raise RuntimeError("no start inside the bounds")  # pragma: no cover
 
 
+def case_setup(case: str, snr: float, seed: int) -> Any:
+    """``case``'s setup at ``snr`` [dB] with the noise stream of ``seed``."""
+    base = _case(case).setup
+    return dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
+
+
+class SeededRun(NamedTuple):
+    """One run of a cell made ready by :func:`seeded_run` (every method of the cell gets
+    the same: common random numbers)."""
+
+    setup: Any
+    """the case's setup at the cell's SNR, with the run's noise stream"""
+    seed: int
+    position: np.ndarray
+    """[m] (3,)"""
+    bounds: np.ndarray
+    """[deg] (2, 2) the tilt box x0 lies in"""
+    x0: np.ndarray
+    """[deg] (2,) the start"""
+    optima: np.ndarray
+    """[deg] (k, 2) every equal optimum"""
+    gate: TimeGate | None
+
+
+def seeded_run(
+    case: str, start: str, snr: float, run: int, bounds: np.ndarray | None = None
+) -> SeededRun:
+    """Run ``run`` of the cell ``(case, start, snr)``: its seed (:func:`run_seed`), setup
+    (:func:`case_setup`) and start (:func:`start_point`) inside ``bounds`` [deg] (2, 2)
+    (default :func:`tilt_bounds`)."""
+    _, pos, truth, optima, gate = _case(case)
+    seed = run_seed(case, start, snr, run)
+    setup = case_setup(case, snr, seed)
+    box = tilt_bounds(setup) if bounds is None else bounds
+    return SeededRun(setup, seed, pos, box, start_point(truth, start, seed, box), optima, gate)
+
+
 # ----------------------------------------------------------------------------- one run
+def run_ours(
+    objective: Any,
+    method: str,
+    x0: np.ndarray,
+    budget: int,
+    seed: int,
+    settle: tuple[float, int] | None = None,
+    **options: Any,
+) -> Any:
+    """echocal's ``method`` on ``objective`` from ``x0`` [deg] (2,) with ``budget``
+    measurements, seeded by ``seed``, its warnings silenced; ``settle=None`` (the default)
+    measures to the budget, so the estimate can be read after every measurement."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return calibrate(
+            objective,
+            method=method,
+            x0=x0,
+            budget=budget,
+            max_iter=10_000,
+            settle=settle,
+            rng=seed,
+            **options,
+        )
+
+
+def error_history(estimates: np.ndarray, optima: np.ndarray) -> np.ndarray:
+    """[deg] (n,): the angle between each estimate of ``estimates`` [deg] (n, 2) and the
+    nearest of the equal ``optima`` [deg] (k, 2)."""
+    return np.min([angular_error(estimates, t, PARAM) for t in optima], axis=0)
+
+
+def auto_errors(objective: Any, run: SeededRun, budget: int) -> tuple[Any, np.ndarray]:
+    """``auto`` on ``objective`` from ``run``'s start, to the ``budget``: (its result, its
+    error after n = 0..budget measurements [deg] (budget + 1,))."""
+    res = run_ours(objective, "auto", run.x0, budget, run.seed)
+    return res, error_history(_estimates_ours(res, run.x0, budget), run.optima)
+
+
+def rounded(errors: np.ndarray) -> list[float]:
+    """``errors`` [deg] as a JSON list, to a µ° (a run's stored error history)."""
+    return [round(float(e), 6) for e in errors]
+
+
 def _estimates_ours(result: Any, x0: np.ndarray, budget: int) -> np.ndarray:
     """Estimate after n = 0..budget measurements [deg], shape (budget + 1, 2)."""
     counts = np.asarray(result.iteration_measurements)
@@ -292,11 +373,7 @@ def _front_first(
             stage_setup, pos, parameterization=PARAM, budget=left, bounds=tilt_bounds(setup),
             gate=stage_gate,
         )  # fmt: skip
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            res = calibrate(
-                objective, "auto", x0=start, budget=left, max_iter=10_000, rng=seed, settle=settle
-            )
+        res = run_ours(objective, "auto", start, left, seed, settle=settle)
         measured += res.n_measurements
         spent = res.n_measurements if settle is not None else left  # the last runs to the end
         stages.append((res, _estimates_ours(res, start, spent), spent))
@@ -337,14 +414,11 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     default :data:`BUDGET`); returns its error after each measurement."""
     case, start, snr, run, method, *rest = task
     budget = int(rest[0]) if rest else BUDGET
-    base, pos, truth, optima, gate = _case(case)
-    seed = run_seed(case, start, snr, run)
-    setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
+    setup, seed, pos, bounds, x0, optima, gate = seeded_run(case, start, snr, run)
     objective = ClockedObjective(
-        setup, pos, parameterization=PARAM, budget=budget, bounds=tilt_bounds(setup), gate=gate,
+        setup, pos, parameterization=PARAM, budget=budget, bounds=bounds, gate=gate,
         motion_aware=method == MOTION_AWARE,
     )  # fmt: skip
-    x0 = start_point(truth, start, seed, objective.bounds)
     t0 = time.perf_counter()
     status = ""
     acquisition = None
@@ -352,18 +426,8 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
     if method == FRONT_FIRST:
         est, status, acquisition, n_measurements = _front_first(setup, pos, gate, x0, budget)
     elif method in OURS or method == MOTION_AWARE:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            res = calibrate(
-                objective,
-                method="auto" if method == MOTION_AWARE else method,
-                x0=x0,
-                budget=budget,
-                max_iter=10_000,
-                settle=None,  # to the budget: the estimate is read after every measurement
-                rng=seed,
-                **OURS.get(method, {}),
-            )
+        name = "auto" if method == MOTION_AWARE else method
+        res = run_ours(objective, name, x0, budget, seed, **OURS.get(method, {}))
         est = _estimates_ours(res, x0, budget)
         status = str(res.status)
         acquisition = res.acquisition_measurements
@@ -379,14 +443,13 @@ def run_one(task: tuple[Any, ...]) -> dict[str, Any]:
         est[0] = x0
         for n in range(1, budget + 1):
             est[n] = hist[min(n, len(hist)) - 1] if hist else x0
-    errors = np.min([angular_error(est, t, PARAM) for t in optima], axis=0)
     return {
         "case": case,
         "start": start,
         "snr": snr,
         "run": run,
         "method": method,
-        "errors": [round(float(e), 6) for e in errors],
+        "errors": rounded(error_history(est, optima)),
         "n_measurements": int(
             objective.n_measurements if n_measurements is None else n_measurements
         ),

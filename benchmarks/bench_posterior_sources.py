@@ -44,11 +44,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before numpy is imported
 
 import argparse  # noqa: E402
-import dataclasses  # noqa: E402
-import json  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-import warnings  # noqa: E402
+from contextlib import ExitStack  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -56,22 +54,19 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _calibration_cases import PARAM  # noqa: E402
+from _common import add_cell_arguments, append_jsonl, cell_runs, read_jsonl  # noqa: E402
 from bench_calibration import (  # noqa: E402
-    _case,
-    _estimates_ours,
+    auto_errors,
+    case_setup,
     measurements_to,
-    run_seed,
-    start_point,
-    tilt_bounds,
+    rounded,
+    seeded_run,
 )
 
-from echocal.calibrate import calibrate  # noqa: E402
-from echocal.evaluation import angular_error  # noqa: E402
 from echocal.geometry import Pose  # noqa: E402
 from echocal.measurement import (  # noqa: E402
     HardwareSource,
     InstrumentServer,
-    ReceiverSettings,
     ReplaySource,
     SourceObjective,
 )
@@ -83,11 +78,6 @@ BOX = np.array([[-10.0, 10.0], [-10.0, 10.0]])
 """[deg] the tilt box the recording covers (co-elevation up to 14.1°)."""
 SOURCES = ("simulator", "rig", "rig-no-setup", "simulator-box", "replay")
 _ORDER = (*SOURCES, "rig-before")  # the table also shows runs of an earlier version
-
-
-def _setup(snr: float, seed: int) -> Any:
-    base = _case(CASE).setup
-    return dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
 
 
 _REPLAYS: dict[str, tuple[ReplaySource, Any]] = {}
@@ -104,38 +94,31 @@ def _replay(path: str) -> tuple[ReplaySource, Any]:
 
 def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -> dict[str, Any]:
     """One seeded run of ``auto`` on ``source``; its error after each measurement."""
-    _, pos, truth, optima, _ = _case(CASE)
-    seed = run_seed(CASE, start, snr, run)
-    setup = _setup(snr, seed)
-    bounds = BOX if source in ("simulator-box", "replay") else tilt_bounds(setup)
-    x0 = start_point(truth, start, seed, bounds)
+    box = BOX if source in ("simulator-box", "replay") else None
+    ready = seeded_run(CASE, start, snr, run, box)
+    setup, pos = ready.setup, ready.position
     t0 = time.process_time()
-    kw: dict[str, Any] = {"parameterization": PARAM, "budget": BUDGET, "bounds": bounds}
-    call = {"x0": x0, "budget": BUDGET, "max_iter": 10_000, "settle": None, "rng": seed}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    kw: dict[str, Any] = {"parameterization": PARAM, "budget": BUDGET, "bounds": ready.bounds}
+    with ExitStack() as connected:
         if source in ("simulator", "simulator-box"):
-            res = calibrate(SourceObjective(setup, pos, **kw), "auto", **call)
+            objective = SourceObjective(setup, pos, **kw)
         elif source in ("rig", "rig-no-setup"):
-            twin = _setup(snr, 0) if source == "rig" else None
-            with InstrumentServer(setup, initial_pose=Pose(*pos)) as server:
-                with HardwareSource.connect(*server.address) as rig:
-                    objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)
-                    res = calibrate(objective, "auto", **call)
+            twin = case_setup(CASE, snr, 0) if source == "rig" else None
+            server = connected.enter_context(InstrumentServer(setup, initial_pose=Pose(*pos)))
+            rig = connected.enter_context(HardwareSource.connect(*server.address))
+            objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)
         else:
             assert replay is not None
             recording, twin = _replay(replay)
-            recording.reseed(seed)
+            recording.reseed(ready.seed)
             objective = SourceObjective(recording, pos, pulse=setup.pulse, twin=twin, **kw)
-            res = calibrate(objective, "auto", **call)
-    est = _estimates_ours(res, x0, BUDGET)
-    errors = np.min([angular_error(est, t, PARAM) for t in optima], axis=0)
+        res, errors = auto_errors(objective, ready, BUDGET)
     return {
         "source": source,
         "start": start,
         "snr": snr,
         "run": run,
-        "errors": [round(float(e), 6) for e in errors],
+        "errors": rounded(errors),
         "posterior": bool(res.posterior_search),
         "found_at": res.acquisition_measurements,
         "status": int(res.status),
@@ -180,33 +163,24 @@ def summarize(runs: list[dict[str, Any]]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=50)
+    add_cell_arguments(parser, runs=50, starts="far,near")
     parser.add_argument("--first", type=int, default=0, help="first run index")
     parser.add_argument("--sources", default=",".join(SOURCES))
-    parser.add_argument("--starts", default="far,near")
-    parser.add_argument("--snr", default="30,20")
     parser.add_argument("--replay30", help="the recording at 30 dB (for source replay)")
     parser.add_argument("--replay20", help="the recording at 20 dB (for source replay)")
-    parser.add_argument("--jsonl", type=Path, help="append every run here as it ends")
-    parser.add_argument("--summarize", type=Path, help="print the table of a JSONL and stop")
     args = parser.parse_args(argv)
     if args.summarize is not None:
-        lines = args.summarize.read_text(encoding="utf-8").splitlines()
-        print(summarize([json.loads(line) for line in lines if line.strip()]))
+        print(summarize(read_jsonl(args.summarize)))
         return 0
     replays = {30.0: args.replay30, 20.0: args.replay20}
     runs = []
-    for run in range(args.first, args.first + args.runs):
-        for start in args.starts.split(","):
-            for snr in (float(s) for s in args.snr.split(",")):
-                for source in args.sources.split(","):
-                    if source == "replay" and replays.get(snr) is None:
-                        continue
-                    r = run_one(source, start, snr, run, replays.get(snr))
-                    runs.append(r)
-                    if args.jsonl is not None:
-                        with args.jsonl.open("a", encoding="utf-8") as f:
-                            f.write(json.dumps(r) + "\n")
+    for start, snr, run in cell_runs(args, args.first):
+        for source in args.sources.split(","):
+            if source == "replay" and replays.get(snr) is None:
+                continue
+            r = run_one(source, start, snr, run, replays.get(snr))
+            runs.append(r)
+            append_jsonl(args.jsonl, r)
     print(summarize(runs))
     return 0
 

@@ -33,11 +33,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before numpy is imported
 
 import argparse  # noqa: E402
-import dataclasses  # noqa: E402
-import json  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-import warnings  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -46,19 +43,11 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _calibration_cases import BUDGET, PARAM  # noqa: E402
-from bench_calibration import (  # noqa: E402
-    _case,
-    _estimates_ours,
-    measurements_to,
-    run_seed,
-    start_point,
-    tilt_bounds,
-)
+from _common import add_cell_arguments, append_jsonl, cell_runs, read_jsonl  # noqa: E402
+from bench_calibration import auto_errors, measurements_to, rounded, seeded_run  # noqa: E402
 
-from echocal.calibrate import calibrate  # noqa: E402
 from echocal.calibrate.uncertainty import coverage  # noqa: E402
-from echocal.evaluation import angular_error  # noqa: E402
-from echocal.measurement import ReceiverSettings, SourceObjective  # noqa: E402
+from echocal.measurement import SourceObjective  # noqa: E402
 
 CASE = "immersion-5mhz"
 HOLDOUT_FIRST = 10_000_000
@@ -73,26 +62,18 @@ def run_one(task: tuple[str, float, int]) -> dict[str, Any]:
     """One seeded ``auto`` run of a cell ``(start, snr, run)``: its error after each
     measurement, final error, reported uncertainty, status and false alarms."""
     start, snr, run = task
-    base, pos, truth, optima, gate = _case(CASE)
-    seed = run_seed(CASE, start, snr, run)
-    setup = dataclasses.replace(base, receiver=ReceiverSettings(snr_db=snr), rng=seed)
+    ready = seeded_run(CASE, start, snr, run)
     objective = SourceObjective(
-        setup, pos, parameterization=PARAM, budget=BUDGET, bounds=tilt_bounds(setup), gate=gate
-    )
-    x0 = start_point(truth, start, seed, objective.bounds)
+        ready.setup, ready.position, parameterization=PARAM, budget=BUDGET, bounds=ready.bounds,
+        gate=ready.gate,
+    )  # fmt: skip
     t0 = time.process_time()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = calibrate(
-            objective, "auto", x0=x0, budget=BUDGET, max_iter=10_000, settle=None, rng=seed
-        )
-    est = _estimates_ours(res, x0, BUDGET)
-    errors = np.min([angular_error(est, t, PARAM) for t in optima], axis=0)
+    res, errors = auto_errors(objective, ready, BUDGET)
     return {
         "start": start,
         "snr": snr,
         "run": run,
-        "errors": [round(float(e), 6) for e in errors],
+        "errors": rounded(errors),
         "error": float(errors[-1]),
         "uncertainty": res.uncertainty,
         "level": res.uncertainty_level,
@@ -152,32 +133,22 @@ def table(runs: list[dict[str, Any]]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=int, default=300, help="runs per cell")
-    ap.add_argument("--snr", default="30,20", help="comma-separated SNRs [dB]")
-    ap.add_argument("--starts", default="far", help="comma-separated subset of far,near")
+    add_cell_arguments(ap, runs=300, starts="far")
     ap.add_argument("--holdout", action="store_true", help=f"runs from {HOLDOUT_FIRST:_}")
     ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--jsonl", type=Path, default=None, help="append each run here")
-    ap.add_argument("--summarize", type=Path, default=None, help="only print a JSONL's table")
     args = ap.parse_args(argv)
     if args.summarize is not None:
-        runs = [json.loads(line) for line in args.summarize.read_text().splitlines() if line]
-        print(table(runs))
+        print(table(read_jsonl(args.summarize)))
         return 0
     first = HOLDOUT_FIRST if args.holdout else 0
-    snrs = [float(s) for s in args.snr.split(",")]
-    starts = args.starts.split(",")
-    # interleaved: a run cut short has about as many runs in every cell
-    tasks = [(st, snr, first + k) for k in range(args.runs) for st in starts for snr in snrs]
+    tasks = list(cell_runs(args, first))
     print(f"{len(tasks)} runs ({'hold-out' if args.holdout else 'tuning'} seeds from {first})")
     runs: list[dict[str, Any]] = []
     workers = max(1, min(args.workers, os.cpu_count() or 1))
     pool = ProcessPoolExecutor(max_workers=workers) if workers > 1 else None
     for r in (pool.map if pool is not None else map)(run_one, tasks):
         runs.append(r)
-        if args.jsonl is not None:
-            with open(args.jsonl, "a", encoding="utf-8") as fh:
-                fh.write(json.dumps(r) + "\n")
+        append_jsonl(args.jsonl, r)
     if pool is not None:
         pool.shutdown()
     print(table(runs))

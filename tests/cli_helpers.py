@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import importlib
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -81,3 +83,66 @@ def tiny_setup_file(tmp_path: Path, specimen: str = TINY_PLATE, ref_z: str = "16
     path = tmp_path / "tiny.toml"
     path.write_text(tiny_setup_toml(specimen, ref_z, z_min="0 mm"), encoding="utf-8")
     return path
+
+
+SIMULATED_LAB_MODULE = """
+from echocal.geometry import Pose
+
+SOURCE = None  # the test's simulator (any measurement source), set before the rig is built
+SERVED = []  # the samples of every A-scan the pulser delivered, in order
+BREAK_AT = None  # the pulser fails at this acquisition (1-based), when set
+POSE = Pose(0.0, 0.0, 0.016)  # where the stage was last sent
+
+
+class Stage:
+    \"\"\"A lab's own stage over the simulator: remembers where it was sent.\"\"\"
+
+    def __init__(self):
+        self.limits = SOURCE.limits
+
+    def move_to(self, pose):
+        global POSE
+        POSE = self.limits.check(pose)
+        return POSE
+
+    def position(self):
+        return POSE
+
+    def close(self):
+        pass
+
+
+class Pulser:
+    \"\"\"A lab's own pulser-receiver: one simulated A-scan at the stage's pose; fails as an
+    unplugged scope would at acquisition BREAK_AT.\"\"\"
+
+    def acquire(self):
+        if BREAK_AT is not None and len(SERVED) + 1 >= BREAK_AT:
+            raise OSError("scope unplugged")
+        scan = SOURCE.measure(POSE)
+        SERVED.append(scan.samples.copy())
+        return scan
+
+    def close(self):
+        pass
+"""
+"""A lab's own python classes (a ``Stage`` and a ``Pulser``) over a simulator in this process,
+for the rig's python driver."""
+
+
+def simulated_lab(folder: Path, name: str, setup: Path) -> tuple[ModuleType, Path]:
+    """Write :data:`SIMULATED_LAB_MODULE` as ``folder/name.py``, put ``folder`` first on the
+    import path (the caller takes it off again), import it, and write ``folder/rig.toml``: a
+    python-driver rig of its ``Stage`` and ``Pulser`` over ``setup``.  Returns the module (set
+    its ``SOURCE`` before building the rig) and the rig file."""
+    (folder / f"{name}.py").write_text(SIMULATED_LAB_MODULE, encoding="utf-8")
+    sys.path.insert(0, str(folder))
+    module = importlib.import_module(name)
+    rig = folder / "rig.toml"
+    rig.write_text(
+        f'[rig]\nsetup = "{setup.as_posix()}"\n'
+        f'[rig.positioner]\ndriver = "python"\nclass = "{name}:Stage"\n'
+        f'[rig.receiver]\ndriver = "python"\nclass = "{name}:Pulser"\n',
+        encoding="utf-8",
+    )
+    return module, rig

@@ -19,8 +19,9 @@ The same holds for Ctrl-C (SIGINT) while the context is active.
 
 A signal whose exception is lost (Python ignores an exception raised inside a finalizer or a
 weak-reference callback, where a handler can land when the garbage collector runs) still
-stops the command: :func:`checkpoint`, called before every measurement on a rig, raises it
-again.
+stops the command: :func:`checkpoint`, called before every measurement on a rig (in
+:meth:`echocal.measurement.HardwareSource.measure`, which every command's rig measurement
+passes), raises it again.
 
 Nor does a signal interrupt the saving of what was measured: inside :func:`saving` (a
 partial recording's chunk being written) it is held, then raised the moment the section

@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import errno
 import glob
+import hashlib
+import json
 import math
 import os
 import re
@@ -16,6 +18,7 @@ from typing import Any
 from echocal.errors import DataFileError
 
 __all__ = [
+    "ChecksummedManifest",
     "atomic_path",
     "atomic_write_bytes",
     "atomic_write_text",
@@ -24,6 +27,7 @@ __all__ = [
     "json_ready",
     "netcdf_bytes",
     "refuse_existing_output",
+    "sha256_file",
 ]
 
 
@@ -231,3 +235,130 @@ def json_ready(value: Any) -> Any:
     if isinstance(value, Path):
         return str(value)
     return value
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """The SHA-256 (hex) of the file at ``path``, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with Path(path).open("rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+class ChecksummedManifest:
+    """A folder of files that a run writes one by one, each listed with its SHA-256 in the
+    folder's ``manifest.json`` beside the run's *fingerprint* (what makes it the same run),
+    so that the same run can later resume from them and a file changed after it was
+    written is refused.
+
+    ``data`` is the whole manifest: ``{"format": ..., "fingerprint": {...}, key: [entry,
+    ...], ...}`` (``key`` names the list; an entry is ``{"file": name, "sha256": hex, ...}``;
+    the caller may keep more fields in ``data``).  Every file and every manifest is
+    written atomically: an interrupted write leaves the previous manifest and no
+    half-written file.  :meth:`add` rewrites the whole manifest, O(n) in the entries per
+    file: fine for the hundreds of files of a calibration or a recording's chunks.
+
+    ``label`` starts every error's message (``"cannot resume: "``, ``"partial recording
+    "``), and ``fix`` ends it (what to do: ``"delete FOLDER to start over"``); each error
+    is one line (:class:`~echocal.errors.DataFileError`).
+    """
+
+    def __init__(self, folder: Path, data: dict[str, Any], key: str, *, label: str, fix: str):
+        self.folder = folder
+        self.path = folder / "manifest.json"
+        self.data = data
+        self.key = key
+        self.label = label
+        self.fix = fix
+
+    @classmethod
+    def new(
+        cls, folder: Path, fmt: str, fingerprint: dict[str, Any], key: str, *, label: str, fix: str
+    ) -> ChecksummedManifest:
+        """An empty manifest (nothing written until :meth:`save` or :meth:`add`)."""
+        data = {"format": fmt, "fingerprint": fingerprint, key: []}
+        return cls(folder, data, key, label=label, fix=fix)
+
+    @classmethod
+    def read(cls, folder: Path, key: str, *, label: str, fix: str) -> ChecksummedManifest | None:
+        """The manifest in ``folder``; None when there is none; a one-line
+        :class:`~echocal.errors.DataFileError` when it is unreadable or lacks its
+        fingerprint or list."""
+        path = folder / "manifest.json"
+        if not path.exists():
+            return None
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            if not isinstance(data["fingerprint"], dict) or not isinstance(data[key], list):
+                raise TypeError(f"no fingerprint or {key} list")
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise DataFileError(f"{label}{path} is unreadable ({exc}); {fix}") from None
+        return cls(folder, data, key, label=label, fix=fix)
+
+    @property
+    def entries(self) -> list[dict[str, Any]]:
+        """The files listed so far, in the order they were added."""
+        return list(self.data[self.key])
+
+    def differing(self, fingerprint: dict[str, Any]) -> list[str]:
+        """The keys (sorted) whose values differ between ``fingerprint`` and the recorded
+        one (a key missing on one side counts as None there)."""
+        old = self.data["fingerprint"]
+        keys = fingerprint.keys() | old.keys()
+        return sorted(k for k in keys if fingerprint.get(k) != old.get(k))
+
+    def recorded(self, keys: list[str], limit: int = 60) -> str:
+        """The recorded fingerprint's values of ``keys``, for a message: ``"k=value;
+        k=value"``, each value as JSON (``repr`` where JSON has none) cut to ``limit``
+        characters (a grid's angle lists run to kilobytes)."""
+        old = self.data["fingerprint"]
+
+        def short(value: Any) -> str:
+            text = json.dumps(value, sort_keys=True, default=repr)
+            return text if len(text) <= limit else text[: limit - 1] + "…"
+
+        return "; ".join(f"{k}={short(old.get(k))}" for k in keys)
+
+    def save(self) -> None:
+        """Write the manifest atomically."""
+        atomic_write_text(self.path, json.dumps(self.data, indent=1))
+
+    def add(self, name: str, writer: Callable[[Path], object], **fields: Any) -> dict[str, Any]:
+        """Write file ``name`` in the folder atomically with ``writer(tmp_path)``, list it
+        with its SHA-256 and ``fields``, and write the manifest again; returns its entry."""
+        with atomic_path(self.folder / name) as tmp:
+            writer(tmp)
+            digest = sha256_file(tmp)
+        entry = {"file": name, **fields, "sha256": digest}
+        self.data[self.key].append(entry)
+        self.save()
+        return entry
+
+    def file(self, entry: dict[str, Any]) -> Path:
+        """The path of ``entry``'s file."""
+        return self.folder / str(entry.get("file"))
+
+    def verify(self, entry: dict[str, Any], *, digest_optional: bool = False) -> Path:
+        """``entry``'s file, checked against its SHA-256; a one-line
+        :class:`~echocal.errors.DataFileError` when it is unreadable, changed after it was
+        written, or listed without a SHA-256 (unless ``digest_optional``: an older
+        manifest's entry, then not checked)."""
+        path = self.file(entry)
+        expected = entry.get("sha256")
+        if expected is None and digest_optional:
+            return path
+        try:
+            digest = sha256_file(path)
+        except OSError as exc:
+            raise self.unreadable(path, exc.strerror or exc) from None
+        if digest != expected:
+            raise DataFileError(
+                f"{self.label}{path} is damaged: its SHA-256 is {digest[:12]}…, the manifest "
+                f"says {str(expected)[:12]}… (the file changed after it was written); {self.fix}"
+            )
+        return path
+
+    def unreadable(self, path: Path, why: object) -> DataFileError:
+        """The one-line error of a listed file ``path`` that cannot be read (``why``)."""
+        return DataFileError(f"{self.label}{path} is unreadable ({why}); {self.fix}")

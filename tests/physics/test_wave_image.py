@@ -16,50 +16,31 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.signal
 
 from echocal.geometry import tilt_frame
 from echocal.signal.pulses import GaborPulse
 from echocal.signal.window import RecordingWindow
 from echocal.specimen import FinitePlane, Sphere
-from echocal.specimen.builtins import builtin_specimen
 from echocal.wave import PistonProbe, RectangularProbe, WaveEchoModel, image, sir
 from echocal.wave import model as model_module
 from echocal.wave.model import _IMAGE_NYQUIST_FRACTION
 
 sys.path.insert(0, str(Path(__file__).parent))
 import references as ref
-
-C = 1480.0
-F0 = 5e6
-PULSE = GaborPulse(center_frequency=F0, bandwidth=60)
-SIGMA_T = 1.0 / math.sqrt(2.0 * PULSE.alpha)
-PLANE = tuple(builtin_specimen("flat-plate"))
+from image_setup import F0, PLANE, SIGMA_T, C, envelope_peak, tilted_plane, transfer
+from image_setup import image_model as _model_of
 
 
 def _model(radius: float, d: float, curvature: float | None = None, **kw: object) -> WaveEchoModel:
     return _model_of(PistonProbe(radius=radius, curvature=curvature), d, **kw)
 
 
-def _model_of(probe: PistonProbe | RectangularProbe, d: float, **kw: object) -> WaveEchoModel:
-    window = RecordingWindow(fs=100e6, start=2 * d / C - 4e-6, n_samples=1024)
-    return WaveEchoModel(probe=probe, pulse=PULSE, window=window, sound_speed=C, **kw)  # type: ignore[arg-type]
-
-
 def _transfer(
     model: WaveEchoModel, d: float, tilt: float, freqs: np.ndarray, tilt_y: float = 0.0
 ) -> np.ndarray:
-    """|V(f)| of the model at a plane tilted by ``tilt`` [deg] (the first gimbal angle;
-    ``tilt_y`` the second): the echo spectrum divided by the pulse's (the grid's spectrum
-    is a sum over samples Δ apart: × Δ)."""
-    frame = tilt_frame(np.array([tilt]), np.array([tilt_y]))[0]
-    plane = model.image_plane(PLANE, np.array([0.0, 0.0, d]), frame)
-    assert plane is not None
-    spectrum, _ = model.image_spectrum(plane)
-    f = model.frequencies
-    idx = np.array([int(np.argmin(np.abs(f - fi))) for fi in freqs])
-    dt = model._grid[1]
-    return np.abs(spectrum[idx] * dt / model.pulse.spectrum(f[idx]))
+    """|V(f)| of the model at the grid frequencies nearest ``freqs`` [Hz], at a plane
+    tilted by ``tilt`` [deg] (``tilt_y`` the second gimbal angle)."""
+    return transfer(model, tilted_plane(model, d, tilt, tilt_y), freqs)[1]
 
 
 @pytest.mark.parametrize(
@@ -117,8 +98,7 @@ def test_broadband_tilt_lobe_matches_the_exact_angular_spectrum(
 
 def _peak(model: WaveEchoModel, d: float, tilt_x: float, tilt_y: float) -> float:
     frame = tilt_frame(np.array([tilt_x]), np.array([tilt_y]))
-    x = model.ascans(PLANE, np.array([[0.0, 0.0, d]]), frame)[0]
-    return float(np.abs(scipy.signal.hilbert(x)).max())
+    return envelope_peak(model.ascans(PLANE, np.array([[0.0, 0.0, d]]), frame)[0])
 
 
 def test_level_plane_echo_is_symmetric_and_peaks_exactly_at_the_normal() -> None:
@@ -155,9 +135,7 @@ def test_symmetric_half_of_the_face_rule_gives_the_full_rule_sum(
     rectangle)."""
     d = 0.03
     model = _model_of(probe, d)
-    frame = tilt_frame(np.array([tilt_x]), np.array([tilt_y]))[0]
-    plane = model.image_plane(PLANE, np.array([0.0, 0.0, d]), frame)
-    assert plane is not None
+    plane = tilted_plane(model, d, tilt_x, tilt_y)
     points, weights = model.image_nodes(plane)
     lam = model._shortest_wavelength
     spacing = image.node_spacing(lam, plane.sin_incidence, _IMAGE_NYQUIST_FRACTION)

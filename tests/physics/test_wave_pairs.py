@@ -17,37 +17,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.signal
 
 from echocal.geometry import tilt_frame
-from echocal.signal.pulses import GaborPulse
-from echocal.signal.window import RecordingWindow
-from echocal.specimen.builtins import builtin_specimen
-from echocal.wave import PistonProbe, WaveEchoModel, image, pairs
+from echocal.wave import PistonProbe, WaveEchoModel, pairs
 
 sys.path.insert(0, str(Path(__file__).parent))
 import references as ref
+from image_setup import F0, PLANE, SIGMA_T, C, envelope_peak, image_model, transfer
+from image_setup import tilted_plane as _plane
 
-C = 1480.0
-F0 = 5e6
-PULSE = GaborPulse(center_frequency=F0, bandwidth=60)
-SIGMA_T = 1.0 / math.sqrt(2.0 * PULSE.alpha)
-PLANE = tuple(builtin_specimen("flat-plate"))
 RADIUS = 6.35e-3
 
 
 def _model(d: float, **kw: object) -> WaveEchoModel:
-    window = RecordingWindow(fs=100e6, start=2 * d / C - 4e-6, n_samples=2048)
-    return WaveEchoModel(
-        probe=PistonProbe(radius=RADIUS), pulse=PULSE, window=window, sound_speed=C, **kw
-    )  # type: ignore[arg-type]
-
-
-def _plane(model: WaveEchoModel, d: float, tilt: float) -> image.ImagePlane:
-    frame = tilt_frame(np.array([tilt]), np.array([0.0]))[0]
-    plane = model.image_plane(PLANE, np.array([0.0, 0.0, d]), frame)
-    assert plane is not None
-    return plane
+    return image_model(PistonProbe(radius=RADIUS), d, n_samples=2048, **kw)
 
 
 @pytest.mark.parametrize(
@@ -68,17 +51,10 @@ def test_pair_rule_equals_the_exact_angular_spectrum_at_large_tilts(
     model = _model(d)
     plane = _plane(model, d, tilt)
     assert model._pairs_pay(plane), "the pair rule takes this echo"
-    f = model.frequencies
-    idx = np.array([int(np.argmin(np.abs(f - fi))) for fi in (4e6, 5e6, 6e6)])
-    spectrum, _ = model.image_spectrum(plane)
-    got = np.abs(spectrum[idx] * model._grid[1] / model.pulse.spectrum(f[idx]))
+    f, got = transfer(model, plane, np.array([4e6, 5e6, 6e6]))
     along = d / math.cos(math.radians(tilt))
-    want = np.abs([ref.pulse_echo_plane(RADIUS, fi, along, tilt, C) for fi in f[idx]])
+    want = np.abs([ref.pulse_echo_plane(RADIUS, fi, along, tilt, C) for fi in f])
     assert np.abs(got - want).max() < tolerance * want.max(), f"{got} vs exact {want}"
-
-
-def _envelope(x: np.ndarray) -> float:
-    return float(np.abs(scipy.signal.hilbert(x)).max())
 
 
 @pytest.mark.slow
@@ -94,7 +70,7 @@ def test_broadband_lobe_at_large_tilts_is_the_exact_one(tilt: float) -> None:
     pos = np.array([[0.0, 0.0, d]])
     level = model.ascans(PLANE, pos, tilt_frame(np.array([0.0]), np.array([0.0])))[0]
     tilted = model.ascans(PLANE, pos, tilt_frame(np.array([tilt]), np.array([0.0])))[0]
-    got = _envelope(tilted) / _envelope(level)
+    got = envelope_peak(tilted) / envelope_peak(level)
     freqs = ref._band(RADIUS, d, F0, SIGMA_T, C, tilt)
     spectrum = ref.gabor_spectrum(freqs, F0, SIGMA_T)
     along = d / math.cos(math.radians(tilt))

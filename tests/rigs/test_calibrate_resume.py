@@ -11,7 +11,6 @@ driver); its pulser fails at a chosen acquisition, as an unplugged scope would.
 from __future__ import annotations
 
 import hashlib
-import importlib
 import io
 import json
 import sys
@@ -21,45 +20,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cli_helpers import flat, run_main, tiny_setup_toml
+from cli_helpers import flat, run_main, simulated_lab, tiny_setup_toml
 from echocal.setups import load_setup
-
-LAB_MODULE = """
-from echocal.geometry import Pose
-
-SOURCE = None  # the test's simulator, set before the rig is built
-SERVED = []  # the samples of every A-scan the pulser delivered, in order
-BREAK_AT = None  # the pulser fails at this acquisition (1-based), when set
-POSE = Pose(0.0, 0.0, 0.016)
-
-
-class Stage:
-    def __init__(self):
-        self.limits = SOURCE.limits
-
-    def move_to(self, pose):
-        global POSE
-        POSE = self.limits.check(pose)
-        return POSE
-
-    def position(self):
-        return POSE
-
-    def close(self):
-        pass
-
-
-class Pulser:
-    def acquire(self):
-        if BREAK_AT is not None and len(SERVED) + 1 >= BREAK_AT:
-            raise OSError("scope unplugged")
-        scan = SOURCE.measure(POSE)
-        SERVED.append(scan.samples.copy())
-        return scan
-
-    def close(self):
-        pass
-"""
 
 ARGS = ["--position", "0,0,16", "--x0", "2,-1", "--method", "model-based", "--budget", "200"]
 ARGS += ["--no-plots"]
@@ -72,17 +34,7 @@ class Lab:
     def __init__(self, folder: Path) -> None:
         self.setup = folder / "tiny.toml"
         self.setup.write_text(tiny_setup_toml(), encoding="utf-8")
-        name = f"lab_resume_{folder.name}"
-        (folder / f"{name}.py").write_text(LAB_MODULE, encoding="utf-8")
-        sys.path.insert(0, str(folder))
-        self.module = importlib.import_module(name)
-        self.rig = folder / "rig.toml"
-        self.rig.write_text(
-            f'[rig]\nsetup = "{self.setup.as_posix()}"\n'
-            f'[rig.positioner]\ndriver = "python"\nclass = "{name}:Stage"\n'
-            f'[rig.receiver]\ndriver = "python"\nclass = "{name}:Pulser"\n',
-            encoding="utf-8",
-        )
+        self.module, self.rig = simulated_lab(folder, f"lab_resume_{folder.name}", self.setup)
         self.restart()
 
     def restart(self) -> None:

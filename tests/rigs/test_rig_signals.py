@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +22,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from cli_helpers import flat, run_main, tiny_setup_toml
+from cli_helpers import flat, run_main, simulated_lab, tiny_setup_toml
 from echocal.geometry import Pose
 from echocal.measurement import InstrumentServer
 from echocal.setups import load_setup
@@ -87,42 +88,6 @@ def _visa(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float
     return bench, rig, 0.51 * bench.y_increment  # 16-bit codes: half a code
 
 
-LAB_MODULE = """
-from echocal.geometry import Pose
-
-SOURCE = None  # the test's simulator (a Served), set before the rig is built
-POSE = Pose(0.0, 0.0, 0.016)  # where the stage was last sent
-
-
-class Stage:
-    \"\"\"A lab's own stage over the simulator: remembers where it was sent.\"\"\"
-
-    def __init__(self):
-        self.limits = SOURCE.limits
-
-    def move_to(self, pose):
-        global POSE
-        POSE = self.limits.check(pose)
-        return POSE
-
-    def position(self):
-        return POSE
-
-    def close(self):
-        pass
-
-
-class Pulser:
-    \"\"\"A lab's own pulser-receiver: one simulated A-scan at the stage's pose.\"\"\"
-
-    def acquire(self):
-        return SOURCE.measure(POSE)
-
-    def close(self):
-        pass
-"""
-
-
 class _InProcess:
     """The python driver's devices live in this process: nothing to serve; on exit the
     lab's module leaves the import path."""
@@ -135,28 +100,13 @@ class _InProcess:
         return self
 
     def __exit__(self, *exc: object) -> None:
-        import sys
-
         if self._folder in sys.path:
             sys.path.remove(self._folder)
 
 
 def _python(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float]:
-    import importlib
-    import sys
-
-    name = f"lab_sim_devices_{tmp_path.name}"
-    (tmp_path / f"{name}.py").write_text(LAB_MODULE, encoding="utf-8")
-    sys.path.insert(0, str(tmp_path))
-    module = importlib.import_module(name)
+    module, rig = simulated_lab(tmp_path, f"lab_sim_devices_{tmp_path.name}", setup)
     module.SOURCE = source
-    rig = tmp_path / "python-rig.toml"
-    rig.write_text(
-        f'[rig]\nsetup = "{setup.as_posix()}"\n'
-        f'[rig.positioner]\ndriver = "python"\nclass = "{name}:Stage"\n'
-        f'[rig.receiver]\ndriver = "python"\nclass = "{name}:Pulser"\n',
-        encoding="utf-8",
-    )
     return _InProcess(module, str(tmp_path)), rig, 0.0  # in process: the very samples
 
 

@@ -14,12 +14,12 @@ The same command again resumes: the calibration is deterministic given its seed 
 values it is told, so it starts over and :class:`ResumedRig` hands it the saved A-scans
 for the first requested poses — each pose checked against the one saved — before it
 measures anything on the rig.  The result equals an uninterrupted run's on the same
-A-scans.  A run with other settings refuses the folder in one line.
+A-scans.  A run with other settings refuses the folder in one line.  The folder and its
+manifest are an :class:`echocal.io.ChecksummedManifest`.
 """
 
 from __future__ import annotations
 
-import hashlib
 import io
 import json
 import shutil
@@ -34,7 +34,7 @@ from echocal._signals import measuring, saving
 from echocal.ascan import AScan
 from echocal.errors import DataFileError
 from echocal.geometry import Pose
-from echocal.io import atomic_path, atomic_write_text, json_ready
+from echocal.io import ChecksummedManifest, json_ready
 from echocal.measurement.base import BaseSource
 
 __all__ = [
@@ -112,24 +112,22 @@ def discard_journal(out: Path) -> None:
     shutil.rmtree(out / JOURNAL, ignore_errors=True)
 
 
-def _short(value: Any, limit: int = 60) -> str:
-    text = json.dumps(value, sort_keys=True)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
-
-
 class AScanJournal:
     """The A-scans of one calibration on a rig, one file each, in ``folder``.
 
     ``saved`` lists the measurements found when it was opened (resumed), in order, as
     ``(requested pose (5,) [m, deg], AScan)``; :meth:`keep` adds each new one.  The
-    folder is made with the first measurement.
+    folder is made with the first measurement.  Each :meth:`keep` rewrites the whole
+    manifest (atomically): O(n) per A-scan, fine for a calibration's few hundred.
     """
 
     def __init__(self, folder: Path, stamp: dict[str, Any]) -> None:
         self.folder = folder
-        self.manifest_path = folder / "manifest.json"
         self.fingerprint = stamp
-        self.entries: list[dict[str, Any]] = []
+        fix = f"delete {folder} (and partial_log.json beside it) to start over"
+        self.files = ChecksummedManifest.new(
+            folder, FORMAT, stamp, "ascans", label="cannot resume: ", fix=fix
+        )
         self.saved: list[tuple[np.ndarray, AScan]] = []
 
     @classmethod
@@ -140,51 +138,38 @@ class AScanJournal:
         differs, unless ``overwrite`` (then it is discarded and the run starts from the
         beginning)."""
         journal = cls(folder, stamp)
-        if not journal.manifest_path.exists():
+        found = ChecksummedManifest.read(
+            folder, "ascans", label=journal.files.label, fix=journal.files.fix
+        )
+        if found is None:
             return journal
-        fix = f"delete {folder} (and partial_log.json beside it) to start over"
-        try:
-            manifest = json.loads(journal.manifest_path.read_text(encoding="utf-8"))
-            old, entries = manifest["fingerprint"], list(manifest["ascans"])
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise DataFileError(
-                f"cannot resume: {journal.manifest_path} is unreadable ({exc}); {fix}"
-            ) from None
-        differ = sorted(k for k in stamp.keys() | old.keys() if stamp.get(k) != old.get(k))
+        differ = found.differing(stamp)
         if differ and overwrite:
             journal.discard()
             return journal
         if differ:
-            recorded = "; ".join(f"{k}={_short(old.get(k))}" for k in differ)
             raise DataFileError(
                 f"cannot resume: {folder} holds the measurements of a calibration with "
-                f"another {', '.join(differ)} (recorded {recorded}); run it with those "
-                "settings to resume it, pass --overwrite to discard it, or choose another --out"
+                f"another {', '.join(differ)} (recorded {found.recorded(differ)}); run it with "
+                "those settings to resume it, pass --overwrite to discard it, or choose another "
+                "--out"
             )
-        journal.entries = entries
-        journal.saved = [journal._load(i, entry, fix) for i, entry in enumerate(entries)]
+        journal.files = found
+        journal.saved = [journal._load(i, entry) for i, entry in enumerate(found.entries)]
         return journal
 
     @property
     def n_saved(self) -> int:
         """Measurements saved so far."""
-        return len(self.entries)
+        return len(self.files.data["ascans"])
 
-    def _load(self, index: int, entry: dict[str, Any], fix: str) -> tuple[np.ndarray, AScan]:
+    def _load(self, index: int, entry: dict[str, Any]) -> tuple[np.ndarray, AScan]:
         """Measurement ``index``, checked against its SHA-256."""
-        path = self.folder / str(entry.get("file"))
+        path = self.files.verify(entry)
         try:
             data = path.read_bytes()
         except OSError as exc:
-            raise DataFileError(
-                f"cannot resume: {path} is unreadable ({exc.strerror or exc}); {fix}"
-            ) from None
-        digest = hashlib.sha256(data).hexdigest()
-        if digest != entry.get("sha256"):
-            raise DataFileError(
-                f"cannot resume: {path} is damaged (its SHA-256 is {digest[:12]}…, the "
-                f"manifest says {str(entry.get('sha256'))[:12]}…); {fix}"
-            )
+            raise self.files.unreadable(path, exc.strerror or exc) from None
         with np.load(io.BytesIO(data), allow_pickle=False) as npz:
             reached = np.asarray(npz["reached"], dtype=np.float64)
             scan = AScan(
@@ -201,7 +186,6 @@ class AScanJournal:
         saved already (a resumed run's first ones); a signal waits until it is written."""
         if index < self.n_saved:
             return
-        name = f"{index:06d}.npz"
         reached = np.full(5, np.nan) if scan.pose is None else scan.pose.as_array()
         buffer = io.BytesIO()
         np.savez(
@@ -215,11 +199,7 @@ class AScanJournal:
         )
         data = buffer.getvalue()
         with saving():
-            with atomic_path(self.folder / name) as tmp:
-                tmp.write_bytes(data)
-            self.entries.append({"file": name, "sha256": hashlib.sha256(data).hexdigest()})
-            manifest = {"format": FORMAT, "fingerprint": self.fingerprint, "ascans": self.entries}
-            atomic_write_text(self.manifest_path, json.dumps(manifest, indent=1))
+            self.files.add(f"{index:06d}.npz", lambda tmp: tmp.write_bytes(data))
 
     def discard(self) -> None:
         """Remove the folder (the run finished, or --overwrite started it again)."""

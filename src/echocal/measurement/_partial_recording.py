@@ -2,17 +2,16 @@
 
 ``<path>.partial/`` holds ``chunk-<start>.npy`` files of shape ``(count, n_samples)`` and
 ``manifest.json`` listing the finished chunks (each written atomically, with the SHA-256
-of its file); see :func:`echocal.measurement.recording.record`.  A damaged sidecar — a
-chunk missing, unreadable, of another shape than the manifest says, whose bytes no longer
-match its SHA-256, or holding a sample that is not finite — is refused in one line when
-the recording resumes, before anything more is measured, and again before the final file
+of its file: an :class:`echocal.io.ChecksummedManifest`); see
+:func:`echocal.measurement.recording.record`.  A damaged sidecar — a chunk missing,
+unreadable, of another shape than the manifest says, whose bytes no longer match its
+SHA-256, or holding a sample that is not finite — is refused in one line when the
+recording resumes, before anything more is measured, and again before the final file
 is written.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 from pathlib import Path
 from typing import Any
 
@@ -21,16 +20,10 @@ from numpy.typing import NDArray
 
 from echocal.ascan import AScan
 from echocal.errors import DataFileError, EchocalValueError
-from echocal.io import atomic_path, atomic_write_text
+from echocal.io import ChecksummedManifest
 
 PARTIAL_FORMAT = "replay-partial/1"
 """Format name in the manifest of a partial recording."""
-
-
-def _short(value: Any, limit: int = 60) -> str:
-    """``repr(value)``, cut to ``limit`` characters (a grid's angle lists run to kilobytes)."""
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 class _Partial:
@@ -38,29 +31,23 @@ class _Partial:
 
     def __init__(self, directory: Path, fingerprint: dict[str, Any]) -> None:
         self.dir = directory
-        self.manifest_path = directory / "manifest.json"
-        if self.manifest_path.exists():
-            try:
-                self.manifest = json.loads(self.manifest_path.read_text(encoding="utf-8"))
-                old = self.manifest["fingerprint"]
-            except (OSError, ValueError, KeyError) as exc:
-                raise DataFileError(
-                    f"partial recording {directory} is unreadable ({exc}); delete it to start over"
-                ) from None
-            differ = sorted(
-                k for k in fingerprint.keys() | old.keys() if fingerprint.get(k) != old.get(k)
-            )
+        label, fix = "partial recording ", f"delete {directory} to record from the start"
+        found = ChecksummedManifest.read(directory, "chunks", label=label, fix=fix)
+        if found is not None:
+            self.files = found
+            differ = found.differing(fingerprint)
             if differ:
-                recorded = ", ".join(f"{k}={_short(old.get(k))}" for k in differ)
                 raise DataFileError(
                     f"cannot resume: partial recording {directory} was made with a different "
-                    f"{', '.join(differ)} (recorded {recorded}); "
+                    f"{', '.join(differ)} (recorded {found.recorded(differ)}); "
                     "record to another path, pass overwrite=True (CLI: --overwrite) to discard "
                     "it, or delete the partial directory"
                 )
             self.check_chunks()
         else:
-            self.manifest = {"format": PARTIAL_FORMAT, "fingerprint": fingerprint, "chunks": []}
+            self.files = ChecksummedManifest.new(
+                directory, PARTIAL_FORMAT, fingerprint, "chunks", label=label, fix=fix
+            )
             try:
                 directory.mkdir(parents=True, exist_ok=True)
                 self._save()
@@ -70,11 +57,16 @@ class _Partial:
                 ) from None
 
     @property
+    def manifest(self) -> dict[str, Any]:
+        """The manifest's data: format, fingerprint, chunks and the A-scans' format."""
+        return self.files.data
+
+    @property
     def n_done(self) -> int:
         return sum(int(c["count"]) for c in self.manifest["chunks"])
 
     def _save(self) -> None:
-        atomic_write_text(self.manifest_path, json.dumps(self.manifest, indent=1))
+        self.files.save()
 
     def check_format(self, ascan: AScan, index: int) -> None:
         """Refuse an A-scan of another sampling format than the earlier ones, or with a
@@ -105,14 +97,13 @@ class _Partial:
             raise DataFileError(f"partial recording {self.dir}: measurements {done}.. missing")
         rows = rows[done - start :]
         if rows:
-            name = f"chunk-{done:09d}.npy"
-            with atomic_path(self.dir / name) as tmp:
+
+            def write(tmp: Path) -> None:
                 with tmp.open("wb") as fh:
                     np.save(fh, np.stack(rows))
-                digest = _sha256(tmp)
-            self.manifest["chunks"].append(
-                {"file": name, "start": done, "count": len(rows), "sha256": digest}
-            )
+
+            self.files.add(f"chunk-{done:09d}.npy", write, start=done, count=len(rows))
+            return
         self._save()
 
     def check_chunks(self) -> None:
@@ -124,12 +115,11 @@ class _Partial:
             self._chunk(chunk, mmap=True)
 
     def _chunk(self, chunk: dict[str, Any], *, mmap: bool = False) -> NDArray[np.float64]:
-        path = self.dir / str(chunk.get("file"))
-        fix = f"delete {self.dir} to record from the start"
+        path, fix = self.files.file(chunk), self.files.fix
         try:
             arr = np.load(path, mmap_mode="r" if mmap else None, allow_pickle=False)
         except (OSError, ValueError, EOFError) as exc:
-            raise DataFileError(f"partial recording {path} is unreadable ({exc}); {fix}") from None
+            raise self.files.unreadable(path, exc) from None
         n_samples = (self.manifest.get("ascan") or {}).get("n_samples")
         expected = (int(chunk["count"]), n_samples if n_samples is not None else arr.shape[-1])
         if arr.shape != expected:
@@ -137,20 +127,7 @@ class _Partial:
                 f"partial recording {path} is damaged: it holds an array of shape "
                 f"{arr.shape}, the manifest says {expected} (A-scans, samples); {fix}"
             )
-        expected_digest = chunk.get("sha256")
-        if expected_digest is not None:
-            try:
-                digest = _sha256(path)
-            except OSError as exc:
-                raise DataFileError(
-                    f"partial recording {path} is unreadable ({exc.strerror or exc}); {fix}"
-                ) from None
-            if digest != expected_digest:
-                raise DataFileError(
-                    f"partial recording {path} is damaged: its SHA-256 is {digest[:12]}…, "
-                    f"the manifest says {str(expected_digest)[:12]}… (the file changed after "
-                    f"it was written); {fix}"
-                )
+        self.files.verify(chunk, digest_optional=True)  # manifests before digests have none
         bad = ~np.isfinite(arr)
         if bad.any():
             row, column = (int(v[0]) for v in np.nonzero(bad))
@@ -172,11 +149,3 @@ class _Partial:
             raise DataFileError(f"partial recording {self.dir} holds {expected} of {total} A-scans")
         return np.concatenate(parts, axis=0)
 
-
-def _sha256(path: Path) -> str:
-    """The SHA-256 (hex) of the file at ``path``."""
-    digest = hashlib.sha256()
-    with path.open("rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()

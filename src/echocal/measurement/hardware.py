@@ -419,7 +419,9 @@ class HardwareSource(BaseSource):
         """Move to ``pose``, acquire, and return the A-scan with the pose reached."""
         if self._closed:
             raise InstrumentError(f"{self.description}: source is closed")
-        checkpoint()  # a stop signal whose exception was lost stops before the next move
+        # every command's rig measurement passes here: a stop signal whose exception was
+        # lost (in a finalizer) stops before the next move
+        checkpoint()
         self.limits.check(pose)
         clock = [time.perf_counter()]
         reached = self.positioner.move_to(pose)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from echocal._signals import checkpoint, measuring, saving
+from echocal._signals import measuring, saving
 from echocal._validate import finite_array, positive_int
 from echocal.errors import DataFileError, EchocalError, EchocalValueError, LimitError
 from echocal.geometry import Pose
@@ -511,7 +511,6 @@ def record(
             try:
                 index = done
                 while index < total:
-                    checkpoint()  # a stop signal whose exception was lost stops here
                     batch = list(range(index, min(index + batch_size, total)))
                     batch_poses = [poses[i // repeats] for i in batch]
                     if len(batch) == 1:  # one A-scan (a rig): a signal waits for it
