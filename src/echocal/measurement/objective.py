@@ -550,9 +550,11 @@ class SourceObjective(Objective):
         Each A-scan carries its own noise: the echo fills a small part of the
         recording, so 1.4826 · MAD of the samples estimates the receiver's
         per-sample σ.  The metric of pure noise at that σ (mean and standard
-        deviation over 64 synthetic noise A-scans of the same window, with a fixed
-        internal seed so the source's random stream is untouched) gives the floor
-        that an echo must clear.  None until the first finite A-scan.
+        deviation over 64 synthetic noise A-scans of the same window and of the
+        receiver's colour, :func:`echocal.bench.receiver.ar_noise` — white unless a
+        simulated bench colours it —, with a fixed internal seed so the source's random
+        stream is untouched) gives the floor that an echo must clear.  None until the
+        first finite A-scan.
         """
         if not self._scan_sigmas or self._last_scan is None:
             return super().noise_estimate()
@@ -561,7 +563,10 @@ class SourceObjective(Objective):
         if cached is not None and abs(cached[0] - sigma) <= 0.05 * max(cached[0], 1e-300):
             return cached[1]
         scan = self._last_scan
-        noise = np.random.default_rng(12345).standard_normal((64, scan.n_samples)) * sigma
+        from echocal.bench.receiver import ar_noise
+
+        shape = (64, scan.n_samples)
+        noise = ar_noise(shape, self._noise_ar, np.random.default_rng(12345)) * sigma
         window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
         if self.gate is not None:  # pure noise in a gate as wide, where the last one was
             noise = np.where(self.gate.masks(scan.samples, window), noise, 0.0)
