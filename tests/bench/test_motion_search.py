@@ -4,7 +4,9 @@ motion-aware objective predicts the moves from its bench's tilt axes."""
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import warnings
+from pathlib import Path
 
 import numpy as np
 from _bench_setups import bench_setup, timed_tilts
@@ -111,24 +113,16 @@ def test_a_motion_aware_objective_prices_a_point_and_keeps_a_batch_that_saves_le
 
 
 def _ray_bench_setup(snr_db: float, seed: int):
-    """The 5 MHz probe on the ray model over the plate, on a realistic bench (the
-    calibration benchmark's ``REAL_BENCH``: 10°/s and 50 ms of settling per tilt axis,
-    5 ms per A-scan, 0.05° of compensated backlash, squint, pivot offset, AR(1) noise)."""
-    bench = {
-        "probe": {"squint": (1.5, -1.0), "pivot_offset": (0.002, -0.001, -0.004)},
-        "positioner": {
-            "acquisition_time": 0.005,
-            "approach": "positive",
-            **{
-                axis: {"backlash": 0.05, "step": 0.001, "repeatability": 0.002, "speed": 10.0,
-                       "settling": 0.05}
-                for axis in ("tilt_x", "tilt_y")
-            },
-        },
-        "receiver": {"noise_ar": [0.6]},
-    }  # fmt: skip
-    setup = load_setup("immersion-5mhz-ray", seed=seed)
-    setup = dataclasses.replace(setup, bench=build_bench(BenchConfig.model_validate(bench), None))
+    """The 5 MHz probe on the ray model over the plate, on the calibration benchmark's
+    realistic bench (``REAL_BENCH``: 10°/s and 50 ms of settling per tilt axis, 5 ms per
+    A-scan, 0.05° of compensated backlash, squint, pivot offset, AR(1) noise)."""
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "_calibration_cases.py"
+    spec = importlib.util.spec_from_file_location("_calibration_cases", path)
+    assert spec is not None and spec.loader is not None
+    cases = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(cases)
+    bench = build_bench(BenchConfig.model_validate(cases.REAL_BENCH), None)
+    setup = dataclasses.replace(load_setup("immersion-5mhz-ray", seed=seed), bench=bench)
     return dataclasses.replace(setup, receiver=ReceiverSettings(snr_db=snr_db))
 
 
