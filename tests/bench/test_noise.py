@@ -3,6 +3,8 @@ away, the water's temperature, the gain curve."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from _bench_setups import bench_setup
@@ -10,8 +12,12 @@ from scipy.special import ndtr
 
 from echocal.bench import ar_noise, water_sound_speed
 from echocal.geometry import Pose
+from echocal.measurement import ReceiverSettings, SourceObjective
+from echocal.setups import load_setup
+from echocal.setups.bench_schema import BenchConfig, build_bench
 from echocal.signal import make_pulse
 from echocal.signal.detection import EchoDetector
+from echocal.signal.processing import pseudo_energy
 
 
 def test_ar_noise_has_unit_variance_and_the_ar1_autocorrelation():
@@ -144,3 +150,35 @@ def test_jitter_delays_each_scan_by_a_normal_time_of_its_sigma(tmp_path):
     plain, _ = bench_setup(tmp_path, noise="snr_db = 'none'")
     still = plain.measure(Pose.from_tilt(x, y, z, 0.0, 0.0)).samples ** 2
     np.testing.assert_allclose(np.mean(centroid), still @ times / still.sum(), atol=0.4e-9)
+
+
+def test_the_noise_floor_of_the_metric_is_that_of_the_receivers_colour():
+    """The pseudo-energy of pure noise (the floor a local model subtracts and an echo must
+    clear) against AR(1) noise of coefficient 0.6 written out here: the objective's live
+    estimate draws noise of the bench's colour, not white noise of the same σ (the 5 MHz
+    probe at 100 MHz sampling, where the colour puts 2.9 times the power into its band)."""
+    setup = load_setup("immersion-5mhz-ray", seed=3)
+    bench = build_bench(BenchConfig.model_validate({"receiver": {"noise_ar": [0.6]}}), None)
+    setup = dataclasses.replace(setup, bench=bench, receiver=ReceiverSettings(snr_db=20.0))
+    objective = SourceObjective(setup, setup.reference_position, parameterization="tilt")
+    objective(np.array([[3.0, 2.0], [-2.0, 4.0], [1.0, -3.0]]))
+    floor, spread = objective.noise_estimate()
+    sigma = objective._receiver_sigma()  # the per-sample σ it measured
+    # the truth: 2,000 A-scans of n[k] = 0.6 n[k-1] + e[k], started stationary and scaled
+    # to σ per sample, and of white noise of the same σ, through the same metric
+    window, count, a = setup.window, 2000, 0.6
+    rng = np.random.default_rng(11)
+    e = rng.standard_normal((count, window.n_samples))
+    ar = np.empty_like(e)
+    ar[:, 0] = e[:, 0] / np.sqrt(1.0 - a * a)
+    for k in range(1, window.n_samples):
+        ar[:, k] = a * ar[:, k - 1] + e[:, k]
+    ar *= np.sqrt(1.0 - a * a) * sigma
+    coloured = pseudo_energy(ar, window, setup.pulse)
+    white = pseudo_energy(rng.standard_normal(ar.shape) * sigma, window, setup.pulse)
+    # the estimate's 64 A-scans: the mean to ~2 % (1 σ), the spread to ~9 %: 3 σ each;
+    # white noise of the same σ is off by more than that (−14 % and −31 %)
+    np.testing.assert_allclose(floor, coloured.mean(), rtol=0.06)
+    np.testing.assert_allclose(spread, coloured.std(), rtol=0.27)
+    assert white.mean() < 0.9 * coloured.mean()
+    assert white.std() < 0.73 * coloured.std()

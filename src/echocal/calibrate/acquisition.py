@@ -230,9 +230,14 @@ class Acquisition(Optimizer):
     move_time : callable returning the positioner's time [s] to reach each of a set of
         points [deg] ``(k, 2)`` from where it is, ``(k,)``, or None — e.g.
         :meth:`~echocal.calibrate.Objective.move_times`, which a motion-aware objective on
-        a simulated bench gives: the posterior search then takes, among its equally good
-        next points, the one reached soonest
+        a simulated bench gives: the posterior search then weighs a shorter move against
+        a lower chance of a detection
         (:meth:`~echocal.calibrate.posterior_search.PosteriorSearch.next_point`).
+    measurement_price : [s] the bench time of a measurement apart from its travel
+        (acquisition plus settling), or None (0) — e.g.
+        :meth:`~echocal.calibrate.Objective.measurement_price`: with ``move_time``, the
+        posterior search gives up detection chance for a shorter move only where the
+        move saved is long against this price.
     """
 
     def __init__(
@@ -262,6 +267,7 @@ class Acquisition(Optimizer):
         echo_likelihood: Callable[[], EchoLikelihood | EchoHypotheses | None] | None = None,
         posterior: bool = False,
         move_time: Callable[[FloatArray], FloatArray | None] | None = None,
+        measurement_price: float | None = None,
         bounds: ArrayLike | None = None,
         rng: RngLike = None,
         normalize: str = "none",
@@ -320,6 +326,11 @@ class Acquisition(Optimizer):
         if move_time is not None and not callable(move_time):
             raise EchocalValueError(f"move_time must be a callable or None; got {move_time!r}")
         self.move_time = move_time
+        self.measurement_price = (
+            None
+            if measurement_price is None
+            else nonnegative_float("measurement_price", measurement_price)
+        )
         self.search: PosteriorSearch | None = None
         """The Bayesian search once it has taken over from the lattice (None: the lattice)."""
         self._search_asked = False
@@ -585,7 +596,8 @@ class Acquisition(Optimizer):
         if self._confirming is not None:
             return self._confirming[None, :]
         if self.search is not None:
-            return self.search.next_point(self.move_time)[None, :]
+            price = self.measurement_price or 0.0
+            return self.search.next_point(self.move_time, price)[None, :]
         n = self.batch
         if self._next == 0:
             n = max(n, self._first_ring_size())

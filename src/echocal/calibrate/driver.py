@@ -173,13 +173,15 @@ OBJECTIVE_INPUTS = (
     "detector",
     "echo_likelihood",
     "move_time",
+    "measurement_price",
 )
 """Acquisition options the driver takes from the objective unless they are given."""
 
 
 def _search_inputs(objective: Objective) -> dict[str, Any]:
     """The :data:`OBJECTIVE_INPUTS` of ``objective``: its noise level and floor, the live
-    noise estimate, the probe's lobe, a replay's grid step and the echo detector."""
+    noise estimate, the probe's lobe, a replay's grid step, the echo detector, and the
+    moves' times and a measurement's price of a motion-aware objective."""
     values = (
         objective.noise_sigma,
         objective.noise_floor,
@@ -190,6 +192,7 @@ def _search_inputs(objective: Objective) -> dict[str, Any]:
         objective.detections,
         objective.echo_likelihood,
         objective.move_times,
+        objective.measurement_price(),
     )
     return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
 

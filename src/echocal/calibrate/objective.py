@@ -184,6 +184,13 @@ class Objective:
         then chooses its points without weighing their moves."""
         return None
 
+    def measurement_price(self) -> float | None:
+        """[s] the bench time one point costs apart from its travel (its acquisitions and
+        the positioner's settling), when the objective measures motion-aware and knows
+        its bench; None otherwise (the default).  :meth:`move_times`' moves are weighed
+        against it."""
+        return None
+
     # -- public ------------------------------------------------------------------------
     @property
     def remaining(self) -> int | None:

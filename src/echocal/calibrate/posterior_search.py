@@ -80,12 +80,11 @@ TIE = 0.05
 """Cells whose detection chance is within this fraction of the best are equally good: the
 one nearest to x0 is measured next (module docstring)."""
 MOTION_TIE = 0.15
-"""A motion-aware search (:meth:`PosteriorSearch.next_point` given the moves' times) takes
-the cell reached soonest among those within this fraction of the best detection chance.
-The cells reached soonest lie next to the one just measured, whose chance it lowered, so
-the walk takes a cell near the bottom of this window at nearly every step: the fraction
-is the chance it gives up per measurement, and the loss compounds over a search (the bench
-time it saves and the measurements it costs: ``docs/bench.md``)."""
+"""The detection chance a motion-aware step may give up, as a fraction of the best
+(:meth:`PosteriorSearch.next_point` given the moves' times and the price of a
+measurement): the cell reached soonest among those within this fraction of the best
+chance replaces the plain choice only when the move it saves exceeds the price of
+1 / MOTION_TIE measurements (``docs/bench.md``)."""
 _MAX_CELLS = 401
 """Cells per side of the posterior's grid at most (161,000 cells: 10–18 ms per point, the
 FFT about 6 ms; 2–3 ms at ``max_radius`` 20° and a 0.2° cell)."""
@@ -345,23 +344,41 @@ class PosteriorSearch:
         return np.where(self._candidate, np.clip(chance, 0.0, 1.0), 0.0)
 
     def next_point(
-        self, move_time: Callable[[FloatArray], FloatArray | None] | None = None
+        self,
+        move_time: Callable[[FloatArray], FloatArray | None] | None = None,
+        price: float = 0.0,
     ) -> FloatArray:
         """[deg] shape ``(2,)``: of the cells where a detection is most likely (within
-        :data:`TIE` of the best chance), the one nearest to the centre — or, given
-        ``move_time`` (points [deg] ``(k, 2)`` → the positioner's time [s] to reach each
-        from where it is, ``(k,)``, or None), of the cells within :data:`MOTION_TIE` of
-        the best chance, the one reached soonest."""
+        :data:`TIE` of the best chance), the one nearest to the centre — the plain choice.
+
+        Given ``move_time`` (points [deg] ``(k, 2)`` → the positioner's time [s] to reach
+        each from where it is, ``(k,)``, or None) and ``price`` [s], the bench time of a
+        measurement apart from its travel (acquisition plus settling), the search trades
+        detection chance for a shorter move only where the move is long against that
+        price: the cell reached soonest among those within :data:`MOTION_TIE` of the best
+        chance replaces the plain choice when it saves more than ``price / MOTION_TIE``
+        of the plain choice's move.  A step that takes it gives up at most a fraction
+        MOTION_TIE of one measurement's chance of a detection, so the walk loses a
+        whole measurement's chance over 1 / MOTION_TIE such steps at the earliest; each
+        of those steps must save the price of as many measurements.  Where every move
+        is short against the price (a search close to where the probe stands) the plain
+        choice stands and the search asks exactly the plain search's points; where the
+        plain choice jumps across a ring of likely optima, the walk goes around it."""
         chance = self.detection_chances()
-        if move_time is not None:
-            rows, cols = np.nonzero(chance >= (1.0 - MOTION_TIE) * chance.max())
-            times = move_time(np.column_stack([self._x[0, cols], self._y[rows, 0]]))
-            if times is not None:
-                best = int(np.argmin(times))
-                return np.array([self._x[0, cols[best]], self._y[rows[best], 0]])
         distance = np.where(chance >= (1.0 - TIE) * chance.max(), self._rho, np.inf)
         row, col = np.unravel_index(int(np.argmin(distance)), chance.shape)
-        return np.array([self._x[0, col], self._y[row, 0]])
+        plain = np.array([self._x[0, col], self._y[row, 0]])
+        if move_time is None:
+            return plain
+        rows, cols = np.nonzero(chance >= (1.0 - MOTION_TIE) * chance.max())
+        window = np.column_stack([self._x[0, cols], self._y[rows, 0]])
+        times = move_time(np.vstack([plain[None, :], window]))
+        if times is None:
+            return plain
+        best = int(np.argmin(times[1:]))
+        if times[0] - times[1 + best] > price / MOTION_TIE:
+            return window[best]
+        return plain
 
 
 def _logsumexp(a: FloatArray) -> float:

@@ -202,10 +202,12 @@ class SourceObjective(Objective):
         return self._measure(points)
 
     def _motion_order(self, points: np.ndarray) -> np.ndarray | None:
-        """The short order of ``points`` [deg] ``(k, 2)`` (None for one point), adding the
-        time it saves to :attr:`bench_time_saved` on a simulated bench: the predicted
-        motion and settling of the plain order (along its own path since the first
-        batch) minus the short order's."""
+        """The short order of ``points`` [deg] ``(k, 2)``, or None to keep the order asked
+        (one point; or, on a simulated bench, a short order that saves no more than the
+        price of one point, :meth:`measurement_price`: the noise is then drawn in the
+        order a plain objective draws it); the time it saves is added to
+        :attr:`bench_time_saved`: the predicted motion and settling of the plain order
+        (along its own path since the first batch) minus the short order's."""
         from echocal.bench.motion import move_times, short_order
 
         tilts = np.column_stack(
@@ -214,12 +216,16 @@ class SourceObjective(Objective):
         start, plain_start = self._at, self._plain_at
         speeds, settling, timed = _tilt_axes(self.source)
         order = short_order(tilts, start, speeds, settling)
-        self._at, self._plain_at = tilts[order[-1]], tilts[-1]
         if timed:  # against the plain order's own path, batch after batch
             plain = move_times(tilts, plain_start, speeds, settling).sum()
             short = move_times(tilts[order], start, speeds, settling).sum()
+            if plain - short <= (self.measurement_price() or 0.0):
+                order = np.arange(len(points))
+                short = move_times(tilts, start, speeds, settling).sum()
             self.bench_time_saved = (self.bench_time_saved or 0.0) + float(plain - short)
-        return order if len(points) > 1 else None
+        self._at, self._plain_at = tilts[order[-1]], tilts[-1]
+        keep = len(points) == 1 or np.array_equal(order, np.arange(len(points)))
+        return None if keep else order
 
     def move_times(self, points: np.ndarray) -> np.ndarray | None:
         """[s] the predicted motion and settling from the last point measured to each of
@@ -234,6 +240,16 @@ class SourceObjective(Objective):
         pts = as_points("points", points)
         tilts = np.column_stack(convert_angles(pts[:, 0], pts[:, 1], self.parameterization, "tilt"))
         return reach_times(self._at, tilts, speeds, settling)
+
+    def measurement_price(self) -> float | None:
+        """[s] the bench time of a point apart from its travel — ``repeats`` acquisitions
+        plus the longest settling of the tilt axes — when this objective is motion-aware
+        on a simulated bench whose tilt axes take time (:meth:`move_times`); else None."""
+        _, settling, timed = _tilt_axes(self.source)
+        if not (self.motion_aware and timed):
+            return None
+        acquisition = float(self.source.bench.positioner.acquisition_time)  # type: ignore[attr-defined]
+        return self.repeats * acquisition + float(settling.max())
 
     def _measure(self, points: np.ndarray) -> np.ndarray:
         """Measure ``points`` [deg] ``(k, 2)`` in this order; their metric values ``(k,)``."""
@@ -534,9 +550,11 @@ class SourceObjective(Objective):
         Each A-scan carries its own noise: the echo fills a small part of the
         recording, so 1.4826 · MAD of the samples estimates the receiver's
         per-sample σ.  The metric of pure noise at that σ (mean and standard
-        deviation over 64 synthetic noise A-scans of the same window, with a fixed
-        internal seed so the source's random stream is untouched) gives the floor
-        that an echo must clear.  None until the first finite A-scan.
+        deviation over 64 synthetic noise A-scans of the same window and of the
+        receiver's colour, :func:`echocal.bench.receiver.ar_noise` — white unless a
+        simulated bench colours it —, with a fixed internal seed so the source's random
+        stream is untouched) gives the floor that an echo must clear.  None until the
+        first finite A-scan.
         """
         if not self._scan_sigmas or self._last_scan is None:
             return super().noise_estimate()
@@ -545,7 +563,10 @@ class SourceObjective(Objective):
         if cached is not None and abs(cached[0] - sigma) <= 0.05 * max(cached[0], 1e-300):
             return cached[1]
         scan = self._last_scan
-        noise = np.random.default_rng(12345).standard_normal((64, scan.n_samples)) * sigma
+        from echocal.bench.receiver import ar_noise
+
+        shape = (64, scan.n_samples)
+        noise = ar_noise(shape, self._noise_ar, np.random.default_rng(12345)) * sigma
         window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
         if self.gate is not None:  # pure noise in a gate as wide, where the last one was
             noise = np.where(self.gate.masks(scan.samples, window), noise, 0.0)
