@@ -67,14 +67,12 @@ def test_with_no_echo_within_reach_the_search_gives_up_on_the_evidence(plate):
         assert 7 < res.n_measurements < 120
 
 
-def test_a_weak_echo_near_the_start_is_searched_by_the_posterior_too(plate):
-    """At 10 dB, 2.5° out (a 10 dB echo is seen only 0.55–0.7° away, so x0's first ring
-    misses it): the search is the posterior's, no passes are planned, and the run ends
-    within 0.1° — the near start the log-uniform prior is for (the old prior, uniform in
-    distance, sent such searches outward first: ``docs/benchmarks/auto.md``)."""
+def test_a_weak_echo_keeps_the_passes_with_the_fine_lattice(plate):
+    """At 10 dB (below MIN_SNR_DB) the search after a quiet first ring is the passes':
+    the 1° lattice out to 3°, which a near start needs, then the pass sized for the echo."""
     res, err = _run(plate, 0, offset=(2.5, 0.0), snr=10.0)
-    assert res.posterior_search and res.search_passes is None
-    assert res.acquisition_measurements is not None and res.acquisition_measurements > 7
+    assert not res.posterior_search and res.options["posterior"] is True
+    assert res.search_passes is not None and res.search_snr_db == pytest.approx(10.0, abs=1.0)
     assert err < 0.1
 
 

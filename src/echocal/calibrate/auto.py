@@ -11,11 +11,11 @@ meets them:
    confirming re-measurement of a marginal detection), so a find on noise is not
    handed to the local method;
 3. where the objective cannot say how its echo is distributed (no probe model: an
-   analytic objective, the azimuth/co-elevation parameterization, a gate, repeats), or
-   with ``posterior=False``: inside 3° of x0 the search keeps a 1° lattice, which a
-   10 dB echo needs (visible only within about 0.55–0.7°), unless x0's first ring saw
-   nothing and the objective predicts an echo of ≥ 20 dB against the noise those 7
-   A-scans measured
+   analytic objective, the azimuth/co-elevation parameterization, a gate, repeats), a
+   simulated echo predicted below 15 dB, or with ``posterior=False``: inside 3° of x0
+   the search keeps a 1° lattice, which a 10 dB echo needs (visible only within about
+   0.55–0.7°), unless x0's first ring saw nothing and the objective predicts an echo of
+   ≥ 20 dB against the noise those 7 A-scans measured
    (:meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, the ``replan``
    option): then the first pass is the coarsest for that SNR (below 20 dB one pass sized
    for that SNR follows the 1° lattice).  Beyond, two hexagonal passes out to
@@ -41,14 +41,17 @@ meets them:
    echo, the local method seeks the peak (:mod:`echocal.calibrate.template_seek`): the
    next point is where the candidate peaks' predicted echoes disagree most;
 9. beyond x0's first ring, wherever the objective says how its echo's significance is
-   distributed (a simulated probe, at any SNR; a recording or a rig, over hypotheses on
+   distributed (a simulated probe whose echo the first ring's noise puts at 15 dB or
+   more; a recording or a rig, at any SNR, over hypotheses on
    the echo's unknown amplitude, and on the lobe's width where no setup gives its shape:
    :mod:`echocal.calibrate.echo_hypotheses`), the search follows the posterior over the
    optimum (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option) instead
    of item 3's lattice and passes: a priori the optimum is log-uniform in distance from
-   x0 (as likely 1–2° out as 10–20°, which serves near and far starts alike), every
-   A-scan's significance updates it, and the next point is where a detection is most
-   likely;
+   x0 (as likely 1–2° out as 10–20°: near and far starts alike), every A-scan's
+   significance updates it, and the next point is where a detection is most likely.
+   Below 15 dB on the simulator, the lattice and passes of item 3
+   (:data:`~echocal.calibrate.posterior_search.MIN_SNR_DB`: near starts at 10 dB all
+   reach 0.1° within 40 measurements with them, not quite all with the posterior);
 10. a detection the local method does not confirm within its first
    :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN` (8) measurements — none of them,
    nor all together, significant at the detection threshold — is a false alarm: the
@@ -103,7 +106,8 @@ AUTO_SEARCH: dict[str, Any] = {
     "posterior": True,
 }
 """auto's search [deg] — its only difference from ``acquisition``: the posterior search
-(item 9) wherever the objective gives its echo's likelihood, else the 1° lattice within
+(item 9) wherever the objective gives its echo's likelihood (on the simulator, for an
+echo of 15 dB or more), else the 1° lattice within
 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (item 3,
 :func:`~echocal.calibrate.search_pattern.search_rings`), unless the caller sets where to
 search (``passes``, ``growth``, ``max_spacing`` or ``fine_radius`` without
