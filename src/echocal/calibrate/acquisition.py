@@ -403,9 +403,7 @@ class Acquisition(Optimizer):
         likelihood = self.echo_likelihood()
         if likelihood is None or (likelihood.snr_db is not None and likelihood.snr_db < MIN_SNR_DB):
             return  # a weak echo: the passes, with the fine lattice around x0 (MIN_SNR_DB)
-        self.search = PosteriorSearch(
-            self.x0, self.max_radius, likelihood, self.bounds, inner=self.spacing
-        )
+        self.search = PosteriorSearch(self.x0, self.max_radius, likelihood, self.bounds)
         self.search.update(self._x, self._g)
 
     def _update_search(self, points: FloatArray, ok: np.ndarray, sig: FloatArray | None) -> None:

@@ -10,12 +10,9 @@ meets them:
    (:class:`~echocal.signal.detection.EchoDetector`; a first threshold, then a
    confirming re-measurement of a marginal detection), so a find on noise is not
    handed to the local method;
-3. where the objective cannot say how its echo is distributed (no probe model: an
-   analytic objective, the azimuth/co-elevation parameterization, a gate, repeats), a
-   simulated echo predicted below 15 dB, or with ``posterior=False``: inside 3° of x0
-   the search keeps a 1° lattice, which a 10 dB echo needs (visible only within about
-   0.55–0.7°), unless x0's first ring saw nothing and the objective predicts an echo of
-   ≥ 20 dB against the noise those 7 A-scans measured
+3. inside 3° of x0 the search keeps a 1° lattice, which a 10 dB echo needs (visible only
+   within about 0.55–0.7°), unless x0's first ring saw nothing and the objective
+   predicts an echo of ≥ 20 dB against the noise those 7 A-scans measured
    (:meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, the ``replan``
    option): then the first pass is the coarsest for that SNR (below 20 dB one pass sized
    for that SNR follows the 1° lattice).  Beyond, two hexagonal passes out to
@@ -40,18 +37,14 @@ meets them:
 8. from a detection deep in the tail that the template's fit does not yet show as an
    echo, the local method seeks the peak (:mod:`echocal.calibrate.template_seek`): the
    next point is where the candidate peaks' predicted echoes disagree most;
-9. beyond x0's first ring, wherever the objective says how its echo's significance is
-   distributed (a simulated probe whose echo the first ring's noise puts at 15 dB or
-   more; a recording or a rig, at any SNR, over hypotheses on
-   the echo's unknown amplitude, and on the lobe's width where no setup gives its shape:
-   :mod:`echocal.calibrate.echo_hypotheses`), the search follows the posterior over the
-   optimum (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option) instead
-   of item 3's lattice and passes: a priori the optimum is log-uniform in distance from
-   x0 (as likely 1–2° out as 10–20°: near and far starts alike), every A-scan's
+9. beyond x0's first ring, on a simulated probe whose echo the first ring's noise puts
+   at 15 dB or more, the search follows the posterior over the optimum
+   (:mod:`echocal.calibrate.posterior_search`, the ``posterior`` option): every A-scan's
    significance updates it, and the next point is where a detection is most likely.
-   Below 15 dB on the simulator, the lattice and passes of item 3
-   (:data:`~echocal.calibrate.posterior_search.MIN_SNR_DB`: near starts at 10 dB all
-   reach 0.1° within 40 measurements with them, not quite all with the posterior);
+   On a recording or a rig, whose echo amplitude is unknown, at any SNR, over
+   hypotheses on that amplitude (and on the lobe's width where no setup gives its shape:
+   :mod:`echocal.calibrate.echo_hypotheses`).  Below 15 dB on the simulator, the
+   passes of item 3;
 10. a detection the local method does not confirm within its first
    :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN` (8) measurements — none of them,
    nor all together, significant at the detection threshold — is a false alarm: the
@@ -64,8 +57,9 @@ optimum with 90 % probability (:mod:`echocal.calibrate.uncertainty`: the delta-m
 spread of a log-quadratic's peak fitted to the measurements on the lobe's top, plus the
 estimate's distance to that peak).
 
-A search without a probe model (item 3) spends the 1° lattice first; ``fine_radius=1.0``
-drops it when the SNR is known to be ≥ 20 dB.
+In tilt angles a recording or a rig is searched by the posterior too (item 9); in
+(azimuth, co-elevation), or with ``posterior=False``, a search without a probe model spends
+the 1° lattice first; ``fine_radius=1.0`` drops it when the SNR is known to be ≥ 20 dB.
 When the start is known to be near the echo, ``method="model-based"`` saves the
 acquisition.
 
@@ -105,16 +99,17 @@ AUTO_SEARCH: dict[str, Any] = {
     "passes": (STRONG_ECHO_SPACING, WEAK_ECHO_SPACING),
     "posterior": True,
 }
-"""auto's search [deg] — its only difference from ``acquisition``: the posterior search
-(item 9) wherever the objective gives its echo's likelihood (on the simulator, for an
-echo of 15 dB or more), else the 1° lattice within
-3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (item 3,
-:func:`~echocal.calibrate.search_pattern.search_rings`), unless the caller sets where to
-search (``passes``, ``growth``, ``max_spacing`` or ``fine_radius`` without
-``posterior=True``).  The passes are the default for an objective that cannot size
-them from its probe (:meth:`~echocal.calibrate.Objective.search_passes` returns None);
-the driver puts the probe's own in their place unless the caller sets ``passes``,
-``growth`` or ``max_spacing``."""
+"""auto's search [deg] — its only difference from ``acquisition``: the 1° lattice
+within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the
+evidence above and :func:`~echocal.calibrate.search_pattern.search_rings`), or, on a
+simulated probe with an echo of 15 dB or more, or a recording or a rig, the posterior
+search (item 9), unless the
+caller sets where to search (``passes``, ``growth``, ``max_spacing`` or ``fine_radius``
+without ``posterior=True``).  The passes are
+the default for an objective that cannot size them from its probe
+(:meth:`~echocal.calibrate.Objective.search_passes` returns None); the driver puts the
+probe's own in their place unless the caller sets ``passes``, ``growth`` or
+``max_spacing``."""
 
 
 @register_method("auto")
