@@ -346,6 +346,7 @@ NEAR = 0.015  # [m] the probe's distance: the damped sum needs 1/Δf ≥ 2 · 2d
 DAMPING = 3e5  # [1/s] ε: e^{−ε/Δf} = e^{−12} on what folds back
 STEP = 25e3  # [Hz] Δf: a period of 40 µs, twice the front wall's time
 MARGIN = 0.5e-6  # [s] a gate ends this long (3.3σ_t) before the first path the model leaves out
+LEAD = 8e-6  # [s] the window starts this long before the front wall (below)
 
 
 def _damped_scans(
@@ -354,7 +355,7 @@ def _damped_scans(
     """The model's echoes' analytic signals and the reference's, both damped, at the
     model's sample times, and the model's echo list (``NEAR``, 12.7 mm 5 MHz probe)."""
     pulse = GaborPulse(center_frequency=F0, bandwidth=BW)
-    window = RecordingWindow(fs=FS, start=2 * NEAR / C - 2e-6, n_samples=1400)
+    window = RecordingWindow(fs=FS, start=2 * NEAR / C - LEAD, n_samples=2000)
     layers = _layers(stack)
     model = WaveEchoModel(
         probe=PistonProbe(radius=A),
@@ -374,7 +375,7 @@ def _damped_scans(
     t0 = 2 * NEAR / C
     damp = np.exp(-DAMPING * (t - t0))
     # the model's samples are real; their analytic signal in the reference's e^{−iωt} sign
-    analytic = {k: np.conj(scipy.signal.hilbert(v)) * damp for k, v in echoes.items()}
+    analytic = {k: np.conj(scipy.signal.hilbert(v * damp)) for k, v in echoes.items()}
     sigma_t = 1 / math.sqrt(2 * pulse.alpha)
     sigma_f = 1 / (2 * np.pi * sigma_t)
     freqs = np.arange(F0 - 4.5 * sigma_f, F0 + 4.5 * sigma_f, STEP)
