@@ -350,10 +350,17 @@ LEAD = 8e-6  # [s] the window starts this long before the front wall (below)
 
 
 def _damped_scans(
-    stack, tilt: float, order: int, shear_legs: int
+    stack, tilt: float, order: int, shear_legs: int, exact: bool = False, accuracy: float = 0.5
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, list]:
     """The model's echoes' analytic signals and the reference's, both damped, at the
-    model's sample times, and the model's echo list (``NEAR``, 12.7 mm 5 MHz probe)."""
+    model's sample times, and the model's echo list (``NEAR``, 12.7 mm 5 MHz probe;
+    ``exact``: the whole stack's A-scan, ``specimen.exact_stack``; the reference's
+    quadrature ``accuracy``).
+
+    The window starts ``LEAD`` before the front wall and the model's samples are damped
+    before their analytic signal is taken (scipy's Hilbert transform is periodic over the
+    window: the undamped train, still ringing at the window's end, would wrap onto its
+    start; damped, it has fallen by e^{−εT} there)."""
     pulse = GaborPulse(center_frequency=F0, bandwidth=BW)
     window = RecordingWindow(fs=FS, start=2 * NEAR / C - LEAD, n_samples=2000)
     layers = _layers(stack)
@@ -364,7 +371,8 @@ def _damped_scans(
         sound_speed=C,
         reflection=lambda theta: reflection_fluid_solid(theta, MEDIUM, layers[0].material),
     )
-    interior = Interior(sum(layer.thickness for layer in layers), order, (), layers, shear_legs)
+    thickness = sum(layer.thickness for layer in layers)
+    interior = Interior(thickness, order, (), layers, shear_legs, exact)
     train = InteriorEchoes(
         model=model, front=FRONT, interior=interior, medium=MEDIUM, material=layers[0].material
     )
@@ -392,7 +400,7 @@ def _damped_scans(
                 np.array([tilt]),
                 C,
                 reflection=lambda th, f=f: lref.stack_reflection(f, th, plain, RHO, C),
-                accuracy=0.5,
+                accuracy=accuracy,
                 extra_phase=spin * f.real,
             )[0]
             for f in complex_freqs
@@ -481,6 +489,67 @@ def test_every_echo_matches_the_exact_stack_within_one_percent_of_its_own_peak(
             own = float(np.abs(scan[gate]).max())
         error = float(np.abs(scan - reference)[gate].max())
         checked.append((echo.label, error / own))
+    assert len(checked) >= 3, checked
+    assert all(share <= 0.01 for _, share in checked), checked
+
+
+STRONG = 0.01  # an echo is strong at 1 % of the front wall's peak or more
+
+
+@pytest.mark.parametrize(
+    ("stack", "tilt", "accuracy"),
+    [
+        pytest.param("steel-acrylic-aluminium", 0.0, 0.5, marks=pytest.mark.slow),
+        pytest.param("steel-acrylic-aluminium", 1.0, 1.0, marks=pytest.mark.slow),
+        pytest.param("acrylic-aluminium", 0.0, 0.5, marks=pytest.mark.slow),
+        pytest.param("coating-on-steel", 0.0, 0.5, marks=pytest.mark.slow),
+        pytest.param("thin-coating", 0.0, 0.5, marks=pytest.mark.slow),
+    ],
+)
+def test_the_exact_stack_gives_every_echo_within_one_percent_of_its_own_peak(
+    stack: str, tilt: float, accuracy: float
+) -> None:
+    """``exact_stack``: the model's A-scan is the whole stack's plane-wave response (its
+    own global matrix, ``echocal.wave.stack``), the listed paths (order 3, longitudinal)
+    plus a ``stack-remainder``; against the exact damped train of the reference (module
+    note above; 12.7 mm 5 MHz probe 15 mm above the stack), as complex analytic signals:
+
+    - in the gate (±0.2 µs) of every strong echo (its own peak ≥ 1 % of the front
+      wall's) with at most three reflections, anywhere in the window (no path is left
+      out of the sum), the largest difference is at most 1 % of that echo's own peak
+      (echoes that arrive together are one; on the thin coating, of the gate's peak);
+    - everywhere from the front wall on, the difference is at most 5·10⁻⁴ of the front
+      wall's peak (the weak echoes: measured ≤ 3·10⁻⁴).
+
+    Measured (0°): steel / acrylic / aluminium's interface-2 0.13 % (13 % with the
+    listed paths alone), every strong echo ≤ 0.37 %; the floor of the comparison is
+    1–2·10⁻⁵ of the front wall, both signals, so the tolerance is 1 % where an echo is
+    at least 1 % of the front wall.  1°: the tilted probe's front wall is a tenth of its
+    0° value and the floor is the same in absolute terms (the reference's quadrature:
+    at ``accuracy`` 0.5 it stands 1–2.5·10⁻⁴ of that front wall before it), so the
+    reference runs at ``accuracy`` 1.0 there.  Larger tilts are not checked: at 2° the
+    front wall falls by a further ~10 and interface-2 to ~10× the floor."""
+    layers = STACKS[stack]
+    analytic, reference, t, listed = _damped_scans(layers, tilt, 3, 0, True, accuracy)
+    assert "stack-remainder" in analytic
+    scan = sum(analytic.values())
+    front = next(echo for echo in listed if echo.label == "front-wall")
+    front_peak = float(np.abs(analytic["front-wall"]).max())
+    difference = np.abs(scan - reference)
+    after = t >= front.tof_s - GATE
+    assert float(difference[after].max()) <= 5e-4 * front_peak
+    checked = []
+    for echo in listed:
+        if echo.label.startswith("stack") or echo.label.count(".") > 2:
+            continue
+        gate = np.abs(t - echo.tof_s) <= GATE
+        together = [e.label for e in listed if abs(e.tof_s - echo.tof_s) <= 2 / FS]
+        own = float(np.abs(sum(analytic[label] for label in together)[gate]).max())
+        if stack == "thin-coating":
+            own = float(np.abs(scan[gate]).max())
+        if own < STRONG * front_peak:
+            continue
+        checked.append((echo.label, float(difference[gate].max()) / own))
     assert len(checked) >= 3, checked
     assert all(share <= 0.01 for _, share in checked), checked
 

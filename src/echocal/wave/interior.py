@@ -279,10 +279,12 @@ class InteriorEchoes:
     @property
     def _stack_route(self) -> bool:
         """Whether the layered plate's A-scan is the exact stack's (:meth:`_whole_stack`,
-        with a :data:`STACK_REMAINDER` echo): a flat piston over a flat layered plate."""
+        with a :data:`STACK_REMAINDER` echo): asked for (``exact_stack``), a flat piston
+        over a flat layered plate (other probes: the paths alone)."""
         probe = self.model.probe
         return (
-            bool(self.interior.layers)
+            self.interior.exact_stack
+            and bool(self.interior.layers)
             and isinstance(probe, PistonProbe)
             and probe.curvature is None
             and isinstance(self.front, FinitePlane)
@@ -353,6 +355,8 @@ class InteriorEchoes:
                     for leg, mode in zip(path.legs, path.modes, strict=True)
                 ],
             }
+        if self._stack_route:
+            out[STACK_REMAINDER] = {"paths": "the exact stack's echo train less those listed"}
         for flaw in self.interior.flaws:
             host = len(self._flaw_column(flaw).layers)
             out[flaw.name] = {"layer": host, "material": layers[host - 1].material.name}
