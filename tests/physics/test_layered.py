@@ -346,7 +346,7 @@ NEAR = 0.015  # [m] the probe's distance: the damped sum needs 1/Δf ≥ 2 · 2d
 DAMPING = 3e5  # [1/s] ε: e^{−ε/Δf} = e^{−12} on what folds back
 STEP = 25e3  # [Hz] Δf: a period of 40 µs, twice the front wall's time
 MARGIN = 0.5e-6  # [s] a gate ends this long (3.3σ_t) before the first path the model leaves out
-LEAD = 8e-6  # [s] the window starts this long before the front wall (below)
+LEAD = 8e-6  # [s] the exact stack's window starts this long before the front wall (below)
 
 
 def _damped_scans(
@@ -357,12 +357,13 @@ def _damped_scans(
     ``exact``: the whole stack's A-scan, ``specimen.exact_stack``; the reference's
     quadrature ``accuracy``).
 
-    The window starts ``LEAD`` before the front wall and the model's samples are damped
-    before their analytic signal is taken (scipy's Hilbert transform is periodic over the
-    window: the undamped train, still ringing at the window's end, would wrap onto its
-    start; damped, it has fallen by e^{−εT} there)."""
+    With ``exact`` the window starts ``LEAD`` before the front wall and the model's
+    samples are damped before their analytic signal is taken (scipy's Hilbert transform
+    is periodic over the window: the exact train, still ringing at the window's end,
+    would wrap onto its start; damped, it has fallen by e^{−εT} there)."""
     pulse = GaborPulse(center_frequency=F0, bandwidth=BW)
-    window = RecordingWindow(fs=FS, start=2 * NEAR / C - LEAD, n_samples=2000)
+    lead, n_samples = (LEAD, 2000) if exact else (2e-6, 1400)
+    window = RecordingWindow(fs=FS, start=2 * NEAR / C - lead, n_samples=n_samples)
     layers = _layers(stack)
     model = WaveEchoModel(
         probe=PistonProbe(radius=A),
@@ -383,7 +384,10 @@ def _damped_scans(
     t0 = 2 * NEAR / C
     damp = np.exp(-DAMPING * (t - t0))
     # the model's samples are real; their analytic signal in the reference's e^{−iωt} sign
-    analytic = {k: np.conj(scipy.signal.hilbert(v * damp)) for k, v in echoes.items()}
+    if exact:
+        analytic = {k: np.conj(scipy.signal.hilbert(v * damp)) for k, v in echoes.items()}
+    else:  # the listed paths stop ringing inside the window
+        analytic = {k: np.conj(scipy.signal.hilbert(v)) * damp for k, v in echoes.items()}
     sigma_t = 1 / math.sqrt(2 * pulse.alpha)
     sigma_f = 1 / (2 * np.pi * sigma_t)
     freqs = np.arange(F0 - 4.5 * sigma_f, F0 + 4.5 * sigma_f, STEP)
