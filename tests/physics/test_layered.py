@@ -498,6 +498,7 @@ def test_every_echo_matches_the_exact_stack_within_one_percent_of_its_own_peak(
 
 
 STRONG = 0.01  # an echo is strong at 1 % of the front wall's peak or more
+LATEST = 6e-6  # [s] the exact stack is compared up to this long after the front wall
 
 
 @pytest.mark.parametrize(
@@ -519,14 +520,16 @@ def test_the_exact_stack_gives_every_echo_within_one_percent_of_its_own_peak(
     note above; 12.7 mm 5 MHz probe 15 mm above the stack), as complex analytic signals:
 
     - in the gate (±0.2 µs) of every strong echo (its own peak ≥ 1 % of the front
-      wall's) with at most three reflections, anywhere in the window (no path is left
-      out of the sum), the largest difference is at most 1 % of that echo's own peak
-      (echoes that arrive together are one; on the thin coating, of the gate's peak);
-    - everywhere from the front wall on, the difference is at most 5·10⁻⁴ of the front
-      wall's peak (the weak echoes: measured ≤ 3·10⁻⁴).
+      wall's) with at most three reflections (no path is left out of the sum), the
+      largest difference is at most 1 % of that echo's own peak (echoes that arrive
+      together are one; on the thin coating, of the gate's peak);
+    - from the front wall to ``LATEST`` after it (past every echo with three
+      reflections), the difference is at most 5·10⁻⁴ of the front wall's peak (measured
+      ≤ 8·10⁻⁵ at 0°).  Later the reference carries a signal of its own (steel / acrylic
+      / aluminium: 4 % of the front wall 10.5–11 µs after it, whatever the model).
 
     Measured (0°): steel / acrylic / aluminium's interface-2 0.13 % (13 % with the
-    listed paths alone), every strong echo ≤ 0.37 %; the floor of the comparison is
+    listed paths alone), every strong echo ≤ 0.13 % on every stack; the floor of the comparison is
     1–2·10⁻⁵ of the front wall, both signals, so the tolerance is 1 % where an echo is
     at least 1 % of the front wall.  1°: the tilted probe's front wall is a tenth of its
     0° value and the floor is the same in absolute terms (the reference's quadrature:
@@ -540,7 +543,7 @@ def test_the_exact_stack_gives_every_echo_within_one_percent_of_its_own_peak(
     front = next(echo for echo in listed if echo.label == "front-wall")
     front_peak = float(np.abs(analytic["front-wall"]).max())
     difference = np.abs(scan - reference)
-    after = t >= front.tof_s - GATE
+    after = (t >= front.tof_s - GATE) & (t <= front.tof_s + LATEST)
     assert float(difference[after].max()) <= 5e-4 * front_peak
     checked = []
     for echo in listed:
