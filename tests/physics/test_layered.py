@@ -32,6 +32,7 @@ from echocal.wave import PistonProbe, WaveEchoModel
 from echocal.wave.interior import InteriorEchoes, echo_list
 from echocal.wave.layered import echo_paths, path_label, pp_coefficients
 from echocal.wave.layered_spectrum import PistonOverPlate, path_responses
+from echocal.wave.stack import stack_reflection
 
 sys.path.insert(0, str(Path(__file__).parent))
 import layered_reference as lref
@@ -261,6 +262,36 @@ def test_the_reference_stack_reduces_to_the_plate_and_to_the_impedance_recursion
     np.testing.assert_allclose(
         normal, lref.normal_incidence_reflection(freqs, whole, RHO, C), atol=1e-9
     )
+
+
+def test_the_stacks_own_global_matrix_is_the_references() -> None:
+    """``echocal.wave.stack.stack_reflection`` (the ``exact_stack`` route's R) against the
+    reference's global matrix (written apart, never imported by echocal): the steel /
+    acrylic / aluminium stack at 2–7.3 MHz, from normal incidence to grazing (through
+    every critical angle), to 1e-9; and a lossy layer (α = 20 Np/m at 5 MHz, n = 1) at
+    normal incidence against the impedance formula with the complex wavenumber
+    ω/c + iα computed here, to 1e-9."""
+    layers = _layers(STACKS["steel-acrylic-aluminium"])
+    theta = np.array([0.01, 0.5, 3.0, 10.0, 13.0, 20.0, 30.0, 60.0, 85.0])
+    plain = [(*p, h) for p, h in STACKS["steel-acrylic-aluminium"]]
+    for f in (2e6, 5e6, 7.3e6):
+        got = stack_reflection(np.sin(np.radians(theta)) / C, f, layers, MEDIUM)
+        want = lref.stack_reflection(f, theta, plain, RHO, C)
+        np.testing.assert_allclose(got, want, atol=1e-9)
+    lossy = Material(
+        name="lossy",
+        density=ALUMINIUM[0],
+        longitudinal_speed=ALUMINIUM[1],
+        shear_speed=ALUMINIUM[2],
+        attenuation=Attenuation(alpha0=20.0, f_ref=5e6, exponent=1.0),
+    )
+    f, h = 4e6, 3e-3
+    got = stack_reflection(np.array([1e-9]), f, (Layer(lossy, h),), MEDIUM)[0]
+    k = 2 * np.pi * f / ALUMINIUM[1] + 1j * 20.0 * f / 5e6
+    z, z_w = ALUMINIUM[0] * 2 * np.pi * f / k, RHO * C  # ρω/k
+    t = np.tan(k * h)
+    z_in = z * (z_w - 1j * z * t) / (z - 1j * z_w * t)
+    assert abs(got - (z_in - z_w) / (z_in + z_w)) <= 1e-9
 
 
 @pytest.mark.parametrize("tilt", [0.0, 1.0, 3.0])
