@@ -28,7 +28,9 @@ the back wall behind it: its silhouette along the face's normal, on the wall's e
 mirror, is taken out of the wall's echo (:meth:`InteriorEchoes._shadows`).  A plate of
 several layers (:mod:`echocal.wave.layered`, docs/layered-parts.md) has an echo per path
 through its interfaces, each evaluated the same way (with ``shear_legs``, paths with
-mode-converted legs too).
+mode-converted legs too); with ``exact_stack``, under a flat circular probe, the A-scan is
+the whole stack's exact plane-wave response (:mod:`echocal.wave.stack`), the paths plus a
+``stack-remainder`` echo (:meth:`InteriorEchoes._whole_stack`).
 
 **Left out** (documented in docs/inside-the-specimen.md): a single plate's mode-converted
 (L→T) echoes and the shear waves' own echoes (the coefficients account for the energy
