@@ -15,6 +15,8 @@ against the single plate:
 3. ``layered order 3``: the same at order 3 (20 paths);
 4. ``layered + holes``: ``immersion-layered`` with its two flat-bottom holes (their echoes
    and their shadows on every deeper wall path);
+5. ``layered exact``: case 2 with ``exact_stack = true``: the whole stack's exact A-scan
+   (:mod:`echocal.wave.stack`) besides its 7 paths;
 
 each at normal incidence and at 2° of tilt.
 """
@@ -57,6 +59,9 @@ def _variants(folder: Path) -> dict[str, Path]:
         "layered": no_holes,
         "layered order 3": no_holes.replace("back_wall_echoes = 2", "back_wall_echoes = 3"),
         "layered + holes": base,
+        "layered exact": no_holes.replace(
+            "back_wall_echoes = 2", "back_wall_echoes = 2\nexact_stack = true"
+        ),
     }
     out = {}
     for name, text in texts.items():

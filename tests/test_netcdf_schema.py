@@ -237,8 +237,13 @@ def test_the_compliance_checker_finds_only_the_documented_time_message(recording
         )
         result = json.loads(report.read_text())["cf:1.10"]
         messages = [
-            m for key in ("high_priorities", "medium_priorities", "low_priorities")
-            for item in result[key] for m in item["msgs"]
+            m
+            for key in ("high_priorities", "medium_priorities", "low_priorities")
+            for item in result[key]
+            for m in item["msgs"]
         ]
-        assert messages == ["Coordinate variable 'time' should have standard_name='time', "
-                            "found: 'None'"] or not messages, (path.name, messages)
+        assert (
+            messages
+            == ["Coordinate variable 'time' should have standard_name='time', found: 'None'"]
+            or not messages
+        ), (path.name, messages)

@@ -123,9 +123,7 @@ class _SignalsWhenCollected:
     [("SIGHUP", Terminated), ("SIGTERM", Terminated), ("SIGINT", KeyboardInterrupt)],
 )
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
-def test_a_signal_lost_in_a_finalizer_stops_the_work_at_the_next_checkpoint(
-    name, expected
-) -> None:
+def test_a_signal_lost_in_a_finalizer_stops_the_work_at_the_next_checkpoint(name, expected) -> None:
     from echocal._signals import checkpoint
 
     measured: list[int] = []

@@ -47,7 +47,13 @@ def _run(confirm: bool) -> tuple[float, object, np.ndarray]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = calibrate(
-            objective, "auto", x0=x0, budget=80, max_iter=10_000, rng=SEED, confirm=confirm,
+            objective,
+            "auto",
+            x0=x0,
+            budget=80,
+            max_iter=10_000,
+            rng=SEED,
+            confirm=confirm,
             settle=None,
         )
     err = float(angular_error(np.asarray(res.x)[None], truth, "tilt")[0])

@@ -59,9 +59,7 @@ def test_noisy_gaussian_reaches_the_optimum_with_few_measurements():
         ang = 2.0 * np.pi * seed / 10
         x0 = OPT + 2.0 * np.array([np.cos(ang), np.sin(ang)])
         obj = FunctionObjective(gaussian, noise_sigma=SNR30, rng=seed)
-        res = calibrate(
-            obj, "model-based", x0=x0, budget=30, max_iter=1000, rng=seed, settle=None
-        )
+        res = calibrate(obj, "model-based", x0=x0, budget=30, max_iter=1000, rng=seed, settle=None)
         assert res.n_measurements == 30
         errors.append(np.hypot(*(res.x - OPT)))
     errors = np.array(errors)

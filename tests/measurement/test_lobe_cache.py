@@ -86,4 +86,3 @@ def test_a_change_of_the_code_is_another_key(monkeypatch) -> None:
     before = lobe_cache.profile_key(parts, pos, {"n": 1})
     monkeypatch.setattr(_code_digest, "code_digest", lambda: "0" * 64)
     assert lobe_cache.profile_key(parts, pos, {"n": 1}) != before
-

@@ -32,8 +32,19 @@ def test_getting_started_snippet_settles_within_the_cli_count(tmp_path, capsys, 
     result = names["result"]
     capsys.readouterr()
     code, out, _ = run_main(
-        ["calibrate", "--setup", "immersion-5mhz", "--x0", "0,0", "--seed", "0", "--json",
-         "--no-plots", "--out", str(tmp_path / "cli")],
+        [
+            "calibrate",
+            "--setup",
+            "immersion-5mhz",
+            "--x0",
+            "0,0",
+            "--seed",
+            "0",
+            "--json",
+            "--no-plots",
+            "--out",
+            str(tmp_path / "cli"),
+        ],
         capsys,
         monkeypatch,
     )
@@ -49,13 +60,20 @@ def test_a_misspelt_option_is_an_error_in_python_and_on_the_command_line(
     tmp_path, capsys, monkeypatch
 ):
     names: dict = {}
-    snippet = _snippet().replace('rng=0)', 'rng=0, fine_raduis=1.0)')
+    snippet = _snippet().replace("rng=0)", "rng=0, fine_raduis=1.0)")
     assert "fine_raduis" in snippet
     with pytest.raises(UnknownNameError, match=r"did you mean fine_radius\?"):
         exec(compile(snippet, str(PAGE), "exec"), names)
     code, _, err = run_main(
-        ["calibrate", "--setup", "immersion-5mhz", "--option", "fine_raduis=1",
-         "--out", str(tmp_path / "cli")],
+        [
+            "calibrate",
+            "--setup",
+            "immersion-5mhz",
+            "--option",
+            "fine_raduis=1",
+            "--out",
+            str(tmp_path / "cli"),
+        ],
         capsys,
         monkeypatch,
     )

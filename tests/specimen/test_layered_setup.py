@@ -12,9 +12,11 @@ from typer.testing import CliRunner
 
 from echocal import Pose, load_setup
 from echocal.cli import app
+from echocal.errors import GeometryError
 from echocal.materials import material
 from echocal.setups import validate_setup_file
 from echocal.signal.gates import plate_layers, resolve_gate
+from echocal.specimen.interior import Interior
 from echocal.wave.interior import echo_list
 
 C = 1480.0
@@ -101,6 +103,25 @@ def test_a_bad_layer_is_refused_naming_the_field(
 ) -> None:
     problems = _problems(tmp_path, _text(**edit))  # type: ignore[arg-type]
     assert any(p.startswith(field) and fix in p for p in problems), problems
+
+
+def test_exact_stack_adds_a_remainder_echo_and_is_refused_without_layers(
+    tmp_path: Path,
+) -> None:
+    """``specimen.exact_stack``: the paths keep their labels and a ``stack-remainder``
+    echo holds what the exact stack adds to them (the physics: tests/physics/
+    test_layered.py); on a plate without layers it is refused in one line naming the
+    field."""
+    path = tmp_path / "layered.toml"
+    path.write_text(_text(top="exact_stack = true"))
+    labels = load_setup(path).interior_echoes.labels
+    assert labels[:3] == ("front-wall", "interface-1", "interface-2")
+    assert labels[-1] == "stack-remainder" and labels.count("stack-remainder") == 1
+    plain = tmp_path / "plain.toml"
+    plain.write_text(_text())
+    assert "stack-remainder" not in load_setup(plain).interior_echoes.labels
+    with pytest.raises(GeometryError, match=r"^specimen\.exact_stack: needs \[\[specimen\.layers"):
+        Interior(5e-3, 2, (), (), 0, True)
 
 
 def test_a_flaw_across_an_interface_is_refused(tmp_path: Path) -> None:

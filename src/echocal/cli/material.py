@@ -93,7 +93,7 @@ def material_report(name: str, medium: str = "water", angles: list[float] | None
 
 
 def _wave_kind(angle: float, critical: float | None) -> str:
-    """"evanescent" past the critical angle [deg] of a transmitted wave, else
+    """ "evanescent" past the critical angle [deg] of a transmitted wave, else
     "propagating" (no critical angle: the wave always propagates)."""
     return "evanescent" if critical is not None and angle > critical else "propagating"
 

@@ -93,9 +93,7 @@ def ascan_overlay_figure(
                     color="C4",
                     ls=(0, (6, 3)),
                     lw=1.2,
-                    label=threshold_label(level, ECHO_THRESHOLD)
-                    if ax is full
-                    else None,
+                    label=threshold_label(level, ECHO_THRESHOLD) if ax is full else None,
                 )
     lo = min(expected_tof) * 1e6 - 3.0
     hi = max(expected_tof) * 1e6 + 3.0

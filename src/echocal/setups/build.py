@@ -457,7 +457,9 @@ def _build_interior(
         layers: tuple[Layer, ...] = parts.get("layers", ())
         thickness = sum(layer.thickness for layer in layers) if layers else spec.thickness
         assert thickness is not None  # only called with a thickness or layers
-        interior = Interior(thickness, spec.back_wall_echoes, flaws, layers, spec.shear_legs)
+        interior = Interior(
+            thickness, spec.back_wall_echoes, flaws, layers, spec.shear_legs, spec.exact_stack
+        )
         interior.check_inside(specimen[0])
     except EchocalError as exc:
         return None, [_problem("specimen", exc)]

@@ -166,8 +166,9 @@ def validate_setup_file(name_or_path: str | Path) -> list[str]:
 def resolved_data(config: SetupConfig) -> dict[str, Any]:
     """The resolved setup as JSON-ready data (SI units, degrees), without the tables and
     fields a setup leaves out by default (``bench``: the ideal bench; ``specimen.layers``:
-    one solid; ``specimen.shear_legs`` 0: longitudinal paths only), so a setup written
-    before they existed reads, and digests, as it did."""
+    one solid; ``specimen.shear_legs`` 0: longitudinal paths only;
+    ``specimen.exact_stack`` false: the listed paths), so a setup written before they
+    existed reads, and digests, as it did."""
     data = config.model_dump(mode="json")
     if data.get("bench") is None:
         data.pop("bench", None)
@@ -179,7 +180,11 @@ def resolved_data(config: SetupConfig) -> dict[str, Any]:
     return data
 
 
-_SPECIMEN_DEFAULTS_LEFT_OUT: dict[str, Any] = {"layers": None, "shear_legs": 0}
+_SPECIMEN_DEFAULTS_LEFT_OUT: dict[str, Any] = {
+    "layers": None,
+    "shear_legs": 0,
+    "exact_stack": False,
+}
 """Specimen fields added after setups were first digested, with the default that leaves
 them out of :func:`resolved_data`."""
 

@@ -336,6 +336,9 @@ class Interior:
         (:mod:`echocal.wave.layered`).
     shear_legs : with layers, the most mode-converted (shear) legs an echo path may have,
         0 to :data:`MAX_SHEAR_LEGS` (0: longitudinal paths only).
+    exact_stack : with layers, the A-scan is the whole stack's exact plane-wave response
+        under a flat circular probe (:mod:`echocal.wave.stack`), its paths labelled and
+        what they leave out a remainder of its own.
     """
 
     thickness: float
@@ -343,6 +346,7 @@ class Interior:
     flaws: tuple[Flaw, ...] = ()
     layers: tuple[Layer, ...] = ()
     shear_legs: int = 0
+    exact_stack: bool = False
 
     def __post_init__(self) -> None:
         t = self.thickness
@@ -376,6 +380,15 @@ class Interior:
             raise GeometryError(
                 "specimen.shear_legs: needs [[specimen.layers]] (shear legs are listed for "
                 "layered plates); leave it out or give the layers"
+            )
+        if not isinstance(self.exact_stack, bool):
+            raise GeometryError(
+                f"specimen.exact_stack: must be true or false; got {self.exact_stack!r}"
+            )
+        if self.exact_stack and not self.layers:
+            raise GeometryError(
+                "specimen.exact_stack: needs [[specimen.layers]] (the exact stack is a "
+                "layered plate's); leave it out or give the layers"
             )
         if self.layers:
             echo_routes(len(self.layers), n, m)  # refuses an order with too many paths

@@ -28,7 +28,9 @@ the back wall behind it: its silhouette along the face's normal, on the wall's e
 mirror, is taken out of the wall's echo (:meth:`InteriorEchoes._shadows`).  A plate of
 several layers (:mod:`echocal.wave.layered`, docs/layered-parts.md) has an echo per path
 through its interfaces, each evaluated the same way (with ``shear_legs``, paths with
-mode-converted legs too).
+mode-converted legs too); with ``exact_stack``, under a flat circular probe, the A-scan is
+the whole stack's exact plane-wave response (:mod:`echocal.wave.stack`), the paths plus a
+``stack-remainder`` echo (:meth:`InteriorEchoes._whole_stack`).
 
 **Left out** (documented in docs/inside-the-specimen.md): a single plate's mode-converted
 (L→T) echoes and the shear waves' own echoes (the coefficients account for the energy
@@ -66,18 +68,37 @@ from echocal.specimen.plane import FinitePlane
 from echocal.specimen.sphere import Sphere
 from echocal.wave.curved_wall import curved_back_walls, tangent_plane
 from echocal.wave.layered import EchoPath, echo_paths, pp_coefficients
-from echocal.wave.layered_spectrum import PistonOverPlate, band_responses
+from echocal.wave.layered_spectrum import PistonOverPlate, band_responses, stack_response
 from echocal.wave.model import WaveEchoModel
 from echocal.wave.probe import PistonProbe
 from echocal.wave.shell import equivalent_mirror
+from echocal.wave.stack import damped_grid
 
-__all__ = ["FRONT_WALL", "InteriorEchoes", "LabelledEcho", "back_wall_label", "echo_list"]
+__all__ = [
+    "FRONT_WALL",
+    "STACK_REMAINDER",
+    "InteriorEchoes",
+    "LabelledEcho",
+    "back_wall_label",
+    "echo_list",
+]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
 FRONT_WALL = "front-wall"
 """Label of the front face's echo."""
+
+STACK_REMAINDER = "stack-remainder"
+"""Label of what a layered plate's exact echo train holds beyond its listed paths (the
+multiples past their order, the mode conversions past ``shear_legs``): the A-scan is the
+front wall, the paths and this remainder."""
+
+STACK_BAND_FLOOR = 1e-6
+"""The whole stack's response is computed where the pulse's spectrum is above this fraction
+of its peak (lower than the paths' 10⁻³: the band's cut spreads over the window, where
+undamping the response (:func:`echocal.wave.stack.damped_grid`) raises it towards the
+window's end)."""
 
 _SOLID_SAMPLES_PER_WAVELENGTH = 6.0
 """Flaw surfaces are sampled at λ_L/6 (at the pulse's centre frequency): two-way time steps
@@ -160,8 +181,9 @@ class InteriorEchoes:
     def labels(self) -> tuple[str, ...]:
         """Every echo's label, in the order of :meth:`echoes`."""
         if self.interior.layers:
-            paths = self.paths(0.0)
-            return (FRONT_WALL, *(p.label for p in paths), *(f.name for f in self.interior.flaws))
+            paths = tuple(p.label for p in self.paths(0.0))
+            rest = (STACK_REMAINDER,) if self._stack_route else ()
+            return (FRONT_WALL, *paths, *rest, *(f.name for f in self.interior.flaws))
         walls = tuple(back_wall_label(k) for k in range(1, self.interior.back_wall_echoes + 1))
         return (FRONT_WALL, *walls, *(f.name for f in self.interior.flaws))
 
@@ -225,6 +247,7 @@ class InteriorEchoes:
         else:
             out[FRONT_WALL] = self._front_wall(position, frame)
         unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
+        listed = np.zeros_like(self.model.frequencies, dtype=np.complex128)
         for j, path in enumerate(paths):
             if exact is not None:
                 spectrum = self.model.spectrum_of_response(exact[j + 1])
@@ -235,6 +258,7 @@ class InteriorEchoes:
                         path.equivalent_depth, 1.0, path.delay, position, frame
                     )
                 spectrum = np.conj(path.coefficient) * unit[key]
+            listed += self._attenuated(path, spectrum, front)
             if self.interior.flaws:
                 wall = float(self.interior.interfaces[max(path.turns)])
                 spectrum = spectrum - self._shadows(
@@ -246,8 +270,58 @@ class InteriorEchoes:
                     frame,
                     front,
                 )
-            out[path.label] = self._layered(path, spectrum, front)
+            out[path.label] = self.model.samples(self._attenuated(path, spectrum, front))
+        if self._stack_route:
+            out[STACK_REMAINDER] = np.zeros(self.model.window.n_samples)
+            if exact is not None:  # the exact train less the front wall and the paths
+                whole = self._whole_stack(front)
+                out[STACK_REMAINDER] = whole - out[FRONT_WALL] - self.model.samples(listed)
         return out
+
+    @property
+    def _stack_route(self) -> bool:
+        """Whether the layered plate's A-scan is the exact stack's (:meth:`_whole_stack`,
+        with a :data:`STACK_REMAINDER` echo): asked for (``exact_stack``), a flat piston
+        over a flat layered plate (other probes: the paths alone)."""
+        probe = self.model.probe
+        return (
+            self.interior.exact_stack
+            and bool(self.interior.layers)
+            and isinstance(probe, PistonProbe)
+            and probe.curvature is None
+            and isinstance(self.front, FinitePlane)
+        )
+
+    def _whole_stack(self, front: _Front) -> FloatArray:
+        """The whole plate's exact echo train (front wall, every multiple and mode
+        conversion; :func:`echocal.wave.layered_spectrum.stack_response`), on a grid
+        longer in period than the model's and damped (:func:`echocal.wave.stack.damped_grid`),
+        so that the plate's ringing past the window does not fold back onto it."""
+        model = self.model
+        probe = model.probe
+        assert isinstance(probe, PistonProbe)
+        tilt = math.radians(self._axis_angles(front)[0])
+        distance = front.water_path * math.cos(tilt)
+        c_w = model.sound_speed
+        window = model.window
+        end = window.start + window.n_samples / window.fs
+        support = model.pulse.support
+        factor, damping = damped_grid(
+            end + support - model.grid_start, end + support, model.grid_period
+        )
+        f = model.refined_frequencies(factor)
+        magnitude = np.abs(model.pulse.spectrum(f))
+        band = (magnitude > STACK_BAND_FLOOR * magnitude.max()) & (f > 0.0)
+        setting = PistonOverPlate(
+            probe.radius, self._medium_at_model_speed, self.interior.layers, distance, tilt
+        )
+        response = np.zeros(f.size, dtype=np.complex128)
+        span = end - 2.0 * distance / c_w
+        complex_f = f[band] + 1j * damping / (2.0 * math.pi)
+        response[band] = stack_response(setting, complex_f, span)
+        if model.attenuation is not None:
+            response *= np.exp(-np.asarray(model.attenuation(f)) * 2.0 * front.water_path)
+        return model.refined_samples(response, factor, damping)
 
     def _front_wall(self, position: FloatArray, frame: FloatArray) -> FloatArray:
         """The front face's echo by the wave model (its reflection R(θ) at each sample)."""
@@ -283,6 +357,8 @@ class InteriorEchoes:
                     for leg, mode in zip(path.legs, path.modes, strict=True)
                 ],
             }
+        if self._stack_route:
+            out[STACK_REMAINDER] = {"paths": "the exact stack's echo train less those listed"}
         for flaw in self.interior.flaws:
             host = len(self._flaw_column(flaw).layers)
             out[flaw.name] = {"layer": host, "material": layers[host - 1].material.name}
@@ -326,11 +402,12 @@ class InteriorEchoes:
             longitudinal_speed=self.model.sound_speed,
         )
 
-    def _layered(self, path: EchoPath, spectrum: ComplexArray, front: _Front) -> FloatArray:
-        """A layered plate's echo along ``path`` from its ``spectrum`` before attenuation
-        (its equivalent water mirror's echo: :meth:`_mirror` with coefficient 1 scaled by
-        conj(c), the e^{−iωt} phase in numpy's convention, less the flaws' shadows),
-        attenuated in each layer over the distance the path runs there."""
+    def _attenuated(self, path: EchoPath, spectrum: ComplexArray, front: _Front) -> ComplexArray:
+        """A layered plate's echo spectrum along ``path`` from its ``spectrum`` before
+        attenuation (its equivalent water mirror's echo: :meth:`_mirror` with coefficient 1
+        scaled by conj(c), the e^{−iωt} phase in numpy's convention, or its plane-wave
+        response), attenuated in each layer over the distance the path runs there and in
+        the water."""
         f = self.model.frequencies
         loss = np.zeros_like(f)
         for layer, mode, length in path.attenuation_path:
@@ -339,8 +416,7 @@ class InteriorEchoes:
             if mode == "S" and material.shear_attenuation is not None:
                 law = material.shear_attenuation
             loss += np.asarray(law.alpha(f)) * length
-        spectrum = spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
-        return self.model.samples(spectrum)
+        return spectrum * np.exp(-loss) * self.model.attenuation_factor(2.0 * front.water_path)
 
     # ------------------------------------------------------------------ geometry
     @property

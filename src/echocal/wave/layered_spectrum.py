@@ -43,13 +43,21 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import j1
+from scipy.special import j1, jv
 
 from echocal.materials import Material
 from echocal.specimen.interior import Layer
 from echocal.wave.layered import mode_coefficients, path_factors
+from echocal.wave.stack import stack_reflection
 
-__all__ = ["FREQUENCIES", "PistonOverPlate", "Route", "band_responses", "path_responses"]
+__all__ = [
+    "FREQUENCIES",
+    "PistonOverPlate",
+    "Route",
+    "band_responses",
+    "path_responses",
+    "stack_response",
+]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -63,10 +71,11 @@ _BAND_FLOOR = 1e-3
 """Frequencies where the pulse's spectrum is below this fraction of its peak are left out."""
 
 
-def _jinc(x: FloatArray) -> FloatArray:
-    """2J₁(x)/x with its limit 1 at x = 0."""
+def _jinc(x: ComplexArray | FloatArray) -> ComplexArray | FloatArray:
+    """2J₁(x)/x with its limit 1 at x = 0 (x real or complex)."""
     safe = np.where(np.abs(x) < 1e-8, 1.0, x)
-    return np.where(np.abs(x) < 1e-8, 1.0, 2.0 * j1(safe) / safe)
+    bessel = jv(1, safe) if np.iscomplexobj(safe) else j1(safe)
+    return np.where(np.abs(x) < 1e-8, 1.0, 2.0 * bessel / safe)
 
 
 def _slowness(c: float, s: FloatArray, c_w: float) -> ComplexArray:
@@ -143,16 +152,19 @@ def _theta_nodes(
     return nodes, weights
 
 
-def _ring_weight(theta: FloatArray, ka: FloatArray, tilt: float) -> FloatArray:
-    """A(θ, f) ``(n_f, n)`` (module doc) for ka ``(n_f,)``."""
+def _ring_weight(
+    theta: FloatArray, ka: FloatArray | ComplexArray, tilt: float
+) -> FloatArray | ComplexArray:
+    """A(θ, f) ``(n_f, n)`` (module doc) for ka ``(n_f,)`` (complex at a complex
+    frequency: A is analytic in ω)."""
     st, ct = np.sin(theta), np.cos(theta)
     if abs(tilt) < 1e-12:
         return 2.0 * math.pi * _jinc(ka[:, None] * st) ** 2
-    n_half = 8 + math.ceil(2.0 * float(ka.max()) * abs(math.sin(tilt)))
+    n_half = 8 + math.ceil(2.0 * float(np.abs(ka).max()) * abs(math.sin(tilt)))
     phi = np.linspace(0.0, math.pi, n_half + 1)
     w_phi = np.full(phi.size, 2.0 * math.pi / n_half)  # both half circles
     w_phi[[0, -1]] *= 0.5
-    out = np.zeros((ka.size, theta.size))
+    out = np.zeros((ka.size, theta.size), dtype=np.result_type(ka, np.float64))
     along = st[:, None] * np.cos(phi) * math.cos(tilt)
     across2 = (st[:, None] * np.sin(phi)) ** 2
     lift = (ct * math.sin(tilt))[:, None]
@@ -234,4 +246,36 @@ def band_responses(
         smooth = responses[j] * np.exp(-2j * math.pi * nodes * delays[j])
         values = np.interp(fb, nodes, smooth.real) + 1j * np.interp(fb, nodes, smooth.imag)
         out[j, band] = values * np.exp(2j * math.pi * fb * delays[j])
+    return out
+
+
+def stack_response(setting: PistonOverPlate, freqs: ComplexArray, span: float) -> ComplexArray:
+    """The whole plate's exact response V(f) ``(n_f,)`` in ``setting`` at ``freqs`` [Hz]
+    ``(n_f,)`` (real parts positive; complex frequencies f + iε/2π give the response
+    damped by e^{−εt}): the module doc's integral with the plate's own reflection
+    coefficient R(sin θ/c_w, f) (:func:`echocal.wave.stack.stack_reflection`: every
+    multiple and mode conversion, attenuation as complex slownesses) in place of a path's
+    C·exp(iωΣh q): the front face's echo and the whole echo train in one.  The θ panels
+    resolve the train's components up to ``span`` [s] after the front face's echo (the
+    vertical time of any path that long spreads at most span·(1 − c q(θ)) over θ, c q
+    the cosine in its fastest-spreading layer and mode)."""
+    radius, medium, layers = setting.radius, setting.medium, setting.layers
+    c_w = medium.longitudinal_speed
+    coarse = np.linspace(0.0, 0.5 * math.pi, 2001)
+    s = np.sin(coarse)
+    spread = np.zeros(coarse.size)
+    for layer in layers:
+        for c in (layer.material.longitudinal_speed, layer.material.shear_speed):
+            spread = np.maximum(spread, span * (1.0 - (c * _slowness(c, s, c_w)).real))
+    f_max = float(freqs.real.max())
+    theta, weights = _theta_nodes(radius, f_max, c_w, setting.distance, setting.tilt, spread)
+    slowness = np.sin(theta) / c_w
+    water = 2.0 * setting.distance * np.cos(theta) / c_w
+    out = np.empty(freqs.size, dtype=np.complex128)
+    for i, f in enumerate(freqs):
+        omega = 2.0 * math.pi * complex(f)
+        ka = np.array([omega / c_w * radius])
+        weight = _ring_weight(theta, ka, setting.tilt)[0] * weights * (ka[0] ** 2 / (4.0 * math.pi))
+        r = stack_reflection(slowness, complex(f), layers, medium)
+        out[i] = np.sum(weight * np.exp(1j * omega * water) * r)
     return out
