@@ -385,3 +385,31 @@ def test_a_suspender_tripped_from_another_thread_resumes_to_the_uninterrupted_ru
     _check_resumed_run(outcome, docs, *uninterrupted)
     n = outcome.plan_result.n_measurements
     assert n <= counts["triggers"] <= n + 1
+
+
+def test_a_read_answered_none_after_a_rewind_is_asked_again():
+    """A suspension landing on the plan's read outside the event bundle: the RunEngine
+    replays the read from its cache and answers the plan's pending read with None (seen
+    in CI: the detector's fields were missing and the plan stopped).  The plan reads the
+    device again; a device that never answers is a one-line error naming it."""
+    from echocal.errors import EchocalValueError
+    from echocal.rigs.plans import READ_ATTEMPTS, _read
+
+    class Device:
+        name = "ascan"
+
+    reading = {"ascan_samples": {"value": [0.0], "timestamp": 0.0}}
+    plan = _read(Device())
+    messages = [next(plan)]
+    messages.append(plan.send(None))  # the rewound read's reply: asked again
+    with pytest.raises(StopIteration) as stop:
+        plan.send(reading)
+    assert stop.value.value == reading
+    assert [m.command for m in messages] == ["read", "read"]
+    assert all(m.obj is messages[0].obj for m in messages)
+
+    plan = _read(Device())
+    next(plan)
+    with pytest.raises(EchocalValueError, match="ascan: the device's read returned nothing"):
+        for _ in range(READ_ATTEMPTS):
+            plan.send(None)

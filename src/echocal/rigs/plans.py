@@ -164,6 +164,26 @@ def _value(reading: Mapping[str, Any], key: str, what: str) -> Any:
     return reading[key]["value"]
 
 
+READ_ATTEMPTS = 3
+"""How often :func:`_read` asks a device before it gives up."""
+
+
+def _read(device: Any) -> Generator[Msg, Any, dict[str, Any]]:
+    """A device's reading, outside an event bundle.  A suspension that lands on the read
+    rewinds the RunEngine to the last checkpoint and replays the read; the replay's reply
+    goes to the replay, and the plan's pending read is answered ``None``: it is asked
+    again (at most :data:`READ_ATTEMPTS` times, then a one-line error naming the device)."""
+    for _ in range(READ_ATTEMPTS):
+        values = yield from bps.read(device)
+        if values:
+            return dict(values)
+    name = getattr(device, "name", repr(device))
+    raise EchocalValueError(
+        f"{name}: the device's read returned nothing {READ_ATTEMPTS} times in a row "
+        "(check that it is connected and has readable signals)"
+    )
+
+
 def calibrate_plan(
     motors: Any,
     detector: Any,
@@ -308,7 +328,7 @@ def calibrate_plan(
             # rewound message gives the plan may be incomplete)
             reading: dict[str, Any] = {}
             for device in (detector, *axes):
-                reading.update((yield from bps.read(device)) or {})
+                reading.update((yield from _read(device)))
             bridge.replies.put(_ascan(reading, keys, _reached(reading, axes, pose)))
     except BaseException as exc:
         bridge.replies.put(_Aborted(f"calibrate_plan stopped: {type(exc).__name__}: {exc}"))
