@@ -146,3 +146,18 @@ def simulated_lab(folder: Path, name: str, setup: Path) -> tuple[ModuleType, Pat
         encoding="utf-8",
     )
     return module, rig
+
+
+def tcp_rig_file(path: Path, address: str, setup: str | Path | None = None, **rig: object) -> Path:
+    """Write ``path``: a rig file whose positioner and receiver are the TCP instrument at
+    ``address`` (``host:port``; a 30 s timeout: the first simulation in a process compiles
+    its kernels), naming ``setup`` (a built-in name or a file) and any other ``[rig]`` keys
+    (written as given). Returns ``path``."""
+    lines = ["[rig]", 'name = "emulated"']
+    if setup is not None:
+        lines.append(f'setup = "{setup.as_posix() if isinstance(setup, Path) else setup}"')
+    lines += [f"{key} = {value}" for key, value in rig.items()]
+    for part in ("positioner", "receiver"):
+        lines += [f"[rig.{part}]", 'driver = "tcp"', f'address = "{address}"', "timeout = 30"]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from cli_helpers import run_main
+from cli_helpers import run_main, tcp_rig_file
 from echocal.calibrate import calibrate
 from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.cli import app
@@ -66,15 +66,7 @@ def test_the_emulated_rig_searches_by_the_posterior_as_far_as_the_simulator(
         load_setup("immersion-5mhz", seed=SEED), initial_pose=Pose(*POSITION)
     ) as server:
         host, port = server.address
-        rig = tmp_path / "rig.toml"
-        rig.write_text(
-            '[rig]\nname = "emulated"\nsetup = "immersion-5mhz"\n'
-            + "".join(
-                f'[rig.{part}]\ndriver = "tcp"\naddress = "{host}:{port}"\ntimeout = 30\n'
-                for part in ("positioner", "receiver")
-            ),
-            encoding="utf-8",
-        )
+        rig = tcp_rig_file(tmp_path / "rig.toml", f"{host}:{port}", "immersion-5mhz")
         args = ["calibrate", "--rig", str(rig), "--position", "0,0,50", "--seed", str(SEED)]
         args += ["--x0", f"{X0[0]},{X0[1]}", "--budget", "60", "--no-plots", "--json"]
         code, out, err = run_main([*args, "--out", str(tmp_path / "run")], capsys, monkeypatch)

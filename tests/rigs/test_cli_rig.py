@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from cli_helpers import flat, run_main, tiny_setup_toml
+from cli_helpers import flat, run_main, tcp_rig_file, tiny_setup_toml
 from echocal.geometry import Pose
 from echocal.measurement import Faults, InstrumentServer
 from echocal.setups import load_setup
@@ -41,16 +41,7 @@ def emulator(setup_file: Path):
 
 
 def _tcp_rig(tmp_path: Path, address: str, setup: Path | None, **extra: str) -> Path:
-    lines = ["[rig]", 'name = "emulated"']
-    if setup is not None:
-        lines.append(f'setup = "{setup.as_posix()}"')
-    lines += [f"{k} = {v}" for k, v in extra.items()]
-    for part in ("positioner", "receiver"):
-        # a generous timeout: the first simulation in a process compiles its kernels
-        lines += [f"[rig.{part}]", 'driver = "tcp"', f'address = "{address}"', "timeout = 30"]
-    path = tmp_path / "rig.toml"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return tcp_rig_file(tmp_path / "rig.toml", address, setup, **extra)
 
 
 def test_rig_check_prints_identity_limits_and_one_ascan(

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from cli_helpers import TILTED_PLATE as TILTED
-from cli_helpers import tiny_setup_toml
+from cli_helpers import tcp_rig_file, tiny_setup_toml
 from echocal.calibrate import calibrate
 from echocal.geometry import Pose, convert_angles
 from echocal.measurement import InstrumentServer, SourceObjective
@@ -44,15 +44,7 @@ def test_simulator_tcp_rig_and_bluesky_calibrate_identically(tmp_path: Path):
     emulated = load_setup(setup)
     with InstrumentServer(emulated, initial_pose=Pose(*POSITION)) as server:
         host, port = server.address
-        rig_file = tmp_path / "rig.toml"
-        rig_file.write_text(
-            "[rig]\n"
-            + "".join(
-                f'[rig.{part}]\ndriver = "tcp"\naddress = "{host}:{port}"\ntimeout = 30\n'
-                for part in ("positioner", "receiver")
-            ),
-            encoding="utf-8",
-        )
+        rig_file = tcp_rig_file(tmp_path / "rig.toml", f"{host}:{port}")
         with connect_rig(rig_file) as rig:
             on_rig = calibrate(
                 SourceObjective(rig, POSITION, pulse=emulated.pulse, parameterization="tilt"),

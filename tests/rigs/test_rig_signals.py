@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from cli_helpers import flat, run_main, simulated_lab, tiny_setup_toml
+from cli_helpers import flat, run_main, simulated_lab, tcp_rig_file, tiny_setup_toml
 from echocal.geometry import Pose
 from echocal.measurement import InstrumentServer
 from echocal.setups import load_setup
@@ -73,11 +73,7 @@ def run_until_signal(
 def _tcp(source: Served, tmp_path: Path, setup: Path) -> tuple[Any, Path, float]:
     server = InstrumentServer(source, initial_pose=Pose(0.0, 0.0, 0.016), move_time=0.02)
     host, port = server.address
-    lines = ["[rig]", f'setup = "{setup.as_posix()}"']
-    for part in ("positioner", "receiver"):
-        lines += [f"[rig.{part}]", 'driver = "tcp"', f'address = "{host}:{port}"', "timeout = 30"]
-    rig = tmp_path / "tcp-rig.toml"
-    rig.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    rig = tcp_rig_file(tmp_path / "tcp-rig.toml", f"{host}:{port}", setup)
     return server, rig, 0.0  # the line protocol sends float64: exact
 
 
