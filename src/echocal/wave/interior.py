@@ -247,7 +247,8 @@ class InteriorEchoes:
         else:
             out[FRONT_WALL] = self._front_wall(position, frame)
         unit: dict[tuple[float, float], ComplexArray] = {}  # paths of equal legs
-        listed = np.zeros_like(self.model.frequencies, dtype=np.complex128)
+        whole_stack = self._stack_route and exact is not None
+        listed = np.zeros_like(self.model.frequencies, dtype=np.complex128)  # paths' sum
         for j, path in enumerate(paths):
             if exact is not None:
                 spectrum = self.model.spectrum_of_response(exact[j + 1])
@@ -258,7 +259,9 @@ class InteriorEchoes:
                         path.equivalent_depth, 1.0, path.delay, position, frame
                     )
                 spectrum = np.conj(path.coefficient) * unit[key]
-            listed += self._attenuated(path, spectrum, front)
+            echo = self._attenuated(path, spectrum, front)
+            if whole_stack:
+                listed += echo
             if self.interior.flaws:
                 wall = float(self.interior.interfaces[max(path.turns)])
                 spectrum = spectrum - self._shadows(
@@ -270,10 +273,11 @@ class InteriorEchoes:
                     frame,
                     front,
                 )
-            out[path.label] = self.model.samples(self._attenuated(path, spectrum, front))
+                echo = self._attenuated(path, spectrum, front)
+            out[path.label] = self.model.samples(echo)
         if self._stack_route:
             out[STACK_REMAINDER] = np.zeros(self.model.window.n_samples)
-            if exact is not None:  # the exact train less the front wall and the paths
+            if whole_stack:  # the exact train less the front wall and the paths
                 whole = self._whole_stack(front)
                 out[STACK_REMAINDER] = whole - out[FRONT_WALL] - self.model.samples(listed)
         return out
