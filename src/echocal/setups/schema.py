@@ -14,6 +14,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    StrictBool,
     ValidationError,
     model_validator,
 )
@@ -178,7 +179,7 @@ class SpecimenConfig(_Model):
     shear_legs: Annotated[int, NotBool] = Field(default=0, ge=0, le=MAX_SHEAR_LEGS)
     """With layers: the most mode-converted (shear) legs an echo path may have; each such
     path is an echo of its own (0: longitudinal paths only)."""
-    exact_stack: bool = False
+    exact_stack: StrictBool = False
     """With layers, under a flat circular probe: the A-scan is the whole stack's exact
     plane-wave response (every multiple and mode conversion), the listed paths plus a
     ``stack-remainder`` echo; costlier (docs/layered-parts.md)."""
