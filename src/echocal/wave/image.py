@@ -17,8 +17,18 @@ whole footprint of the diffracted beam (about a thousand samples for a 12.7 mm p
 
 **When it applies.** :func:`find_plane` accepts a pose when every ray of the beam's
 footprint (the Kirchhoff fan's rim, a ring at half its radius and the axis) hits the same
-plane first: the plane is then, for the beam, infinite and unobstructed.  Anything else
-(curved parts, edges, several shapes in the beam) uses the Kirchhoff sum.
+plane first: the plane is then, for the beam, infinite and unobstructed.  Asked to
+(``edge_clearance``), it also accepts a rectangular plate whose edge cuts the footprint
+when the plate's echo and its edges' echo are apart in time: the Kirchhoff integral over
+the plate is the one over its infinite plane (the image form, whose response lasts while
+the paths from the face to its image do: 2h ± 2ρ, h the plane's distance from the
+aperture's origin and ρ the face's radius about it) less the integral over the plane
+beyond the plate's edges, nothing of which arrives before the paths 2(D − ρ), D the
+distance from the aperture's origin to the nearest point beyond the edges.  When D − h
+is at least 2ρ plus the pulse's support (in path), the image form gives the plate's echo
+exactly and leaves out only the edges' own, later echo, as it does wherever the plate
+fills the footprint.  Anything else (curved parts, edges near the specular point,
+several shapes in the beam) uses the Kirchhoff sum.
 
 **Sampling.** Across the image face the two-way delay changes by sin 2α per unit length
 (α the beam axis's incidence on the plane), so the nodes lie at most
@@ -66,6 +76,7 @@ from numpy.typing import NDArray
 
 from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
+from echocal.specimen.plane import FinitePlane
 from echocal.wave import sir
 from echocal.wave.probe import Aperture
 
@@ -79,6 +90,7 @@ __all__ = [
     "ImagePlane",
     "angular_bandwidth",
     "bandwidth_ring_count",
+    "edge_margin",
     "face_quadrature",
     "face_samples",
     "find_plane",
@@ -421,6 +433,8 @@ def find_plane(
     directions: FloatArray,
     basis: FloatArray,
     position: FloatArray,
+    edge_clearance: float | None = None,
+    may_miss: NDArray[np.bool_] | None = None,
 ) -> ImagePlane | None:
     """The plane that every ray of a footprint hits first, or None.
 
@@ -431,14 +445,50 @@ def find_plane(
         the last one is the beam axis.
     basis : ``(3, 3)`` world → aperture rotation (rows x′, y′, −n).
     position : [m] ``(3,)`` the aperture frame's origin in world coordinates.
+    edge_clearance : [m] None: every ray must hit the plane.  Else the rays may also pass
+        beyond the edges of the rectangular plate (:class:`~echocal.specimen.FinitePlane`)
+        that the axis hits, hitting nothing else, when the nearest point of its plane
+        beyond its edges lies at least this much farther from ``position`` than the plane
+        does (:func:`edge_margin`; see the module's "When it applies").
+    may_miss : ``(n,)`` with ``edge_clearance``, the rays that may pass the plate's edges
+        (the rest must hit it); None: any but the axis.
     """
     distance, normal, index = _cast_soa(shapes, origins, directions)
-    if not np.all(np.isfinite(distance)) or np.any(index != index[0]):
+    if not np.isfinite(distance[-1]):
         return None
-    shape = shapes[int(index[0])]
+    shape = shapes[int(index[-1])]
     if shape.kind != "plane":
         return None
+    hit = np.isfinite(distance)
+    if np.any(index[hit] != index[-1]):
+        return None
+    if not np.all(hit):
+        if edge_clearance is None or not isinstance(shape, FinitePlane):
+            return None
+        if may_miss is not None and np.any(~hit & ~may_miss):
+            return None
+        if edge_margin(shape, position) < edge_clearance:
+            return None
+        # the rays that pass the plate must meet its plane ahead (behind it, nothing else)
+        ahead = (shape.normal @ directions[:, ~hit]) * float(shape.normal @ directions[:, -1])
+        if np.any(ahead <= 0.0):
+            return None
     axis_point = origins[:, -1] + directions[:, -1] * distance[-1]
     point = basis @ (axis_point - position)
     n = basis @ normal[:, -1]  # facing the ray: towards the probe
     return ImagePlane(point=point, normal=n / np.linalg.norm(n))
+
+
+def edge_margin(plate: FinitePlane, position: FloatArray) -> float:
+    """[m] D − h: how much farther from ``position`` [m] ``(3,)`` the nearest point of
+    ``plate``'s plane beyond its edges lies (D) than the plane itself (h); 0 when the foot
+    of the perpendicular from ``position`` lies on or beyond an edge."""
+    offset = position - plate.center
+    h = abs(float(plate.normal @ offset))
+    gap = min(
+        0.5 * plate.width - abs(float(plate.x_axis @ offset)),
+        0.5 * plate.height - abs(float(plate.y_axis @ offset)),
+    )
+    if gap <= 0.0:
+        return 0.0
+    return math.hypot(h, gap) - h

@@ -318,12 +318,21 @@ class WaveEchoModel:
         return np.ascontiguousarray(o), np.ascontiguousarray(d)
 
     def image_plane(
-        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+        self,
+        shapes: tuple[Shape, ...],
+        position: FloatArray,
+        frame: FloatArray,
+        edges: bool = False,
     ) -> image.ImagePlane | None:
         """The plane that fills the beam's whole footprint at this pose, in the aperture
         frame, or None (the Kirchhoff sum applies); see :func:`echocal.wave.image.find_plane`.
 
-        ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n (beam along −n)."""
+        ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n (beam along −n).
+        ``edges``: also a rectangular plate whose edge cuts the footprint, when its edges'
+        echo arrives after the plate's own (:attr:`_edge_clearance`): the image form then
+        gives the plate's echo exactly and leaves out the edges' later echo (the axis
+        and the footprint's inner ring must still hit the plate: only its rim may pass an
+        edge)."""
         basis = np.stack([frame[:, 0], frame[:, 1], -frame[:, 2]])
         axis = -frame[:, 2:3]
         distance, _, _ = _cast_soa(shapes, position[:, None].copy(), np.ascontiguousarray(axis))
@@ -338,7 +347,26 @@ class WaveEchoModel:
             position,
             frame,
         )
-        return image.find_plane(shapes, o, d, basis, position)
+        clearance = self._edge_clearance if edges else None
+        return image.find_plane(shapes, o, d, basis, position, clearance, self._rim_rays)
+
+    @cached_property
+    def _rim_rays(self) -> NDArray[np.bool_]:
+        """``(2·_FOOTPRINT_RAYS + 1,)`` the footprint's rim rays: the only ones that may
+        pass a plate's edges (the edge then lies in the beam's outer fringe, where the
+        Kirchhoff sum's taper weights the surface least)."""
+        rim = np.zeros(self._footprint_rays.shape[1], dtype=bool)
+        rim[:_FOOTPRINT_RAYS] = True
+        return rim
+
+    @cached_property
+    def _edge_clearance(self) -> float:
+        """[m] 2ρ + c·s: the margin by which the plane beyond a plate's edges must lie
+        farther from the aperture's origin than the plane itself for the plate's echo
+        (paths 2h ± 2ρ, ρ the face's radius about the origin, a bowl's sag included) and
+        its edges' (paths from 2(D − ρ)) to be apart after the pulse (half-support s)."""
+        rho = math.hypot(self.probe.radius, self.probe.depth)
+        return 2.0 * rho + self.sound_speed * self.pulse.support
 
     def image_nodes(self, plane: image.ImagePlane) -> tuple[FloatArray, FloatArray]:
         """The image form's quadrature over the probe's mirror image across ``plane``:
@@ -526,7 +554,7 @@ class WaveEchoModel:
     ) -> FloatArray:
         # only a plane can fill the beam: curved parts skip the two extra ray casts
         has_plane = self.image_planes and any(shape.kind == "plane" for shape in shapes)
-        plane = self.image_plane(shapes, position, frame) if has_plane else None
+        plane = self.image_plane(shapes, position, frame, edges=True) if has_plane else None
         if plane is not None:
             spectrum, path_time = self.image_spectrum(plane)
             if path_time > 0.0:
