@@ -176,7 +176,10 @@ def _cpu_per_call(fn: Callable[[], object], min_seconds: float) -> float:
 
 
 def tilt_table(
-    min_seconds: float, n_freq: int, max_direct_tilt: float = 90.0
+    min_seconds: float,
+    n_freq: int,
+    max_direct_tilt: float = 90.0,
+    setups: tuple[str, ...] = (),
 ) -> list[dict[str, float | str]]:
     """CPU time per noiseless A-scan of the wave and ray models at :data:`TILTS_DEG` off
     the normal, on ``immersion-5mhz`` (the plate: tilted from its normal, along the
@@ -187,7 +190,9 @@ def tilt_table(
     distance and incidence (up to ``max_direct_tilt`` [deg]), with the agreement of |V| at
     5 MHz; and the same probe 50 mm above the level ``flat-plate``.  Where the image form
     applies, also the wave model with the face rule only (the pair rule off: the model
-    before it), the face rule's nodes and the pair rule's pairs."""
+    before it), the face rule's nodes and the pair rule's pairs.  ``setups``: only the
+    rows of these setups (their labels' first words: ``immersion-5mhz``, ``plate``,
+    ``sphere``); empty, all."""
     import _rayleigh_compiled as direct
 
     rows: list[dict[str, float | str]] = []
@@ -200,6 +205,8 @@ def tilt_table(
         ("12.7 mm over a sphere", sphere_ray, np.array([0.0, 0.0, 0.05])),
     )
     for label, ray, position in cases:
+        if setups and _setup_key(label) not in setups:
+            continue
         wave = dataclasses.replace(ray, reflection="wave")
         model, shapes = wave.wave_model, _as_shapes(wave.specimen)
         pos = position[None]
@@ -239,6 +246,15 @@ def tilt_table(
                 row.update(_direct_sum(model, plane, n_freq, direct))
             rows.append(row)
     return rows
+
+
+SETUP_KEYS = ("immersion-5mhz", "plate", "sphere")
+"""The tilt table's setups as ``--setups`` names them."""
+
+
+def _setup_key(label: str) -> str:
+    """The :data:`SETUP_KEYS` name of a tilt-table row's setup ``label``."""
+    return next(key for key in SETUP_KEYS if key in label)
 
 
 @contextlib.contextmanager
@@ -440,6 +456,13 @@ def main() -> None:
     parser.add_argument("--smoke", action="store_true", help="one repeat of everything cheap")
     parser.add_argument("--json", type=Path, help="write every number to this file")
     parser.add_argument("--tilts-only", action="store_true", help="only the tilt table")
+    parser.add_argument(
+        "--setups",
+        nargs="+",
+        choices=SETUP_KEYS,
+        default=[],
+        help="the tilt table's rows for these setups only (default: all)",
+    )
     args = parser.parse_args()
     cheap = args.quick or args.smoke
     repeats = 1 if args.smoke else (3 if args.quick else 7)
@@ -448,6 +471,7 @@ def main() -> None:
         0.05 if cheap else 0.5,
         8 if args.smoke else (12 if args.quick else 32),
         max_direct_tilt=10.0 if args.smoke else 90.0,  # the direct sum at 20°: ~10 s
+        setups=tuple(args.setups),
     )
     result["tilt_table"] = table
     print(tilt_markdown(table))

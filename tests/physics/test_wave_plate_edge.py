@@ -85,12 +85,11 @@ def test_edge_margin_is_the_distance_beyond_the_edges_less_the_height() -> None:
     plate = PLATE[0]
     h = float(plate.normal @ POSITION)
     s = np.linspace(-0.05, 0.05, 1001)
-    rim = [
-        plate.center + sx * plate.x_axis + sy * plate.y_axis
-        for sx, sy in [*((0.05, v) for v in s), *((-0.05, v) for v in s)]
-        + [*((v, 0.05) for v in s), *((v, -0.05) for v in s)]
-    ]
-    brute = min(float(np.linalg.norm(p - POSITION)) for p in rim) - h
+    edge = np.full_like(s, 0.05)
+    u = np.concatenate([edge, -edge, s, s])  # along the width, then along the height
+    v = np.concatenate([s, s, edge, -edge])
+    rim = plate.center[:, None] + np.outer(plate.x_axis, u) + np.outer(plate.y_axis, v)
+    brute = float(np.linalg.norm(rim - POSITION[:, None], axis=0).min()) - h
     assert image.edge_margin(plate, POSITION) == pytest.approx(brute, abs=1e-5)
     beyond = POSITION + 0.06 * plate.x_axis
     assert image.edge_margin(plate, beyond) == 0.0
