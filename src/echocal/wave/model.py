@@ -32,7 +32,8 @@ the beam axis's incidence θ (finer, and costlier, at large tilts: 6 ms per A-sc
 normal incidence, 0.05 s at 10°, 0.18 s at 20° for a 12.7 mm probe at 50 mm).  Closest hits
 keep visibility.
 
-**Planes.** Over a plane that fills the beam, the same physics is evaluated exactly and far
+**Planes.** Over a plane that fills the beam (or a plate whose edges' echo comes after its
+own, :meth:`WaveEchoModel.image_plane`), the same physics is evaluated exactly and far
 more cheaply by the image form (:mod:`echocal.wave.image`): the probe's SIR integrated over
 its mirror image, a few hundred face nodes at most near normal incidence (0.5 ms per A-scan
 there); for a flat disc off the normal, the same double integral over pairs of the two
