@@ -232,7 +232,7 @@ def tilt_table(
                 "wave_s": t_wave,
                 "wave_over_ray": t_wave / t_ray,
             }
-            plane = model.image_plane(shapes, position, frames[0])
+            plane = model.image_plane(shapes, position, frames[0], edges=True)  # as A-scans
             if plane is not None:
                 row["face_nodes"] = float(_face_nodes(model, plane))
                 row["pairs"] = float(_pairs(model, plane)) if model._pairs_pay(plane) else 0.0
