@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import references as ref
 import scipy.signal
 
 from echocal.geometry import tilt_frame
@@ -65,3 +66,19 @@ def transfer(
 def envelope_peak(x: np.ndarray) -> float:
     """The largest value of the analytic envelope of an A-scan ``x`` (n_samples,)."""
     return float(np.abs(scipy.signal.hilbert(x)).max())
+
+
+def exact_lobe(radius: float, distance: float, tilt: float) -> float:
+    """The exact broadband tilt lobe: the envelope peak of :data:`PULSE`'s echo from a rigid
+    plane ``distance`` [m] from a flat piston of radius ``radius`` [m] tilted ``tilt`` [deg]
+    (the plane ``distance``/cos(tilt) along the axis), relative to normal incidence, by the
+    exact angular spectrum (``references.pulse_echo_plane``) over the pulse's band."""
+    along = distance / math.cos(math.radians(tilt))
+    freqs = ref._band(radius, distance, F0, SIGMA_T, C, tilt)
+    spectrum = ref.gabor_spectrum(freqs, F0, SIGMA_T)
+    v_tilt = np.array([ref.pulse_echo_plane(radius, f, along, tilt, C) for f in freqs])
+    v_level = np.array([ref.pulse_echo_plane(radius, f, distance, 0.0, C) for f in freqs])
+    return float(
+        ref.pulse_echo_envelope_peak(v_tilt, freqs, spectrum)
+        / ref.pulse_echo_envelope_peak(v_level, freqs, spectrum)
+    )
