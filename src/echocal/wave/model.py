@@ -330,7 +330,7 @@ class WaveEchoModel:
 
         ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n (beam along −n).
         ``edges``: also a rectangular plate whose edge cuts the footprint, when its edges'
-        echo arrives after the plate's own (:attr:`_edge_clearance`): the image form then
+        echo arrives after the plate's own (``_edge_clearance``): the image form then
         gives the plate's echo exactly and leaves out the edges' later echo (the axis
         and the footprint's inner ring must still hit the plate: only its rim may pass an
         edge)."""
