@@ -457,6 +457,26 @@ def test_setup_show_output_validates_and_loads_back_the_same(tmp_path, source):
     assert again.transducer.directivity == original.transducer.directivity
     assert again.transducer.pinhole_distance == original.transducer.pinhole_distance
     assert again.description == original.description
+    assert _inside(again) == _inside(original)
+
+
+def _inside(setup: VirtualSetup) -> tuple[object, ...] | None:
+    """A setup's interior as comparable data, lengths [m] to the 15 digits ``setup show``
+    writes (8.2 mm is 0.008199999999999999 parsed, 0.0082 shown: 1 ulp)."""
+    interior = setup.interior
+    if interior is None:
+        return None
+
+    def digits(*values: float) -> tuple[float, ...]:
+        return tuple(float(f"{v:.15g}") for v in values)
+
+    flaws = [
+        (f.name, f.kind, digits(*f.position, f.diameter, f.length or 0.0), tuple(f.axis))
+        for f in interior.flaws
+    ]
+    layers = [(layer.material, digits(layer.thickness)) for layer in interior.layers]
+    settings = (interior.back_wall_echoes, interior.shear_legs, interior.exact_stack)
+    return digits(interior.thickness), layers, settings, flaws
 
 
 def test_setup_show_prints_the_defaults_in_effect(tmp_path):

@@ -210,3 +210,71 @@ def test_the_built_in_layered_setup_shows_its_holes_in_the_aluminium() -> None:
     assert listed["interface-2.0.2"].amplitude == 0.0
     assert math.isnan(listed["interface-2.0.2"].tof_s)
     assert listed["interface-2.1.2"].tof_s < setup.window.end
+
+
+RESIN = '{ name = "resin", density = 1200, longitudinal_speed = "2600 m/s", shear_speed = 1100 }'
+SDH_IN_RESIN = """
+[[specimen.flaws]]
+name = "sdh"
+kind = "side-drilled-hole"
+position = ["1 mm", "0 mm", "-7 mm"]
+diameter = "1 mm"
+length = "20 mm"
+axis = [1, 0, 0]
+"""
+
+
+def test_setup_show_prints_the_layers_flaws_and_exact_stack(tmp_path: Path) -> None:
+    """``setup show`` (TOML and ``--json``) gives each layer's material and thickness [m],
+    the flaws' geometry [m] and the stack settings, and its TOML loads back the same part."""
+    path = tmp_path / "layered.toml"
+    top = "shear_legs = 1\nexact_stack = true"
+    path.write_text(_text(top=top, second=RESIN, flaws=SDH_IN_RESIN))
+    runner = CliRunner()
+    shown = runner.invoke(app, ["setup", "show", str(path)])
+    assert shown.exit_code == 0, shown.output
+    lines = [" ".join(line.split()) for line in shown.stdout.splitlines()]
+    for line in (
+        "exact_stack = true",
+        "shear_legs = 1",
+        "[[specimen.layers]]",
+        'material = "acrylic"',
+        "thickness = 0.004 # m",
+        "[specimen.layers.material]",
+        'name = "resin"',
+        "longitudinal_speed = 2600.0 # m/s",
+        "thickness = 0.006 # m",
+        "[[specimen.flaws]]",
+        'kind = "side-drilled-hole"',
+        "position = [0.001, 0.0, -0.007] # m",
+        "diameter = 0.001 # m",
+        "length = 0.02 # m",
+        "axis = [1.0, 0.0, 0.0]",
+    ):
+        assert line in lines, line
+    copy = tmp_path / "copy.toml"
+    copy.write_text(shown.stdout)
+    original, again = load_setup(path).interior, load_setup(copy).interior
+    assert (again.thickness, again.back_wall_echoes) == (original.thickness, 2)
+    assert (again.shear_legs, again.exact_stack) == (1, True)
+    assert again.layers == original.layers
+    assert [(f.name, f.kind, f.diameter, f.length) for f in again.flaws] == [
+        ("sdh", "side-drilled-hole", 0.001, 0.02)
+    ]
+    np.testing.assert_array_equal(again.flaws[0].position, original.flaws[0].position)
+    np.testing.assert_array_equal(again.flaws[0].axis, original.flaws[0].axis)
+    data = json.loads(runner.invoke(app, ["setup", "show", str(path), "--json"]).stdout)
+    specimen = data["config"]["specimen"]
+    assert (specimen["shear_legs"], specimen["exact_stack"]) == (1, True)
+    assert [layer["thickness"] for layer in specimen["layers"]] == [0.004, 0.006]
+    assert specimen["layers"][1]["material"]["longitudinal_speed"] == 2600.0
+    assert specimen["flaws"] == [
+        {
+            "name": "sdh",
+            "kind": "side-drilled-hole",
+            "position": [0.001, 0.0, -0.007],
+            "diameter": 0.001,
+            "length": 0.02,
+            "axis": [1.0, 0.0, 0.0],
+        }
+    ]

@@ -29,6 +29,9 @@ _UNITS = {
     "height": "m",
     "radius": "m",
     "length": "m",
+    "thickness": "m",
+    "diameter": "m",
+    "position": "m",
     "pinhole_distance": "m",
     "reference_position": "m",
     "x": "m",
@@ -108,8 +111,7 @@ def _specimen(config: Any, base_dir: Path, resolved_name: str) -> dict[str, Any]
         out["mesh_scale"] = spec.mesh_scale
     out["name"] = spec.name if spec.name is not None else Default(resolved_name)
     if spec.material is not None:
-        material = spec.material
-        out["material"] = material if isinstance(material, str) else material.model_dump()
+        out["material"] = _material(spec.material)
     if spec.shapes is not None:
         out["shapes"] = []
         for i, shape in enumerate(spec.shapes):
@@ -117,6 +119,51 @@ def _specimen(config: Any, base_dir: Path, resolved_name: str) -> dict[str, Any]
             item.update({key: getattr(shape, key) for key in _SHAPE_FIELDS[shape.kind]})
             item["name"] = shape.name if shape.name is not None else Default(f"{shape.kind}{i}")
             out["shapes"].append(item)
+    if spec.thickness is not None or spec.layers:
+        out.update(_interior(spec))
+    return out
+
+
+def _material(material: Any) -> Any:
+    """A material as given: a built-in name, or its inline table as plain data."""
+    return material if isinstance(material, str) else material.model_dump()
+
+
+_FLAW_FIELDS = {"side-drilled-hole": ("length", "axis"), "flat-bottom-hole": (), "pore": ()}
+"""The flaw fields besides name, kind, position and diameter that apply to each kind."""
+
+
+def _interior(spec: Any) -> dict[str, Any]:
+    """The plate's inside as given in ``[specimen]``: its thickness (one material) or its
+    layers (material and thickness [m] each, top first), the echo settings (defaults the
+    file leaves out as :class:`Default`; ``shear_legs`` and ``exact_stack`` only with
+    layers) and its flaws (position and diameter [m]; a side-drilled hole's length [m] and
+    axis)."""
+    out: dict[str, Any] = {}
+    if spec.thickness is not None:
+        out["thickness"] = spec.thickness
+    keys = ["back_wall_echoes"] + (["shear_legs", "exact_stack"] if spec.layers else [])
+    for key in keys:
+        value = getattr(spec, key)
+        out[key] = value if key in spec.model_fields_set else Default(value)
+    if spec.layers:
+        out["layers"] = [
+            {"material": _material(layer.material), "thickness": layer.thickness}
+            for layer in spec.layers
+        ]
+    if spec.flaws:
+        out["flaws"] = []
+        for flaw in spec.flaws:
+            item: dict[str, Any] = {
+                "name": flaw.name,
+                "kind": flaw.kind,
+                "position": list(flaw.position),
+                "diameter": flaw.diameter,
+            }
+            for key in _FLAW_FIELDS[flaw.kind]:
+                value = getattr(flaw, key)
+                item[key] = list(value) if isinstance(value, tuple) else value
+            out["flaws"].append(item)
     return out
 
 
