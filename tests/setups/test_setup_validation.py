@@ -97,25 +97,43 @@ def _is_list(annotation: object) -> bool:
     return any(_is_list(arg) for arg in typing.get_args(annotation))
 
 
-def numeric_fields(model: type[BaseModel] = SetupConfig, prefix: str = "") -> list[tuple]:
-    """(table path, field name, kind, length) of every numeric field, recursively."""
+def _switch(annotation: object) -> tuple[str, int] | None:
+    """('switch', 1) if ``annotation`` is a bool field (optional or not), else None."""
+    args = typing.get_args(annotation)
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return _switch(args[0])
+    if origin in (typing.Union, types.UnionType):
+        inner = [a for a in args if a is not type(None)]
+        return _switch(inner[0]) if len(inner) == 1 else None
+    return ("switch", 1) if annotation is bool else None
+
+
+def schema_fields(
+    kind_of: typing.Callable[[object], tuple[str, int] | None] = _numeric,
+    model: type[BaseModel] = SetupConfig,
+    prefix: str = "",
+) -> list[tuple]:
+    """(table path, field name, kind, length) of every field ``kind_of`` names (numeric
+    ones by default), recursively."""
     out = []
     for name, info in model.model_fields.items():
         path = f"{prefix}{name}"
         if path in SKIP:
             continue
         annotation = info.rebuild_annotation()
-        kind = _numeric(annotation)
+        kind = kind_of(annotation)
         if kind is not None:
             out.append((prefix.rstrip("."), name, *kind))
             continue
         sub = _model(annotation)
         if sub is not None and (path in RENDERED_LISTS or not _is_list(annotation)):
-            out.extend(numeric_fields(sub, f"{path}."))
+            out.extend(schema_fields(kind_of, sub, f"{path}."))
     return out
 
 
-FIELDS = numeric_fields()
+FIELDS = schema_fields()
+SWITCHES = schema_fields(_switch)
 SHAPE_FIELDS = [f for f in FIELDS if f[0] == "specimen.shapes"]
 
 # values a field may legitimately take (everything else must be refused)
@@ -143,7 +161,7 @@ def _toml(table: str, name: str, literal: str, length: int) -> str:
     value = literal if length == 1 else "[" + ", ".join([literal] * length) + "]"
     base = tomllib.loads(tiny_setup_toml())
     if table == "specimen.shapes":  # a shape list (of the kind the field applies to)
-        shape = dict(SHAPES["cylinder" if name in ("radius", "length") else "plane"])
+        shape = dict(SHAPES["cylinder" if name in ("radius", "length", "caps") else "plane"])
         shape[name] = _Raw(value)
         rows = "\n".join(f"{k} = {_literal(v)}" for k, v in shape.items())
         return _render(base, skip=("specimen",)) + f"[[specimen.shapes]]\n{rows}\n"
@@ -231,6 +249,23 @@ def test_the_table_covers_every_numeric_field():
     }
     assert expected <= names, expected - names
     assert len(CASES) == len(FIELDS) * len(VALUES) >= 50 * 7
+
+
+def test_every_switch_of_a_setup_file_is_listed():
+    """The switches the test below covers (a new bool field joins it by itself)."""
+    assert {f"{t}.{n}" for t, n, _, _ in SWITCHES} >= {"specimen.shapes.caps"}
+
+
+@pytest.mark.parametrize(("value", "got"), [('"yes"', "'yes'"), ("1", "1"), ('"true"', "'true'")])
+@pytest.mark.parametrize(("table", "name"), [(t, n) for t, n, _, _ in SWITCHES])
+def test_a_switch_takes_true_or_false_only(table, name, value, got, tmp_path):
+    """A word or a number is not read as a switch (pydantic's lax bool took "yes" and 1):
+    one line naming the field and the fix; true still loads."""
+    path = write(tmp_path, _toml(table, name, value, 1))
+    fix = f"must be true or false (unquoted: {name} = true)"
+    where = f"{table}.0.{name}" if table == "specimen.shapes" else f"{table}.{name}"
+    assert validate_setup_file(path) == [f"{where}: {fix}, got {got}"]
+    assert validate_setup_file(write(tmp_path, _toml(table, name, "true", 1))) == []
 
 
 @pytest.mark.parametrize(("table", "name", "length", "label"), CASES)

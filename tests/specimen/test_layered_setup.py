@@ -124,11 +124,12 @@ def test_exact_stack_adds_a_remainder_echo_and_is_refused_without_layers(
         Interior(5e-3, 2, (), (), 0, True)
 
 
-@pytest.mark.parametrize("value", ['"yes"', "1"])
-def test_exact_stack_is_true_or_false_only(tmp_path: Path, value: str) -> None:
-    """A word or a number is not read as a switch: one line naming the field."""
+@pytest.mark.parametrize(("value", "got"), [('"yes"', "'yes'"), ("1", "1")])
+def test_exact_stack_is_true_or_false_only(tmp_path: Path, value: str, got: str) -> None:
+    """A word or a number is not read as a switch: one line naming the field and the fix."""
     problems = _problems(tmp_path, _text(top=f"exact_stack = {value}"))
-    assert any(p.startswith("specimen.exact_stack") and "boolean" in p for p in problems), problems
+    fix = "must be true or false (unquoted: exact_stack = true)"
+    assert problems == [f"specimen.exact_stack: {fix}, got {got}"]
 
 
 def test_a_flaw_across_an_interface_is_refused(tmp_path: Path) -> None:

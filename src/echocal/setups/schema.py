@@ -96,7 +96,8 @@ class ShapeConfig(_Model):
     azimuth: Angle = 0.0
     coelevation: Angle = 0.0
     surface: Literal["outside", "inside"] = "outside"
-    caps: bool = False
+    caps: StrictBool = False
+    """A cylinder's end discs are part of its surface too (true or false only)."""
     name: str | None = None
 
 
@@ -326,6 +327,8 @@ def _format_errors(
         message = item["msg"]
         if item["type"] == "extra_forbidden":
             message = f"unknown key (check the spelling; {hint})"
+        elif item["type"] == "bool_type":  # a StrictBool switch given a word or a number
+            message = f"must be true or false (unquoted: {parts[-1]} = true), got {item['input']!r}"
         elif (
             "input" in item
             and item["type"] not in ("missing",)
