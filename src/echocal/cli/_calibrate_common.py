@@ -433,7 +433,6 @@ def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dic
         return {}
     from echocal.ascan import save_ascan
     from echocal.measurement.objective import ascan_metric
-    from echocal.plots import plot_ascan
     from echocal.signal.window import RecordingWindow
 
     scan = objective.last_scan if result.final_value is not None else None
@@ -466,7 +465,9 @@ def save_final_ascan(objective: Any, result: Any, out: Path, plots: bool) -> dic
             )
         )
     }
-    if plots:
+    if plots:  # matplotlib is imported only to draw (--no-plots: not at all)
+        from echocal.plots import plot_ascan
+
         window = RecordingWindow(fs=scan.fs, start=scan.start_time, n_samples=scan.n_samples)
         a, b = result.x
         fig = plot_ascan(
