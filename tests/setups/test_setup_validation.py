@@ -58,21 +58,36 @@ SKIP = {"pulse"}
 """The pulse table is free-form (its options depend on the pulse): checked separately."""
 
 
-def _numeric(annotation: object) -> tuple[str, int] | None:
-    """('scalar'|'tuple', n) if ``annotation`` is an int/float field (optional or a tuple of
-    them), else None."""
+def _bare(annotation: object) -> object:
+    """``annotation`` without ``Annotated`` and an optional's None; None for a union of
+    several types."""
     args = typing.get_args(annotation)
     origin = typing.get_origin(annotation)
     if origin is typing.Annotated:
-        return _numeric(args[0])
+        return _bare(args[0])
     if origin in (typing.Union, types.UnionType):
         inner = [a for a in args if a is not type(None)]
-        return _numeric(inner[0]) if len(inner) == 1 else None
-    if origin is tuple and args and all(_numeric(a) == ("scalar", 1) for a in args):
+        return _bare(inner[0]) if len(inner) == 1 else None
+    return annotation
+
+
+def _numeric(annotation: object) -> tuple[str, int] | None:
+    """('scalar'|'tuple', n) if ``annotation`` is an int/float field (optional or a tuple of
+    them), else None."""
+    bare = _bare(annotation)
+    args = typing.get_args(bare)
+    if (
+        typing.get_origin(bare) is tuple
+        and args
+        and all(_numeric(a) == ("scalar", 1) for a in args)
+    ):
         return "tuple", len(args)
-    if annotation in (int, float):
-        return "scalar", 1
-    return None
+    return ("scalar", 1) if bare in (int, float) else None
+
+
+def _switch(annotation: object) -> tuple[str, int] | None:
+    """('switch', 1) if ``annotation`` is a bool field (optional or not), else None."""
+    return ("switch", 1) if _bare(annotation) is bool else None
 
 
 def _model(annotation: object) -> type[BaseModel] | None:
@@ -95,18 +110,6 @@ def _is_list(annotation: object) -> bool:
     if typing.get_origin(annotation) is list:
         return True
     return any(_is_list(arg) for arg in typing.get_args(annotation))
-
-
-def _switch(annotation: object) -> tuple[str, int] | None:
-    """('switch', 1) if ``annotation`` is a bool field (optional or not), else None."""
-    args = typing.get_args(annotation)
-    origin = typing.get_origin(annotation)
-    if origin is typing.Annotated:
-        return _switch(args[0])
-    if origin in (typing.Union, types.UnionType):
-        inner = [a for a in args if a is not type(None)]
-        return _switch(inner[0]) if len(inner) == 1 else None
-    return ("switch", 1) if annotation is bool else None
 
 
 def schema_fields(

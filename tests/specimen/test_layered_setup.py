@@ -214,23 +214,19 @@ def test_the_built_in_layered_setup_shows_its_holes_in_the_aluminium() -> None:
 
 
 RESIN = '{ name = "resin", density = 1200, longitudinal_speed = "2600 m/s", shear_speed = 1100 }'
-SDH_IN_RESIN = """
-[[specimen.flaws]]
-name = "sdh"
-kind = "side-drilled-hole"
-position = ["1 mm", "0 mm", "-7 mm"]
-diameter = "1 mm"
-length = "20 mm"
-axis = [1, 0, 0]
-"""
+SDH_IN_RESIN = (
+    'flaws = [{ name = "sdh", kind = "side-drilled-hole", position = ["1 mm", "0 mm", "-7 mm"], '
+    'diameter = "1 mm", length = "20 mm", axis = [1, 0, 0] }]'
+)
+"""A side-drilled hole in the second layer (an inline array of ``[specimen]``)."""
 
 
 def test_setup_show_prints_the_layers_flaws_and_exact_stack(tmp_path: Path) -> None:
     """``setup show`` (TOML and ``--json``) gives each layer's material and thickness [m],
     the flaws' geometry [m] and the stack settings, and its TOML loads back the same part."""
     path = tmp_path / "layered.toml"
-    top = "shear_legs = 1\nexact_stack = true"
-    path.write_text(_text(top=top, second=RESIN, flaws=SDH_IN_RESIN))
+    top = f"shear_legs = 1\nexact_stack = true\n{SDH_IN_RESIN}"
+    path.write_text(_text(top=top, second=RESIN))
     runner = CliRunner()
     shown = runner.invoke(app, ["setup", "show", str(path)])
     assert shown.exit_code == 0, shown.output
