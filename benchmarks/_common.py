@@ -133,6 +133,36 @@ def add_cell_arguments(ap: argparse.ArgumentParser, *, runs: int, starts: str) -
     ap.add_argument("--summarize", type=Path, default=None, help="only print a JSONL's table")
 
 
+def parse_cell_arguments(
+    ap: argparse.ArgumentParser,
+    argv: list[str] | None,
+    table: Callable[[list[dict[str, Any]]], str],
+) -> argparse.Namespace | None:
+    """``ap``'s arguments (with :func:`add_cell_arguments`'s); with ``--summarize`` the
+    JSONL's ``table`` is printed instead and None returned (the benchmark is done)."""
+    args = ap.parse_args(argv)
+    if args.summarize is None:
+        return args
+    print(table(read_jsonl(args.summarize)))
+    return None
+
+
+def cell_table(
+    runs: list[dict[str, Any]],
+    keys: tuple[str, ...],
+    header: Sequence[str],
+    row: Callable[[tuple[Any, ...], list[dict[str, Any]]], Sequence[str]],
+    order: Callable[[tuple[Any, ...]], Any],
+) -> str:
+    """A Markdown table (:func:`markdown_table`) of ``runs`` with one row per cell (the
+    runs' values at ``keys``), cells sorted by ``order`` (of a cell's key values): the
+    ``header`` columns, a cell's column texts ``row(cell, its runs)``."""
+    cells: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
+    for r in runs:
+        cells.setdefault(tuple(r[k] for k in keys), []).append(r)
+    return markdown_table(header, [row(c, cells[c]) for c in sorted(cells, key=order)])
+
+
 def cell_runs(args: argparse.Namespace, first: int) -> Iterator[tuple[str, float, int]]:
     """``(start, snr, run)`` of :func:`add_cell_arguments`'s ``args`` for runs ``first`` ..
     ``first + args.runs - 1``, interleaved (run-major): a benchmark cut short has about as

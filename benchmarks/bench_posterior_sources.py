@@ -53,8 +53,9 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _common  # noqa: E402
 from _calibration_cases import PARAM  # noqa: E402
-from _common import add_cell_arguments, append_jsonl, cell_runs, read_jsonl  # noqa: E402
+from _common import add_cell_arguments, append_jsonl, cell_runs  # noqa: E402
 from bench_calibration import (  # noqa: E402
     auto_errors,
     case_setup,
@@ -129,36 +130,37 @@ def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -
 
 def summarize(runs: list[dict[str, Any]]) -> str:
     """The Markdown table of the runs, one row per (source, start, SNR)."""
-    cells: dict[tuple[str, str, float], list[dict[str, Any]]] = {}
-    for r in runs:
-        cells.setdefault((r["source"], r["start"], r["snr"]), []).append(r)
-    lines = [
-        "| source | start | SNR | runs | posterior | within 0.1° at 100 | in ≤ 60 "
-        "| median / p90 / max to 0.1° | echo found after (median / p90) "
-        "| final error (median / p90) | CPU-s/run |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    order = {s: i for i, s in enumerate(_ORDER)}
-    for (source, start, snr), rs in sorted(
-        cells.items(), key=lambda kv: (kv[0][1], -kv[0][2], order[kv[0][0]])
-    ):
+
+    def spread(values: np.ndarray, *more: float) -> str:
+        """``median/p90[/more]``, ∞ for a run that never got there."""
+        p90 = np.percentile(values, 90, method="higher")
+        return "/".join(
+            "∞" if not np.isfinite(v) else f"{v:g}" for v in (np.median(values), p90, *more)
+        )
+
+    def row(cell: tuple[Any, ...], rs: list[dict[str, Any]]) -> list[str]:
+        source, start, snr = cell
         errs = np.array([r["errors"] for r in rs])
         n_to = np.array([measurements_to(e, 0.1) for e in errs])
-        med, p90 = np.median(n_to), np.percentile(n_to, 90, method="higher")
-        fmt = "/".join("∞" if not np.isfinite(v) else f"{v:g}" for v in (med, p90, n_to.max()))
         found = np.array([np.inf if r["found_at"] is None else r["found_at"] for r in rs])
-        seen = "/".join(
-            "∞" if not np.isfinite(v) else f"{v:g}"
-            for v in (np.median(found), np.percentile(found, 90, method="higher"))
-        )
-        lines.append(
-            f"| {source} | {start} | {snr:g} dB | {len(rs)} "
-            f"| {np.mean([r['posterior'] for r in rs]):.0%} "
-            f"| {np.mean(errs[:, -1] <= 0.1):.1%} | {np.mean(n_to <= 60):.1%} | {fmt} | {seen} "
-            f"| {np.median(errs[:, -1]):.3f}° / {np.percentile(errs[:, -1], 90):.3f}° "
-            f"| {np.mean([r['cpu_s'] for r in rs]):.1f} |"
-        )
-    return "\n".join(lines)
+        return [
+            source, start, f"{snr:g} dB", f"{len(rs)}",
+            f"{np.mean([r['posterior'] for r in rs]):.0%}",
+            f"{np.mean(errs[:, -1] <= 0.1):.1%}", f"{np.mean(n_to <= 60):.1%}",
+            spread(n_to, n_to.max()), spread(found),
+            f"{np.median(errs[:, -1]):.3f}° / {np.percentile(errs[:, -1], 90):.3f}°",
+            f"{np.mean([r['cpu_s'] for r in rs]):.1f}",
+        ]  # fmt: skip
+
+    header = [
+        "source", "start", "SNR", "runs", "posterior", "within 0.1° at 100", "in ≤ 60",
+        "median / p90 / max to 0.1°", "echo found after (median / p90)",
+        "final error (median / p90)", "CPU-s/run",
+    ]  # fmt: skip
+    order = {s: i for i, s in enumerate(_ORDER)}
+    return _common.cell_table(
+        runs, ("source", "start", "snr"), header, row, order=lambda c: (c[1], -c[2], order[c[0]])
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -168,9 +170,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sources", default=",".join(SOURCES))
     parser.add_argument("--replay30", help="the recording at 30 dB (for source replay)")
     parser.add_argument("--replay20", help="the recording at 20 dB (for source replay)")
-    args = parser.parse_args(argv)
-    if args.summarize is not None:
-        print(summarize(read_jsonl(args.summarize)))
+    args = _common.parse_cell_arguments(parser, argv, summarize)
+    if args is None:
         return 0
     replays = {30.0: args.replay30, 20.0: args.replay20}
     runs = []

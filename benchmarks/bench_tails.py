@@ -42,8 +42,9 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _common  # noqa: E402
 from _calibration_cases import BUDGET, PARAM  # noqa: E402
-from _common import add_cell_arguments, append_jsonl, cell_runs, read_jsonl  # noqa: E402
+from _common import add_cell_arguments, append_jsonl, cell_runs  # noqa: E402
 from bench_calibration import auto_errors, measurements_to, rounded, seeded_run  # noqa: E402
 
 from echocal.calibrate.uncertainty import coverage  # noqa: E402
@@ -114,21 +115,21 @@ def table(runs: list[dict[str, Any]]) -> str:
     def n(v: float) -> str:
         return f">{BUDGET}" if not np.isfinite(v) else f"{v:.0f}"
 
-    lines = [
-        f"| start | SNR | runs | within {TOL}° at {BUDGET} | within {TOL}° in ≤ {AT} "
-        f"| median / p90 / p99 to {TOL}° | false alarms refuted | 90 % radius covers "
-        "| radius reported |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    cells = sorted({(r["start"], r["snr"]) for r in runs}, key=lambda c: (c[0], -c[1]))
-    for start, snr in cells:
-        s = summarize([r for r in runs if (r["start"], r["snr"]) == (start, snr)])
-        lines.append(
-            f"| {start} | {snr:g} dB | {s['runs']} | {s['success']:.1%} | {s['within_at']:.1%} "
-            f"| {n(s['median'])} / {n(s['p90'])} / {n(s['p99'])} | {s['false_alarms']} "
-            f"| {s['coverage']:.1%} | {s['reported']:.1%} |"
-        )
-    return "\n".join(lines)
+    def row(cell: tuple[Any, ...], rs: list[dict[str, Any]]) -> list[str]:
+        start, snr = cell
+        s = summarize(rs)
+        return [
+            start, f"{snr:g} dB", f"{s['runs']}", f"{s['success']:.1%}", f"{s['within_at']:.1%}",
+            f"{n(s['median'])} / {n(s['p90'])} / {n(s['p99'])}", f"{s['false_alarms']}",
+            f"{s['coverage']:.1%}", f"{s['reported']:.1%}",
+        ]  # fmt: skip
+
+    header = [
+        "start", "SNR", "runs", f"within {TOL}° at {BUDGET}", f"within {TOL}° in ≤ {AT}",
+        f"median / p90 / p99 to {TOL}°", "false alarms refuted", "90 % radius covers",
+        "radius reported",
+    ]  # fmt: skip
+    return _common.cell_table(runs, ("start", "snr"), header, row, order=lambda c: (c[0], -c[1]))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -136,9 +137,8 @@ def main(argv: list[str] | None = None) -> int:
     add_cell_arguments(ap, runs=300, starts="far")
     ap.add_argument("--holdout", action="store_true", help=f"runs from {HOLDOUT_FIRST:_}")
     ap.add_argument("--workers", type=int, default=1)
-    args = ap.parse_args(argv)
-    if args.summarize is not None:
-        print(table(read_jsonl(args.summarize)))
+    args = _common.parse_cell_arguments(ap, argv, table)
+    if args is None:
         return 0
     first = HOLDOUT_FIRST if args.holdout else 0
     tasks = list(cell_runs(args, first))

@@ -5,17 +5,28 @@ about success rates; the numbers are the benchmark's report)."""
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import subprocess
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "benchmarks" / "bench_calibration.py"
+
+
+def _benchmark_module(name: str) -> ModuleType:
+    """A module of the benchmarks folder (a script directory, not a package)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.pop(0)
 
 
 @pytest.mark.slow  # 30 CPU-s: the slow tier
@@ -57,14 +68,7 @@ def test_bench_calibration_smoke_runs_and_reports(tmp_path):
     # every peer is either run or reported as skipped (optional dependencies)
     ours = {"auto", "model-based", "newton", "quasi-newton", "spsa", "gradient"}
     assert ours <= set(data["methods"])
-    for peer in (
-        "scipy-nelder-mead",
-        "py-bobyqa",
-        "skopt-gp",
-        "nevergrad-ngopt",
-        "cma-es",
-        "botorch-qlognei",
-    ):
+    for peer in _benchmark_module("_peers").PEERS:
         assert (peer in data["methods"]) + (peer in data["skipped_peers"]) == 1, peer
         if peer in data["skipped_peers"]:
             assert f"SKIPPED peer {peer}" in proc.stdout
@@ -151,11 +155,7 @@ def test_the_back_wall_case_and_the_front_first_workflow():
     gate: both stages' estimates, one per measurement, and every measurement counted."""
     import dataclasses
 
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    try:
-        import bench_calibration
-    finally:
-        sys.path.pop(0)
+    bench_calibration = _benchmark_module("bench_calibration")
     from echocal.measurement import ReceiverSettings
     from echocal.signal.gates import resolve_gate
 
