@@ -268,7 +268,33 @@ def test_a_switch_takes_true_or_false_only(table, name, value, got, tmp_path):
     fix = f"must be true or false (unquoted: {name} = true)"
     where = f"{table}.0.{name}" if table == "specimen.shapes" else f"{table}.{name}"
     assert validate_setup_file(path) == [f"{where}: {fix}, got {got}"]
-    assert validate_setup_file(write(tmp_path, _toml(table, name, "true", 1))) == []
+    problems = validate_setup_file(write(tmp_path, _toml(table, name, "true", 1)))
+    assert not [p for p in problems if "true or false" in p]  # (exact_stack needs layers)
+
+
+@pytest.mark.parametrize(
+    ("key", "line"),
+    [
+        ("flaws", 'flaws = [{ name = "p", kind = "pore", position = [0, 0, "-5 mm"], '
+         'diameter = "1 mm" }]'),
+        ("shear_legs", "shear_legs = 1"),
+        ("exact_stack", "exact_stack = true"),
+    ],
+)  # fmt: skip
+def test_the_inside_of_a_part_without_one_is_refused(tmp_path, key, line):
+    """Flaws, shear legs or the exact stack on a part without a thickness or layers were
+    dropped without a word ("valid"): one line naming the field and the fix."""
+    path = write(tmp_path, TINY + f'[specimen]\nbuiltin = "flat-plate"\n{line}\n')
+    assert validate_setup_file(path) == [
+        f"specimen.{key}: the part has no inside (no specimen.thickness or "
+        "[[specimen.layers]]); give one or leave it out"
+    ]
+
+
+def test_back_wall_echoes_without_an_inside_is_warned_about(tmp_path):
+    path = write(tmp_path, TINY + '[specimen]\nbuiltin = "flat-plate"\nback_wall_echoes = 2\n')
+    with pytest.warns(UserWarning, match=r"^specimen.back_wall_echoes is ignored: the part "):
+        assert validate_setup_file(path) == []
 
 
 @pytest.mark.parametrize(("table", "name", "length", "label"), CASES)

@@ -329,6 +329,8 @@ def _build_parts(
     has_inside = config.specimen.thickness is not None or config.specimen.layers
     if "specimen" not in invalid and has_inside:
         run("interior", lambda: _build_interior(config, parts))
+    elif "specimen" not in invalid:
+        problems.extend(_inside_without_interior(config.specimen))
     run("positioner", lambda: _build_limits(config.positioner))
     if config.bench is not None:
         bench = config.bench
@@ -414,6 +416,22 @@ def _build_layers(config: SetupConfig) -> tuple[tuple[Layer, ...] | None, list[s
         except EchocalError as exc:
             problems.append(_problem(where, exc))
     return (None, problems) if problems else (tuple(layers), [])
+
+
+def _inside_without_interior(spec: SpecimenConfig) -> list[str]:
+    """A part without ``thickness`` or ``layers`` has no inside: its flaws, shear legs and
+    exact stack are refused (they were dropped without a word); a ``back_wall_echoes``
+    given is warned about as ignored."""
+    given = [
+        key for key in ("flaws", "shear_legs", "exact_stack") if getattr(spec, key)
+    ]  # 0 shear legs or a false exact_stack ask for nothing
+    if "back_wall_echoes" in spec.model_fields_set:
+        _ignored("specimen.back_wall_echoes", "the part has no specimen.thickness or layers")
+    return [
+        f"specimen.{key}: the part has no inside (no specimen.thickness or "
+        "[[specimen.layers]]); give one or leave it out"
+        for key in given
+    ]
 
 
 def _build_interior(
