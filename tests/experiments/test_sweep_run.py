@@ -109,9 +109,13 @@ def test_process_killed_by_signal_resumes(reference, tmp_path):
     assert not (out / "runs.parquet").exists()
     done = len(load_results(out).runs)
     assert 2 <= done < 6
-    result = subprocess.run([*cmd, "--no-progress"], capture_output=True, text=True, timeout=120)
+    resume = [sys.executable, "-X", "importtime", *cmd[1:], "--no-progress"]
+    result = subprocess.run(resume, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert f"{done} already done" in result.stdout.replace("\n", " ")  # the result: stdout
+    # its table needs no matplotlib (-X importtime lists every import on stderr)
+    imported = {line.rsplit("|", 1)[-1].strip() for line in result.stderr.splitlines()}
+    assert "numpy" in imported and "matplotlib" not in imported
     final = load_results(out)
     _same(final.runs, reference[0], ["case_id"])
     _same(final.history, reference[1], ["case_id", "index"])

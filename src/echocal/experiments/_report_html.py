@@ -14,12 +14,12 @@ import io
 import math
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
-from matplotlib.figure import Figure
 
-from echocal.plots._figure import release
+if TYPE_CHECKING:  # matplotlib is imported only to draw: `sweep run`'s table needs none
+    from matplotlib.figure import Figure
 
 __all__ = ["CSS", "NEVER", "facts", "fig_png", "fmt", "header", "percent", "png", "table"]
 
@@ -160,6 +160,8 @@ def png(path: Path) -> str:
 
 def fig_png(fig: Figure) -> str:
     """An ``<img>`` with the figure embedded as PNG (base64)."""
+    from echocal.plots._figure import release
+
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
     release(fig)
