@@ -68,18 +68,12 @@ class FitNeighbourhood:
         """Whether a ridge's measurements in the fitted neighbourhood scatter about the
         model by clearly more than their noise: χ² of the residuals (each over its
         measurement's σ) above the ``_LACK_OF_FIT`` quantile of χ² with n − 6 degrees of
-        freedom (log space with a known noise, a ridge's fit only: a plate's round lobe
-        at 10 dB, whose diffraction tails a log-quadratic fits only roughly, lost runs to
-        the test — 7 of 100 slower, one 11 → 66 measurements).
-
-        Over a rod a 12.7 mm probe's lobe is a ridge with two humps 3° apart and a saddle
-        at 0.79 between; a quadratic fitted 4° around either hump spans all three, its
-        maximum drifts along the ridge (0.1–0.3° off for 60 measurements at 10 dB; traced:
-        residuals of 12 % of the fitted energy where the noise is 4.5 % of the peak).
-
-        Not on a replay (a ``resolution``): between its grid points the values are
-        interpolated, and their error, which the noise does not include, lacks fit at any
-        scale (the thesis block replayed from a 2° grid ended 1.09° off, not 0.30°)."""
+        freedom (log space with a known noise, a ridge's fit only: a round lobe's
+        diffraction tails, which a log-quadratic fits only roughly, are not tested).
+        Over a rod a 12.7 mm probe's lobe is a ridge with two humps 3° apart; a quadratic
+        fitted 4° around either hump spans both, and its maximum drifts along the ridge.
+        Not on a replay (a ``resolution``): its interpolation error, which the noise does
+        not include, lacks fit at any scale."""
         if self.space != "log" or self.resolution is not None or not is_ridge(model):
             return False
         local = np.hypot(*(self._x - model.center).T) <= self._fit_radius()
@@ -118,15 +112,8 @@ class FitNeighbourhood:
         moving the incumbent too, to the point nearest the maximum, is what
         :meth:`_follow_max` does at the smallest neighbourhood only (at any size the
         noisy maximum dragged the centre about at 10 dB).  The re-centred fit is not
-        tested again for refutation or lack of fit.
-
-        Along the rod a 12.7 mm probe's hump is 1.2–1.6° wide (1 σ) and not symmetric:
-        it falls to the saddle slower than outwards.  A 1° neighbourhood centred 0.4–0.5°
-        down either flank (the incumbent: a measured point, never the maximum itself, as
-        refinement points ring the maximum) saw more of that flank and put the maximum
-        0.1–0.15° towards it — at 30 dB (run 19) alternating between two flanks' points,
-        4.77° and 4.88° (truth 4.769°), at 10 dB (run 3) held on the outer flank at
-        4.90–4.92°.  The same 80 measurements fitted around the maximum: 4.777°."""
+        tested again for refutation or lack of fit.  (A rod's hump is not symmetric: a
+        neighbourhood centred down one flank puts the maximum towards that flank.)"""
         radius = self._fit_radius()
         if self.space != "log" or radius > LACK_OF_FIT_RADIUS * self.radius * (1.0 + 1e-9):
             return model
@@ -152,15 +139,9 @@ class FitNeighbourhood:
         """At the smallest neighbourhood (:data:`MIN_FIT`), move the incumbent — the next
         fit's centre — to the measured echo (above ``floor`` of the largest) nearest the
         model's maximum when that lies beyond half the neighbourhood from it, and such an
-        echo lies within half of it from the maximum.
-
-        The incumbent is chosen among the fitted points only: over the rod with the
-        12.7 mm probe at 30 dB (run 18) a 0.5° neighbourhood shrunk around a point 0.36°
-        down the hump kept its centre there, its maximum near its edge and the
-        refinement points around that outside it — 0.135° off for 53 measurements, where
-        the same points centred on the maximum fit within 0.005° of the truth.  Only at
-        the smallest neighbourhood: at any size, 10 dB's noisy maximum dragged the centre
-        about (the rod at 10 dB: 85 → 80 % within 0.1° after 60)."""
+        echo lies within half of it from the maximum (else a neighbourhood shrunk around a
+        flank point keeps its maximum near its edge).  Only at the smallest neighbourhood:
+        at any size a noisy maximum drags the centre about."""
         radius = self._fit_radius()
         if not model.concave or radius > MIN_FIT * self.radius * (1.0 + 1e-9):
             return

@@ -5,7 +5,7 @@ A log-quadratic (``local_model``) is right near a lobe's top, but a diffraction 
 tail is not Gaussian: the 12.7 mm 5 MHz probe's pseudo-energy falls to 0.3 of its peak
 0.5° out, to 0.035 at 0.9° and then only slowly (0.016 at 1.4°, 0.01 at 1.8°).  A
 quadratic fitted to tail points sees a lobe twice as broad and puts its peak where it
-is not; a start 2.6° off at 30 dB spent 8–10 measurements stepping through the tail.
+is not.
 Given the lobe's shape g(d) (relative metric versus misalignment d from the peak,
 g(0) = 1; from the simulated probe, :meth:`~echocal.calibrate.Objective.lobe_template`)
 the measurements y_i at points x_i are y_i ≈ E₀ g(x_i − c) + noise, whose two unknowns
@@ -49,10 +49,8 @@ _TOP = 0.5
 """The lobe's top: where it is above this fraction of its peak (:meth:`LobeTemplate.on_top`)."""
 _KEEP = 9.0
 """[χ²] a previous fit's peak is kept unless another fits the data better by more than
-this (for the peak's 2 coordinates a likelihood ratio of e^4.5 = 90, about 2.5σ).  A lobe
-with a ring fits a few points on the ring almost as well with its peak across the ring:
-at 10 dB the best fit flipped 1.6° there and back for single measurements, and the
-estimate with it (the 12.7 mm probe over a ball)."""
+this (for the peak's 2 coordinates a likelihood ratio of e^4.5 = 90, about 2.5σ): a lobe
+with a ring fits a few points on the ring almost as well with its peak across the ring."""
 _CANDIDATES = 4
 """Coarse candidates refined on the fine grid: the best few (often neighbours of one
 basin; the tail's mirror images are told apart by the measurement at the chosen peak)."""

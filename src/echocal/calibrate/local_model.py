@@ -134,9 +134,7 @@ def fit_quadratic(
         z, w = values, np.ones(len(values))
     if np.count_nonzero(w > 1e-8) < 6:
         return None
-    phi = np.stack(
-        [np.ones(len(z)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
-    )
+    phi = _features(d)
     sw = np.sqrt(w)
     ridge = np.sqrt(1e-12 * w.sum()) * np.eye(6)[1:]
     a = np.vstack([phi * sw[:, None], ridge])
@@ -156,6 +154,7 @@ _PRIOR_STD = 0.5
 
 
 def _features(d: FloatArray) -> FloatArray:
+    """The quadratic's 6 basis functions at scaled offsets ``d`` (n, 2): shape (n, 6)."""
     return np.stack(
         [np.ones(len(d)), d[:, 0], d[:, 1], d[:, 0] ** 2, d[:, 0] * d[:, 1], d[:, 1] ** 2], 1
     )

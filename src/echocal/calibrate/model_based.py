@@ -36,14 +36,11 @@ Algorithm (one measurement per iteration after a 7-point initial design):
 
 With the probe's lobe (``lobe_template``) the steps from the lobe's tail follow the lobe
 instead, and the recommendation is its fitted peak until the quadratic takes over (a
-diffraction lobe's tail is not Gaussian; :mod:`echocal.calibrate.template_steps` gives the
-rule and its evidence).  A warm start whose history
-the template already fits (a far detection handed on by the acquisition) steps to the
-fitted peak at once, without measuring the design hexagon around x0 first (same 40 far
-runs: median 22 → 19, 90th percentile 27 → 23).  One it does not fit yet — a detection
-deep in the tail, 4–7° out — seeks the peak instead, measuring where the peaks that fit
-the measurements disagree most (:mod:`echocal.calibrate.template_seek`; 100 far starts at
-30 dB: 99th percentile to 0.1° 29 → 26, 90th 23 → 21; 100 other seeds: 30 → 26, 25 → 21).
+diffraction lobe's tail is not Gaussian: :mod:`echocal.calibrate.template_steps`).  A warm
+start whose history the template already fits (a far detection handed on by the
+acquisition) steps to the fitted peak at once, without the design hexagon; one it does not
+fit yet (a detection deep in the tail) seeks the peak where the peaks that fit the
+measurements disagree most (:mod:`echocal.calibrate.template_seek`).
 
 ``space="linear"`` fits f itself with equal weights instead (for objectives
 that can be negative).
@@ -94,11 +91,8 @@ maximum: beyond the neighbourhood it would not be fitted."""
 _MAX_SIGMA_LOG = 1.0
 """The largest log-space noise the trust-region test allows for (a factor e) once the
 model's value at the incumbent is a significant echo (``REFUTE`` σ of the measurement
-noise).  The residuals of a model that one strong measurement had just refuted (a
-lobe's top 1.7× above the fitted maximum) gave 40: every step passed the test, the
-trust radius stayed at its maximum and the run circled 4° out for its last 36
-measurements.  In the noise (no significant echo) the residuals keep their scale: large,
-so the trust radius grows and the steps explore."""
+noise): the residuals of a just-refuted model would otherwise pass every step.  In the
+noise (no significant echo) the residuals keep their scale, so the steps explore."""
 
 
 @register_method("model-based")

@@ -49,10 +49,8 @@ _ACROSS_REPEATS = 4
 """At most this many measurements of one point of that search."""
 _ACROSS_LOW = 0.15
 """A side of that search ends at a point clearly (2 σ) below this fraction of the
-ridge's top: the lobe has fallen away there.  The dip between a near-field ring and
-the central peak over a ball is 0.4 of the ring's top, which the search must cross; a
-plate's lobe, fitted as a ridge from noisy data, fell to 0.08 of the top 0.9° out on
-both sides and the search went on to 2.4° (12 measurements, far start at 30 dB)."""
+ridge's top: the lobe has fallen away there (the dip between a near-field ring and the
+central peak over a ball, which the search must cross, is 0.4 of the ring's top)."""
 _SIDE_LOBE = 0.4
 """A peak refined :data:`_SIDE_LOBE_AFTER` times whose fitted echo is below this fraction
 of the echo at normal incidence (and is an echo: :data:`_ECHO_SIGMAS`) is a side lobe,
@@ -61,15 +59,11 @@ searched along both axes (again after a search that was dropped:
 normal incidence's, the optimum's at least 1 — 0.4 leaves a factor 2.4 either way."""
 _SIDE_LOBE_AFTER = 2
 """Consecutive refinement steps before a peak is tested for a side lobe: the test needs
-the peak's echo, not its shape, and two steps pin it (over the rod at 10 dB the side
-maximum's fitted echo read 0.15–0.2 of normal incidence's from the first step on; waiting
-:data:`_ACROSS_AFTER` cost 4 measurements in each of the 10 of 60 runs that climbed it)."""
+the peak's echo, not its shape, and two steps pin it."""
 _ECHO_SIGMAS = 3.0
 """A refined peak's fitted echo must stand this many σ of one measurement's noise above
 the floor to be a side lobe; below, the local method refines noise the acquisition
-handed it, and a search around it is no lobe's (over the plate, far start at 30 dB, run
-21: 0.3–0.7 σ, the search cost 14 measurements).  The rod's side maximum stands 5.2 σ
-at 10 dB (run 1)."""
+handed it, and a search around it is no lobe's."""
 _SAME_RAY = 0.7
 """Points of that search whose offsets' directions agree within 45° are on one side."""
 _BUMP_RADIUS = 0.35
@@ -169,12 +163,8 @@ class RidgeSearch:
         """Drop the queued points of a search under way: the fit moves to a new centre
         (a point of the search found a stronger echo, or the data refuted the model).  The
         next search waits until the model has settled there again; a side lobe's search
-        may then be made again — the peak it finds is tested afresh.  Tested after two
-        refinement steps, a side lobe's model may still be refuted by its own data (the
-        rod at 30 dB, run 53: the search dropped after 2 of its points, and with the
-        run's one side-lobe search spent the run refined the side maximum to its end,
-        2.19° off); and a point of the search may beat a top that two steps
-        underestimated while still on the side lobe.  Each new search needs an echo
+        may then be made again — the peak it finds is tested afresh (a side lobe's model
+        may still be refuted by its own data after two steps).  Each new search needs an echo
         clearly (4 σ and 5 %) above the last peak's, so they do not repeat without end."""
         if not len(self._across):
             return
@@ -255,8 +245,7 @@ class RidgeSearch:
         if np.isfinite(value) and noise is not None and len(y) <= _ACROSS_REPEATS:
             if excess > REFUTE * noise and excess > REFUTE_RELATIVE * self._across_top:
                 # found: the refit starts over around it, from the whole neighbourhood —
-                # one shrunk to its smallest around the side lobe would not see it (the
-                # rod at 30 dB, run 19: 2.3x the side lobe's top 1.2 deg out, ignored)
+                # one shrunk to its smallest around the side lobe would not see it
                 self._incumbent = point.copy()
                 self._loc_scale = 1.0
                 self._drop_search()

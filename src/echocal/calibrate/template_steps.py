@@ -12,17 +12,12 @@ lies on the main lobe's top the next point is the fitted peak; once one does, th
 around it are measured and the recommendation is the fitted peak; once
 :data:`_QUADRATIC_TOP` measurements lie on the top and the quadratic's maximum agrees
 with the template's, the quadratic takes over for good (:meth:`TemplateSteps._hand_over`).
-Evidence (``benchmarks/bench_calibration.py``, 100 runs): from 1–3° at 30 dB, within
-0.05° after 15 measurements in 91 % of runs without, 100 % with it; from 5–20° at 30 dB
-the median to 0.1° went from 29 to 22 measurements and the 99th percentile from 50 to 31.
 
 The top is the main lobe only (:meth:`~echocal.calibrate.lobe_template.LobeTemplate.on_top`),
 and a fitted peak is kept unless the data clearly prefer another (``fit_template``'s
 ``previous``): over a ball the 12.7 mm probe's lobe has a near-field ring at about 0.8 of its
 peak 1.6° out, which is above half the peak and which a centre across the ring fits almost
-as well.  With both, the benchmark's ``sphere-12.7`` cell from 1–3° at 10 dB is within 0.1°
-after 60 measurements in 60 of 60 seeded runs (median 9), against 60 % without the ring in
-the template (docs/benchmarks/curved.md).
+as well.
 """
 
 from __future__ import annotations
@@ -46,9 +41,8 @@ the template does not fit yet, before the usual steps take over."""
 
 _TEMPLATE_MISFIT = 25.0
 """A template fit whose χ² per degree of freedom (against the measurement noise) exceeds
-this refutes the template for the run: the log-quadratic alone, as without one.  On the
-5 MHz plate the fits stay at 1–4; a 4 mm 1 MHz probe over a plate tilted 36° (ray model)
-gave 150, its template's peak 1.5° off the echo's, and the run ended 1° off."""
+this refutes the template for the run: the log-quadratic alone, as without one (a lobe
+that is not the probe's; fits of the probe's own stay at 1–4)."""
 _QUADRATIC_TOP = 6
 """Measurements on the lobe's top before the log-quadratic (6 parameters) takes over from
 the template there."""
@@ -205,8 +199,7 @@ class TemplateSteps:
         log-quadratic's 6 parameters need them there) and the quadratic's maximum agrees
         with the template's peak (:data:`_AGREE`), the quadratic takes over for good: the
         template is not fitted again.  The maximum need not be supported by a measurement
-        near it: over a broad lobe the flank points lie a lobe's width out (a 4 mm 1 MHz
-        probe's template, biased by 0.1°, otherwise kept the estimate to the end)."""
+        near it: over a broad lobe the flank points lie a lobe's width out."""
         if self._tfit is None or self._template is None or self._n_top < _QUADRATIC_TOP:
             return
         xs = self._supported_max()
