@@ -124,16 +124,30 @@ def _search(bounds=((-30.0, 30.0), (-30.0, 30.0)), like=None) -> PosteriorSearch
     return PosteriorSearch(np.zeros(2), 20.0, like, np.array(bounds))
 
 
-def test_the_prior_is_uniform_in_distance():
-    search = _search()
+def _prior_mass_within(r: float, radius: float = 20.0, inner: float = 1.0) -> float:
+    """P(ρ ≤ r) of the mixture prior, by hand: half log-uniform in distance (a density
+    ∝ 1/max(ρ, inner)² per area: mass π within ``inner``, 2π ln(r / inner) out to r), half
+    uniform in distance (r / radius)."""
+    def near(x: float) -> float:
+        return x * x / inner**2 if x < inner else 1.0 + 2.0 * np.log(x / inner)
+
+    return 0.5 * near(r) / near(radius) + 0.5 * r / radius
+
+
+@pytest.mark.parametrize("inner", [1.0, 2.0])
+def test_the_prior_is_half_log_uniform_half_uniform_in_distance(inner):
+    search = PosteriorSearch(
+        np.zeros(2), 20.0, _likelihood(), np.array([[-30.0, 30.0], [-30.0, 30.0]]), inner=inner
+    )
     post = np.exp(search.log_posterior())
     x, y = np.meshgrid(search._x[0], search._y[:, 0])
     rho = np.hypot(x, y)
-    # a uniform distance on [0, 20]: each 5° annulus holds a quarter (cells straddle the
-    # annuli's edges and the first cell is capped at 1/cell: 2 % absolute)
-    for lo in (0.0, 5.0, 10.0, 15.0):
-        inside = (rho >= lo) & (rho < lo + 5.0)
-        assert post[inside].sum() == pytest.approx(0.25, abs=0.02)
+    # annuli by hand; cells (0.25°) straddle the edges and the far half's first cell is
+    # capped at 1/cell: 1.5 % absolute (uniform in distance alone, before: 25 % per 5°)
+    for lo, hi in ((0.0, 1.0), (1.0, 3.0), (3.0, 5.0), (5.0, 10.0), (10.0, 20.0)):
+        inside = (rho >= lo) & (rho < hi)
+        expected = _prior_mass_within(hi, inner=inner) - _prior_mass_within(lo, inner=inner)
+        assert post[inside].sum() == pytest.approx(expected, abs=0.015)
 
 
 def test_a_strong_detection_concentrates_and_a_quiet_value_thins_the_posterior():

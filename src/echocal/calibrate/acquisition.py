@@ -77,7 +77,6 @@ from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.posterior_search import (
     GIVE_UP_EVIDENCE,
-    MIN_SNR_DB,
     EchoLikelihood,
     PosteriorSearch,
 )
@@ -412,9 +411,11 @@ class Acquisition(Optimizer):
             return
         self._search_asked = True
         likelihood = self.echo_likelihood()
-        if likelihood is None or (likelihood.snr_db is not None and likelihood.snr_db < MIN_SNR_DB):
-            return  # a weak echo: the passes, with the fine lattice around x0 (MIN_SNR_DB)
-        self.search = PosteriorSearch(self.x0, self.max_radius, likelihood, self.bounds)
+        if likelihood is None:
+            return
+        self.search = PosteriorSearch(
+            self.x0, self.max_radius, likelihood, self.bounds, inner=self.spacing
+        )
         self.search.update(self._x, self._g)
 
     def _update_search(self, points: FloatArray, ok: np.ndarray, sig: FloatArray | None) -> None:
