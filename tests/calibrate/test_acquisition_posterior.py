@@ -67,12 +67,15 @@ def test_with_no_echo_within_reach_the_search_gives_up_on_the_evidence(plate):
         assert 7 < res.n_measurements < 120
 
 
-def test_a_weak_echo_keeps_the_passes_with_the_fine_lattice(plate):
-    """At 10 dB (below MIN_SNR_DB) the search after a quiet first ring is the passes':
-    the 1° lattice out to 3°, which a near start needs, then the pass sized for the echo."""
-    res, err = _run(plate, 0, offset=(2.5, 0.0), snr=10.0)
-    assert not res.posterior_search and res.options["posterior"] is True
-    assert res.search_passes is not None and res.search_snr_db == pytest.approx(10.0, abs=1.0)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_weak_echo_is_searched_by_the_posterior_too(plate, seed):
+    """At 10 dB a quiet first ring hands the search to the posterior as at 30 dB (there
+    is no switch on the SNR), whose prior keeps half its mass on "x0 is good": a near
+    start 2.5° out, where the echo is seen only 0.55–0.7° away, reaches 0.1° within 40
+    measurements (measured: 100 of 100 runs of the benchmark's near starts)."""
+    res, err = _run(plate, seed, offset=(2.5, 0.0), snr=10.0, budget=40)
+    assert res.posterior_search and res.options["posterior"] is True
+    assert res.search_snr_db is None  # no passes were sized: none are searched
     assert err < 0.1
 
 

@@ -124,16 +124,30 @@ def _search(bounds=((-30.0, 30.0), (-30.0, 30.0)), like=None) -> PosteriorSearch
     return PosteriorSearch(np.zeros(2), 20.0, like, np.array(bounds))
 
 
-def test_the_prior_is_uniform_in_distance():
-    search = _search()
+def _prior_mass_within(r: float, radius: float = 20.0, near: float = 3.0) -> float:
+    """P(ρ ≤ r) of the prior, by hand: a uniform distance, half within ``near`` of x0, half
+    within ``radius``."""
+    return 0.5 * min(r, near) / near + 0.5 * min(r, radius) / radius
+
+
+@pytest.mark.parametrize("near", [3.0, 6.0])
+def test_the_prior_is_uniform_in_distance_half_near_x0_half_anywhere(near):
+    search = PosteriorSearch(
+        np.zeros(2), 20.0, _likelihood(), np.array([[-30.0, 30.0], [-30.0, 30.0]]),
+        near_radius=near,
+    )  # fmt: skip
     post = np.exp(search.log_posterior())
     x, y = np.meshgrid(search._x[0], search._y[:, 0])
     rho = np.hypot(x, y)
-    # a uniform distance on [0, 20]: each 5° annulus holds a quarter (cells straddle the
-    # annuli's edges and the first cell is capped at 1/cell: 2 % absolute)
-    for lo in (0.0, 5.0, 10.0, 15.0):
-        inside = (rho >= lo) & (rho < lo + 5.0)
-        assert post[inside].sum() == pytest.approx(0.25, abs=0.02)
+    # annuli by hand (uniform in distance out to 20° alone, before: 5 % per 1° annulus).
+    # Cells (0.25°) straddle the edges, and within 1° of x0 a 1/ρ density is integrated
+    # over 4 cells per radius, the first capped at 1/cell: 2.5 % absolute there, 1.2 %
+    # beyond (measured), so 3 % bounds both and a prior off by a third of a 1° annulus fails
+    # (0.19 expected in the first degree with near=3°; the old prior had 0.05)
+    for lo, hi in ((0.0, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 6.0), (6.0, 10.0), (10.0, 20.0)):
+        inside = (rho >= lo) & (rho < hi)
+        expected = _prior_mass_within(hi, near=near) - _prior_mass_within(lo, near=near)
+        assert post[inside].sum() == pytest.approx(expected, abs=0.03)
 
 
 def test_a_strong_detection_concentrates_and_a_quiet_value_thins_the_posterior():

@@ -37,9 +37,8 @@ measurements join the search's, and the search resumes where it stood.
 
 With ``posterior`` (``auto``'s default) and an objective that says how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
-probe, for an echo predicted at 15 dB or more; a recording or a rig, whose echo
-amplitude is unknown, at any SNR), the search beyond x0's first ring is
-Bayesian instead
+probe at its known amplitude; a recording or a rig over hypotheses on its unknown
+amplitude), the search beyond x0's first ring is Bayesian instead, at every SNR
 (:mod:`echocal.calibrate.posterior_search`): every significance — below the threshold
 too — updates a posterior over where the optimum is, the next point is where a detection
 is most likely, and the search gives up once the measurements are 1,000 times likelier
@@ -77,7 +76,6 @@ from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.posterior_search import (
     GIVE_UP_EVIDENCE,
-    MIN_SNR_DB,
     EchoLikelihood,
     PosteriorSearch,
 )
@@ -218,10 +216,8 @@ class Acquisition(Optimizer):
         or :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
         amplitude) or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`.
     posterior : (true or false) once x0 and its first ring saw no echo, and given a
-        ``detector``, an ``echo_likelihood`` (asked then, once) whose echo's predicted SNR
-        is at least :data:`~echocal.calibrate.posterior_search.MIN_SNR_DB` (15 dB) or not
-        known (hypotheses over its amplitude) and
-        ``batch`` 1, search by the posterior over the optimum instead of the lattice
+        ``detector``, an ``echo_likelihood`` (asked then, once; at any SNR) and ``batch``
+        1, search by the posterior over the optimum instead of the lattice
         (:mod:`echocal.calibrate.posterior_search`): every significance, below the
         threshold too, updates it, and the next point is where a detection is most
         likely.  The detection test and its confirmation are the lattice's; the search
@@ -412,8 +408,8 @@ class Acquisition(Optimizer):
             return
         self._search_asked = True
         likelihood = self.echo_likelihood()
-        if likelihood is None or (likelihood.snr_db is not None and likelihood.snr_db < MIN_SNR_DB):
-            return  # a weak echo: the passes, with the fine lattice around x0 (MIN_SNR_DB)
+        if likelihood is None:
+            return
         self.search = PosteriorSearch(self.x0, self.max_radius, likelihood, self.bounds)
         self.search.update(self._x, self._g)
 

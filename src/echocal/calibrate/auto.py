@@ -4,14 +4,15 @@ A run has two phases that share every measurement:
 
 1. **Find the echo.** From ``x0`` outward, each A-scan is asked whether it shows the echo
    (its matched-filter peak's significance, :class:`~echocal.signal.detection.EchoDetector`;
-   a marginal detection is confirmed by a second A-scan). Within 3° of ``x0`` the search
-   keeps a 1° lattice. Beyond, where the echo's likelihood is known — a simulated probe
-   whose echo is predicted at 15 dB or more, or a recording or a rig in tilt angles, whose
-   unknown amplitude is averaged over (:mod:`echocal.calibrate.echo_hypotheses`) — it
-   follows a posterior over the optimum (:mod:`echocal.calibrate.posterior_search`): every
-   A-scan, below the detection threshold too, updates it, and the next point is where a
-   detection is most likely. Elsewhere it measures hexagonal passes sized for the probe
-   (:data:`AUTO_SEARCH`).
+   a marginal detection is confirmed by a second A-scan). First ``x0`` and its 1° ring.
+   Beyond, where the echo's likelihood is known — a simulated probe, or a recording or a
+   rig in tilt angles, whose unknown amplitude is averaged over
+   (:mod:`echocal.calibrate.echo_hypotheses`) — it follows a posterior over the optimum
+   (:mod:`echocal.calibrate.posterior_search`), at every SNR: a priori half "x0 is good"
+   (the optimum's distance log-uniform) and half "anywhere within reach" (uniform in
+   distance); every A-scan, below the detection threshold too, updates it, and the next
+   point is where a detection is most likely. Elsewhere it keeps a 1° lattice within 3°
+   of ``x0``, then hexagonal passes sized for the probe (:data:`AUTO_SEARCH`).
 2. **Refine the peak** with :class:`~echocal.calibrate.model_based.ModelBased`: a
    log-quadratic fitted to every measurement so far, in a trust region, with the live
    noise floor subtracted; from the lobe's tail it follows the probe's lobe template
@@ -29,9 +30,10 @@ page.
 Evidence (``benchmarks/bench_calibration.py``, ``benchmarks/bench_tails.py``): on
 ``immersion-5mhz`` (wave model, budget 80, tilt angles) every start 1–3° off reaches 0.1°
 within 40 measurements at 30, 20 and 10 dB; from 5–20° off the median / p99 to 0.1° are
-17 / 24 at 30 dB, 27 / 59 at 20 dB and 262 / 535 at 10 dB; on 300 hold-out seeds per far
-cell, 100 % (30 dB) and 99 % (20 dB) reach 0.1° within 60, and the 90 % radius covers the
-truth in 94–98 % of runs.
+17 / 24 at 30 dB, 27 / 59 at 20 dB, and at 10 dB a median 108, the slowest of 30 runs 190
+(262 / 535 with the passes it searched before the posterior served every SNR); on 300
+hold-out seeds per far cell, 100 % (30 dB) and 99 % (20 dB) reach 0.1° within 60, and the
+90 % radius covers the truth in 94–98 % of runs.
 """
 
 from __future__ import annotations
@@ -63,8 +65,7 @@ AUTO_SEARCH: dict[str, Any] = {
 """auto's search [deg] — its only difference from ``acquisition``: the 1° lattice
 within 3° of x0, then two passes over the disc of ``max_radius``, coarse to fine (see the
 evidence above and :func:`~echocal.calibrate.search_pattern.search_rings`), or, on a
-simulated probe with an echo of 15 dB or more, or a recording or a rig, the posterior
-search, unless the
+simulated probe, a recording or a rig (at every SNR), the posterior search, unless the
 caller sets where to search (``passes``, ``growth``, ``max_spacing`` or ``fine_radius``
 without ``posterior=True``).  The passes are
 the default for an objective that cannot size them from its probe

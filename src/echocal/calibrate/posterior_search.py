@@ -9,11 +9,18 @@ echo fades with misalignment and how the detector's peak is distributed around i
 is, and the next one goes where a detection is most likely.
 
 Model (:class:`PosteriorSearch`).  The optimum c lies within ``max_radius`` of the start
-x0, a priori at a uniform *distance* (a density ∝ 1/ρ per area: as likely 2° away as
-15°) in a uniform direction, on a square grid of cells.  A measurement at x observes the
-matched-filter envelope's peak t over the window (in units of the noise's Rayleigh
-scale σ·gain; recovered from the significance g the detector reports, which is a
-monotonic function of it), the larger of
+x0, on a square grid of cells, a priori at a uniform *distance* (a density ∝ 1/ρ per
+area: as likely 2° away as 15°) in a uniform direction, from one of two causes of equal
+weight (:data:`NEAR_WEIGHT`): "x0 is good", within :data:`NEAR_RADIUS` (3°) of it, or
+"anywhere within reach", within ``max_radius``.  The first half keeps a weak echo's
+search around x0 until that disc is covered (a 10 dB echo is seen only 0.55–0.7° away;
+uniform in distance out to 20° alone, the prior put 90 % of its mass beyond 3° and a
+near start's search went out first); a strong echo's quiet first ring empties that disc
+at once, and the search is the far one's.  So the same search serves every SNR.
+
+A measurement at x observes the matched-filter envelope's peak t over the window (in
+units of the noise's Rayleigh scale σ·gain; recovered from the significance g the
+detector reports, which is a monotonic function of it), the larger of
 
 * the envelope at the echo, a Rice variable R of the noiseless peak ν(|x − c|) there
   (the probe's lobe profile) and unit scale, and
@@ -54,12 +61,14 @@ from numpy.typing import ArrayLike
 from scipy.special import chndtr, i0e, log_ndtr, logsumexp
 
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate._options import positive_float
 from echocal.errors import EchocalValueError
 
 __all__ = [
     "GIVE_UP_EVIDENCE",
-    "MIN_SNR_DB",
     "MOTION_TIE",
+    "NEAR_RADIUS",
+    "NEAR_WEIGHT",
     "TIE",
     "EchoLikelihood",
     "Hypotheses",
@@ -71,11 +80,11 @@ __all__ = [
 GIVE_UP_EVIDENCE = 1e-3
 """The search gives up once the measurements are this much likelier with no echo within
 reach than with one from the prior (:meth:`PosteriorSearch.log_evidence`)."""
-MIN_SNR_DB = 15.0
-"""[dB] below this predicted peak SNR of the echo the acquisition keeps its passes (a 10 dB
-echo is seen only 0.55–0.7° away, and a prior uniform in distance out to 20° puts 90 % of
-its mass beyond 3°: near starts at 10 dB, 100 runs, 97 % within 0.1° after 40 with the
-posterior search against 100 % with the 1° lattice out to 3°)."""
+NEAR_WEIGHT = 0.5
+"""The prior's weight on "x0 is good": the optimum within :data:`NEAR_RADIUS` of x0; the
+rest on "anywhere within reach", within ``max_radius`` (:class:`PosteriorSearch`)."""
+NEAR_RADIUS = 3.0
+"""[deg] "x0 is good": the optimum at most this far from x0 (a near start, 1–3° off)."""
 TIE = 0.05
 """Cells whose detection chance is within this fraction of the best are equally good: the
 one nearest to x0 is measured next (module docstring)."""
@@ -123,8 +132,8 @@ class EchoLikelihood:
     n_cells : M of Rice's formula for the window (:class:`~echocal.signal.detection.EchoDetector`).
     threshold : the detection threshold on the same normalized peak (the significance
         threshold through the detector).
-    snr_db : [dB] the peak SNR ŝ of the best echo against this noise, when known (the
-        acquisition searches by the posterior only from :data:`MIN_SNR_DB`).
+    snr_db : [dB] the peak SNR ŝ of the best echo against this noise, when known
+        (information: the search is the same at every SNR).
     """
 
     angles: FloatArray
@@ -221,6 +230,7 @@ class PosteriorSearch:
         detection chance and the evidence sum over the hypotheses.
     bounds : [deg] shape ``(2, 2)``: the next point lies inside, and the evidence counts
         the optima inside (:meth:`log_evidence`).
+    near_radius : [deg] the reach of the prior's "x0 is good" half (:data:`NEAR_RADIUS`).
     """
 
     def __init__(
@@ -229,6 +239,7 @@ class PosteriorSearch:
         max_radius: float,
         likelihood: EchoLikelihood | Hypotheses,
         bounds: FloatArray,
+        near_radius: float = NEAR_RADIUS,
     ) -> None:
         self.likelihood = likelihood
         if isinstance(likelihood, EchoLikelihood):
@@ -252,8 +263,8 @@ class PosteriorSearch:
         inside_x = (self._x >= bounds[0, 0]) & (self._x <= bounds[0, 1])
         inside_y = (self._y >= bounds[1, 0]) & (self._y <= bounds[1, 1])
         self._candidate = inside_x & inside_y
-        log_prior = np.where(rho <= max_radius, -np.log(np.maximum(rho, cell)), -np.inf)
-        self._log_prior = log_prior - _logsumexp(log_prior)
+        near_radius = positive_float("near_radius", near_radius)
+        self._log_prior = _mixture_prior(rho, max_radius, cell, near_radius)
         self._log_like = np.zeros((len(self._models), *rho.shape))  # per hypothesis
         # the evidence counts the optima inside the bounds: mass beyond them is never
         # measured, so it would neither deplete nor let the search give up
@@ -379,6 +390,25 @@ class PosteriorSearch:
         if times[0] - times[1 + best] > price / MOTION_TIE:
             return window[best]
         return plain
+
+
+def _mixture_prior(
+    rho: FloatArray, max_radius: float, cell: float, near_radius: float
+) -> FloatArray:
+    """ln of the prior over the optimum per cell, normalized, shape of ``rho`` (each cell's
+    distance [deg] from x0): uniform in distance in a uniform direction (a density ∝ 1/ρ
+    per area, the first cell's capped at 1/``cell``), with probability
+    :data:`NEAR_WEIGHT` within ``near_radius`` ("x0 is good"), else within
+    ``max_radius`` ("anywhere within reach")."""
+    anywhere = np.where(rho <= max_radius, -np.log(np.maximum(rho, cell)), -np.inf)
+    near = np.where(rho <= min(near_radius, max_radius), anywhere, -np.inf)
+    return np.asarray(
+        np.logaddexp(
+            np.log(NEAR_WEIGHT) + near - _logsumexp(near),
+            np.log1p(-NEAR_WEIGHT) + anywhere - _logsumexp(anywhere),
+        ),
+        dtype=np.float64,
+    )
 
 
 def _logsumexp(a: FloatArray) -> float:
