@@ -28,9 +28,11 @@ there: it reproduces the Rogers–Van Buren diffraction loss on axis and the exa
 face, through a disc of radius a + margin on it, wide enough to hold the diffracted beam
 (its half-angle grows with λ/a) and dense enough that the samples lie about ``spacing``
 apart on the surface, and never farther than the two-way Nyquist spacing λ_hi/(4 sin θ) at
-the beam axis's incidence θ (finer, and costlier, at large tilts: 6 ms per A-scan at
-normal incidence, 0.05 s at 10°, 0.18 s at 20° for a 12.7 mm probe at 50 mm).  Closest hits
-keep visibility.
+the beam axis's incidence θ (finer, and costlier, at large tilts), and on a curved surface
+not farther than the coarser of 1.5 times that at the largest incidence on it across the
+face's footprint and 0.8 times that of the paths to the probe's rim
+(``_CURVED_FOOTPRINT_FRACTION``, ``_CURVED_RIM_FRACTION``; costs in
+docs/benchmarks/wave.md).  Closest hits keep visibility.
 
 **Planes.** Over a plane that fills the beam (or a plate whose edges' echo comes after its
 own, :meth:`WaveEchoModel.image_plane`), the same physics is evaluated exactly and far
@@ -82,6 +84,26 @@ _CURVED_SPACING_WAVELENGTHS = 1.35
 faster between neighbours there; at 2.7 λ a 3 mm probe's echo over a 20 mm rod rose 2–4 %
 from the normal to 0.4° off it, at 1.35 λ it falls as it should and agrees with 0.68 λ to
 0.3 % (tests/physics/test_wave_optimum.py)."""
+_CURVED_RIM_FRACTION = 0.8
+"""A curved surface's samples may also lie this fraction of the two-way Nyquist spacing of
+the paths to the probe's rim, λ_hi/(4 sin β) with tan β = a/ℓ (a the face's radius, ℓ the
+surface's distance), apart (see ``WaveEchoModel._curved_spacing``): every sample's
+two-way SIR starts and ends at the paths to the nearest and farthest rim points, which
+move at up to sin β per unit step.  50 mm above the 25 mm ball it asks for 0.24 mm: 0.27 %
+of the echo's peak at 0°, 0.67 % at 2° (1.0 of it, 0.30 mm: 2.5 and 4.2 %)."""
+_CURVED_FOOTPRINT_FRACTION = 1.5
+"""With the default spacing, a curved surface's samples may lie this multiple of the
+two-way Nyquist spacing λ_hi/(4 sin θ_f) apart, θ_f the largest angle between the surface's
+normal and the beam axis where rays from the face's centre and rim, parallel to the axis,
+meet it (λ_hi at the pulse's −60 dB frequency: 1.5 of its Nyquist spacing is the Nyquist
+spacing at 2/3 of that frequency, the upper −6 dB one of a 60 % Gabor pulse at 5 MHz).
+Under a large probe the near field is a plane wave along the axis, so the two-way delay
+changes at 2 sin θ_f per unit step across the footprint whatever the distance.  The echo of
+a 12.7 mm 5 MHz probe above a 25 mm ball within 2 µs of it, against an independent
+physical-optics sum (tests/physics/test_ball.py): at 1.35 λ (0.40 mm) 11, 8.2 and 7.2 % of
+its peak off at 10, 25 and 50 mm; 0.30 mm 2.2, 2.6, 2.5 %; 0.25 mm 0.86, 0.96 %; 0.20 mm
+0.62, 0.36, 0.14 % (converged); this rule 0.22 mm (the coarser of it and the rim's rule
+applies)."""
 _SPACING_PER_SIZE = 0.5
 """The default spacing is at most this fraction of the probe's (shorter) half-width: a small
 probe's field varies across its own size, finer than a few wavelengths (a 4 mm probe at
@@ -308,6 +330,45 @@ class WaveEchoModel:
         t = t[np.isfinite(t)]
         return (float(t.min()) if t.size else 3.0 * a), sin_axis
 
+    def _curved_spacing(
+        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray, distance: float
+    ) -> float:
+        """[m] the spacing a curved surface ``distance`` [m] away needs besides the axis's
+        Nyquist spacing: the coarser of the footprint's and the rim's rules
+        (``_CURVED_FOOTPRINT_FRACTION``, ``_CURVED_RIM_FRACTION``), each an upper bound on the
+        delay's rate that the other overstates: the rim's paths near the probe (at 10 mm
+        the rim rule asked for 0.057 mm where 0.2 mm had converged), the footprint's grazing
+        hits at large tilts (at 20° 72,000 samples for no change in the echo's window)."""
+        sin_footprint = self._footprint_sine(shapes, position, frame)
+        footprint = (
+            _CURVED_FOOTPRINT_FRACTION * self._pose_spacing(sin_footprint)
+            if sin_footprint > 0.0
+            else math.inf
+        )
+        sin_rim = math.sin(math.atan2(self.probe.radius, max(distance, 0.0)))
+        return max(footprint, _CURVED_RIM_FRACTION * self._pose_spacing(sin_rim))
+
+    def _footprint_sine(
+        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+    ) -> float:
+        """The largest sine of the angle between the surface's normal and the beam axis
+        where rays parallel to the axis from the face's centre and 16 points of its rim
+        (radius a) meet ``shapes`` (0 if none does): see ``_CURVED_FOOTPRINT_FRACTION``."""
+        phi = 2.0 * math.pi * np.arange(16) / 16
+        a = self.probe.radius
+        origins = np.stack(
+            [np.append(a * np.cos(phi), 0.0), np.append(a * np.sin(phi), 0.0), np.zeros(17)]
+        )
+        axis = np.zeros((3, 17))
+        axis[2] = 1.0
+        o, d = self._to_world(origins, axis, position, frame)
+        t, normal, _ = _cast_soa(shapes, o, d)
+        hit = np.isfinite(t)
+        if not np.any(hit):
+            return 0.0
+        cos_axis = np.abs(np.sum(normal[:, hit] * d[:, hit], axis=0))
+        return float(np.sqrt(np.maximum(0.0, 1.0 - cos_axis.min() ** 2)))
+
     @staticmethod
     def _to_world(
         origins: FloatArray, dirs: FloatArray, position: FloatArray, frame: FloatArray
@@ -521,6 +582,8 @@ class WaveEchoModel:
         """
         distance, sin_axis = self._surface_distance(shapes, position, frame)
         spacing = self._sample_spacing(shapes, sin_axis)
+        if self.spacing is None and not all(shape.kind == "plane" for shape in shapes):
+            spacing = min(spacing, self._curved_spacing(shapes, position, frame, distance))
         origins2, dirs, solid_angle, apex = self._fan(distance, spacing)
         origins = np.vstack([origins2, np.zeros(origins2.shape[1])])
         o, d = self._to_world(origins, dirs, position, frame)
