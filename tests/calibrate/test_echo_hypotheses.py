@@ -83,7 +83,6 @@ def test_one_hypothesis_is_the_plain_likelihood():
 def test_lorentzian_lobes_are_the_closed_form_at_each_width_and_amplitude():
     family = lorentzian_lobes(M, THRESHOLD)
     assert len(family.likelihoods) == len(WIDTHS) * len(AMPLITUDE_DB)
-    assert family.snr_db is None  # the acquisition's SNR switch does not apply
     np.testing.assert_allclose(np.exp(family.log_weights), 1.0 / len(family.likelihoods))
     theta = family.angles
     for i, like in enumerate(family.likelihoods):

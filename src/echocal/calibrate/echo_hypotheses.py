@@ -72,9 +72,6 @@ class EchoHypotheses:
     log_weights: FloatArray
     label: str = "hypotheses"
 
-    snr_db = None
-    """The echo's SNR is not known (the acquisition's switch on it does not apply)."""
-
     def __post_init__(self) -> None:
         likes = tuple(self.likelihoods)
         weights = np.asarray(self.log_weights, dtype=np.float64)

@@ -132,15 +132,12 @@ class EchoLikelihood:
     n_cells : M of Rice's formula for the window (:class:`~echocal.signal.detection.EchoDetector`).
     threshold : the detection threshold on the same normalized peak (the significance
         threshold through the detector).
-    snr_db : [dB] the peak SNR ŝ of the best echo against this noise, when known
-        (information: the search is the same at every SNR).
     """
 
     angles: FloatArray
     echo: FloatArray
     n_cells: float
     threshold: float
-    snr_db: float | None = None
 
     def __post_init__(self) -> None:
         angles = np.asarray(self.angles, dtype=np.float64)

@@ -189,9 +189,8 @@ class LobeProfile:
         coefficients, :func:`echocal.bench.receiver.ar_noise`; () white), for a Bayesian
         search (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`): the
         profile's peaks averaged over its directions, in units of σ · the noise gain of
-        the detector calibrated on that colour, the detection threshold ``threshold`` [σ
-        of significance] on the same scale, and the echo's effective peak SNR ŝ against
-        that noise (:func:`white_equivalent_sigma`).  None when the lobe does not peak at
+        the detector calibrated on that colour, and the detection threshold ``threshold``
+        [σ of significance] on the same scale.  None when the lobe does not peak at
         normal incidence (a large probe over a curved part: the optimum is not where the
         profile is centred)."""
         top = float(np.mean(self.peaks[:, 0]))
@@ -202,13 +201,11 @@ class LobeProfile:
         detector = shared_detector(setup.pulse, window.fs, window.n_samples, noise_ar)
         sigma = positive_float("noise_sigma", noise_sigma)
         scale = sigma * detector.noise_gain
-        white = white_equivalent_sigma(setup, sigma, noise_ar)
         return EchoLikelihood(
             angles=self.angles,
             echo=self.peaks.mean(axis=0) / scale,
             n_cells=detector.n_cells,
             threshold=detector.threshold_peak(sigma, threshold) / scale,
-            snr_db=float(snr_for_noise_sigma(self.reference, white, window, setup.pulse)),
         )
 
     def peak_shape(self) -> np.ndarray | None:
