@@ -110,7 +110,7 @@ def test_scan_maps_the_plates_thickness(tmp_path):
 def test_the_simulated_pipe_reads_its_wall():
     """The 8-inch pipe (8.2 mm wall: a curved front face and back wall) at its top under
     water paths of 45–55 mm: the wall from the front-to-back time of flight of its
-    noiseless A-scans within 0.05 mm, the scan's tolerance below (measured 0.010–0.024 mm:
+    noiseless A-scans within 0.05 mm (measured 0.010–0.024 mm:
     the back wall's diffraction through the curved face moves its matched peak), the back
     echo found after the front wall and inside the back-wall gate alike."""
     pipe = load_setup("immersion-steel-pipe")
@@ -131,7 +131,12 @@ def test_the_simulated_pipe_reads_its_wall():
 @pytest.mark.slow
 def test_scan_maps_a_pipes_wall(tmp_path):
     """The 8-inch pipe (8.2 mm wall) at its top: the wall from the front-to-back time of
-    flight within 0.05 mm (measured 0.007–0.026 mm over −10…10 mm across the pipe).
+    flight of one noisy A-scan within 0.1 mm.  The noiseless reading is off by 0.016 mm
+    (0.007–0.026 mm over −10…10 mm across the pipe: the back wall's diffraction through
+    the curved face), and 30 dB noise moves one reading by σ = 0.016 mm (4,000 noise
+    draws at this pose: 99 % within 0.053 mm, 99.9 % within 0.061 mm): the bias plus 5σ
+    is 0.1 mm.  A wrong speed (shear for longitudinal) or the second back echo taken for
+    the first is off by millimetres.
 
     Slow tier (about 20 CPU-s: 28 curved-wall A-scans): it joins two fast checks, the
     plate's thickness map through ``echocal scan`` above and the pipe's wall from its
@@ -148,7 +153,7 @@ def test_scan_maps_a_pipes_wall(tmp_path):
     summary = json.loads(result.stdout.strip().splitlines()[-1])["scan"]
     assert summary["found"] == 1
     assert summary["true_thickness_m"] == pytest.approx(0.0082)
-    assert summary["thickness_error_abs_m"]["max"] < 5e-5
+    assert summary["thickness_error_abs_m"]["max"] < 1e-4
 
 
 def test_scan_refuses_a_bad_longitudinal_speed(tmp_path, capsys, monkeypatch):
