@@ -306,7 +306,9 @@ class WaveEchoModel:
         """[m] 2λ + ``_FRESNEL_MARGIN``·√(λ_lo·d): how far beyond the face's rim (or a
         ball's specular cap) the edge waves of a surface ``distance`` d [m] away reach."""
         lam = self._wavelength
-        return 2.0 * lam + _FRESNEL_MARGIN * math.sqrt(self._longest_wavelength * max(distance, lam))
+        return 2.0 * lam + _FRESNEL_MARGIN * math.sqrt(
+            self._longest_wavelength * max(distance, lam)
+        )
 
     def _fan_extent(self, distance: float) -> tuple[float, float]:
         """(r₀, apex) [m]: the fan's radius on the face and the distance of its virtual apex
@@ -412,15 +414,10 @@ class WaveEchoModel:
         local = np.stack([uu.ravel(), vv.ravel(), np.full(81, 2.0)])
         local /= np.linalg.norm(local, axis=0)
         origins_l = np.stack([uu.ravel() * a, vv.ravel() * a, np.zeros(81)])
-        o, d = self._to_world(origins_l, local, position, frame)
-        t, normal, _ = _cast_soa(shapes, o, d)
+        t, sine = self._incidence(shapes, origins_l, local, position, frame)
         axis = 40  # the centre of the 9 × 9 grid: on the beam axis
-        sin_axis = 0.0
-        if np.isfinite(t[axis]):
-            cos_axis = abs(float(np.dot(normal[:, axis], d[:, axis])))
-            sin_axis = math.sqrt(max(0.0, 1.0 - cos_axis * cos_axis))
         t = t[np.isfinite(t)]
-        return (float(t.min()) if t.size else 3.0 * a), sin_axis
+        return (float(t.min()) if t.size else 3.0 * a), float(sine[axis])
 
     def _curved_spacing(
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray, distance: float
@@ -470,13 +467,26 @@ class WaveEchoModel:
         )
         axis = np.zeros((3, 17))
         axis[2] = 1.0
-        o, d = self._to_world(origins, axis, position, frame)
+        return float(self._incidence(shapes, origins, axis, position, frame)[1].max())
+
+    def _incidence(
+        self,
+        shapes: tuple[Shape, ...],
+        origins: FloatArray,
+        dirs: FloatArray,
+        position: FloatArray,
+        frame: FloatArray,
+    ) -> tuple[FloatArray, FloatArray]:
+        """Rays from local ``origins`` [m] ``(3, n)`` along local unit ``dirs`` ``(3, n)``
+        (beam along +z): their distances to ``shapes`` [m] ``(n,)`` (inf for a miss) and
+        the sines of their angles of incidence there ``(n,)`` (0 for a miss)."""
+        o, d = self._to_world(origins, dirs, position, frame)
         t, normal, _ = _cast_soa(shapes, o, d)
         hit = np.isfinite(t)
-        if not np.any(hit):
-            return 0.0
-        cos_axis = np.abs(np.sum(normal[:, hit] * d[:, hit], axis=0))
-        return float(np.sqrt(np.maximum(0.0, 1.0 - cos_axis.min() ** 2)))
+        cos = np.abs(np.sum(normal[:, hit] * d[:, hit], axis=0))
+        sine = np.zeros(t.shape)
+        sine[hit] = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
+        return t, sine
 
     @staticmethod
     def _to_world(
