@@ -32,7 +32,9 @@ the beam axis's incidence θ (finer, and costlier, at large tilts), and on a cur
 not farther than the coarser of 1.5 times that at the largest incidence on it across the
 face's footprint and 0.8 times that of the paths to the probe's rim
 (``_CURVED_FOOTPRINT_FRACTION``, ``_CURVED_RIM_FRACTION``; costs in
-docs/benchmarks/wave.md).  Closest hits keep visibility.
+docs/benchmarks/wave.md).  Over a lone ball the fan is aimed at its centre and covers
+the cap its echo comes from, whatever the tilt (``WaveEchoModel._cap``).  Closest hits
+keep visibility.
 
 **Planes.** Over a plane that fills the beam (or a plate whose edges' echo comes after its
 own, :meth:`WaveEchoModel.image_plane`), the same physics is evaluated exactly and far
