@@ -346,5 +346,7 @@ def test_auto_on_an_interpolated_replay_reaches_a_tenth_of_a_degree(tmp_path: Pa
         objective = SourceObjective(
             replay, position, parameterization="tilt", pulse=pulse, bounds=bounds, budget=40
         )
-        result = calibrate(objective, method="auto", x0=truth + [0.9, -0.6], budget=40, rng=0)
+        result = calibrate(
+            objective, method="auto", x0=truth + np.array([0.9, -0.6]), budget=40, rng=0
+        )
     assert float(np.hypot(*(result.x - truth))) < 0.1

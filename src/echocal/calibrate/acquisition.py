@@ -594,7 +594,7 @@ class Acquisition(Optimizer):
         if search is None:
             return False
         like = search.likelihood
-        models = like.likelihoods if isinstance(like, EchoHypotheses) else (like,)
+        models = (like,) if isinstance(like, EchoLikelihood) else like.likelihoods
         weakest = min(float(np.max(m.echo)) for m in models)
         needed = min(weakest * 10.0 ** (WEAK_ECHO_DB / 20.0), _PEAK_TABLE_TOP)
         return models[0].peak_of_significance(significance) < needed
