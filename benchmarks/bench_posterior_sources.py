@@ -20,12 +20,22 @@ far (5–20°) and near (1–3°) starts from the true optimum, 30 and 20 dB, wi
   whose objective knows the setup only as its ``twin`` (the lobe's shape; the amplitude
   unknown); ``rig-no-setup``: the same without a twin (Lorentzian lobes of unknown
   width);
-* ``replay``: a recording of the setup (``random-repeat``, seeded by the run), whose
-  objective's twin is the setup the file stores
+* ``replay``: a recording of the setup (``--replay-mode``, default ``random-repeat``;
+  its draws seeded by the run), whose objective's twin is the setup the file stores
   (:meth:`~echocal.measurement.ReplaySource.recorded_setup`).
 
+Hold-out runs: ``--first 10000000`` (run indices from 10,000,000).  A smaller recording
+with repeats, replayed interpolated in a ±6° box (docs/benchmarks/auto.md, "On a
+recording with repeats, interpolated")::
+
+    echocal record --setup immersion-5mhz --snr 30 --seed 30 --azimuth -180:180:145 \\
+        --coelevation 0:8.5:35 --repeats 4 --out rec30.nc
+    nice -n 10 python benchmarks/bench_posterior_sources.py --sources simulator-box,replay \\
+        --box 6 --replay-mode interpolate --replay30 rec30.nc --first 10000000
+
 The simulator and the rig use :mod:`bench_calibration`'s tilt box (±21.5°); the replay
-and its own ``simulator-box`` runs use the ±10° tilt box the recording covers (its grid:
+and its own ``simulator-box`` runs use a tilt box of ±``--box`` (default 10°) the
+recording must cover (the first recording's grid:
 co-elevation 0–14.25° in 0.25° steps, azimuth in 1.25° steps — 0.09° of arc at the
 optimum's 4°, 0.31° at the box's corner — one A-scan per pose, the nearest grid pose
 answers).

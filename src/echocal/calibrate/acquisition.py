@@ -33,7 +33,11 @@ With a detector, the local method must confirm the echo it was handed: unless on
 first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
 significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
 significances of the neighbourhood that passed stop counting, the local method's
-measurements join the search's, and the search resumes where it stood.
+measurements join the search's, and the search resumes where it stood.  After a
+posterior search the echo must also be one its likelihood allows: unless the strongest of
+the local phase's first :data:`ECHO_WITHIN` measurements reaches :data:`WEAK_ECHO_DB` of
+the weakest echo peak the likelihood allows at the optimum, the search resumes the same
+way (a lobe's far structure or a weaker reflector, confirmed but not the echo).
 
 With ``posterior`` (``auto``'s default) and an objective that says how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
