@@ -560,8 +560,9 @@ class Acquisition(Optimizer):
         self._handed = best.copy()
         self._local_g, self._local_x, self._local_y = [], np.zeros((0, 2)), np.zeros(0)
         self._echo_confirmed = not self._use_significance  # values alone: not checked
-        # the echo's strength is checked only against a posterior search's likelihood
-        self._strength_checked = self._echo_confirmed or self.search is None
+        # the echo's strength is checked against the echo's likelihood, where there is one
+        known = self.search is not None or (self.posterior and self.echo_likelihood is not None)
+        self._strength_checked = self._echo_confirmed or not known
 
     def _check_local(self, points: FloatArray, values: FloatArray) -> bool:
         """Whether the local phase's measurements refute the detection it was handed (then
@@ -594,10 +595,13 @@ class Acquisition(Optimizer):
         """Whether the strongest significance of the local phase, read back to a normalized
         peak t, stays below :data:`WEAK_ECHO_DB` of the weakest echo peak at the optimum
         that the posterior search's likelihood allows (at most :data:`_PEAK_TABLE_TOP`)."""
-        search = self.search
-        if search is None:
-            return False
-        like = search.likelihood
+        if self.search is not None:
+            like = self.search.likelihood
+        else:  # handed on from x0's first ring, before the posterior search was asked
+            asked = self.echo_likelihood() if self.echo_likelihood is not None else None
+            if asked is None:
+                return False
+            like = asked
         models = (like,) if isinstance(like, EchoLikelihood) else like.likelihoods
         weakest = min(float(np.max(m.echo)) for m in models)
         needed = min(weakest * 10.0 ** (WEAK_ECHO_DB / 20.0), _PEAK_TABLE_TOP)
