@@ -1,5 +1,5 @@
-"""After a posterior search, an echo the local phase cannot raise to what the search's
-model allows is not the echo searched for: the search resumes (issue 44; on a recording,
+"""An echo the local phase cannot raise to what the echo's likelihood allows (here after a
+posterior search) is not the echo searched for: the search resumes (issue 44; on a recording,
 a lobe's far structure ~4° off, confirmed as a real echo, held three far runs in 30)."""
 
 from __future__ import annotations

@@ -33,8 +33,9 @@ With a detector, the local method must confirm the echo it was handed: unless on
 first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
 significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
 significances of the neighbourhood that passed stop counting, the local method's
-measurements join the search's, and the search resumes where it stood.  After a
-posterior search the echo must also be one its likelihood allows: unless the strongest of
+measurements join the search's, and the search resumes where it stood.  Where the
+echo's likelihood is known (``posterior`` with ``echo_likelihood``; asked at the check if
+the first ring handed the echo on) the echo must also be one it allows: unless the strongest of
 the local phase's first :data:`ECHO_WITHIN` measurements reaches :data:`WEAK_ECHO_DB` of
 the weakest echo peak the likelihood allows at the optimum, the search resumes the same
 way (a lobe's far structure or a weaker reflector, confirmed but not the echo).
@@ -111,10 +112,11 @@ CONFIRM_WITHIN = 8
 them, or all of them together (Stouffer), is significant at ``threshold``, the detection
 was a false alarm and the search resumes."""
 ECHO_WITHIN = 16
-"""Measurements after which the local phase's echo must be one the search's model allows
-(after a posterior search): unless its strongest peak reaches :data:`WEAK_ECHO_DB` of the
-weakest echo the likelihood allows at the optimum, the echo it climbs is not the one
-searched for (a lobe's far structure, a weaker reflector) and the search resumes."""
+"""Measurements after which the local phase's echo must be one the echo's likelihood
+allows (with ``posterior`` and an ``echo_likelihood``): unless its strongest peak reaches
+:data:`WEAK_ECHO_DB` of the weakest echo the likelihood allows at the optimum, the echo it
+climbs is not the one searched for (a lobe's far structure, a weaker reflector) and the
+search resumes."""
 WEAK_ECHO_DB = -6.0
 """[dB] of the weakest echo peak the search's likelihood allows (a recording's or a rig's
 hypotheses: 30 dB, so a normalized peak of 16; a simulated probe: its known peak)."""
@@ -568,8 +570,8 @@ class Acquisition(Optimizer):
         """Whether the local phase's measurements refute the detection it was handed (then
         the search resumes, see :meth:`_resume`): none of its first :data:`CONFIRM_WITHIN`
         is significant at ``threshold`` and neither are all of them together (Σg/√n); or,
-        after a posterior search, the strongest of its first :data:`ECHO_WITHIN` is weaker
-        than the search's likelihood allows (:meth:`_too_weak`).  Checked once each."""
+        where the echo's likelihood is known, the strongest of its first :data:`ECHO_WITHIN`
+        is weaker than it allows (:meth:`_too_weak`).  Checked once each."""
         if self._echo_confirmed and self._strength_checked:
             return False
         sig = self._significances(len(points))
@@ -594,7 +596,8 @@ class Acquisition(Optimizer):
     def _too_weak(self, significance: float) -> bool:
         """Whether the strongest significance of the local phase, read back to a normalized
         peak t, stays below :data:`WEAK_ECHO_DB` of the weakest echo peak at the optimum
-        that the posterior search's likelihood allows (at most :data:`_PEAK_TABLE_TOP`)."""
+        that the echo's likelihood allows (the posterior search's, else asked now; at most
+        :data:`_PEAK_TABLE_TOP`).  False without a likelihood."""
         if self.search is not None:
             like = self.search.likelihood
         else:  # handed on from x0's first ring, before the posterior search was asked
