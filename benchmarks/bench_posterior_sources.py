@@ -20,12 +20,22 @@ far (5–20°) and near (1–3°) starts from the true optimum, 30 and 20 dB, wi
   whose objective knows the setup only as its ``twin`` (the lobe's shape; the amplitude
   unknown); ``rig-no-setup``: the same without a twin (Lorentzian lobes of unknown
   width);
-* ``replay``: a recording of the setup (``random-repeat``, seeded by the run), whose
-  objective's twin is the setup the file stores
+* ``replay``: a recording of the setup (``--replay-mode``, default ``random-repeat``;
+  its draws seeded by the run), whose objective's twin is the setup the file stores
   (:meth:`~echocal.measurement.ReplaySource.recorded_setup`).
 
+Hold-out runs: ``--first 10000000`` (run indices from 10,000,000).  A smaller recording
+with repeats, replayed interpolated in a ±6° box (docs/benchmarks/auto.md, "On a
+recording with repeats, interpolated")::
+
+    echocal record --setup immersion-5mhz --snr 30 --seed 30 --azimuth -180:180:145 \\
+        --coelevation 0:8.5:35 --repeats 4 --out rec30.nc
+    nice -n 10 python benchmarks/bench_posterior_sources.py --sources simulator-box,replay \\
+        --box 6 --replay-mode interpolate --replay30 rec30.nc --first 10000000
+
 The simulator and the rig use :mod:`bench_calibration`'s tilt box (±21.5°); the replay
-and its own ``simulator-box`` runs use the ±10° tilt box the recording covers (its grid:
+and its own ``simulator-box`` runs use a tilt box of ±``--box`` (default 10°) the
+recording must cover (the first recording's grid:
 co-elevation 0–14.25° in 0.25° steps, azimuth in 1.25° steps — 0.09° of arc at the
 optimum's 4°, 0.31° at the box's corner — one A-scan per pose, the nearest grid pose
 answers).
@@ -71,6 +81,7 @@ from echocal.measurement import (  # noqa: E402
     ReplaySource,
     SourceObjective,
 )
+from echocal.measurement.replay import MODES  # noqa: E402
 
 CASE = "immersion-5mhz"
 BUDGET = 100
@@ -81,21 +92,33 @@ SOURCES = ("simulator", "rig", "rig-no-setup", "simulator-box", "replay")
 _ORDER = (*SOURCES, "rig-before")  # the table also shows runs of an earlier version
 
 
-_REPLAYS: dict[str, tuple[ReplaySource, Any]] = {}
+_REPLAYS: dict[tuple[str, str], tuple[ReplaySource, Any]] = {}
 
 
-def _replay(path: str) -> tuple[ReplaySource, Any]:
-    """The recording at ``path`` (``random-repeat``), opened once per process (its A-scans
-    are read into memory at the first measurement), and the setup it stores."""
-    if path not in _REPLAYS:
-        recording = ReplaySource.open(path, mode="random-repeat")
-        _REPLAYS[path] = (recording, recording.recorded_setup())
-    return _REPLAYS[path]
+def _replay(path: str, mode: str) -> tuple[ReplaySource, Any]:
+    """The recording at ``path`` in ``mode``, opened once per process (its A-scans are
+    read into memory at the first measurement), and the setup it stores."""
+    if (path, mode) not in _REPLAYS:
+        recording = ReplaySource.open(path, mode=mode)
+        _REPLAYS[path, mode] = (recording, recording.recorded_setup())
+    return _REPLAYS[path, mode]
 
 
-def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -> dict[str, Any]:
-    """One seeded run of ``auto`` on ``source``; its error after each measurement."""
-    box = BOX if source in ("simulator-box", "replay") else None
+def run_one(
+    source: str,
+    start: str,
+    snr: float,
+    run: int,
+    replay: str | None,
+    *,
+    mode: str = "random-repeat",
+    half_box: float = float(BOX[0, 1]),
+) -> dict[str, Any]:
+    """One seeded run of ``auto`` on ``source``; its error after each measurement.
+    ``mode``: the replay's (:data:`~echocal.measurement.replay.MODES`); ``half_box``
+    [deg]: the tilt box of ``simulator-box`` and ``replay`` is ±``half_box``."""
+    in_box = source in ("simulator-box", "replay")
+    box = np.array([[-half_box, half_box]] * 2) if in_box else None
     ready = seeded_run(CASE, start, snr, run, box)
     setup, pos = ready.setup, ready.position
     t0 = time.process_time()
@@ -110,7 +133,7 @@ def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -
             objective = SourceObjective(rig, pos, pulse=setup.pulse, twin=twin, **kw)
         else:
             assert replay is not None
-            recording, twin = _replay(replay)
+            recording, twin = _replay(replay, mode)
             recording.reseed(ready.seed)
             objective = SourceObjective(recording, pos, pulse=setup.pulse, twin=twin, **kw)
         res, errors = auto_errors(objective, ready, BUDGET)
@@ -125,7 +148,20 @@ def run_one(source: str, start: str, snr: float, run: int, replay: str | None) -
         "status": int(res.status),
         "false_alarms": int(res.false_alarms),
         "cpu_s": time.process_time() - t0,
+        **({"mode": mode} if source == "replay" else {}),
+        **({"box": half_box} if in_box else {}),
     }
+
+
+def _label(run: dict[str, Any]) -> str:
+    """The source column of ``run``'s row: the source, the replay's mode, the tilt box
+    (runs stored before these options: ``random-repeat``, ±10°)."""
+    label = run["source"]
+    if label == "replay":
+        label += f" {run.get('mode', 'random-repeat')}"
+    if "box" in run or label.startswith(("replay", "simulator-box")):
+        label += f" ±{run.get('box', 10.0):g}°"
+    return label
 
 
 def summarize(runs: list[dict[str, Any]]) -> str:
@@ -139,12 +175,12 @@ def summarize(runs: list[dict[str, Any]]) -> str:
         )
 
     def row(cell: tuple[Any, ...], rs: list[dict[str, Any]]) -> list[str]:
-        source, start, snr = cell
+        label, start, snr = cell
         errs = np.array([r["errors"] for r in rs])
         n_to = np.array([measurements_to(e, 0.1) for e in errs])
         found = np.array([np.inf if r["found_at"] is None else r["found_at"] for r in rs])
         return [
-            source, start, f"{snr:g} dB", f"{len(rs)}",
+            label, start, f"{snr:g} dB", f"{len(rs)}",
             f"{np.mean([r['posterior'] for r in rs]):.0%}",
             f"{np.mean(errs[:, -1] <= 0.1):.1%}", f"{np.mean(n_to <= 60):.1%}",
             spread(n_to, n_to.max()), spread(found),
@@ -158,8 +194,13 @@ def summarize(runs: list[dict[str, Any]]) -> str:
         "final error (median / p90)", "CPU-s/run",
     ]  # fmt: skip
     order = {s: i for i, s in enumerate(_ORDER)}
+    labelled = [{**r, "label": _label(r)} for r in runs]
     return _common.cell_table(
-        runs, ("source", "start", "snr"), header, row, order=lambda c: (c[1], -c[2], order[c[0]])
+        labelled,
+        ("label", "start", "snr"),
+        header,
+        row,
+        order=lambda c: (c[1], -c[2], order[c[0].split()[0]], c[0]),
     )
 
 
@@ -170,6 +211,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sources", default=",".join(SOURCES))
     parser.add_argument("--replay30", help="the recording at 30 dB (for source replay)")
     parser.add_argument("--replay20", help="the recording at 20 dB (for source replay)")
+    parser.add_argument(
+        "--replay-mode", default="random-repeat", choices=MODES, help="the replay's mode"
+    )
+    parser.add_argument(
+        "--box", type=float, default=float(BOX[0, 1]),
+        help="[deg] half-width of the tilt box of simulator-box and replay",
+    )  # fmt: skip
     args = _common.parse_cell_arguments(parser, argv, summarize)
     if args is None:
         return 0
@@ -179,7 +227,9 @@ def main(argv: list[str] | None = None) -> int:
         for source in args.sources.split(","):
             if source == "replay" and replays.get(snr) is None:
                 continue
-            r = run_one(source, start, snr, run, replays.get(snr))
+            r = run_one(
+                source, start, snr, run, replays.get(snr), mode=args.replay_mode, half_box=args.box
+            )
             runs.append(r)
             append_jsonl(args.jsonl, r)
     print(summarize(runs))

@@ -119,20 +119,64 @@ def test_random_repeat_is_seeded_and_covers_all_repeats(noisy_file: Path) -> Non
 
 def test_interpolate_at_grid_points_and_midpoints(noisy_file: Path) -> None:
     with xr.open_dataset(noisy_file, engine="h5netcdf") as ds:
-        mean = ds["samples"].values[0].mean(axis=2)  # (azimuth, coelevation, time)
-    with ReplaySource.open(noisy_file, mode="interpolate") as replay:
+        recorded = ds["samples"].values[0]  # (azimuth, coelevation, repeat, time)
+    mean = recorded.mean(axis=2)
+    n = REPEATS
+    with ReplaySource.open(noisy_file, mode="interpolate", rng=1) as replay:
+        # at a grid pose the weights are (1, 0, 0, 0): the drawn recorded A-scan itself
         on_grid = replay.measure(Pose(0, 0, 0.02, 20.0, 5.0))
-        np.testing.assert_allclose(on_grid.samples, mean[2, 3], rtol=0, atol=1e-15)
-        # midway in azimuth: the plain average of the two neighbours (bilinear weights 1/2)
+        r = on_grid.metadata["repeat"]
+        np.testing.assert_allclose(on_grid.samples, recorded[2, 3, r], rtol=0, atol=1e-14)
+        # midway in azimuth (weights 1/2, 1/2): the average of the two neighbours' means
+        # plus the drawn repeat's deviation at the first (the nearest on a tie), scaled by
+        # sqrt((n - 1/2) / (n - 1))
         mid = replay.measure(Pose(0, 0, 0.02, 25.0, 5.0))
-        np.testing.assert_allclose(mid.samples, 0.5 * (mean[2, 3] + mean[3, 3]), atol=1e-15)
-        # cell centre: the average of the four corners
+        r = mid.metadata["repeat"]
+        noise = np.sqrt((n - 0.5) / (n - 1)) * (recorded[2, 3, r] - mean[2, 3])
+        expected = 0.5 * (mean[2, 3] + mean[3, 3]) + noise
+        np.testing.assert_allclose(mid.samples, expected, atol=1e-14)
+        # cell centre (weights 1/4): the average of the four corners' means plus noise
         centre = replay.measure(Pose(0, 0, 0.02, 25.0, 7.5))
+        r = centre.metadata["repeat"]
         corners = mean[2, 3] + mean[3, 3] + mean[2, 4] + mean[3, 4]
-        np.testing.assert_allclose(centre.samples, corners / 4, atol=1e-15)
+        noise = np.sqrt((n - 0.25) / (n - 1)) * (recorded[2, 3, r] - mean[2, 3])
+        np.testing.assert_allclose(centre.samples, corners / 4 + noise, atol=1e-14)
         assert centre.pose == Pose(0, 0, 0.02, 25.0, 7.5)
         with pytest.raises(LimitError, match="azimuth=40.5"):
             replay.measure(Pose(0, 0, 0.02, 40.5, 0.0))  # no extrapolation
+
+
+@pytest.mark.parametrize(
+    ("azimuth", "coelevation"), [(20.0, 5.0), (25.0, 5.0), (25.0, 7.5), (22.5, 6.25)]
+)
+def test_interpolate_replays_the_recorded_noise_at_every_pose(
+    tmp_path: Path, azimuth: float, coelevation: float
+) -> None:
+    """The replayed noise has the recorded A-scans' variance wherever the pose lies in a
+    cell, and a re-measurement draws again.  The truth is the fake's own noise σ and its
+    noiseless A-scans (bilinear over the 4 corners, computed here).  Averaging the repeats
+    and blending them alone would give σ²·Σw²/n: σ²/16 at a cell's centre with n = 4."""
+    sigma, n = 0.05, 4
+    grid = RecordingGrid.regular(
+        azimuth=(20.0, 30.0, 3), coelevation=(5.0, 10.0, 3), positions=[(0, 0, 0.02)]
+    )
+    fake = GaussianEchoSource(noise_std=sigma, seed=5)
+    path = record(fake, grid, tmp_path / "r.nc", repeats=n, progress=False)
+    u, v = (azimuth - 20.0) / 5.0, (coelevation - 5.0) / 2.5  # inside the first cell
+    weights = [(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v]
+    corners = [(20.0, 5.0), (25.0, 5.0), (20.0, 7.5), (25.0, 7.5)]
+    clean = sum(
+        w * fake.clean_samples(Pose(0, 0, 0.02, a, c))
+        for w, (a, c) in zip(weights, corners, strict=True)
+    )
+    with ReplaySource.open(path, mode="interpolate", rng=7) as replay:
+        scans = [replay.measure(Pose(0, 0, 0.02, azimuth, coelevation)) for _ in range(40)]
+    noise = np.array([s.samples - clean for s in scans])  # (40, 256)
+    # 40 draws of 4 recorded deviations plus one fixed blend of 4 x 4 recorded noises, over
+    # 256 samples: the variance estimate's relative standard error is below 10 %; ±25 %
+    assert np.mean(noise**2) == pytest.approx(sigma**2, rel=0.25)
+    # a re-measurement draws again: 4 different A-scans (P(a repeat never drawn) < 1e-4)
+    assert len({s.samples.tobytes() for s in scans}) == n
 
 
 def test_interpolated_metric_reproduces_bilinear_functions(clean_file: Path) -> None:
@@ -278,3 +322,31 @@ def _set_units(ds: xr.Dataset, name: str, unit: str) -> xr.Dataset:
 def _drop_attr(ds: xr.Dataset, name: str) -> xr.Dataset:
     ds.attrs.pop(name)
     return ds
+
+
+def test_auto_on_an_interpolated_replay_reaches_a_tenth_of_a_degree(tmp_path: Path) -> None:
+    """``auto`` on a replay (``interpolate``, 4 repeats) of a small recorded grid lands
+    within 0.1° of the fake's analytic optimum, which lies off the grid's nodes (30.4°,
+    4.05°): the replay answers between nodes, with the recorded noise."""
+    from echocal.calibrate import calibrate
+    from echocal.geometry import convert_angles
+    from echocal.measurement import SourceObjective
+    from echocal.signal import make_pulse
+
+    position = (0.0, 0.0, 0.016)  # the echo at 2 z / c = 21.6 µs, inside the 20–25 µs window
+    fake = GaussianEchoSource(true_azimuth=30.4, true_coelevation=4.05, noise_std=0.01, seed=3)
+    grid = RecordingGrid.regular(
+        azimuth=(0.0, 60.0, 31), coelevation=(2.0, 6.0, 41), positions=[position]
+    )
+    path = record(fake, grid, tmp_path / "small.nc", repeats=4, progress=False)
+    truth = np.array(convert_angles(30.4, 4.05, "azimuth-coelevation", "tilt"))
+    bounds = np.array([truth - 1.2, truth + 1.2]).T  # inside the grid (co-elevation 2.5–5.6°)
+    pulse = make_pulse("gabor", center_frequency=5e6, bandwidth=60)
+    with ReplaySource.open(path, mode="interpolate", rng=0) as replay:
+        objective = SourceObjective(
+            replay, position, parameterization="tilt", pulse=pulse, bounds=bounds, budget=40
+        )
+        result = calibrate(
+            objective, method="auto", x0=truth + np.array([0.9, -0.6]), budget=40, rng=0
+        )
+    assert float(np.hypot(*(result.x - truth))) < 0.1

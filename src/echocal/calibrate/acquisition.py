@@ -33,7 +33,12 @@ With a detector, the local method must confirm the echo it was handed: unless on
 first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
 significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
 significances of the neighbourhood that passed stop counting, the local method's
-measurements join the search's, and the search resumes where it stood.
+measurements join the search's, and the search resumes where it stood.  Where the
+echo's likelihood is known (``posterior`` with ``echo_likelihood``; asked at the check if
+the first ring handed the echo on) the echo must also be one it allows: unless the strongest of
+the local phase's first :data:`ECHO_WITHIN` measurements reaches :data:`WEAK_ECHO_DB` of
+the weakest echo peak the likelihood allows at the optimum, the search resumes the same
+way (a lobe's far structure or a weaker reflector, confirmed but not the echo).
 
 With ``posterior`` (``auto``'s default) and an objective that says how its echo's
 significance is distributed versus misalignment (``echo_likelihood``: a simulated
@@ -106,6 +111,17 @@ CONFIRM_WITHIN = 8
 """Measurements the local method gets to confirm the echo it was handed: unless one of
 them, or all of them together (Stouffer), is significant at ``threshold``, the detection
 was a false alarm and the search resumes."""
+ECHO_WITHIN = 16
+"""Measurements after which the local phase's echo must be one the echo's likelihood
+allows (with ``posterior`` and an ``echo_likelihood``): unless its strongest peak reaches
+:data:`WEAK_ECHO_DB` of the weakest echo the likelihood allows at the optimum, the echo it
+climbs is not the one searched for (a lobe's far structure, a weaker reflector) and the
+search resumes."""
+WEAK_ECHO_DB = -6.0
+"""[dB] of the weakest echo peak the search's likelihood allows (a recording's or a rig's
+hypotheses: 30 dB, so a normalized peak of 16; a simulated probe: its known peak)."""
+_PEAK_TABLE_TOP = 60.0
+"""The normalized peak a significance is read back to at most (its table ends at 64)."""
 
 LOCAL_INPUTS = ("noise_model", "lobe_template", "normal_echo", "resolution")
 """Inputs from the objective a local method may take: an acquisition hands its own on to
@@ -347,7 +363,7 @@ class Acquisition(Optimizer):
         self.false_alarms = np.zeros((0, 2))
         """[deg] (k, 2) the detections the local method did not confirm (the search
         resumed after each)."""
-        self._local_g: list[float] = []  # the local phase's significances, until confirmed
+        self._local_g: list[float] = []  # the local phase's significances, until checked
         self._local_x = np.zeros((0, 2))
         self._local_y = np.zeros(0)
         self._echo_confirmed = False
@@ -546,27 +562,53 @@ class Acquisition(Optimizer):
         self._handed = best.copy()
         self._local_g, self._local_x, self._local_y = [], np.zeros((0, 2)), np.zeros(0)
         self._echo_confirmed = not self._use_significance  # values alone: not checked
+        # the echo's strength is checked against the echo's likelihood, where there is one
+        known = self.search is not None or (self.posterior and self.echo_likelihood is not None)
+        self._strength_checked = self._echo_confirmed or not known
 
     def _check_local(self, points: FloatArray, values: FloatArray) -> bool:
-        """Whether the local phase's first :data:`CONFIRM_WITHIN` measurements refute the
-        detection it was handed (then the search resumes, see :meth:`_resume`): none of
-        them is significant at ``threshold`` and neither are all of them together
-        (Σg/√n).  An echo, once confirmed, is not checked again."""
-        if self._echo_confirmed:
+        """Whether the local phase's measurements refute the detection it was handed (then
+        the search resumes, see :meth:`_resume`): none of its first :data:`CONFIRM_WITHIN`
+        is significant at ``threshold`` and neither are all of them together (Σg/√n); or,
+        where the echo's likelihood is known, the strongest of its first :data:`ECHO_WITHIN`
+        is weaker than it allows (:meth:`_too_weak`).  Checked once each."""
+        if self._echo_confirmed and self._strength_checked:
             return False
         sig = self._significances(len(points))
         if sig is None:  # the detector stopped answering: nothing to check against
-            self._echo_confirmed = True
+            self._echo_confirmed = self._strength_checked = True
             return False
         ok = ~self.last_nan
         self._local_x = np.vstack([self._local_x, points[ok]])
         self._local_y = np.append(self._local_y, values[ok])
         self._local_g.extend(sig[ok].tolist())
         g = np.asarray(self._local_g)
-        if g.size and (g.max() > self.threshold or g.sum() / np.sqrt(g.size) > self.threshold):
-            self._echo_confirmed = True
+        if not self._echo_confirmed:
+            if g.size and (g.max() > self.threshold or g.sum() / np.sqrt(g.size) > self.threshold):
+                self._echo_confirmed = True
+            else:
+                return g.size >= CONFIRM_WITHIN
+        if g.size < ECHO_WITHIN:
             return False
-        return g.size >= CONFIRM_WITHIN
+        self._strength_checked = True
+        return self._too_weak(float(g.max()))
+
+    def _too_weak(self, significance: float) -> bool:
+        """Whether the strongest significance of the local phase, read back to a normalized
+        peak t, stays below :data:`WEAK_ECHO_DB` of the weakest echo peak at the optimum
+        that the echo's likelihood allows (the posterior search's, else asked now; at most
+        :data:`_PEAK_TABLE_TOP`).  False without a likelihood."""
+        if self.search is not None:
+            like = self.search.likelihood
+        else:  # handed on from x0's first ring, before the posterior search was asked
+            asked = self.echo_likelihood() if self.echo_likelihood is not None else None
+            if asked is None:
+                return False
+            like = asked
+        models = (like,) if isinstance(like, EchoLikelihood) else like.likelihoods
+        weakest = min(float(np.max(m.echo)) for m in models)
+        needed = min(weakest * 10.0 ** (WEAK_ECHO_DB / 20.0), _PEAK_TABLE_TOP)
+        return models[0].peak_of_significance(significance) < needed
 
     def _resume(self) -> None:
         """The local phase did not confirm its detection: a false alarm.  The

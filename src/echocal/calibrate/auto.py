@@ -18,7 +18,9 @@ A run has two phases that share every measurement:
    noise floor subtracted; from the lobe's tail it follows the probe's lobe template
    (:mod:`echocal.calibrate.lobe_template`). A detection it cannot confirm within
    :data:`~echocal.calibrate.acquisition.CONFIRM_WITHIN` (8) measurements is a false alarm:
-   the search resumes where it stood (``result.false_alarms``).
+   the search resumes where it stood (``result.false_alarms``); so it does when the
+   local phase's echo stays weaker than the echo's likelihood allows
+   (:data:`~echocal.calibrate.acquisition.ECHO_WITHIN`).
 
 The run stops when its recommendation has settled (or the budget is spent) and reports
 ``uncertainty``, a radius [deg] around the estimate that holds the optimum with 90 %

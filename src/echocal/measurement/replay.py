@@ -27,13 +27,24 @@ How :meth:`ReplaySource.measure` answers a pose (the ``mode``):
     reproducible), so replaying shows the recorded noise.
 ``"interpolate"``
     Bilinear interpolation, in (azimuth, co-elevation), of the repeat-averaged
-    A-scans of the 4 grid orientations around the pose (nearest position).  This
-    interpolates *samples*: between grid points two echoes with different arrival
-    times blend into a double echo and the phase is blurred, and averaging the
-    repeats lowers the noise by sqrt(n_repeats).  For a scalar objective,
-    :meth:`ReplaySource.interpolated_metric` — the metric computed on every grid
-    A-scan (averaged over repeats), then interpolated bilinearly — is usually the
-    better choice.
+    A-scans of the 4 grid orientations around the pose (nearest position), plus the
+    recorded noise: one repeat of the nearest of the 4, drawn with ``rng``, minus that
+    orientation's repeat average, scaled by ``sqrt((n - Σw²) / (n - 1))`` (``n``
+    repeats, ``w`` the 4 bilinear weights).  The repeat averages carry noise of
+    variance σ²/n each, so their bilinear blend carries σ²·Σw²/n, and a repeat's
+    deviation from its average carries σ²·(n − 1)/n, uncorrelated with every average:
+    the sum has the variance σ² of one recorded A-scan at every pose (white or
+    coloured, the recorded noise's own spectrum), and measuring the same pose again
+    draws again.  Without the added deviation the noise would depend on the pose — σ²
+    at a grid pose but σ²/(4n) at a cell's centre — and repeat itself.  With one
+    repeat (``n = 1``) the noise cannot be told from the echo: the blend of the
+    recorded A-scans answers, its noise σ·sqrt(Σw²) (down to σ/2 at a cell's centre)
+    and the same at every re-measurement; record ``--repeats 3`` or more for this
+    mode.  This interpolates *samples*: between grid points two echoes with different
+    arrival times blend into a double echo and the phase is blurred.  For a scalar
+    objective without noise, :meth:`ReplaySource.interpolated_metric` — the metric
+    computed on every grid A-scan (averaged over repeats), then interpolated
+    bilinearly — is another choice.
 
 Tolerance: a pose may lie outside the recorded grid by at most half a grid step
 (of the end step of that axis; for an axis with a single value, 1e-9 deg) in
@@ -208,7 +219,8 @@ class ReplaySource(BaseSource):
 
     # -- opening ----------------------------------------------------------------------------
     def reseed(self, rng: RngLike) -> None:
-        """Restart the draws of ``random-repeat`` mode from ``rng`` (seed or Generator)."""
+        """Restart the draws of the ``random-repeat`` and ``interpolate`` modes from
+        ``rng`` (seed or Generator)."""
         self._rng = as_generator(rng)
 
     @classmethod
@@ -291,13 +303,10 @@ class ReplaySource(BaseSource):
         if self.mode == "interpolate":
             ai, ci = self._fractional(pose, exact=True)
             corners, weights = _bilinear(ai, ci, self.azimuths.size, self.coelevations.size)
-            block = self._block(p)
-            samples = sum(
-                w * block[a, c].mean(axis=0) for (a, c), w in zip(corners, weights, strict=True)
-            )
+            samples, r = self._interpolated_samples(self._block(p), corners, weights)
             x, y, z = (float(v) for v in self.positions[p])
             reached = Pose(x, y, z, pose.azimuth, pose.coelevation)
-            meta = {"mode": self.mode, "position_index": p, "grid_index": (ai, ci)}
+            meta = {"mode": self.mode, "position_index": p, "grid_index": (ai, ci), "repeat": r}
             return AScan(samples, self.fs, self.start_time, reached, {"source": "replay", **meta})
         ai, ci = self._fractional(pose, exact=False)
         a, c = round(ai), round(ci)
@@ -305,6 +314,23 @@ class ReplaySource(BaseSource):
         samples = self._block(p)[a, c, r]
         meta = {"source": "replay", "mode": self.mode, "grid_index": (p, a, c), "repeat": r}
         return AScan(samples, self.fs, self.start_time, self._grid_pose(p, a, c), meta)
+
+    def _interpolated_samples(
+        self, block: NDArray[np.float64], corners: list[tuple[int, int]], weights: list[float]
+    ) -> tuple[NDArray[np.float64], int | None]:
+        """``"interpolate"`` mode's A-scan (n_time,) from a position's ``block`` (see
+        :meth:`_block`) and the bilinear ``corners``/``weights``; and the repeat drawn at
+        the nearest corner (None with one repeat).  See the module docstring."""
+        means = [block[a, c].mean(axis=0) for a, c in corners]
+        samples = sum(w * m for w, m in zip(weights, means, strict=True))
+        n = self.n_repeats
+        if n == 1:
+            return np.asarray(samples, dtype=np.float64), None
+        k = int(np.argmax(weights))
+        r = int(self._rng.integers(n))
+        a, c = corners[k]
+        scale = np.sqrt((n - sum(w * w for w in weights)) / (n - 1))
+        return np.asarray(samples + scale * (block[a, c, r] - means[k]), dtype=np.float64), r
 
     # -- metrics ----------------------------------------------------------------------------
     def metric_grid(
