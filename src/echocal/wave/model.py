@@ -156,8 +156,10 @@ class _Cap:
     axes : ``(3, 3)`` rows e₁, e₂ and the unit vector from the face centre towards the
         ball's centre, in the aperture frame.
     distance : [m] from the face centre to the ball's top along that line.
-    radius : [m] the fan's radius at the top (its outer ``_TAPER`` tapered).
+    radius : [m] the fan's radius at the top: ``core`` + ``_CAP_SIGMAS`` · ``width``.
     sin_normal : the sine of the largest angle between the cap's normals and the beam axis.
+    core : [m] the fully lit radius: the face's central projection plus the Fresnel margin.
+    width : [m] σ of the Gaussian edge beyond ``core`` (``_CAP_WIDTH`` of the margin).
     """
 
     axes: FloatArray
@@ -378,9 +380,9 @@ class WaveEchoModel:
         radius R·a/(D − a) about the top (a the face's radius).  Elsewhere the two-way phase
         has no stationary point and the lit surface's contributions cancel, wherever the
         beam's main lobe falls: the fan covers that cap and the edge waves' Fresnel margin
-        (``_fresnel_margin`` at the top's distance) fully, and tapers off beyond (over
-        ``_TAPER`` of its radius), whatever the tilt.  Past the cap the sum would only add
-        the lit side's truncation and its grazing, aliased flank."""
+        (``_fresnel_margin`` at the top's distance) fully, and fades out beyond it with a
+        Gaussian edge (``_CAP_WIDTH``, ``_CAP_SIGMAS``), whatever the tilt.  Past the cap
+        the sum would only add the lit side's truncation and its grazing, aliased flank."""
         if len(shapes) != 1 or not isinstance(shapes[0], Sphere):
             return None
         ball = shapes[0]
@@ -430,7 +432,14 @@ class WaveEchoModel:
         delay's rate that the other overstates: the rim's paths near the probe (at 10 mm
         the rim rule asked for 0.057 mm where 0.2 mm had converged), the footprint's grazing
         hits at large tilts (at 20° 72,000 samples for no change in the echo's window)."""
-        return self._curved_spacing_at(self._footprint_sine(shapes, position, frame), distance)
+        sin_footprint = self._footprint_sine(shapes, position, frame)
+        footprint = (
+            _CURVED_FOOTPRINT_FRACTION * self._pose_spacing(sin_footprint)
+            if sin_footprint > 0.0
+            else math.inf
+        )
+        sin_rim = math.sin(math.atan2(self.probe.radius, max(distance, 0.0)))
+        return max(footprint, _CURVED_RIM_FRACTION * self._pose_spacing(sin_rim))
 
     def _cap_spacing(
         self, cap: _Cap, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
@@ -445,16 +454,6 @@ class WaveEchoModel:
         sin_beam = self._footprint_sine(shapes, position, frame)
         sin_normal = min(cap.sin_normal, sin_beam) if sin_beam > 0.0 else cap.sin_normal
         return _CURVED_FOOTPRINT_FRACTION * self._pose_spacing(sin_normal)
-
-    def _curved_spacing_at(self, sin_footprint: float, distance: float) -> float:
-        """[m] ``_curved_spacing`` given the footprint's largest incidence sine."""
-        footprint = (
-            _CURVED_FOOTPRINT_FRACTION * self._pose_spacing(sin_footprint)
-            if sin_footprint > 0.0
-            else math.inf
-        )
-        sin_rim = math.sin(math.atan2(self.probe.radius, max(distance, 0.0)))
-        return max(footprint, _CURVED_RIM_FRACTION * self._pose_spacing(sin_rim))
 
     def _footprint_sine(
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
