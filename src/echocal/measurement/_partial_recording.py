@@ -148,4 +148,3 @@ class _Partial:
         if expected != total:
             raise DataFileError(f"partial recording {self.dir} holds {expected} of {total} A-scans")
         return np.concatenate(parts, axis=0)
-
