@@ -316,7 +316,7 @@ def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkey
     the neighbourhood halves until it fits, and the fitted maximum is a hump's (either is
     the optimum). A single hump fits: the neighbourhood stays whole. Without the test (its
     quantile at 1), the two-hump fit ends ≥ 0.25° along the ridge."""
-    from echocal.calibrate import fit_neighbourhood
+    from echocal.calibrate import model_based
     from echocal.calibrate.evidence import energy_sigma
 
     rng = np.random.default_rng(3)
@@ -327,7 +327,7 @@ def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkey
     noisy = clean + floor + energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(120)
 
     def fitted(quantile: float) -> ModelBased:
-        monkeypatch.setattr(fit_neighbourhood, "_LACK_OF_FIT", quantile)
+        monkeypatch.setattr(model_based, "_LACK_OF_FIT", quantile)
         return ModelBased(
             np.array([0.05, 0.2]), history=(pts, noisy), noise_model=lambda: (floor, sigma)
         )
@@ -406,7 +406,7 @@ def test_a_ridge_hump_is_fitted_around_its_own_maximum(monkeypatch):
     0 by symmetry (log = −x²/2σₓ² − u²/2 − u⁴/2, u = y/1.2°), measured symmetrically:
     fitted around its own maximum, either flank gives the top within 0.002°; fitted
     around the flank (the rule off) the two lie ≥ 0.03° apart."""
-    from echocal.calibrate import fit_neighbourhood
+    from echocal.calibrate import model_based
 
     def hump(p: np.ndarray) -> np.ndarray:
         u = p[:, 1] / 1.2
@@ -429,7 +429,7 @@ def test_a_ridge_hump_is_fitted_around_its_own_maximum(monkeypatch):
         return np.array(found)
 
     np.testing.assert_allclose(tops(), 0.0, atol=0.002)
-    monkeypatch.setattr(fit_neighbourhood, "_OFF_CENTRE", np.inf)
+    monkeypatch.setattr(model_based, "_OFF_CENTRE", np.inf)
     flanks = tops()
     assert np.hypot(*(flanks[1] - flanks[0])) >= 0.03
 

@@ -1,4 +1,4 @@
-"""The seek from a detection in the lobe's tail (:mod:`echocal.calibrate.template_seek`).
+"""The seek from a detection in the lobe's tail (``echocal.calibrate.lobe_template.seek_point``).
 
 Independent truth: the far-field piston lobe with a broadband tail that the lobe template's
 tests build (``_piston``: 0.09·e^(−θ/0.8°) beyond the main lobe), whose tail the tests
@@ -14,8 +14,7 @@ import pytest
 from tests.calibrate.test_lobe_template import ANGLES, _measurements_to_stay_within, _piston
 
 from echocal.calibrate import FunctionObjective, calibrate
-from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.template_seek import seek_point, tail_reach
+from echocal.calibrate.lobe_template import LobeTemplate, seek_point, tail_reach
 from echocal.calibrate.template_steps import TemplateSteps
 
 PEAK, SIGMA = 100.0, 0.05

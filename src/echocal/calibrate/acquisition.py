@@ -1,56 +1,27 @@
 """Acquisition phase for poor first guesses: find the echo, then hand over to a local method.
 
 When the start lies at the noise floor, every local method wanders on noise.
-:class:`Acquisition` first measures x0 and a hexagonal lattice outward from
-it, ring by ring (ring k: radius k·``spacing``, 6k points), in batches of at
-most ``batch`` points (default 1: stop at the first detection; within a ring the
-points nearest to the strongest value so far come first), until a value is *clearly above noise*:
+:class:`Acquisition` first measures x0 and a hexagonal lattice outward from it, ring by ring
+(:mod:`~echocal.calibrate.search_pattern`), until a value is *clearly above noise*:
 
     max_i (m_i − floor) / (σ / √n_i) > ``threshold``   (default 4.5),
 
-where m_i is the mean of point i and its n_i − 1 measured lattice neighbours
-(averaging makes a peak detectable even when no single value stands out, as
-at 10 dB), the floor is the objective's ``noise_floor`` or the median of the
-values, and σ the objective's known noise level (``noise_sigma``, e.g. from the
-source's SNR) or else a robust estimate 1.4826 · MAD of the values measured
-so far (noise points are the majority while searching).
+m_i the mean of point i and its n_i − 1 measured lattice neighbours (averaging shows a peak
+no single value does, as at 10 dB), the floor the objective's ``noise_floor`` or the median,
+σ its ``noise_sigma`` or 1.4826 · MAD of the values.  With a ``detector`` (the
+matched-filter significance of each A-scan, :meth:`~echocal.calibrate.Objective.detections`)
+the test combines those significances over the same neighbourhoods as Σg/√n_i (Stouffer)
+instead — a better detector than the energy.  x0 and its first ring are measured before
+deciding.  The local method starts at the best point and, if it takes a warm start
+(``history``), gets every measurement.  A search past ``max_radius`` stops with status 4.
 
-When the objective can say how significant each measurement's echo is (a
-``detector``: :meth:`~echocal.calibrate.Objective.detections`, which an
-A-scan source objective computes from the matched-filter peak, see
-:class:`~echocal.signal.detection.EchoDetector`), the test uses those
-Gaussian-equivalent significances g_i instead of the values, combined over
-the same neighbourhoods as Σg/√n_i (Stouffer) — a better detector than the
-energy (on the 5 MHz probe at 30 dB it finds the echo ≈ 2.5° from the peak
-instead of ≈ 2.1°).  At least the first 7
-points (x0 and ring 1) are measured before deciding.  Then the local method
-starts at the best point; if it accepts a warm start (``history``, the
-model-based method does) it receives every acquisition measurement, so none is
-wasted.  If the search passes ``max_radius`` without finding the echo, the
-run stops with status 4 ("acquisition failed").
-
-With a detector, the local method must confirm the echo it was handed: unless one of its
-first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
-significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
-significances of the neighbourhood that passed stop counting, the local method's
-measurements join the search's, and the search resumes where it stood.  Where the
-echo's likelihood is known (``posterior`` with ``echo_likelihood``; asked at the check if
-the first ring handed the echo on) the echo must also be one it allows: unless the strongest of
-the local phase's first :data:`ECHO_WITHIN` measurements reaches :data:`WEAK_ECHO_DB` of
-the weakest echo peak the likelihood allows at the optimum, the search resumes the same
-way (a lobe's far structure or a weaker reflector, confirmed but not the echo).
-
-With ``posterior`` (``auto``'s default) and an objective that says how its echo's
-significance is distributed versus misalignment (``echo_likelihood``: a simulated
-probe at its known amplitude; a recording or a rig over hypotheses on its unknown
-amplitude), the search beyond x0's first ring is Bayesian instead, at every SNR
-(:mod:`echocal.calibrate.posterior_search`): every significance — below the threshold
-too — updates a posterior over where the optimum is, the next point is where a detection
-is most likely, and the search gives up once the measurements are 1,000 times likelier
-with no echo within ``max_radius`` than with one.  The detection test, its confirmation
-and the hand-over are the same.
-
-Acquisition batches are not counted as iterations.
+With ``posterior`` (``auto``'s default) and an ``echo_likelihood``, the search beyond x0's
+first ring is Bayesian instead (:mod:`echocal.calibrate.posterior_search`); the detection
+test, its confirmation and the hand-over are the same.  With a detector the local method
+must confirm the echo it was handed within :data:`CONFIRM_WITHIN` measurements, and where
+the likelihood is known the echo must be one it allows (:data:`ECHO_WITHIN`); else the
+detection was a false alarm and the search resumes where it stood.  Acquisition batches are
+not counted as iterations.
 """
 
 from __future__ import annotations
@@ -71,16 +42,18 @@ from echocal.calibrate._options import (
     check_option_types,
     finite_float,
     nonnegative_float,
+    optional,
+    optional_callable,
     positive_float,
     positive_int,
     strict_bool,
     suggestion,
 )
 from echocal.calibrate.base import Optimizer
-from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.posterior_search import (
     GIVE_UP_EVIDENCE,
+    EchoHypotheses,
     EchoLikelihood,
     PosteriorSearch,
 )
@@ -176,80 +149,58 @@ class Acquisition(Optimizer):
     Parameters
     ----------
     local : name of the local method (default ``"model-based"``).
-    local_options : dict of options for the local method, checked at construction (an
-        unknown name or a value of the wrong type raises EchocalValueError).
+    local_options : dict of options for the local method, checked at construction.
     spacing : [deg] lattice spacing (≈ the peak width: a peak of width w stays
         detectable up to ~1.7 w from its centre at 30 dB with threshold 6).
     max_radius : [deg] give up beyond this distance from x0.
     threshold : detection threshold in units of σ.
     first_threshold : the threshold while only x0 and the first ring are measured.
-    confirm : (true or false; other values are refused) a marginal detection (score
-        below ``threshold`` + 2) must survive one re-measurement of its best point (one
-        measurement more): the repeat joins that point's neighbourhood, which must still
-        pass, and with a detector the repeat's own significance must exceed 1 — so a noise
-        excursion is dropped and the search goes on instead of handing a local method pure
-        noise.
+    confirm : (true or false) a marginal detection (below ``threshold`` + 2) must survive
+        one re-measurement of its best point: the repeat joins its neighbourhood, which
+        must still pass, and with a detector its own significance must exceed 1.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
-    noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
-        estimates (either may be None), consulted at every decision when the fixed values
-        above are None — e.g. a source objective that measures the noise in each A-scan.
-    lobe_template, normal_echo, resolution : handed to a local method that takes them:
-        a callable returning the probe's lobe template or None (e.g.
-        :meth:`~echocal.calibrate.Objective.lobe_template`), likewise ``normal_echo``
-        (:meth:`~echocal.calibrate.Objective.normal_echo`), and ``resolution`` [deg], a
-        replay's grid step (:meth:`~echocal.calibrate.Objective.resolution`; None:
-        continuous).
+    noise_model : callable returning the objective's live ``(noise_floor, noise_sigma)``
+        (either may be None), used where the fixed values above are None.
+    lobe_template, normal_echo, resolution : handed to a local method that takes them
+        (:meth:`~echocal.calibrate.Objective.lobe_template`,
+        :meth:`~echocal.calibrate.Objective.normal_echo`, and ``resolution`` [deg], a
+        replay's grid step; None: continuous).
     detector : callable returning the detection significances of the points just
         measured, shape (k,), or None (then the values are tested) — e.g.
         :meth:`~echocal.calibrate.Objective.detections`.
     batch : maximum points per acquisition ask (1 = stop at the first detection).
-    fine_radius : [deg] the lattice of ``spacing`` is used out to this distance from x0;
-        beyond it the search continues on coarser circles (see
-        :func:`~echocal.calibrate.search_pattern.search_rings`).
+    fine_radius : [deg] the lattice of ``spacing`` out to this distance from x0, coarser
+        circles or passes beyond (:func:`~echocal.calibrate.search_pattern.search_rings`).
         Default: infinite (the fine lattice everywhere).
     growth : beyond ``fine_radius`` the point spacing is ``max(spacing, growth · r)``.
-    max_spacing : [deg] cap on that spacing; the search leaves gaps of up to ≈ 0.66 ×
-        it, so about 1.5 × the distance from the peak at which one measurement still
-        sees the echo.
-    passes : [deg] point spacings of the passes beyond ``fine_radius``, coarse to fine,
-        instead of the circles of ``growth`` and ``max_spacing`` (see
-        :func:`~echocal.calibrate.search_pattern.search_rings`): when the first pass,
-        sized for a strong echo, misses, the region is searched again as a weaker echo
-        needs.  Default: none (circles).
+    max_spacing : [deg] cap on that spacing (gaps of up to ≈ 0.66 × it).
+    passes : [deg] point spacings of hexagonal passes beyond ``fine_radius``, coarse to
+        fine, instead of circles: a weaker echo than the first pass saw is searched for
+        again, more densely.  Default: none (circles).
     replan : callable returning the passes for the rest of the search once x0 and its
         first ring saw no echo, or None to keep the plan — e.g.
-        :meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, which sizes them
-        for the echo the probe's model predicts against the noise those 7 A-scans
-        measured.  Passes returned replace ``passes``, and the fine lattice beyond the
-        first ring (an echo strong enough to be seen from far needs no fine lattice) —
-        unless their first pass is finer than every planned one: an echo weaker than the
-        plan was sized for keeps the fine lattice out to ``fine_radius``, where a near
-        start's echo is, and is searched beyond it by the passes returned, in place of
-        planned passes too coarse to see it.  Called once.
+        :meth:`~echocal.calibrate.Objective.passes_for_measured_noise`.  They replace
+        ``passes`` and the fine lattice beyond the first ring, unless their first pass is
+        finer than every planned one (a weaker echo than planned: the fine lattice stays
+        out to ``fine_radius``).  Called once.
     echo_likelihood : callable returning how the detector's significance is distributed
-        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`,
-        or :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
-        amplitude) or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`.
-    posterior : (true or false) once x0 and its first ring saw no echo, and given a
-        ``detector``, an ``echo_likelihood`` (asked then, once; at any SNR) and ``batch``
-        1, search by the posterior over the optimum instead of the lattice
-        (:mod:`echocal.calibrate.posterior_search`): every significance, below the
-        threshold too, updates it, and the next point is where a detection is most
-        likely.  The detection test and its confirmation are the lattice's; the search
-        gives up (status 4) once the measurements are 1,000 times likelier with no echo
-        within ``max_radius`` than with one.  ``replan`` is then not asked.
-    move_time : callable returning the positioner's time [s] to reach each of a set of
-        points [deg] ``(k, 2)`` from where it is, ``(k,)``, or None — e.g.
-        :meth:`~echocal.calibrate.Objective.move_times`, which a motion-aware objective on
-        a simulated bench gives: the posterior search then weighs a shorter move against
-        a lower chance of a detection
+        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`
+        or :class:`~echocal.calibrate.posterior_search.EchoHypotheses`) or None — e.g.
+        :meth:`~echocal.calibrate.Objective.echo_likelihood`.
+    posterior : (true or false) once x0 and its first ring saw no echo, given a
+        ``detector``, an ``echo_likelihood`` (asked then, once) and ``batch`` 1, search by
+        the posterior over the optimum instead of the lattice
+        (:mod:`echocal.calibrate.posterior_search`); it gives up (status 4) once the
+        measurements are 1,000 times likelier with no echo within ``max_radius`` than
+        with one.  ``replan`` is then not asked.
+    move_time : callable returning the positioner's time [s] to reach each of points
+        [deg] ``(k, 2)``, ``(k,)``, or None — e.g.
+        :meth:`~echocal.calibrate.Objective.move_times`: the posterior search weighs a
+        shorter move against a lower detection chance
         (:meth:`~echocal.calibrate.posterior_search.PosteriorSearch.next_point`).
-    measurement_price : [s] the bench time of a measurement apart from its travel
-        (acquisition plus settling), or None (0) — e.g.
-        :meth:`~echocal.calibrate.Objective.measurement_price`: with ``move_time``, the
-        posterior search gives up detection chance for a shorter move only where the
-        move saved is long against this price.
+    measurement_price : [s] the bench time of a measurement apart from its travel, or
+        None (0) — e.g. :meth:`~echocal.calibrate.Objective.measurement_price`.
     """
 
     def __init__(
@@ -288,7 +239,7 @@ class Acquisition(Optimizer):
         self.noise_model = noise_model
         self.lobe_template = lobe_template
         self.normal_echo = normal_echo
-        self.resolution = None if resolution is None else positive_float("resolution", resolution)
+        self.resolution = optional(positive_float, "resolution", resolution)
         self.detector = detector
         self._use_significance = detector is not None
         if not isinstance(local, str):
@@ -307,18 +258,14 @@ class Acquisition(Optimizer):
         self.confirm = strict_bool("confirm", confirm)
         self._confirming: FloatArray | None = None  # a detection's best point to re-measure
         self._confirmed = 0  # re-measurements made
-        self.noise_sigma = (
-            None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
-        )
-        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
+        self.noise_sigma = optional(nonnegative_float, "noise_sigma", noise_sigma)
+        self.noise_floor = optional(finite_float, "noise_floor", noise_floor)
         self.batch = positive_int("batch", batch)
         self.fine_radius = (
             np.inf if fine_radius is None else positive_float("fine_radius", fine_radius)
         )
         self.growth = nonnegative_float("growth", growth)
-        self.max_spacing = (
-            None if max_spacing is None else positive_float("max_spacing", max_spacing)
-        )
+        self.max_spacing = optional(positive_float, "max_spacing", max_spacing)
         self.passes = _spacings("passes", passes)
         if self.passes and (self.growth > 0.0 or self.max_spacing is not None):
             raise EchocalValueError(
@@ -326,23 +273,11 @@ class Acquisition(Optimizer):
                 f"with passes {list(self.passes)} they have no effect: give passes=[] to "
                 "search in circles, or leave growth and max_spacing out"
             )
-        if replan is not None and not callable(replan):
-            raise EchocalValueError(f"replan must be a callable or None; got {replan!r}")
-        self.replan = replan
-        if echo_likelihood is not None and not callable(echo_likelihood):
-            raise EchocalValueError(
-                f"echo_likelihood must be a callable or None; got {echo_likelihood!r}"
-            )
-        self.echo_likelihood = echo_likelihood
+        self.replan = optional_callable("replan", replan)
+        self.echo_likelihood = optional_callable("echo_likelihood", echo_likelihood)
         self.posterior = strict_bool("posterior", posterior)
-        if move_time is not None and not callable(move_time):
-            raise EchocalValueError(f"move_time must be a callable or None; got {move_time!r}")
-        self.move_time = move_time
-        self.measurement_price = (
-            None
-            if measurement_price is None
-            else nonnegative_float("measurement_price", measurement_price)
-        )
+        self.move_time = optional_callable("move_time", move_time)
+        self.measurement_price = optional(nonnegative_float, "measurement_price", measurement_price)
         self.search: PosteriorSearch | None = None
         """The Bayesian search once it has taken over from the lattice (None: the lattice)."""
         self._search_asked = False

@@ -1,9 +1,9 @@
 """Ask/tell optimizer base (nevergrad style): the base owns order, counters and NaN policy.
 
-Subclasses implement ``_ask() -> points (k, 2)`` and ``_tell(points, values) -> bool``
-(True when the call completed an iteration, i.e. the iterate may have moved;
-False for setup batches such as SPSA gain calibration or acquisition rings).
-Optionally ``_recommend()`` for a model's or an average's optimum.
+Subclasses implement ``_ask() -> points (k, 2)`` and ``_tell(points, values) -> bool`` (True
+when the call completed an iteration, i.e. the iterate may have moved; False for setup
+batches such as SPSA gain calibration or acquisition rings). Optionally ``_recommend()`` for
+a model's or an average's optimum.
 
 NaN policy
 ----------

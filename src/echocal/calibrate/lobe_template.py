@@ -1,19 +1,25 @@
 """The probe's known lobe as a model of the echo far from its peak: where is the peak, seen
 from the lobe's tail?
 
-A log-quadratic (``local_model``) is right near a lobe's top, but a diffraction lobe's
-tail is not Gaussian: the 12.7 mm 5 MHz probe's pseudo-energy falls to 0.3 of its peak
-0.5° out, to 0.035 at 0.9° and then only slowly (0.016 at 1.4°, 0.01 at 1.8°).  A
-quadratic fitted to tail points sees a lobe twice as broad and puts its peak where it
-is not.
-Given the lobe's shape g(d) (relative metric versus misalignment d from the peak,
-g(0) = 1; from the simulated probe, :meth:`~echocal.calibrate.Objective.lobe_template`)
-the measurements y_i at points x_i are y_i ≈ E₀ g(x_i − c) + noise, whose two unknowns
-— the peak c and its energy E₀ — every point constrains, the tail points included
-(a point in the noise says "the peak is not near here").
+A log-quadratic (``local_model``) is right near a lobe's top, but a diffraction lobe's tail
+is not Gaussian: the 12.7 mm 5 MHz probe's pseudo-energy falls to 0.3 of its peak 0.5° out,
+to 0.035 at 0.9° and then only slowly (0.016 at 1.4°, 0.01 at 1.8°).  A quadratic fitted to
+tail points sees a lobe twice as broad and puts its peak where it is not. Given the lobe's
+shape g(d) (relative metric versus misalignment d from the peak, g(0) = 1; from the
+simulated probe, :meth:`~echocal.calibrate.Objective.lobe_template`) the measurements y_i at
+points x_i are y_i ≈ E₀ g(x_i − c) + noise, whose two unknowns — the peak c and its energy
+E₀ — every point constrains, the tail points included (a point in the noise says "the peak
+is not near here").
 
 :func:`fit_template` finds them by weighted least squares: E₀ is linear (solved in closed
 form for each c) and c is searched on a grid, coarse then fine.
+
+Seen from deep in the tail (a far search's first detection, 4–7° out at 30 dB), one value
+with the peak's known energy says how far the peak is, not in which direction: the peaks
+that fit lie on an arc, and the fit is not significant.  :func:`seek_point` then measures
+where the candidate peaks, each weighted by its likelihood exp(−χ²/2), disagree most about
+the echo (in noise σ, capped at :data:`SEEK_CAP`): each such measurement finds the echo or
+removes the candidates near it.
 """
 
 from __future__ import annotations
@@ -25,15 +31,19 @@ import numpy as np
 
 from echocal._curves import first_crossing
 from echocal.calibrate._fd import FloatArray
+from echocal.errors import EchocalValueError
 
 __all__ = [
     "COARSE_STEP",
+    "SEEK_CAP",
     "LobeTemplate",
     "TemplateFit",
     "disc_grid",
     "energy_prior",
     "fit_template",
     "peak_scores",
+    "seek_point",
+    "tail_reach",
 ]
 
 COARSE_STEP = 0.2
@@ -54,6 +64,12 @@ with a ring fits a few points on the ring almost as well with its peak across th
 _CANDIDATES = 4
 """Coarse candidates refined on the fine grid: the best few (often neighbours of one
 basin; the tail's mirror images are told apart by the measurement at the chosen peak)."""
+
+
+SEEK_CAP = 10.0
+"""[σ] a predicted echo this far above the noise counts as seen, however strong."""
+_KEEP_LIKELIHOOD = 1e-4
+"""Candidate peaks less likely than this fraction of the best are left out."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,8 +94,6 @@ class LobeTemplate:
     peak: float | None = None
 
     def __post_init__(self) -> None:
-        from echocal.errors import EchocalValueError
-
         k, n = len(self.directions), len(self.angles)
         if self.values.shape != (k, n) or n < 2 or k < 1:
             raise EchocalValueError(
@@ -277,3 +291,53 @@ def peak_scores(
         penalty = weight * (energy - mean) ** 2
     resid = y[None, :] - energy[:, None] * g
     return (w * resid * resid).sum(axis=1) + penalty, energy, measured, info
+
+
+def tail_reach(template: LobeTemplate, peak: float, sigma: float, level: float = 3.0) -> float:
+    """[deg] the largest misalignment at which the lobe of peak metric ``peak`` is still
+    ``level`` × ``sigma`` (same units) above the noise in its strongest direction: how far
+    from a detection its peak can be."""
+    strongest = template.values.max(axis=0)
+    seen = template.angles[peak * strongest >= level * sigma]
+    return float(seen.max()) if seen.size else 0.0
+
+
+def seek_point(
+    template: LobeTemplate,
+    points: FloatArray,
+    values: FloatArray,
+    sigmas: FloatArray,
+    sigma: float,
+    peak: float,
+    around: FloatArray,
+    radius: float,
+) -> FloatArray | None:
+    """The next point [deg] (2,) of the seek, within ``radius`` [deg] of ``around`` (2,).
+
+    ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed) and
+    ``sigmas`` (n,) their noise σ (> 0), as for
+    :func:`~echocal.calibrate.lobe_template.fit_template`; ``sigma`` the noise σ of a
+    measurement of no echo and ``peak`` the metric at the lobe's peak (same units).  The
+    candidate peaks are a 0.2° grid within ``radius`` of ``around``, the candidate points
+    a 0.4° grid.  None when no candidate peak gives a positive energy."""
+    if not (sigma > 0.0 and peak > 0.0):
+        raise EchocalValueError(
+            f"seek_point needs a noise sigma > 0 and a peak metric > 0; got {sigma!r}, {peak!r}"
+        )
+    ok = np.isfinite(values) & (sigmas > 0.0)
+    x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
+    centres = disc_grid(around, radius, COARSE_STEP)
+    chi2, energy, *_ = peak_scores(template, centres, x, y, w, energy_prior(peak))
+    usable = energy > 0.0
+    if not usable.any():
+        return None
+    log_like = np.where(usable, -0.5 * (chi2 - chi2[usable].min()), -np.inf)
+    keep = log_like >= np.log(_KEEP_LIKELIHOOD)
+    weight = np.exp(log_like[keep])
+    weight /= weight.sum()
+    probes = disc_grid(around, radius, 2.0 * COARSE_STEP)
+    predicted = energy[keep] * template(probes[:, None, :] - centres[None, keep, :])
+    z = np.minimum(predicted / sigma, SEEK_CAP)  # (probes, candidates)
+    mean = z @ weight
+    spread = (z * z) @ weight - mean * mean
+    return probes[int(np.argmax(spread))].copy()

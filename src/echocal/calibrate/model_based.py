@@ -1,49 +1,46 @@
 """Model-based trust-region ascent: a quadratic model of log-energy fitted to every measurement.
 
-Why log-energy: a beam's pseudo-energy is close to a Gaussian in the two
-angles near its peak, and the log of a Gaussian is *exactly* quadratic, so a
-quadratic model of log f is right over the whole peak, not only at its top.
-With additive noise of fixed σ, var(log y) ≈ σ²/y², so the weighted least
-squares fit uses weights ∝ y² (points at the noise floor weigh ~nothing and
-non-positive values are left out).  The weights are relative, so the method
-is independent of the energy unit; NaN measurements are left out of the fit.
+Why log-energy: a beam's pseudo-energy is close to a Gaussian in the two angles near its
+peak, and the log of a Gaussian is *exactly* quadratic, so a quadratic model of log f is
+right over the whole peak, not only at its top. With additive noise of fixed σ, var(log y) ≈
+σ²/y², so the weighted least squares fit uses weights ∝ y² (points at the noise floor weigh
+~nothing and non-positive values are left out).  The weights are relative, so the method is
+independent of the energy unit; NaN measurements are left out of the fit.
 
 Algorithm (one measurement per iteration after a 7-point initial design):
 
-1. Design: x0 and a hexagon of radius ``radius`` around it (a rotatable
-   second-order design; skipped where a warm-start ``history`` already covers x0).
-2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to the points so far within a
-   neighbourhood of the incumbent (``locality``), which halves where a measurement
-   refutes the fit or a ridge's residuals lack fit (a rod's two humps), widens again
-   where too few points remain to fit or to show a peak, is fitted again around a
-   ridge hump's own maximum, and at its smallest follows its fitted maximum
-   (:mod:`~echocal.calibrate.fit_neighbourhood`).
-3. Approach: if the model's maximum x* is not yet inside the trust region
-   around the incumbent (the measured point with the highest *model* value,
-   never the luckiest raw sample), measure the maximizer of m in the ball of
-   radius Δ.  Δ doubles after a successful step to the boundary and halves
-   when the measured value is below the incumbent's model value by more
-   than the estimated noise (2 σ̂ in log units, σ̂ from the fit's residuals,
-   at most ``_MAX_SIGMA_LOG`` once the incumbent is a significant echo) —
+1. Design: x0 and a hexagon of radius ``radius`` around it (a rotatable second-order design;
+   skipped where a warm-start ``history`` already covers x0).
+2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to the points so far within a neighbourhood
+   of the incumbent (``locality``), which halves where a measurement refutes the fit or a
+   ridge's residuals lack fit (a rod's two humps), widens again where too few points remain
+   to fit or to show a peak, is fitted again around a ridge hump's own maximum (a rod's hump
+   is not symmetric), and at its smallest follows its fitted maximum; a replay's
+   neighbourhood spans at least two of its grid steps.
+3. Approach: if the model's maximum x* is not yet inside the trust region around the
+   incumbent (the measured point with the highest *model* value, never the luckiest raw
+   sample), measure the maximizer of m in the ball of radius Δ.  Δ doubles after a
+   successful step to the boundary and halves when the measured value is below the
+   incumbent's model value by more than the estimated noise (2 σ̂ in log units, σ̂ from the
+   fit's residuals, at most ``_MAX_SIGMA_LOG`` once the incumbent is a significant echo) —
    noise-aware control.
-4. Refine: once x* is inside the trust region and supported by data, the
-   peak's location is best learned from points on its flanks, not its top
-   (the Fisher information of x* from a point at distance r is ∝ r² e^{−r²/w²},
-   largest at r ≈ w).  So new points go on an ellipse ``ring`` × (−H)^{−1/2}
-   around x*, at golden-angle steps in direction.
-5. ``recommend()`` returns x* (the model's maximum) when the model is
-   concave and supported, else the incumbent.
+4. Refine: once x* is inside the trust region and supported by data, the peak's location is
+   best learned from points on its flanks, not its top (the Fisher information of x* from a
+   point at distance r is ∝ r² e^{−r²/w²}, largest at r ≈ w).  So new points go on an
+   ellipse ``ring`` × (−H)^{−1/2} around x*, at golden-angle steps in direction.
+5. ``recommend()`` returns x* (the model's maximum) when the model is concave and supported,
+   else the incumbent.
 
 With the probe's lobe (``lobe_template``) the steps from the lobe's tail follow the lobe
 instead, and the recommendation is its fitted peak until the quadratic takes over (a
 diffraction lobe's tail is not Gaussian: :mod:`echocal.calibrate.template_steps`).  A warm
-start whose history the template already fits (a far detection handed on by the
-acquisition) steps to the fitted peak at once, without the design hexagon; one it does not
-fit yet (a detection deep in the tail) seeks the peak where the peaks that fit the
-measurements disagree most (:mod:`echocal.calibrate.template_seek`).
+start whose history the template already fits (a far detection handed on by the acquisition)
+steps to the fitted peak at once, without the design hexagon; one it does not fit yet (a
+detection deep in the tail) seeks the peak where the peaks that fit the measurements
+disagree most (:func:`~echocal.calibrate.lobe_template.seek_point`).
 
-``space="linear"`` fits f itself with equal weights instead (for objectives
-that can be negative).
+``space="linear"`` fits f itself with equal weights instead (for objectives that can be
+negative).
 """
 
 from __future__ import annotations
@@ -59,7 +56,6 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
-from echocal.calibrate.fit_neighbourhood import LACK_OF_FIT_RADIUS, MIN_FIT, FitNeighbourhood
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.local_model import (
     REFUTE,
@@ -71,7 +67,7 @@ from echocal.calibrate.local_model import (
 )
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
-from echocal.calibrate.ridge_search import RidgeSearch
+from echocal.calibrate.ridge_search import RidgeSearch, is_ridge
 from echocal.calibrate.template_steps import TemplateSteps
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
@@ -94,9 +90,24 @@ model's value at the incumbent is a significant echo (``REFUTE`` σ of the measu
 noise): the residuals of a just-refuted model would otherwise pass every step.  In the
 noise (no significant echo) the residuals keep their scale, so the steps explore."""
 
+MIN_FIT = 0.5
+"""[× radius] the smallest fitting neighbourhood (the central peak over a ball is 0.3°
+wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
+_LACK_OF_FIT = 0.999
+"""A fit whose residuals' χ² exceeds this quantile lacks fit: its neighbourhood halves."""
+_LACK_OF_FIT_MIN = 12
+"""Fewer fitted measurements than this are not tested for lack of fit (6 parameters)."""
+LACK_OF_FIT_RADIUS = 1.0
+"""[× radius] lack of fit shrinks the fitting neighbourhood down to this radius, no less."""
+_OFF_CENTRE = 0.2
+"""[× the fitting neighbourhood] a ridge's fitted maximum farther than this from the
+neighbourhood's centre is fitted again around itself."""
+_RECENTRE_STEPS = 2
+"""At most this many fits around the previous fit's maximum per refit."""
+
 
 @register_method("model-based")
-class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
+class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
     """Trust-region ascent on a log-quadratic model of all measurements (1 per iteration).
 
     Parameters
@@ -556,3 +567,93 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     @property
     def iterate(self) -> FloatArray:
         return self.recommend()
+
+    def _lacks_fit(self, model: QuadraticModel, y_all: FloatArray) -> bool:
+        """Whether a ridge's measurements in the fitted neighbourhood scatter about the
+        model by clearly more than their noise: χ² of the residuals (each over its
+        measurement's σ) above the ``_LACK_OF_FIT`` quantile of χ² with n − 6 degrees of
+        freedom (log space with a known noise, a ridge's fit only: a round lobe's
+        diffraction tails, which a log-quadratic fits only roughly, are not tested).
+        Over a rod a 12.7 mm probe's lobe is a ridge with two humps 3° apart; a quadratic
+        fitted 4° around either hump spans both, and its maximum drifts along the ridge.
+        Not on a replay (a ``resolution``): its interpolation error, which the noise does
+        not include, lacks fit at any scale."""
+        if self.space != "log" or self.resolution is not None or not is_ridge(model):
+            return False
+        local = np.hypot(*(self._x - model.center).T) <= self._fit_radius()
+        n = int(np.count_nonzero(local))
+        sig = self._sigmas(np.maximum(y_all[local], 0.0))
+        if sig is None or n <= _LACK_OF_FIT_MIN:
+            return False
+        resid = (y_all[local] - model.energy(self._x[local])) / sig
+        from scipy.stats import chi2  # lazy: scipy.stats costs a CLI start ~1 CPU-s
+
+        return bool(np.sum(resid**2) > chi2.ppf(_LACK_OF_FIT, n - 6))
+
+    def _fit_around(self, center: FloatArray, y_all: FloatArray) -> QuadraticModel | None:
+        """The quadratic fitted to the measurements (values ``y_all`` (n,), floor removed)
+        within the fitting neighbourhood around ``center`` [deg] (2,); None when too few."""
+        return fit_quadratic(
+            self._x,
+            y_all,
+            center,
+            space=self.space,
+            scale=self.radius,
+            locality=self._fit_radius(),
+            floor=self.floor,
+        )
+
+    def _centred_on_max(self, model: QuadraticModel, y_all: FloatArray) -> QuadraticModel:
+        """``model`` fitted again, in a neighbourhood of the same radius, around its own
+        maximum when that lies more than ``_OFF_CENTRE`` of the neighbourhood from its
+        centre (at most ``_RECENTRE_STEPS`` times) — for a ridge (log space) whose
+        neighbourhood is :data:`LACK_OF_FIT_RADIUS` × radius or less (shrunk by lack of
+        fit or a refutation, or a ``locality`` that small); the model unchanged
+        otherwise, or when a fit around the maximum is no ridge.
+
+        Only the model moves: the incumbent (the next fit's centre) stays the measured
+        point the flank-centred fit ranked highest, and every refit re-centres again —
+        moving the incumbent too, to the point nearest the maximum, is what
+        :meth:`_follow_max` does at the smallest neighbourhood only (at any size the
+        noisy maximum dragged the centre about at 10 dB).  The re-centred fit is not
+        tested again for refutation or lack of fit.  (A rod's hump is not symmetric: a
+        neighbourhood centred down one flank puts the maximum towards that flank.)"""
+        radius = self._fit_radius()
+        if self.space != "log" or radius > LACK_OF_FIT_RADIUS * self.radius * (1.0 + 1e-9):
+            return model
+        for _ in range(_RECENTRE_STEPS):
+            if not is_ridge(model):
+                return model
+            xs = model.argmax()
+            off = float(np.hypot(*(xs - model.center)))
+            if not np.isfinite(off) or off <= _OFF_CENTRE * radius or off > radius:
+                return model
+            refit = self._fit_around(xs, y_all)
+            if refit is None or not is_ridge(refit):
+                return model
+            model = refit
+        return model
+
+    def _finest(self) -> float:
+        """[deg] the smallest neighbourhood whose shape the objective's values resolve:
+        two of its ``resolution`` steps (0 when continuous)."""
+        return 0.0 if self.resolution is None else 2.0 * self.resolution
+
+    def _follow_max(self, model: QuadraticModel, y_all: FloatArray) -> None:
+        """At the smallest neighbourhood (:data:`MIN_FIT`), move the incumbent — the next
+        fit's centre — to the measured echo (above ``floor`` of the largest) nearest the
+        model's maximum when that lies beyond half the neighbourhood from it, and such an
+        echo lies within half of it from the maximum (else a neighbourhood shrunk around a
+        flank point keeps its maximum near its edge).  Only at the smallest neighbourhood:
+        at any size a noisy maximum drags the centre about."""
+        radius = self._fit_radius()
+        if not model.concave or radius > MIN_FIT * self.radius * (1.0 + 1e-9):
+            return
+        xs = model.argmax()
+        if not np.all(np.isfinite(xs)) or np.hypot(*(xs - self._incumbent)) <= 0.5 * radius:
+            return
+        dist = np.hypot(*(self._x - xs).T)
+        echo = (dist <= 0.5 * radius) & (y_all > max(self.floor * float(y_all.max()), 0.0))
+        if echo.any():
+            idx = np.flatnonzero(echo)
+            self._incumbent = self._x[idx[int(np.argmin(dist[idx]))]].copy()

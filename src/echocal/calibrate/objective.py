@@ -1,13 +1,13 @@
 """The calibration objective: measure values at orientation points, count and log everything.
 
-An :class:`Objective` wraps a vectorized "measure the pseudo-energy at these
-angles" function.  It is the single place where measurements are counted,
-logged, limited by a budget and kept inside the positioner's angle bounds, so
-optimizers never have to trust each other's bookkeeping.
+An :class:`Objective` wraps a vectorized "measure the pseudo-energy at these angles"
+function.  It is the single place where measurements are counted, logged, limited by a
+budget and kept inside the positioner's angle bounds, so optimizers never have to trust each
+other's bookkeeping.
 
-Subclasses override one method, :meth:`Objective._evaluate`.  Angles are
-degrees; the two axes are either (azimuth, co-elevation) or (tilt-x, tilt-y)
-— the optimizers do not care which.
+Subclasses override one method, :meth:`Objective._evaluate`.  Angles are degrees; the two
+axes are either (azimuth, co-elevation) or (tilt-x, tilt-y) — the optimizers do not care
+which.
 """
 
 from __future__ import annotations
@@ -21,9 +21,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, finite_float, nonnegative_float, one_of, positive_int
-from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.posterior_search import EchoLikelihood
+from echocal.calibrate.posterior_search import EchoHypotheses, EchoLikelihood
 from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
 
 __all__ = [
@@ -244,7 +243,7 @@ class Objective:
     def echo_likelihood(self) -> EchoLikelihood | EchoHypotheses | None:
         """How each measurement's echo significance is distributed versus misalignment
         (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`, or
-        :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
+        :class:`~echocal.calibrate.posterior_search.EchoHypotheses` over an unknown
         amplitude), against the noise measured so far, when the objective measures A-scans
         — for a Bayesian search of a lost echo — else None (the base class: an analytic
         function has no echo)."""

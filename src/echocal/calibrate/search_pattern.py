@@ -1,8 +1,7 @@
 """Where a blind search for the echo looks: the hexagonal lattice around the start,
-ring by ring, and beyond a fine radius either circles whose spacing grows with the
-distance or coarse-to-fine passes of hexagonal lattices (used by
-:class:`~echocal.calibrate.acquisition.Acquisition`).  Angles in degrees, shapes
-``(k, 2)``."""
+ring by ring, and beyond a fine radius either circles whose spacing grows with the distance
+or coarse-to-fine passes of hexagonal lattices (used by
+:class:`~echocal.calibrate.acquisition.Acquisition`).  Angles in degrees, shapes ``(k, 2)``."""
 
 from __future__ import annotations
 

@@ -2,22 +2,22 @@
 then flanks around it until the log-quadratic takes over (a mixin of
 :class:`~echocal.calibrate.model_based.ModelBased`).
 
-A diffraction lobe's tail is not Gaussian (the 5 MHz probe's falls to 0.035 of the peak
-0.9° out and then only slowly), so a log-quadratic fitted to it sees a lobe twice as
-broad.  The template (:mod:`echocal.calibrate.lobe_template`, the simulated probe's
-pseudo-energy versus misalignment) is fitted to every measurement after each tell: the
-peak and its energy (for the simulator the peak's energy is known to 25 %, which breaks
-the tail's trade between a strong far peak and a weak near one).  While no measurement
-lies on the main lobe's top the next point is the fitted peak; once one does, the flanks
-around it are measured and the recommendation is the fitted peak; once
-:data:`_QUADRATIC_TOP` measurements lie on the top and the quadratic's maximum agrees
-with the template's, the quadratic takes over for good (:meth:`TemplateSteps._hand_over`).
+A diffraction lobe's tail is not Gaussian (the 5 MHz probe's falls to 0.035 of the peak 0.9°
+out and then only slowly), so a log-quadratic fitted to it sees a lobe twice as broad.  The
+template (:mod:`echocal.calibrate.lobe_template`, the simulated probe's pseudo-energy versus
+misalignment) is fitted to every measurement after each tell: the peak and its energy (for
+the simulator the peak's energy is known to 25 %, which breaks the tail's trade between a
+strong far peak and a weak near one).  While no measurement lies on the main lobe's top the
+next point is the fitted peak; once one does, the flanks around it are measured and the
+recommendation is the fitted peak; once :data:`_QUADRATIC_TOP` measurements lie on the top
+and the quadratic's maximum agrees with the template's, the quadratic takes over for good
+(:meth:`TemplateSteps._hand_over`).
 
-The top is the main lobe only (:meth:`~echocal.calibrate.lobe_template.LobeTemplate.on_top`),
-and a fitted peak is kept unless the data clearly prefer another (``fit_template``'s
-``previous``): over a ball the 12.7 mm probe's lobe has a near-field ring at about 0.8 of its
-peak 1.6° out, which is above half the peak and which a centre across the ring fits almost
-as well.
+The top is the main lobe only
+(:meth:`~echocal.calibrate.lobe_template.LobeTemplate.on_top`), and a fitted peak is kept
+unless the data clearly prefer another (``fit_template``'s ``previous``): over a ball the
+12.7 mm probe's lobe has a near-field ring at about 0.8 of its peak 1.6° out, which is above
+half the peak and which a centre across the ring fits almost as well.
 """
 
 from __future__ import annotations
@@ -29,15 +29,20 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from echocal.calibrate._fd import FloatArray
-from echocal.calibrate.lobe_template import LobeTemplate, TemplateFit, fit_template
+from echocal.calibrate.lobe_template import (
+    LobeTemplate,
+    TemplateFit,
+    fit_template,
+    seek_point,
+    tail_reach,
+)
 from echocal.calibrate.local_model import REFUTE, QuadraticModel
-from echocal.calibrate.template_seek import seek_point, tail_reach
 
 __all__ = ["TemplateSteps"]
 
 _SEEK_MAX = 8
-"""Seek measurements (:mod:`~echocal.calibrate.template_seek`) at most, after a warm start
-the template does not fit yet, before the usual steps take over."""
+"""Seek measurements (:func:`~echocal.calibrate.lobe_template.seek_point`) at most, after a
+warm start the template does not fit yet, before the usual steps take over."""
 
 _TEMPLATE_MISFIT = 25.0
 """A template fit whose χ² per degree of freedom (against the measurement noise) exceeds
@@ -154,7 +159,7 @@ class TemplateSteps:
     def _seek_step(self) -> FloatArray | None:
         """While seeking and no template fit is accepted: the point [deg] (2,) where the
         candidate peaks' predicted echoes disagree most
-        (:func:`~echocal.calibrate.template_seek.seek_point`, candidates out to where the
+        (:func:`~echocal.calibrate.lobe_template.seek_point`, candidates out to where the
         lobe's tail is still 3 σ above the noise, at least ``max_radius`` from x0); else
         None, and the seek is over for the run — also when that point, as the positioner
         reaches it, was measured already (clipped onto a limit, or a NaN there: it would

@@ -7,11 +7,10 @@ measurements on the lobe's top: within twice the farthest half-maximum measureme
 estimate), measured with independent Gaussian noise of the σ an energy has at its level
 (:func:`~echocal.calibrate.evidence.energy_sigma`).  The fitted parameters' covariance is
 the Gauss–Newton one, (Jᵀ W J)⁻¹ with W = 1/σ², inflated by the reduced χ² when the
-quadratic fits worse than the noise explains; the peak x̂ = centre − H⁻¹ b carries it by
-the delta method.  The radius at ``level`` is that of the covariance's long axis,
-√(χ²₂(level) λ_max), plus the distance from the estimate to x̂ (the recommendation may be
-another model's peak, e.g. the lobe template's), so it bounds the estimate's error, not
-only x̂'s.
+quadratic fits worse than the noise explains; the peak x̂ = centre − H⁻¹ b carries it by the
+delta method.  The radius at ``level`` is that of the covariance's long axis, √(χ²₂(level)
+λ_max), plus the distance from the estimate to x̂ (the recommendation may be another model's
+peak, e.g. the lobe template's), so it bounds the estimate's error, not only x̂'s.
 """
 
 from __future__ import annotations
