@@ -33,11 +33,11 @@ Algorithm (one measurement per iteration after a 7-point initial design):
 
 With the probe's lobe (``lobe_template``) the steps from the lobe's tail follow the lobe
 instead, and the recommendation is its fitted peak until the quadratic takes over (a
-diffraction lobe's tail is not Gaussian: :mod:`echocal.calibrate.template_steps`).  A warm
-start whose history the template already fits (a far detection handed on by the acquisition)
-steps to the fitted peak at once, without the design hexagon; one it does not fit yet (a
-detection deep in the tail) seeks the peak where the peaks that fit the measurements
-disagree most (:func:`~echocal.calibrate.lobe_template.seek_point`).
+diffraction lobe's tail is not Gaussian:
+:class:`~echocal.calibrate.lobe_template.TemplateSteps`).  A warm start the template already
+fits (a far detection handed on) steps to the fitted peak at once, without the design
+hexagon; one it does not fit yet (deep in the tail) seeks the peak
+(:func:`~echocal.calibrate.lobe_template.seek_point`).
 
 ``space="linear"`` fits f itself with equal weights instead (for objectives that can be
 negative).
@@ -56,7 +56,7 @@ from echocal.calibrate._fd import FloatArray
 from echocal.calibrate._options import finite_float, in_range, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
-from echocal.calibrate.lobe_template import LobeTemplate
+from echocal.calibrate.lobe_template import LobeTemplate, TemplateSteps
 from echocal.calibrate.local_model import (
     REFUTE,
     REFUTE_RELATIVE,
@@ -68,7 +68,6 @@ from echocal.calibrate.local_model import (
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
 from echocal.calibrate.ridge_search import RidgeSearch, is_ridge
-from echocal.calibrate.template_steps import TemplateSteps
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 

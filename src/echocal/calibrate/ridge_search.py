@@ -135,15 +135,12 @@ class RidgeSearch:
         self._across_bump = False
 
     def _start_ridge_search(self, m: QuadraticModel, xs: FloatArray) -> bool:
-        """Queue the search across the peak through the model's maximum ``xs`` [deg] (2,)
-        once the model has settled on a ridge (:data:`_ACROSS_AFTER` refinement steps) or
-        on a side lobe (:meth:`_on_side_lobe`, :data:`_SIDE_LOBE_AFTER` steps); True when
-        queued (each once per run, a side lobe's again after a dropped search: see
-        :meth:`_drop_search`).  Before :data:`_ACROSS_AFTER` steps only the side-lobe
-        test is made, so a ridge far below the echo at normal incidence is searched as a
-        side lobe, along both its axes.  A ridge is searched across, a side lobe along both
-        its axes at once (a side lobe fitted nearly round from noisy data has no telling
-        direction; over the rod its steepest is along the rod, the main lobe across)."""
+        """Queue the search through the model's maximum ``xs`` [deg] (2,) once the model has
+        settled on a ridge (:data:`_ACROSS_AFTER` refinement steps: across it) or on a side
+        lobe (:meth:`_on_side_lobe`, :data:`_SIDE_LOBE_AFTER` steps: along both its axes,
+        as a side lobe fitted from noisy data has no telling direction); True when queued.
+        Each once per run, a side lobe's again after a dropped search
+        (:meth:`_drop_search`)."""
         if self._streak < _SIDE_LOBE_AFTER:
             return False
         if not self._across_done and self._streak >= _ACROSS_AFTER and is_ridge(m):
@@ -161,12 +158,10 @@ class RidgeSearch:
         return True
 
     def _drop_search(self) -> None:
-        """Drop the queued points of a search under way: the fit moves to a new centre
-        (a point of the search found a stronger echo, or the data refuted the model).  The
-        next search waits until the model has settled there again; a side lobe's search
-        may then be made again — the peak it finds is tested afresh (a side lobe's model
-        may still be refuted by its own data after two steps).  Each new search needs an echo
-        clearly (4 σ and 5 %) above the last peak's, so they do not repeat without end."""
+        """Drop the queued points of a search under way (the fit moves to a new centre): the
+        next waits until the model has settled again, and a side lobe's may be made again
+        (its peak tested afresh); each needs an echo clearly (4 σ and 5 %) above the last
+        peak's, so they do not repeat without end."""
         if not len(self._across):
             return
         if self._across_side_lobe:
@@ -196,16 +191,11 @@ class RidgeSearch:
     def _across_line(
         self, m: QuadraticModel, xs: FloatArray, axes: tuple[int, ...] = (1,)
     ) -> FloatArray:
-        """The points of a search across the peak through ``xs`` along its steepest
-        direction (``axes`` (1,); (1, 0): and its flattest, interleaved), at the offsets
-        :data:`_ACROSS_STEPS`, nearest first.
-
-        A large probe in its near field over a ball sees a lobe made of a central peak,
-        a dip (0.32 of the peak 0.8° out) and a ring (0.8 of the peak, 1.6° out): a local
-        model started beyond the dip climbs the ring, on which it is a ridge — steep across
-        (the radius), flat along it — and the centre lies across it.  On each axis the side
-        where the data fall below the model (the dip) is searched first, alternating
-        sides."""
+        """The points [deg] (k, 2) of a search across the peak through ``xs`` along its
+        steepest direction (``axes`` (1,); (1, 0): and its flattest, interleaved), at the
+        offsets :data:`_ACROSS_STEPS`, nearest first, alternating sides: on each axis first
+        the side where the data fall below the model (over a ball, the dip before the
+        central peak)."""
         _, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
         y = self._y - self._floor()
         resid = y - m.energy(self._x)
