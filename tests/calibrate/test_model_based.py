@@ -9,8 +9,8 @@ import pytest
 
 from conftest import OPT, gaussian
 from echocal.calibrate import FunctionObjective, calibrate
+from echocal.calibrate.acquisition import hex_spiral
 from echocal.calibrate.model_based import ModelBased, fit_quadratic, hexagon, trust_region_max
-from echocal.calibrate.search_pattern import hex_spiral
 
 SNR30 = 3.7 / np.sqrt(1e3)  # noise sigma for 30 dB below the peak of gaussian()
 
@@ -170,7 +170,7 @@ def test_model_based_subtracts_the_noise_floor_before_the_log_fit(floor):
 
 @pytest.mark.parametrize(("growth", "cap"), [(0.5, 4.0), (2.0, 4.2)])
 def test_search_rings_coarse_outside_cover_the_whole_disc(growth, cap):
-    from echocal.calibrate.search_pattern import search_rings
+    from echocal.calibrate.acquisition import search_rings
 
     rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, growth=growth, max_spacing=cap)
     # inside fine_radius: the hexagonal lattice itself
@@ -199,7 +199,7 @@ def test_search_passes_each_cover_the_disc_at_their_spacing(passes):
     lattice's covering radius s/√3 plus the s/4 by which a left-out point may stand from
     the point searched instead, and nearly all (95 %) within s/√3: checked on 5000
     random points.  Passes come coarse to fine, and no point is measured twice."""
-    from echocal.calibrate.search_pattern import search_rings
+    from echocal.calibrate.acquisition import search_rings
 
     rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=passes)
     for a, b in zip(rings[:4], hex_spiral(np.zeros(2), 1.0, 3), strict=True):
@@ -223,7 +223,7 @@ def test_search_passes_each_cover_the_disc_at_their_spacing(passes):
 def test_a_pass_sqrt3_coarser_is_part_of_the_next():
     """Nested passes: (√3·s, s) measures the same points as (s,) alone, the coarse ones
     first — the fine pass spends nothing on what the coarse one measured."""
-    from echocal.calibrate.search_pattern import search_rings
+    from echocal.calibrate.acquisition import search_rings
 
     fine = np.vstack(search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(4.2,)))
     rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(4.2 * np.sqrt(3), 4.2))

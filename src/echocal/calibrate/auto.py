@@ -22,7 +22,7 @@ A run has two phases that share every measurement:
 
 The run stops when its recommendation has settled (or the budget is spent) and reports
 ``uncertainty``, a radius [deg] around the estimate that holds the optimum with 90 %
-probability (:mod:`echocal.calibrate.uncertainty`). When the start is known to be near the
+probability (``echocal.calibrate.evidence.estimate_radius``). When the start is known to be near the
 echo, ``method="model-based"`` saves the search. Every rule of both phases, in the order a
 run meets it, with the measurement that keeps it: the documentation's ``auto`` benchmark
 page.
@@ -61,7 +61,7 @@ AUTO_SEARCH: dict[str, Any] = {
     "posterior": True,
 }
 """auto's search geometry [deg], its only difference from ``acquisition``: the 1° lattice
-within 3° of x0, then the passes (:func:`~echocal.calibrate.search_pattern.search_rings`)
+within 3° of x0, then the passes (:func:`~echocal.calibrate.acquisition.search_rings`)
 where the objective cannot size its own (the driver's ``_search_plan``), or the posterior
 search where the echo's likelihood is known — unless the caller sets where to search
 (``passes``, ``growth``, ``max_spacing`` or ``fine_radius`` without ``posterior=True``)."""

@@ -1,46 +1,35 @@
 """Model-based trust-region ascent: a quadratic model of log-energy fitted to every measurement.
 
-Why log-energy: a beam's pseudo-energy is close to a Gaussian in the two angles near its
-peak, and the log of a Gaussian is *exactly* quadratic, so a quadratic model of log f is
-right over the whole peak, not only at its top. With additive noise of fixed σ, var(log y) ≈
-σ²/y², so the weighted least squares fit uses weights ∝ y² (points at the noise floor weigh
-~nothing and non-positive values are left out).  The weights are relative, so the method is
-independent of the energy unit; NaN measurements are left out of the fit.
+Near its peak a beam's pseudo-energy is close to a Gaussian in the two angles, whose log is
+exactly quadratic, so a quadratic of log f holds over the whole peak.  With additive noise
+of fixed σ, var(log y) ≈ σ²/y²: the weighted least-squares fit weighs y² (relative, so the
+energy unit does not matter; non-positive and NaN values are left out).
 
-Algorithm (one measurement per iteration after a 7-point initial design):
+One measurement per iteration after the initial design:
 
-1. Design: x0 and a hexagon of radius ``radius`` around it (a rotatable second-order design;
-   skipped where a warm-start ``history`` already covers x0).
-2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to the points so far within a neighbourhood
-   of the incumbent (``locality``), which halves where a measurement refutes the fit or a
-   ridge's residuals lack fit (a rod's two humps), widens again where too few points remain
-   to fit or to show a peak, is fitted again around a ridge hump's own maximum (a rod's hump
-   is not symmetric), and at its smallest follows its fitted maximum; a replay's
-   neighbourhood spans at least two of its grid steps.
-3. Approach: if the model's maximum x* is not yet inside the trust region around the
-   incumbent (the measured point with the highest *model* value, never the luckiest raw
-   sample), measure the maximizer of m in the ball of radius Δ.  Δ doubles after a
-   successful step to the boundary and halves when the measured value is below the
-   incumbent's model value by more than the estimated noise (2 σ̂ in log units, σ̂ from the
-   fit's residuals, at most ``_MAX_SIGMA_LOG`` once the incumbent is a significant echo) —
-   noise-aware control.
-4. Refine: once x* is inside the trust region and supported by data, the peak's location is
-   best learned from points on its flanks, not its top (the Fisher information of x* from a
-   point at distance r is ∝ r² e^{−r²/w²}, largest at r ≈ w).  So new points go on an
-   ellipse ``ring`` × (−H)^{−1/2} around x*, at golden-angle steps in direction.
-5. ``recommend()`` returns x* (the model's maximum) when the model is concave and supported,
-   else the incumbent.
+1. Design: x0 and a hexagon of ``radius`` (skipped where a warm-start ``history`` covers x0).
+2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) within a neighbourhood of the incumbent
+   (``locality``): it halves where a measurement refutes the fit or a ridge's residuals
+   lack fit (a rod's two humps), widens again where too few points remain, is refitted
+   around a ridge hump's own maximum, at its smallest follows its fitted maximum, and on a
+   replay spans at least two grid steps.
+3. Approach: while the model's maximum x* lies outside the trust region around the
+   incumbent (the measured point with the highest *model* value), measure m's maximizer in
+   the ball of radius Δ; Δ doubles after a successful step to the boundary and halves when
+   the value falls short of the incumbent's by more than 2 σ̂ (log units, from the fit's
+   residuals, at most :data:`_MAX_SIGMA_LOG` once the incumbent is a significant echo).
+4. Refine: x* is learned best from its flanks (the Fisher information of a point at
+   distance r is ∝ r² e^{−r²/w²}, largest at r ≈ w): points on an ellipse ``ring`` ×
+   (−H)^{−1/2} around x*, at golden-angle steps.
+5. ``recommend()`` is x* when the model is concave and supported, else the incumbent.
 
 With the probe's lobe (``lobe_template``) the steps from the lobe's tail follow the lobe
-instead, and the recommendation is its fitted peak until the quadratic takes over (a
-diffraction lobe's tail is not Gaussian:
-:class:`~echocal.calibrate.lobe_template.TemplateSteps`).  A warm start the template already
-fits (a far detection handed on) steps to the fitted peak at once, without the design
-hexagon; one it does not fit yet (deep in the tail) seeks the peak
-(:func:`~echocal.calibrate.lobe_template.seek_point`).
-
-``space="linear"`` fits f itself with equal weights instead (for objectives that can be
-negative).
+instead, and the recommendation is its fitted peak until the quadratic takes over
+(:class:`~echocal.calibrate.lobe_template.TemplateSteps`; a diffraction lobe's tail is not
+Gaussian); a warm start deep in the tail seeks the peak
+(:func:`~echocal.calibrate.lobe_template.seek_point`).  On a ridge or a side lobe it
+searches across (:mod:`~echocal.calibrate.ridge_search`).  ``space="linear"`` fits f
+itself with equal weights (for objectives that can be negative).
 """
 
 from __future__ import annotations
@@ -53,7 +42,7 @@ from numpy.typing import ArrayLike
 from echocal._rng import RngLike
 from echocal._validate import one_of
 from echocal.calibrate._fd import FloatArray
-from echocal.calibrate._options import finite_float, in_range, positive_float
+from echocal.calibrate._options import finite_float, in_range, optional, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
 from echocal.calibrate.lobe_template import LobeTemplate, TemplateSteps
@@ -68,6 +57,7 @@ from echocal.calibrate.local_model import (
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
 from echocal.calibrate.ridge_search import RidgeSearch, is_ridge
+from echocal.errors import EchocalValueError
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 
@@ -119,29 +109,21 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
     floor : leave out of the log fit points below ``floor`` × the largest value (noise floor).
     history : optional (points (n, 2) [deg], values (n,)) already measured (warm start),
         e.g. by an acquisition phase; the initial design is skipped where these cover x0.
-    noise_floor : [energy units] mean value of pure noise, subtracted before the fit (the
-        echo's energy is the measured energy minus the noise's).  None: taken from
-        ``noise_model`` when given, else 0.
+    noise_floor : [energy units] mean value of pure noise, subtracted before the fit
+        (None: ``noise_model``'s, else 0; at 10 dB left in it broadens log f).
     noise_model : callable returning the objective's live ``(noise_floor, noise_sigma)``
-        (e.g. :meth:`~echocal.calibrate.Objective.noise_estimate`); its floor is used when
-        ``noise_floor`` is None.  At 10 dB SNR the floor is ~10 % of the peak: left in, it
-        makes log f look like a much broader peak than the echo's and the fit wanders.
-    lobe_template : callable returning the probe's lobe (a
-        :class:`~echocal.calibrate.lobe_template.LobeTemplate`) or None, e.g.
-        :meth:`~echocal.calibrate.Objective.lobe_template`; called once, when first
-        needed.  Given one, the steps from the lobe's tail go to the peak of the template
-        fitted to every measurement, until a measurement lies on the lobe's top
-        (:meth:`_template_step`).
+        (e.g. :meth:`~echocal.calibrate.Objective.noise_estimate`).
+    lobe_template : callable returning the probe's
+        :class:`~echocal.calibrate.lobe_template.LobeTemplate` or None (e.g.
+        :meth:`~echocal.calibrate.Objective.lobe_template`; called once, when needed):
+        steps from the lobe's tail go to the fitted template's peak.
     normal_echo : callable returning the echo at the probe's best direction of normal
-        incidence [objective units] or None, e.g.
-        :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when first needed.
-        The optimum's echo is at least that, so a peak refined twice below 0.4 of it that is
-        an echo (≥ 3 σ) is a side lobe, searched along both its axes (see
-        :mod:`~echocal.calibrate.ridge_search`).  Only with ``normalize="none"``.
-    resolution : [deg] the finest detail the objective's values resolve, e.g. a
-        replay's recorded grid step (:meth:`~echocal.calibrate.Objective.resolution`);
-        None: continuous.  Given one, lack of fit is not tested (the interpolation's
-        error lacks fit, not the lobe) and refinement points may go two steps out.
+        incidence [objective units] or None (e.g.
+        :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when needed): a
+        peak refined below 0.4 of it is a side lobe (:mod:`~echocal.calibrate.ridge_search`;
+        ``normalize="none"`` only).
+    resolution : [deg] the finest detail the values resolve, e.g. a replay's grid step
+        (None: continuous): no lack-of-fit test, refinement points up to two steps out.
     """
 
     batch_size = 1
@@ -168,8 +150,8 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
         normalize: str = "none",
     ) -> None:
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
-        self.resolution = None if resolution is None else positive_float("resolution", resolution)
-        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
+        self.resolution = optional(positive_float, "resolution", resolution)
+        self.noise_floor = optional(finite_float, "noise_floor", noise_floor)
         self.noise_model = noise_model
         self.normal_echo = normal_echo
         self._init_template_steps(lobe_template)
@@ -190,8 +172,6 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
             hp = as_points("history points", history[0])
             hv = np.asarray(history[1], dtype=np.float64).reshape(-1)
             if hv.shape != (len(hp),):
-                from echocal.errors import EchocalValueError
-
                 raise EchocalValueError(
                     f"history values must have shape ({len(hp)},); got shape {hv.shape}"
                 )
@@ -273,16 +253,12 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
     def _refuting_point(
         self, model: QuadraticModel, y_all: FloatArray, local: np.ndarray
     ) -> int | None:
-        """Index of the strongest local measurement that lies clearly above everything
-        the model allows (its maximum in the fitted neighbourhood, or its largest value at
-        a measured point): ``REFUTE`` σ of that measurement's noise, and 5 % — or, when
-        there is none, the strongest local measurement if it stands ``_MISFIT`` times and
-        ``REFUTE`` σ above the model's value at that very point; None when neither holds
-        or the noise is unknown (log space only).
-
-        A quadratic fitted across several lobes (a near-field probe over a ball: a central
-        peak, a dip to 0.32 at 0.8°, a ring at 0.8 of the peak 1.6° out) puts its maximum
-        between them, below the central peak's measured values."""
+        """Index of the strongest local measurement clearly above everything the model
+        allows (its maximum in the fitted neighbourhood or at a measured point): ``REFUTE``
+        σ of its noise and 5 %; else the strongest local measurement if it stands
+        :data:`_MISFIT` times and ``REFUTE`` σ above the model's own value there; else None
+        (also when the noise is unknown; log space only).  A quadratic fitted across
+        several lobes puts its maximum between them, below the central peak's values."""
         if self.space != "log" or not local.any():
             return None
         sig = self._sigmas(np.maximum(y_all, 0.0))
@@ -569,14 +545,11 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
 
     def _lacks_fit(self, model: QuadraticModel, y_all: FloatArray) -> bool:
         """Whether a ridge's measurements in the fitted neighbourhood scatter about the
-        model by clearly more than their noise: χ² of the residuals (each over its
-        measurement's σ) above the ``_LACK_OF_FIT`` quantile of χ² with n − 6 degrees of
-        freedom (log space with a known noise, a ridge's fit only: a round lobe's
-        diffraction tails, which a log-quadratic fits only roughly, are not tested).
-        Over a rod a 12.7 mm probe's lobe is a ridge with two humps 3° apart; a quadratic
-        fitted 4° around either hump spans both, and its maximum drifts along the ridge.
-        Not on a replay (a ``resolution``): its interpolation error, which the noise does
-        not include, lacks fit at any scale."""
+        model clearly more than their noise: χ² of the residuals (each over its σ) above
+        the :data:`_LACK_OF_FIT` quantile with n − 6 degrees of freedom (over a rod a fit 4°
+        around either hump spans both).  Log space with a known noise and a ridge only (a
+        round lobe's diffraction tails fit only roughly); not on a replay, whose
+        interpolation error lacks fit at any scale."""
         if self.space != "log" or self.resolution is not None or not is_ridge(model):
             return False
         local = np.hypot(*(self._x - model.center).T) <= self._fit_radius()
@@ -603,20 +576,12 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
         )
 
     def _centred_on_max(self, model: QuadraticModel, y_all: FloatArray) -> QuadraticModel:
-        """``model`` fitted again, in a neighbourhood of the same radius, around its own
-        maximum when that lies more than ``_OFF_CENTRE`` of the neighbourhood from its
-        centre (at most ``_RECENTRE_STEPS`` times) — for a ridge (log space) whose
-        neighbourhood is :data:`LACK_OF_FIT_RADIUS` × radius or less (shrunk by lack of
-        fit or a refutation, or a ``locality`` that small); the model unchanged
-        otherwise, or when a fit around the maximum is no ridge.
-
-        Only the model moves: the incumbent (the next fit's centre) stays the measured
-        point the flank-centred fit ranked highest, and every refit re-centres again —
-        moving the incumbent too, to the point nearest the maximum, is what
-        :meth:`_follow_max` does at the smallest neighbourhood only (at any size the
-        noisy maximum dragged the centre about at 10 dB).  The re-centred fit is not
-        tested again for refutation or lack of fit.  (A rod's hump is not symmetric: a
-        neighbourhood centred down one flank puts the maximum towards that flank.)"""
+        """``model`` fitted again around its own maximum, in a neighbourhood of the same
+        radius, when that lies more than :data:`_OFF_CENTRE` of it from the centre (at most
+        :data:`_RECENTRE_STEPS` times): a rod's hump is not symmetric, and a neighbourhood
+        centred down one flank puts the maximum towards it.  Only for a ridge (log space)
+        in a neighbourhood of :data:`LACK_OF_FIT_RADIUS` × radius or less, and only while
+        the refit is a ridge; the incumbent stays (:meth:`_follow_max` moves it)."""
         radius = self._fit_radius()
         if self.space != "log" or radius > LACK_OF_FIT_RADIUS * self.radius * (1.0 + 1e-9):
             return model

@@ -450,18 +450,12 @@ class PosteriorSearch:
         :data:`TIE` of the best chance), the one nearest to the centre — the plain choice.
 
         Given ``move_time`` (points [deg] ``(k, 2)`` → the positioner's time [s] to reach
-        each from where it is, ``(k,)``, or None) and ``price`` [s], the bench time of a
-        measurement apart from its travel (acquisition plus settling), the search trades
-        detection chance for a shorter move only where the move is long against that
-        price: the cell reached soonest among those within :data:`MOTION_TIE` of the best
-        chance replaces the plain choice when it saves more than ``price / MOTION_TIE``
-        of the plain choice's move.  A step that takes it gives up at most a fraction
-        MOTION_TIE of one measurement's chance of a detection, so the walk loses a
-        whole measurement's chance over 1 / MOTION_TIE such steps at the earliest; each
-        of those steps must save the price of as many measurements.  Where every move
-        is short against the price (a search close to where the probe stands) the plain
-        choice stands and the search asks exactly the plain search's points; where the
-        plain choice jumps across a ring of likely optima, the walk goes around it."""
+        each, ``(k,)``, or None) and ``price`` [s], a measurement's bench time apart from
+        its travel: the cell reached soonest among those within :data:`MOTION_TIE` of the
+        best chance replaces the plain choice when it saves more than
+        ``price / MOTION_TIE`` of its move — so over 1 / MOTION_TIE such steps, which lose
+        at most one measurement's chance, the walk saves at least as many measurements'
+        price.  Where every move is short against the price, the plain search's points."""
         chance = self.detection_chances()
         distance = np.where(chance >= (1.0 - TIE) * chance.max(), self._rho, np.inf)
         row, col = np.unravel_index(int(np.argmin(distance)), chance.shape)
