@@ -171,30 +171,20 @@ def search_rings(
     max_spacing: float | None = None,
     passes: Sequence[float] = (),
 ) -> list[FloatArray]:
-    """Search rings around ``center`` [deg]: the hexagonal lattice of ``spacing`` out to
-    ``fine_radius``, then (coarse-to-the-outside) circles whose point spacing s and
-    circle spacing (√3/2)·s grow with the radius r as s = ``max(spacing, growth · r)``,
-    capped at ``max_spacing`` — the area a measurement must cover grows with the area to
-    search.  Consecutive circles carry different point counts, so they are only partly
-    staggered: every point of the disc lies within ≈ 0.66 s of a search point (measured;
-    a true hexagonal lattice would give s/√3 = 0.58 s).
+    """Search rings around ``center`` [deg], in the order they are searched (arrays (k_i, 2),
+    the first ``center``): the hexagonal lattice of ``spacing`` out to ``fine_radius``, then
+    circles whose point spacing s = ``max(spacing, growth · r)`` (capped at
+    ``max_spacing``) and circle spacing (√3/2)·s grow with the radius r, out to the first
+    beyond ``max_radius`` by no more than s/√3: every point of the disc within ≈ 0.66 s of a
+    search point (measured; partly staggered circles).
 
-    ``passes`` [deg]: when given, the search beyond ``fine_radius`` is instead a pass
-    per spacing s, coarse to fine, each the hexagonal lattice of spacing s around
-    ``center`` (every point of the disc within s/√3 of one of its points; the points
-    inside the fine lattice's hexagon and those farther than ``max_radius`` + s/√3 left
-    out, as are the points within s/4 of a point searched before — so after each pass
-    no point of the disc is farther than s/√3 + s/4 ≈ 0.83 s from a search point, and
-    most are within s/√3).  Each pass's lattice is turned by 30° from the next finer
-    one's, so a pass √3 times coarser than the next is a part of it: the finer pass
-    then spends nothing on the points the coarser one measured.  A coarse first
-    pass finds a strong echo far away in few measurements; when it misses, a weaker echo
-    is seen from less far, and the next pass searches again, more densely.
-
-    Returns a list of arrays of shape (k_i, 2) (the first is ``center``): the rings in
-    the order they are searched.  Without ``passes``, the last circle is the first that
-    lies beyond ``max_radius`` by no more than s/√3, which leaves no point of the disc
-    of ``max_radius`` farther than ≈ 0.66 s from a search point.
+    ``passes`` [deg]: beyond ``fine_radius`` instead a pass per spacing s, coarse to fine,
+    each the hexagonal lattice of spacing s (every point within s/√3 of one of its points)
+    without the points inside the fine lattice's hexagon, beyond ``max_radius`` + s/√3, or
+    within s/4 of a point searched before.  Each pass is turned by 30° from the next finer
+    one's, so a pass √3 times coarser is part of it and costs the finer one nothing.  A
+    coarse first pass finds a strong echo far away in few measurements; a weaker one is
+    seen from less far, by the next pass.
     """
     n_fine = int(np.ceil(min(fine_radius, max_radius) / spacing)) if np.isfinite(fine_radius) else 0
     if not np.isfinite(fine_radius) or (growth <= 0.0 and not passes):

@@ -3,17 +3,17 @@
 A run *converged* only when its own stopping rule fired (``xtol`` or ``settle``, as in
 scipy's ``success``) **and** the data support the estimate:
 
-- it does not sit on the positioner's angle limits (the optimum may lie beyond reach: status
-  8, whatever the stopping rule said);
+- it does not sit on the positioner's angle limits (the optimum may lie beyond reach:
+  status 8, whatever the stopping rule said);
 - the final measurement at the estimate shows an echo clearly above the noise floor (the
   matched-filter significance above :data:`~echocal.constants.ECHO_THRESHOLD` when the
   objective has a detector, else the value ``5 σ`` above the noise floor: status 9);
 - a method with a model has a concave one there (:attr:`Optimizer.concave`);
 - the estimate lies inside the region sampled (the convex hull of the measured points);
-- no measured point is clearly stronger than the estimate's own final measurement (by ``5
-  σ`` of the difference, σ the noise of an energy at that level, see :func:`energy_sigma`,
-  and by 0.1 %) — a quadratic model fitted over a double-humped lobe, as a large probe sees
-  over a cylinder, puts its maximum between the humps (status 10 otherwise);
+- no measured point is clearly stronger than the estimate's own final measurement (by
+  ``5 σ`` of the difference, σ an energy's noise at that level, :func:`energy_sigma`, and
+  by 0.1 %): a quadratic fitted over a double-humped lobe (a large probe over a cylinder)
+  puts its maximum between the humps (status 10 otherwise);
 - where the objective knows a floor the optimum's echo exceeds
   (:meth:`~echocal.calibrate.objective.Objective.echo_floor`: half a simulator's echo at
   normal incidence), the echo at the estimate is above it — not a side lobe's or the grains'

@@ -415,15 +415,12 @@ class TemplateSteps:
         self._seeks_left = 0  # seek measurements still allowed (:meth:`_start_seek`)
 
     def _fit_template(self) -> None:
-        """Fit the probe's lobe template to every measurement
-        (:func:`fit_template`, peaks within
-        ``max_radius`` of the incumbent): ``_tfit`` is the fit when its peak is a
-        significant echo (``REFUTE`` standard errors), else None; ``_n_top`` counts the
-        measurements on the lobe's main top (:meth:`LobeTemplate.on_top`: above half its
-        peak, not on a ring around it); the previous fit's peak is kept unless the data
-        clearly prefer another (``fit_template``'s ``previous``).  Log space only, with a
-        live noise model; the prior on the peak's energy only when the values keep the
-        objective's units (``normalize="none"``)."""
+        """Fit the probe's lobe template to every measurement (:func:`fit_template`, peaks
+        within ``max_radius`` of the incumbent, the previous fit's peak kept on ties):
+        ``_tfit`` is the fit when its peak is a significant echo (``REFUTE`` standard
+        errors), else None; ``_n_top`` counts the measurements on the lobe's main top.  Log
+        space with a live noise model only; the prior on the peak's energy only when the
+        values keep the objective's units (``normalize="none"``)."""
         previous = None if self._tfit is None else self._tfit.centre  # kept on ties
         self._tfit, self._n_top = None, 0
         if self._quadratic_on_top or self.space != "log" or not len(self._x):
@@ -463,10 +460,10 @@ class TemplateSteps:
         return template
 
     def _start_seek(self) -> bool:
-        """For a warm start the template does not fit yet (typically a detection in the
-        lobe's tail; also a false alarm handed on): seek the peak (:meth:`_seek_step`, up
-        to :data:`_SEEK_MAX` measurements) instead of measuring a design around x0 — True —
-        when :meth:`_seek_template` gives the template; else False."""
+        """For a warm start the template does not fit yet (a detection in the lobe's tail,
+        or a false alarm handed on): seek the peak (:meth:`_seek_step`, at most
+        :data:`_SEEK_MAX` measurements) instead of a design around x0 — True — when
+        :meth:`_seek_template` gives the template; else False."""
         if self._seek_template() is None:
             return False
         self._seeks_left = _SEEK_MAX
@@ -474,12 +471,10 @@ class TemplateSteps:
 
     def _seek_step(self) -> FloatArray | None:
         """While seeking and no template fit is accepted: the point [deg] (2,) where the
-        candidate peaks' predicted echoes disagree most
-        (:func:`seek_point`, candidates out to where the
-        lobe's tail is still 3 σ above the noise, at least ``max_radius`` from x0); else
+        candidate peaks' predicted echoes disagree most (:func:`seek_point`, candidates out
+        to where the lobe's tail is 3 σ above the noise, at least ``max_radius``); else
         None, and the seek is over for the run — also when that point, as the positioner
-        reaches it, was measured already (clipped onto a limit, or a NaN there: it would
-        teach nothing new)."""
+        reaches it, was measured already."""
         template = self._seek_template()
         if self._tfit is not None or template is None or template.peak is None:
             self._seeks_left = 0
@@ -516,11 +511,10 @@ class TemplateSteps:
         return self.clip(self._tfit.centre)
 
     def _hand_over(self) -> None:
-        """Once :data:`_QUADRATIC_TOP` measurements lie on the lobe's top (the
-        log-quadratic's 6 parameters need them there) and the quadratic's maximum agrees
-        with the template's peak (:data:`_AGREE`), the quadratic takes over for good: the
-        template is not fitted again.  The maximum need not be supported by a measurement
-        near it: over a broad lobe the flank points lie a lobe's width out."""
+        """Once :data:`_QUADRATIC_TOP` measurements lie on the lobe's top and the
+        quadratic's maximum (supported or not: over a broad lobe the flank points lie a
+        width out) agrees with the template's peak within :data:`_AGREE` widths, the
+        quadratic takes over for good: the template is not fitted again."""
         if self._tfit is None or self._template is None or self._n_top < _QUADRATIC_TOP:
             return
         xs = self._supported_max()

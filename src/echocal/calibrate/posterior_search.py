@@ -407,9 +407,6 @@ class PosteriorSearch:
     def log_posterior(self) -> FloatArray:
         """ln of the posterior over the grid's cells (normalized; the hypotheses on the
         echo's amplitude marginalized), shape ``(m, m)``."""
-        if len(self._models) == 1:
-            log_post = self._log_prior + self._log_like[0]
-            return np.asarray(log_post - _logsumexp(log_post), dtype=np.float64)
         return np.asarray(logsumexp(self._log_joint(), axis=0), dtype=np.float64)
 
     def log_evidence(self) -> float:
@@ -417,8 +414,6 @@ class PosteriorSearch:
         restricted to them, w_h the hypotheses' prior weights): the log Bayes factor of a
         measurable optimum drawn from the prior against no echo within reach of any
         measurement."""
-        if len(self._models) == 1:
-            return _logsumexp(self._measurable + self._log_like[0])
         return _logsumexp(self._log_weights[:, None, None] + self._measurable + self._log_like)
 
     def detection_chances(self) -> FloatArray:
