@@ -82,15 +82,12 @@ _SURE_MARGIN = 2.0
 _CONFIRM_LEVEL = 1.0
 """The repeat's own significance must exceed this (noise does so 16 % of the time)."""
 CONFIRM_WITHIN = 8
-"""Measurements the local method gets to confirm the echo it was handed: unless one of
-them, or all of them together (Stouffer), is significant at ``threshold``, the detection
-was a false alarm and the search resumes."""
+"""Measurements the local method gets to confirm the echo it was handed (one of them, or
+all together by Stouffer, significant at ``threshold``); else a false alarm."""
 ECHO_WITHIN = 16
-"""Measurements after which the local phase's echo must be one the echo's likelihood
-allows (with ``posterior`` and an ``echo_likelihood``): unless its strongest peak reaches
-:data:`WEAK_ECHO_DB` of the weakest echo the likelihood allows at the optimum, the echo it
-climbs is not the one searched for (a lobe's far structure, a weaker reflector) and the
-search resumes."""
+"""Measurements after which, where the echo's likelihood is known, the local phase's
+strongest peak must reach :data:`WEAK_ECHO_DB` of the weakest echo it allows at the
+optimum; else it climbs something else (a lobe's far structure, a weaker reflector)."""
 WEAK_ECHO_DB = -6.0
 """[dB] of the weakest echo peak the search's likelihood allows (a recording's or a rig's
 hypotheses: 30 dB, so a normalized peak of 16; a simulated probe: its known peak)."""
@@ -98,15 +95,13 @@ _PEAK_TABLE_TOP = 60.0
 """The normalized peak a significance is read back to at most (its table ends at 64)."""
 
 LOCAL_INPUTS = ("noise_model", "lobe_template", "normal_echo", "resolution")
-"""Inputs from the objective a local method may take: an acquisition hands its own on to
-the method it starts, the driver supplies them to a local method run alone."""
+"""Inputs from the objective a local method may take (handed on by an acquisition)."""
 
 Detector = Callable[[], "FloatArray | None"]
 """The detection significances of the points just measured, shape (k,), or None."""
 
 MAX_SEARCH_RADIUS = 180.0
-"""[deg] the farthest an acquisition search may go from x0: 180 deg of beam tilt reach every
-orientation, and the search's memory and time grow with the radius squared."""
+"""[deg] the farthest a search may go from x0 (180° of tilt reach every orientation)."""
 _CAP_WHY = "deg (180 deg of tilt reach every orientation)"
 
 

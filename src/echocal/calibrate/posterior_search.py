@@ -310,11 +310,9 @@ class PosteriorSearch:
     ----------
     centre : [deg] x0, shape ``(2,)``.
     max_radius : [deg] the optimum lies within this distance of ``centre`` (the prior).
-    likelihood : the echo's :class:`EchoLikelihood`, or
-        :class:`EchoHypotheses` when its amplitude (and
-        lobe width) are unknown: the posterior is then over the optimum and the
-        hypothesis, every measurement updates each hypothesis's likelihood, and the
-        detection chance and the evidence sum over the hypotheses.
+    likelihood : the echo's :class:`EchoLikelihood`, or :class:`EchoHypotheses` when its
+        amplitude (and lobe width) are unknown: the posterior is then over (optimum,
+        hypothesis), and the detection chance and the evidence sum over the hypotheses.
     bounds : [deg] shape ``(2, 2)``: the next point lies inside, and the evidence counts
         the optima inside (:meth:`log_evidence`).
     near_radius : [deg] the reach of the prior's "x0 is good" half (:data:`NEAR_RADIUS`).
