@@ -197,11 +197,8 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
 
     def _initial_design(self) -> FloatArray:
         """x0 and a hexagon of ``radius`` around it — none for a warm start whose history
-        already has 6 points within 2 × radius of x0, or that the lobe's template already
-        fits (a far detection handed on by the acquisition: its fitted peak is the first
-        step).  The template is fitted around x0 here and again around the refit's
-        incumbent by the first model update, which keeps this fit's peak unless the data
-        clearly prefer another."""
+        has 6 points within 2 × radius of x0, or that the lobe's template already fits (its
+        fitted peak is the first step) or will seek (:meth:`_start_seek`)."""
         if len(self._x):
             near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius
             if np.count_nonzero(near) >= 6:
@@ -604,12 +601,11 @@ class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
         return 0.0 if self.resolution is None else 2.0 * self.resolution
 
     def _follow_max(self, model: QuadraticModel, y_all: FloatArray) -> None:
-        """At the smallest neighbourhood (:data:`MIN_FIT`), move the incumbent — the next
-        fit's centre — to the measured echo (above ``floor`` of the largest) nearest the
-        model's maximum when that lies beyond half the neighbourhood from it, and such an
-        echo lies within half of it from the maximum (else a neighbourhood shrunk around a
-        flank point keeps its maximum near its edge).  Only at the smallest neighbourhood:
-        at any size a noisy maximum drags the centre about."""
+        """At the smallest neighbourhood (:data:`MIN_FIT`) only (at any size a noisy maximum
+        drags the centre about): when the model's maximum lies beyond half the neighbourhood
+        from the incumbent, move the incumbent (the next fit's centre) to the measured echo
+        (above ``floor`` of the largest) nearest the maximum, if one lies within half of it
+        — else a neighbourhood shrunk around a flank point keeps its maximum at its edge."""
         radius = self._fit_radius()
         if not model.concave or radius > MIN_FIT * self.radius * (1.0 + 1e-9):
             return

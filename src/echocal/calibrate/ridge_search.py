@@ -1,25 +1,16 @@
-"""The search across a ridge of ``model-based``: when the fitted peak is a ridge, look once
-across it for the lobe's true top (a mixin of
+"""The search across a ridge or a side lobe of ``model-based`` (a mixin of
 :class:`~echocal.calibrate.model_based.ModelBased`).
 
 A large probe in its near field over a ball sees a central peak, a dip and a ring; a local
-model started beyond the dip climbs the ring, on which it is a ridge — steep across, flat
-along — and the centre lies across it.  Once the model has settled on a ridge
-(:data:`_ACROSS_AFTER` refinement steps), points at growing offsets on either side are
-measured (:data:`_ACROSS_STEPS`), re-measured while they stand above the ridge's top, a side
-ended where the lobe has fallen away, and a bump beyond a dip on the line gets a small
-hexagon of its own.
-
-The same search, along both axes, leaves a side lobe: a peak refined for
-:data:`_SIDE_LOBE_AFTER` steps whose echo is far below the echo at normal incidence
-(``normal_echo``, which the optimum's is at least) is not the optimum.  A 12.7 mm probe over
-a rod sees a side maximum 1.6° across the rod at 0.17 of normal incidence's echo (a dip to
-0.07 between): a start beyond it climbs it, and the search along its axes reaches the main
-lobe (no bump hexagon: the main lobe is 2.5x the side lobe's top or more, and refutes the
-model where the search passes it).
-
-A point of either search that clearly exceeds the top restarts the fit around it from the
-whole neighbourhood; after a search the next waits until the model has settled again.
+model started beyond the dip climbs the ring, a ridge (steep across, flat along) with the
+centre across it.  Once the model has settled on a ridge, points at growing offsets
+(:data:`_ACROSS_STEPS`) on either side are measured, re-measured while above the ridge's
+top, a side ended where the lobe has fallen away, and a bump beyond a dip gets a small
+hexagon.  The same search along both axes leaves a side lobe: a refined peak whose echo is
+far below the echo at normal incidence (``normal_echo``, which the optimum's is at least;
+over a rod the 12.7 mm probe's side maximum is 0.17 of it, 1.6° across the rod).  A point
+of either search clearly above the top restarts the fit around it; the next search waits
+until the model has settled again.
 """
 
 from __future__ import annotations
