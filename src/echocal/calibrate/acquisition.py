@@ -429,10 +429,8 @@ class Acquisition(Optimizer):
         return pts[inside], ring[inside]
 
     def _replan(self) -> None:
-        """Once x0's first ring has been searched in vain: ask ``replan`` for the passes of
-        the rest of the search; if it gives some, they replace the planned passes, and
-        the fine lattice beyond the first ring unless their first is finer than every
-        planned pass (what was measured stays measured)."""
+        """Once x0's first ring has been searched in vain: the passes ``replan`` gives, if
+        any, replace the planned ones (see ``replan``); what was measured stays measured."""
         first = self._first_ring_size()
         if self.replan is None or self._next < first:
             return
@@ -450,8 +448,8 @@ class Acquisition(Optimizer):
 
     def _start_search(self) -> None:
         """Once x0's first ring has seen no echo: hand the search to the posterior
-        (``posterior``), if the objective gives the echo's likelihood then (asked once),
-        the significances are the detector's and points are asked one at a time."""
+        (``posterior``, a detector, one point per ask, and the echo's likelihood, asked
+        once now)."""
         if (
             not self.posterior
             or self._search_asked
@@ -606,11 +604,11 @@ class Acquisition(Optimizer):
         self._strength_checked = self._echo_confirmed or not known
 
     def _check_local(self, points: FloatArray, values: FloatArray) -> bool:
-        """Whether the local phase's measurements refute the detection it was handed (then
-        the search resumes, see :meth:`_resume`): none of its first :data:`CONFIRM_WITHIN`
-        is significant at ``threshold`` and neither are all of them together (Σg/√n); or,
-        where the echo's likelihood is known, the strongest of its first :data:`ECHO_WITHIN`
-        is weaker than it allows (:meth:`_too_weak`).  Checked once each."""
+        """Whether the local phase's measurements refute the detection it was handed (the
+        search then resumes, :meth:`_resume`): none of its first :data:`CONFIRM_WITHIN`, nor
+        all together (Σg/√n), significant at ``threshold``; or, where the echo's likelihood
+        is known, the strongest of its first :data:`ECHO_WITHIN` too weak
+        (:meth:`_too_weak`).  Checked once each."""
         if self._echo_confirmed and self._strength_checked:
             return False
         sig = self._significances(len(points))
@@ -650,10 +648,8 @@ class Acquisition(Optimizer):
         return models[0].peak_of_significance(significance) < needed
 
     def _resume(self) -> None:
-        """The local phase did not confirm its detection: a false alarm.  The
-        significances of the neighbourhood that passed the test (the points within a
-        lattice spacing of where the local phase started) no longer count towards any
-        test, the local phase's measurements join the search's (its posterior too), and
+        """A false alarm: the significances within a lattice spacing of where the local phase
+        started stop counting, its measurements join the search's (and its posterior), and
         the search goes on from where it stood."""
         self.false_alarms = np.vstack([self.false_alarms, self._handed[None, :]])
         self._g[np.hypot(*(self._x - self._handed).T) <= 1.01 * self.spacing] = 0.0
