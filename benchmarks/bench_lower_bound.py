@@ -107,7 +107,7 @@ from information_bound import search_bound  # noqa: E402
 from scipy import sparse  # noqa: E402
 from scipy.optimize import linprog  # noqa: E402
 
-from echocal.calibrate.search_pattern import hex_spiral  # noqa: E402
+from echocal.calibrate.acquisition import hex_spiral  # noqa: E402
 from echocal.io import atomic_write_text  # noqa: E402
 from echocal.measurement.detection_radius import cached_lobe_profile  # noqa: E402
 from echocal.setups import load_setup  # noqa: E402

@@ -47,7 +47,7 @@ from _calibration_cases import BUDGET, PARAM  # noqa: E402
 from _common import add_cell_arguments, append_jsonl, cell_runs  # noqa: E402
 from bench_calibration import auto_errors, measurements_to, rounded, seeded_run  # noqa: E402
 
-from echocal.calibrate.uncertainty import coverage  # noqa: E402
+from echocal.calibrate.evidence import coverage  # noqa: E402
 from echocal.measurement import SourceObjective  # noqa: E402
 
 CASE = "immersion-5mhz"

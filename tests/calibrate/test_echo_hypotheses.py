@@ -1,5 +1,5 @@
 """The posterior search over an echo of unknown amplitude (and lobe width):
-:mod:`echocal.calibrate.echo_hypotheses` and its use in
+:mod:`echocal.calibrate.posterior_search` and its use in
 :class:`~echocal.calibrate.posterior_search.PosteriorSearch`.
 
 Independent truth: the mixture's posterior, evidence and detection chances are what Bayes'
@@ -15,14 +15,15 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import logsumexp, ndtr
 
-from echocal.calibrate.echo_hypotheses import (
+from echocal.calibrate.posterior_search import (
     AMPLITUDE_DB,
     WIDTHS,
     EchoHypotheses,
+    EchoLikelihood,
+    PosteriorSearch,
     lorentzian_lobes,
     scaled_lobe,
 )
-from echocal.calibrate.posterior_search import EchoLikelihood, PosteriorSearch
 from echocal.errors import EchocalValueError
 
 M = 300.0

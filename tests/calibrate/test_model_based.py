@@ -9,8 +9,8 @@ import pytest
 
 from conftest import OPT, gaussian
 from echocal.calibrate import FunctionObjective, calibrate
+from echocal.calibrate.acquisition import hex_spiral
 from echocal.calibrate.model_based import ModelBased, fit_quadratic, hexagon, trust_region_max
-from echocal.calibrate.search_pattern import hex_spiral
 
 SNR30 = 3.7 / np.sqrt(1e3)  # noise sigma for 30 dB below the peak of gaussian()
 
@@ -170,7 +170,7 @@ def test_model_based_subtracts_the_noise_floor_before_the_log_fit(floor):
 
 @pytest.mark.parametrize(("growth", "cap"), [(0.5, 4.0), (2.0, 4.2)])
 def test_search_rings_coarse_outside_cover_the_whole_disc(growth, cap):
-    from echocal.calibrate.search_pattern import search_rings
+    from echocal.calibrate.acquisition import search_rings
 
     rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, growth=growth, max_spacing=cap)
     # inside fine_radius: the hexagonal lattice itself
@@ -199,7 +199,7 @@ def test_search_passes_each_cover_the_disc_at_their_spacing(passes):
     lattice's covering radius s/√3 plus the s/4 by which a left-out point may stand from
     the point searched instead, and nearly all (95 %) within s/√3: checked on 5000
     random points.  Passes come coarse to fine, and no point is measured twice."""
-    from echocal.calibrate.search_pattern import search_rings
+    from echocal.calibrate.acquisition import search_rings
 
     rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=passes)
     for a, b in zip(rings[:4], hex_spiral(np.zeros(2), 1.0, 3), strict=True):
@@ -223,7 +223,7 @@ def test_search_passes_each_cover_the_disc_at_their_spacing(passes):
 def test_a_pass_sqrt3_coarser_is_part_of_the_next():
     """Nested passes: (√3·s, s) measures the same points as (s,) alone, the coarse ones
     first — the fine pass spends nothing on what the coarse one measured."""
-    from echocal.calibrate.search_pattern import search_rings
+    from echocal.calibrate.acquisition import search_rings
 
     fine = np.vstack(search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(4.2,)))
     rings = search_rings(np.zeros(2), 1.0, 20.0, fine_radius=3.0, passes=(4.2 * np.sqrt(3), 4.2))
@@ -316,7 +316,7 @@ def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkey
     the neighbourhood halves until it fits, and the fitted maximum is a hump's (either is
     the optimum). A single hump fits: the neighbourhood stays whole. Without the test (its
     quantile at 1), the two-hump fit ends ≥ 0.25° along the ridge."""
-    from echocal.calibrate import fit_neighbourhood
+    from echocal.calibrate import model_based
     from echocal.calibrate.evidence import energy_sigma
 
     rng = np.random.default_rng(3)
@@ -327,7 +327,7 @@ def test_a_fit_that_lacks_fit_shrinks_to_the_hump_it_stands_on(two_humps, monkey
     noisy = clean + floor + energy_sigma(clean + floor, floor, sigma) * rng.standard_normal(120)
 
     def fitted(quantile: float) -> ModelBased:
-        monkeypatch.setattr(fit_neighbourhood, "_LACK_OF_FIT", quantile)
+        monkeypatch.setattr(model_based, "_LACK_OF_FIT", quantile)
         return ModelBased(
             np.array([0.05, 0.2]), history=(pts, noisy), noise_model=lambda: (floor, sigma)
         )
@@ -406,7 +406,7 @@ def test_a_ridge_hump_is_fitted_around_its_own_maximum(monkeypatch):
     0 by symmetry (log = −x²/2σₓ² − u²/2 − u⁴/2, u = y/1.2°), measured symmetrically:
     fitted around its own maximum, either flank gives the top within 0.002°; fitted
     around the flank (the rule off) the two lie ≥ 0.03° apart."""
-    from echocal.calibrate import fit_neighbourhood
+    from echocal.calibrate import model_based
 
     def hump(p: np.ndarray) -> np.ndarray:
         u = p[:, 1] / 1.2
@@ -429,7 +429,7 @@ def test_a_ridge_hump_is_fitted_around_its_own_maximum(monkeypatch):
         return np.array(found)
 
     np.testing.assert_allclose(tops(), 0.0, atol=0.002)
-    monkeypatch.setattr(fit_neighbourhood, "_OFF_CENTRE", np.inf)
+    monkeypatch.setattr(model_based, "_OFF_CENTRE", np.inf)
     flanks = tops()
     assert np.hypot(*(flanks[1] - flanks[0])) >= 0.03
 

@@ -1,4 +1,4 @@
-"""The seek from a detection in the lobe's tail (:mod:`echocal.calibrate.template_seek`).
+"""The seek from a detection in the lobe's tail (``echocal.calibrate.lobe_template.seek_point``).
 
 Independent truth: the far-field piston lobe with a broadband tail that the lobe template's
 tests build (``_piston``: 0.09·e^(−θ/0.8°) beyond the main lobe), whose tail the tests
@@ -14,9 +14,7 @@ import pytest
 from tests.calibrate.test_lobe_template import ANGLES, _measurements_to_stay_within, _piston
 
 from echocal.calibrate import FunctionObjective, calibrate
-from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.template_seek import seek_point, tail_reach
-from echocal.calibrate.template_steps import TemplateSteps
+from echocal.calibrate.lobe_template import LobeTemplate, TemplateSteps, seek_point, tail_reach
 
 PEAK, SIGMA = 100.0, 0.05
 """The echo at the lobe's peak and the noise σ (objective units): the tail is 3 σ up to
@@ -107,8 +105,8 @@ def test_a_seek_on_noise_ends_after_its_eight_measurements(template):
     """A false alarm handed on (every value pure noise): the seek measures at most
     ``_SEEK_MAX`` points, then the usual steps go on; each seek point lies within the
     candidates' reach of the detection."""
+    from echocal.calibrate.lobe_template import _SEEK_MAX
     from echocal.calibrate.model_based import ModelBased
-    from echocal.calibrate.template_steps import _SEEK_MAX
 
     rng = np.random.default_rng(7)
     history = np.vstack([np.zeros(2), 3.0 * np.eye(2), -3.0 * np.eye(2)])

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from echocal.calibrate import FunctionObjective, calibrate
+from echocal.calibrate.evidence import UNCERTAINTY_LEVEL, coverage, estimate_radius
 from echocal.calibrate.local_model import hexagon
-from echocal.calibrate.uncertainty import UNCERTAINTY_LEVEL, coverage, estimate_radius
 
 PEAK = np.array([0.23, -0.11])
 """[deg] the true optimum."""

@@ -10,7 +10,7 @@ from scipy.special import ndtri
 
 from echocal.calibrate import Acquisition
 from echocal.calibrate.acquisition import ECHO_WITHIN, WEAK_ECHO_DB
-from echocal.calibrate.echo_hypotheses import AMPLITUDE_DB, lorentzian_lobes
+from echocal.calibrate.posterior_search import AMPLITUDE_DB, lorentzian_lobes
 
 N_CELLS = 300.0
 THRESHOLD_PEAK = 6.35

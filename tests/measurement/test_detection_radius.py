@@ -223,7 +223,7 @@ def test_lattice_spacing_covers_its_share_of_random_points(ray):
     bounded variable: σ ≤ 0.0035)."""
     from scipy.spatial import cKDTree
 
-    from echocal.calibrate.search_pattern import hex_spiral
+    from echocal.calibrate.acquisition import hex_spiral
 
     _, profile = ray
     spacing = profile.lattice_spacing(30.0, coverage=0.9)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from echocal.calibrate import Acquisition, CalibrationResult, FunctionObjective, calibrate
-from echocal.calibrate.search_pattern import search_rings
+from echocal.calibrate.acquisition import search_rings
 from echocal.errors import EchocalValueError
 from echocal.measurement import SourceObjective
 from echocal.measurement import detection_radius as dr

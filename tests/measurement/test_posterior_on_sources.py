@@ -20,7 +20,7 @@ from typer.testing import CliRunner
 
 from cli_helpers import run_main, tcp_rig_file
 from echocal.calibrate import calibrate
-from echocal.calibrate.echo_hypotheses import EchoHypotheses
+from echocal.calibrate.posterior_search import EchoHypotheses
 from echocal.cli import app
 from echocal.evaluation import angular_error
 from echocal.geometry import Pose, convert_angles

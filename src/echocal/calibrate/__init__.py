@@ -1,11 +1,11 @@
 """Calibration: find the orientation [deg] of maximum echo from few, noisy measurements.
 
-Ask/tell optimizers behind one registry (:func:`method_names`), a counted and
-bounded :class:`Objective`, the :func:`calibrate` driver and a plain-data
-:class:`CalibrationResult`.  Thesis Part II methods (``gradient``,
-``momentum``, ``nesterov``, ``spsa``, ``newton``, ``quasi-newton``) with the
-errata of the thesis fixed (docs/physics.md, "The thesis's errata"), plus
-``model-based``, ``grid``, ``acquisition`` and ``auto``.
+Ask/tell optimizers behind one registry (:func:`method_names`), a counted and bounded
+:class:`Objective`, the :func:`calibrate` driver and a plain-data
+:class:`CalibrationResult`.  Thesis Part II methods (``gradient``, ``momentum``,
+``nesterov``, ``spsa``, ``newton``, ``quasi-newton``) with the errata of the thesis fixed
+(docs/physics.md, "The thesis's errata"), plus ``model-based``, ``grid``, ``acquisition``
+and ``auto``.
 """
 
 from echocal.calibrate.acquisition import Acquisition

@@ -1,13 +1,13 @@
 """Method options: which a method accepts, their types, and a "did you mean" for typos (private).
 
-Every calibration method declares its options as keyword parameters of its
-constructor, with type hints.  The driver and the command line check the options a
-user gives against those declarations *before* anything is measured: a string where a
-number or a boolean belongs is refused with the option's name (``bool("False")`` is
-True, so a boolean option must never take a string), and an unknown name gets the
-nearest valid one suggested.  Ranges (> 0, within [0, 1), ...) are each method's own
-checks, with the strict number checks below (text and booleans refused) so that a method
-built directly is as strict as one built by the driver.
+Every calibration method declares its options as keyword parameters of its constructor, with
+type hints.  The driver and the command line check the options a user gives against those
+declarations *before* anything is measured: a string where a number or a boolean belongs is
+refused with the option's name (``bool("False")`` is True, so a boolean option must never
+take a string), and an unknown name gets the nearest valid one suggested.  Ranges (> 0,
+within [0, 1), ...) are each method's own checks, with the strict number checks below (text
+and booleans refused) so that a method built directly is as strict as one built by the
+driver.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ import difflib
 import inspect
 import types
 import typing
-from collections.abc import Iterable, Mapping
-from typing import Any
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -33,11 +33,15 @@ __all__ = [
     "in_range",
     "nonnegative_float",
     "option_defaults",
+    "optional",
+    "optional_callable",
     "positive_float",
     "positive_int",
     "strict_bool",
     "suggestion",
 ]
+
+_T = TypeVar("_T")
 
 RESERVED = frozenset({"self", "x0", "bounds", "rng"})
 """Constructor parameters that are not options: the start, the objective's bounds, the rng."""
@@ -93,29 +97,33 @@ def _number(name: str, value: Any) -> Any:
     return value
 
 
-def finite_float(name: str, value: Any) -> float:
-    """:func:`echocal._validate.finite_float` that refuses text and booleans."""
-    return _validate.finite_float(name, _number(name, value))
+def _strict(check: Callable[..., _T]) -> Callable[..., _T]:
+    """``check`` (an :mod:`echocal._validate` number check) that refuses text and booleans."""
+
+    def strict(name: str, value: Any, *args: float) -> _T:
+        return check(name, _number(name, value), *args)
+
+    strict.__doc__ = f"``echocal._validate.{check.__name__}`` that refuses text and booleans."
+    return strict
 
 
-def positive_float(name: str, value: Any) -> float:
-    """:func:`echocal._validate.positive_float` that refuses text and booleans."""
-    return _validate.positive_float(name, _number(name, value))
+finite_float = _strict(_validate.finite_float)
+positive_float = _strict(_validate.positive_float)
+nonnegative_float = _strict(_validate.nonnegative_float)
+positive_int = _strict(_validate.positive_int)
+in_range = _strict(_validate.in_range)
 
 
-def nonnegative_float(name: str, value: Any) -> float:
-    """:func:`echocal._validate.nonnegative_float` that refuses text and booleans."""
-    return _validate.nonnegative_float(name, _number(name, value))
+def optional(check: Callable[[str, Any], _T], name: str, value: Any) -> _T | None:
+    """``check(name, value)``, or None for an option left unset (None)."""
+    return None if value is None else check(name, value)
 
 
-def positive_int(name: str, value: Any) -> int:
-    """:func:`echocal._validate.positive_int` (which already refuses text and booleans)."""
-    return _validate.positive_int(name, _number(name, value))
-
-
-def in_range(name: str, value: Any, low: float, high: float) -> float:
-    """:func:`echocal._validate.in_range` that refuses text and booleans."""
-    return _validate.in_range(name, _number(name, value), low, high)
+def optional_callable(name: str, value: Any) -> Any:
+    """``value`` when it is None or callable, else EchocalValueError naming ``name``."""
+    if value is not None and not callable(value):
+        raise EchocalValueError(f"{name} must be a callable or None; got {value!r}")
+    return value
 
 
 def _hints(cls: type) -> dict[str, Any]:

@@ -1,56 +1,27 @@
 """Acquisition phase for poor first guesses: find the echo, then hand over to a local method.
 
 When the start lies at the noise floor, every local method wanders on noise.
-:class:`Acquisition` first measures x0 and a hexagonal lattice outward from
-it, ring by ring (ring k: radius k·``spacing``, 6k points), in batches of at
-most ``batch`` points (default 1: stop at the first detection; within a ring the
-points nearest to the strongest value so far come first), until a value is *clearly above noise*:
+:class:`Acquisition` first measures x0 and a hexagonal lattice outward from it, ring by ring
+(:func:`search_rings`), until a value is *clearly above noise*:
 
     max_i (m_i − floor) / (σ / √n_i) > ``threshold``   (default 4.5),
 
-where m_i is the mean of point i and its n_i − 1 measured lattice neighbours
-(averaging makes a peak detectable even when no single value stands out, as
-at 10 dB), the floor is the objective's ``noise_floor`` or the median of the
-values, and σ the objective's known noise level (``noise_sigma``, e.g. from the
-source's SNR) or else a robust estimate 1.4826 · MAD of the values measured
-so far (noise points are the majority while searching).
+m_i the mean of point i and its n_i − 1 measured lattice neighbours (averaging shows a peak
+no single value does, as at 10 dB), the floor the objective's ``noise_floor`` or the median,
+σ its ``noise_sigma`` or 1.4826 · MAD of the values.  With a ``detector`` (the
+matched-filter significance of each A-scan, :meth:`~echocal.calibrate.Objective.detections`)
+the test combines those significances over the same neighbourhoods as Σg/√n_i (Stouffer)
+instead — a better detector than the energy.  x0 and its first ring are measured before
+deciding.  The local method starts at the best point and, if it takes a warm start
+(``history``), gets every measurement.  A search past ``max_radius`` stops with status 4.
 
-When the objective can say how significant each measurement's echo is (a
-``detector``: :meth:`~echocal.calibrate.Objective.detections`, which an
-A-scan source objective computes from the matched-filter peak, see
-:class:`~echocal.signal.detection.EchoDetector`), the test uses those
-Gaussian-equivalent significances g_i instead of the values, combined over
-the same neighbourhoods as Σg/√n_i (Stouffer) — a better detector than the
-energy (on the 5 MHz probe at 30 dB it finds the echo ≈ 2.5° from the peak
-instead of ≈ 2.1°).  At least the first 7
-points (x0 and ring 1) are measured before deciding.  Then the local method
-starts at the best point; if it accepts a warm start (``history``, the
-model-based method does) it receives every acquisition measurement, so none is
-wasted.  If the search passes ``max_radius`` without finding the echo, the
-run stops with status 4 ("acquisition failed").
-
-With a detector, the local method must confirm the echo it was handed: unless one of its
-first :data:`CONFIRM_WITHIN` measurements, or all of them together (Σg/√n), is
-significant at ``threshold``, the detection was a false alarm (``false_alarms``): the
-significances of the neighbourhood that passed stop counting, the local method's
-measurements join the search's, and the search resumes where it stood.  Where the
-echo's likelihood is known (``posterior`` with ``echo_likelihood``; asked at the check if
-the first ring handed the echo on) the echo must also be one it allows: unless the strongest of
-the local phase's first :data:`ECHO_WITHIN` measurements reaches :data:`WEAK_ECHO_DB` of
-the weakest echo peak the likelihood allows at the optimum, the search resumes the same
-way (a lobe's far structure or a weaker reflector, confirmed but not the echo).
-
-With ``posterior`` (``auto``'s default) and an objective that says how its echo's
-significance is distributed versus misalignment (``echo_likelihood``: a simulated
-probe at its known amplitude; a recording or a rig over hypotheses on its unknown
-amplitude), the search beyond x0's first ring is Bayesian instead, at every SNR
-(:mod:`echocal.calibrate.posterior_search`): every significance — below the threshold
-too — updates a posterior over where the optimum is, the next point is where a detection
-is most likely, and the search gives up once the measurements are 1,000 times likelier
-with no echo within ``max_radius`` than with one.  The detection test, its confirmation
-and the hand-over are the same.
-
-Acquisition batches are not counted as iterations.
+With ``posterior`` (``auto``'s default) and an ``echo_likelihood``, the search beyond x0's
+first ring is Bayesian instead (:mod:`echocal.calibrate.posterior_search`); the detection
+test, its confirmation and the hand-over are the same.  With a detector the local method
+must confirm the echo it was handed within :data:`CONFIRM_WITHIN` measurements, and where
+the likelihood is known the echo must be one it allows (:data:`ECHO_WITHIN`); else the
+detection was a false alarm and the search resumes where it stood.  Acquisition batches are
+not counted as iterations.
 """
 
 from __future__ import annotations
@@ -71,21 +42,22 @@ from echocal.calibrate._options import (
     check_option_types,
     finite_float,
     nonnegative_float,
+    optional,
+    optional_callable,
     positive_float,
     positive_int,
     strict_bool,
     suggestion,
 )
 from echocal.calibrate.base import Optimizer
-from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.posterior_search import (
     GIVE_UP_EVIDENCE,
+    EchoHypotheses,
     EchoLikelihood,
     PosteriorSearch,
 )
 from echocal.calibrate.registry import get_method, register_method
-from echocal.calibrate.search_pattern import search_rings
 from echocal.constants import ECHO_THRESHOLD
 from echocal.errors import EchocalValueError
 
@@ -95,6 +67,8 @@ __all__ = [
     "Acquisition",
     "Detector",
     "NoiseModel",
+    "hex_spiral",
+    "search_rings",
 ]
 
 NoiseModel = Callable[[], tuple[float | None, float | None]]
@@ -108,15 +82,12 @@ _SURE_MARGIN = 2.0
 _CONFIRM_LEVEL = 1.0
 """The repeat's own significance must exceed this (noise does so 16 % of the time)."""
 CONFIRM_WITHIN = 8
-"""Measurements the local method gets to confirm the echo it was handed: unless one of
-them, or all of them together (Stouffer), is significant at ``threshold``, the detection
-was a false alarm and the search resumes."""
+"""Measurements the local method gets to confirm the echo it was handed (one of them, or
+all together by Stouffer, significant at ``threshold``); else a false alarm."""
 ECHO_WITHIN = 16
-"""Measurements after which the local phase's echo must be one the echo's likelihood
-allows (with ``posterior`` and an ``echo_likelihood``): unless its strongest peak reaches
-:data:`WEAK_ECHO_DB` of the weakest echo the likelihood allows at the optimum, the echo it
-climbs is not the one searched for (a lobe's far structure, a weaker reflector) and the
-search resumes."""
+"""Measurements after which, where the echo's likelihood is known, the local phase's
+strongest peak must reach :data:`WEAK_ECHO_DB` of the weakest echo it allows at the
+optimum; else it climbs something else (a lobe's far structure, a weaker reflector)."""
 WEAK_ECHO_DB = -6.0
 """[dB] of the weakest echo peak the search's likelihood allows (a recording's or a rig's
 hypotheses: 30 dB, so a normalized peak of 16; a simulated probe: its known peak)."""
@@ -124,15 +95,13 @@ _PEAK_TABLE_TOP = 60.0
 """The normalized peak a significance is read back to at most (its table ends at 64)."""
 
 LOCAL_INPUTS = ("noise_model", "lobe_template", "normal_echo", "resolution")
-"""Inputs from the objective a local method may take: an acquisition hands its own on to
-the method it starts, the driver supplies them to a local method run alone."""
+"""Inputs from the objective a local method may take (handed on by an acquisition)."""
 
 Detector = Callable[[], "FloatArray | None"]
 """The detection significances of the points just measured, shape (k,), or None."""
 
 MAX_SEARCH_RADIUS = 180.0
-"""[deg] the farthest an acquisition search may go from x0: 180 deg of beam tilt reach every
-orientation, and the search's memory and time grow with the radius squared."""
+"""[deg] the farthest a search may go from x0 (180° of tilt reach every orientation)."""
 _CAP_WHY = "deg (180 deg of tilt reach every orientation)"
 
 
@@ -169,6 +138,114 @@ def _spacings(name: str, values: Any) -> tuple[float, ...]:
     return tuple(positive_float(f"{name}[{i}]", v) for i, v in enumerate(values))
 
 
+# -- where a blind search looks (angles [deg], points (k, 2)) ---------------------------
+def hex_spiral(center: FloatArray, spacing: float, n_rings: int) -> list[FloatArray]:
+    """Rings of a hexagonal lattice around ``center`` [deg]: ring 0 (1 point), ring k (6k).
+
+    Returns a list of arrays of shape (6k, 2) (ring 0: (1, 2)), ordered by angle.
+    """
+    rings = [center[None, :].copy()]
+    corners = np.array([[np.cos(a), np.sin(a)] for a in np.arange(7) * np.pi / 3.0])
+    for k in range(1, n_rings + 1):
+        pts = []
+        for side in range(6):
+            a, b = corners[side] * k, corners[side + 1] * k
+            for j in range(k):
+                pts.append(a + (b - a) * j / k)
+        rings.append(center[None, :] + spacing * np.array(pts))
+    return rings
+
+
+def search_rings(
+    center: FloatArray,
+    spacing: float,
+    max_radius: float,
+    *,
+    fine_radius: float = np.inf,
+    growth: float = 0.0,
+    max_spacing: float | None = None,
+    passes: Sequence[float] = (),
+) -> list[FloatArray]:
+    """Search rings around ``center`` [deg], in the order they are searched (arrays (k_i, 2),
+    the first ``center``): the hexagonal lattice of ``spacing`` out to ``fine_radius``, then
+    circles whose point spacing s = ``max(spacing, growth · r)`` (capped at
+    ``max_spacing``) and circle spacing (√3/2)·s grow with the radius r, out to the first
+    beyond ``max_radius`` by no more than s/√3: every point of the disc within ≈ 0.66 s of a
+    search point (measured; partly staggered circles).
+
+    ``passes`` [deg]: beyond ``fine_radius`` instead a pass per spacing s, coarse to fine,
+    each the hexagonal lattice of spacing s (every point within s/√3 of one of its points)
+    without the points inside the fine lattice's hexagon, beyond ``max_radius`` + s/√3, or
+    within s/4 of a point searched before.  Each pass is turned by 30° from the next finer
+    one's, so a pass √3 times coarser is part of it and costs the finer one nothing.  A
+    coarse first pass finds a strong echo far away in few measurements; a weaker one is
+    seen from less far, by the next pass.
+    """
+    n_fine = int(np.ceil(min(fine_radius, max_radius) / spacing)) if np.isfinite(fine_radius) else 0
+    if not np.isfinite(fine_radius) or (growth <= 0.0 and not passes):
+        return hex_spiral(center, spacing, max(1, int(np.ceil(max_radius / spacing))))
+    rings = hex_spiral(center, spacing, max(1, n_fine))
+    inner = max(1, n_fine) * spacing
+    if not passes:
+        cap = np.inf if max_spacing is None else max_spacing
+        return rings + _circles(
+            center, inner, max_radius, lambda r: min(max(spacing, growth * r), cap)
+        )
+    from scipy.spatial import cKDTree
+
+    for k, step in enumerate(passes if inner < max_radius else ()):  # else: all fine
+        searched = cKDTree(np.vstack(rings))
+        turn = np.pi / 6.0 * (len(passes) - 1 - k)  # a pass √3 coarser is part of the next
+        for ring in _lattice(center, inner, max_radius, step, turn):
+            new = ring[searched.query(ring)[0] > _PASS_SKIP * step]
+            if len(new):
+                rings.append(new)
+    return rings
+
+
+_PASS_SKIP = 0.25
+"""A point of a later pass this close to a point already searched (× its spacing) is
+left out."""
+
+
+def _lattice(
+    center: FloatArray, inner: float, max_radius: float, step: float, turn: float = 0.0
+) -> list[FloatArray]:
+    """The rings of the hexagonal lattice of spacing ``step`` around ``center`` [deg],
+    turned by ``turn`` [rad], whose points lie outside the hexagon of radius ``inner`` and
+    within ``max_radius`` plus their reach (step/√3, the farthest a point of the plane is
+    from the lattice): each ring an array of shape (k, 2), nearest ring first."""
+    reach = step / np.sqrt(3.0)
+    n_rings = int((max_radius + reach) / (0.5 * np.sqrt(3.0) * step))  # ring k: ≥ (√3/2)·k·s
+    rotation = np.array([[np.cos(turn), np.sin(turn)], [-np.sin(turn), np.cos(turn)]])
+    out = []
+    for ring in hex_spiral(np.zeros(2), step, n_rings)[1:]:
+        ring = ring @ rotation
+        r = np.hypot(*ring.T)
+        keep = (r > 0.5 * np.sqrt(3.0) * inner) & (r - reach <= max_radius)
+        if keep.any():
+            out.append(center[None, :] + ring[keep])
+    return out
+
+
+def _circles(
+    center: FloatArray, inner: float, max_radius: float, spacing_at: Callable[[float], float]
+) -> list[FloatArray]:
+    """Circles around ``center`` beyond radius ``inner`` [deg] to ``max_radius``: point
+    spacing s = ``spacing_at(r)`` at radius r, circles (√3/2)·s apart, every other
+    circle turned by half a step; each an array of shape (k, 2)."""
+    circles: list[FloatArray] = []
+    r = inner
+    while True:
+        s = spacing_at(r)
+        r += 0.5 * np.sqrt(3.0) * s
+        if r - s / np.sqrt(3.0) > max_radius + 1e-9:  # the previous circle reached the edge
+            return circles
+        n = int(np.ceil(2.0 * np.pi * r / s))
+        ang = (np.arange(n) + 0.5 * (len(circles) % 2)) * 2.0 * np.pi / n
+        circles.append(center[None, :] + r * np.stack([np.cos(ang), np.sin(ang)], axis=1))
+
+
 @register_method("acquisition")
 class Acquisition(Optimizer):
     """Outward hexagonal search until the echo is clearly above noise, then a local method.
@@ -176,80 +253,58 @@ class Acquisition(Optimizer):
     Parameters
     ----------
     local : name of the local method (default ``"model-based"``).
-    local_options : dict of options for the local method, checked at construction (an
-        unknown name or a value of the wrong type raises EchocalValueError).
+    local_options : dict of options for the local method, checked at construction.
     spacing : [deg] lattice spacing (≈ the peak width: a peak of width w stays
         detectable up to ~1.7 w from its centre at 30 dB with threshold 6).
     max_radius : [deg] give up beyond this distance from x0.
     threshold : detection threshold in units of σ.
     first_threshold : the threshold while only x0 and the first ring are measured.
-    confirm : (true or false; other values are refused) a marginal detection (score
-        below ``threshold`` + 2) must survive one re-measurement of its best point (one
-        measurement more): the repeat joins that point's neighbourhood, which must still
-        pass, and with a detector the repeat's own significance must exceed 1 — so a noise
-        excursion is dropped and the search goes on instead of handing a local method pure
-        noise.
+    confirm : (true or false) a marginal detection (below ``threshold`` + 2) must survive
+        one re-measurement of its best point: the repeat joins its neighbourhood, which
+        must still pass, and with a detector its own significance must exceed 1.
     noise_sigma : [energy units] known noise σ (None: estimated from the data).
     noise_floor : [energy units] mean value of pure noise (None: median of the data).
-    noise_model : callable returning the objective's current ``(noise_floor, noise_sigma)``
-        estimates (either may be None), consulted at every decision when the fixed values
-        above are None — e.g. a source objective that measures the noise in each A-scan.
-    lobe_template, normal_echo, resolution : handed to a local method that takes them:
-        a callable returning the probe's lobe template or None (e.g.
-        :meth:`~echocal.calibrate.Objective.lobe_template`), likewise ``normal_echo``
-        (:meth:`~echocal.calibrate.Objective.normal_echo`), and ``resolution`` [deg], a
-        replay's grid step (:meth:`~echocal.calibrate.Objective.resolution`; None:
-        continuous).
+    noise_model : callable returning the objective's live ``(noise_floor, noise_sigma)``
+        (either may be None), used where the fixed values above are None.
+    lobe_template, normal_echo, resolution : handed to a local method that takes them
+        (:meth:`~echocal.calibrate.Objective.lobe_template`,
+        :meth:`~echocal.calibrate.Objective.normal_echo`, and ``resolution`` [deg], a
+        replay's grid step; None: continuous).
     detector : callable returning the detection significances of the points just
         measured, shape (k,), or None (then the values are tested) — e.g.
         :meth:`~echocal.calibrate.Objective.detections`.
     batch : maximum points per acquisition ask (1 = stop at the first detection).
-    fine_radius : [deg] the lattice of ``spacing`` is used out to this distance from x0;
-        beyond it the search continues on coarser circles (see
-        :func:`~echocal.calibrate.search_pattern.search_rings`).
+    fine_radius : [deg] the lattice of ``spacing`` out to this distance from x0, coarser
+        circles or passes beyond (:func:`search_rings`).
         Default: infinite (the fine lattice everywhere).
     growth : beyond ``fine_radius`` the point spacing is ``max(spacing, growth · r)``.
-    max_spacing : [deg] cap on that spacing; the search leaves gaps of up to ≈ 0.66 ×
-        it, so about 1.5 × the distance from the peak at which one measurement still
-        sees the echo.
-    passes : [deg] point spacings of the passes beyond ``fine_radius``, coarse to fine,
-        instead of the circles of ``growth`` and ``max_spacing`` (see
-        :func:`~echocal.calibrate.search_pattern.search_rings`): when the first pass,
-        sized for a strong echo, misses, the region is searched again as a weaker echo
-        needs.  Default: none (circles).
+    max_spacing : [deg] cap on that spacing (gaps of up to ≈ 0.66 × it).
+    passes : [deg] point spacings of hexagonal passes beyond ``fine_radius``, coarse to
+        fine, instead of circles: a weaker echo than the first pass saw is searched for
+        again, more densely.  Default: none (circles).
     replan : callable returning the passes for the rest of the search once x0 and its
         first ring saw no echo, or None to keep the plan — e.g.
-        :meth:`~echocal.calibrate.Objective.passes_for_measured_noise`, which sizes them
-        for the echo the probe's model predicts against the noise those 7 A-scans
-        measured.  Passes returned replace ``passes``, and the fine lattice beyond the
-        first ring (an echo strong enough to be seen from far needs no fine lattice) —
-        unless their first pass is finer than every planned one: an echo weaker than the
-        plan was sized for keeps the fine lattice out to ``fine_radius``, where a near
-        start's echo is, and is searched beyond it by the passes returned, in place of
-        planned passes too coarse to see it.  Called once.
+        :meth:`~echocal.calibrate.Objective.passes_for_measured_noise`.  They replace
+        ``passes`` and the fine lattice beyond the first ring, unless their first pass is
+        finer than every planned one (a weaker echo than planned: the fine lattice stays
+        out to ``fine_radius``).  Called once.
     echo_likelihood : callable returning how the detector's significance is distributed
-        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`,
-        or :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
-        amplitude) or None — e.g. :meth:`~echocal.calibrate.Objective.echo_likelihood`.
-    posterior : (true or false) once x0 and its first ring saw no echo, and given a
-        ``detector``, an ``echo_likelihood`` (asked then, once; at any SNR) and ``batch``
-        1, search by the posterior over the optimum instead of the lattice
-        (:mod:`echocal.calibrate.posterior_search`): every significance, below the
-        threshold too, updates it, and the next point is where a detection is most
-        likely.  The detection test and its confirmation are the lattice's; the search
-        gives up (status 4) once the measurements are 1,000 times likelier with no echo
-        within ``max_radius`` than with one.  ``replan`` is then not asked.
-    move_time : callable returning the positioner's time [s] to reach each of a set of
-        points [deg] ``(k, 2)`` from where it is, ``(k,)``, or None — e.g.
-        :meth:`~echocal.calibrate.Objective.move_times`, which a motion-aware objective on
-        a simulated bench gives: the posterior search then weighs a shorter move against
-        a lower chance of a detection
+        versus misalignment (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`
+        or :class:`~echocal.calibrate.posterior_search.EchoHypotheses`) or None — e.g.
+        :meth:`~echocal.calibrate.Objective.echo_likelihood`.
+    posterior : (true or false) once x0 and its first ring saw no echo, given a
+        ``detector``, an ``echo_likelihood`` (asked then, once) and ``batch`` 1, search by
+        the posterior over the optimum instead of the lattice
+        (:mod:`echocal.calibrate.posterior_search`); it gives up (status 4) once the
+        measurements are 1,000 times likelier with no echo within ``max_radius`` than
+        with one.  ``replan`` is then not asked.
+    move_time : callable returning the positioner's time [s] to reach each of points
+        [deg] ``(k, 2)``, ``(k,)``, or None — e.g.
+        :meth:`~echocal.calibrate.Objective.move_times`: the posterior search weighs a
+        shorter move against a lower detection chance
         (:meth:`~echocal.calibrate.posterior_search.PosteriorSearch.next_point`).
-    measurement_price : [s] the bench time of a measurement apart from its travel
-        (acquisition plus settling), or None (0) — e.g.
-        :meth:`~echocal.calibrate.Objective.measurement_price`: with ``move_time``, the
-        posterior search gives up detection chance for a shorter move only where the
-        move saved is long against this price.
+    measurement_price : [s] the bench time of a measurement apart from its travel, or
+        None (0) — e.g. :meth:`~echocal.calibrate.Objective.measurement_price`.
     """
 
     def __init__(
@@ -288,7 +343,7 @@ class Acquisition(Optimizer):
         self.noise_model = noise_model
         self.lobe_template = lobe_template
         self.normal_echo = normal_echo
-        self.resolution = None if resolution is None else positive_float("resolution", resolution)
+        self.resolution = optional(positive_float, "resolution", resolution)
         self.detector = detector
         self._use_significance = detector is not None
         if not isinstance(local, str):
@@ -307,18 +362,14 @@ class Acquisition(Optimizer):
         self.confirm = strict_bool("confirm", confirm)
         self._confirming: FloatArray | None = None  # a detection's best point to re-measure
         self._confirmed = 0  # re-measurements made
-        self.noise_sigma = (
-            None if noise_sigma is None else nonnegative_float("noise_sigma", noise_sigma)
-        )
-        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
+        self.noise_sigma = optional(nonnegative_float, "noise_sigma", noise_sigma)
+        self.noise_floor = optional(finite_float, "noise_floor", noise_floor)
         self.batch = positive_int("batch", batch)
         self.fine_radius = (
             np.inf if fine_radius is None else positive_float("fine_radius", fine_radius)
         )
         self.growth = nonnegative_float("growth", growth)
-        self.max_spacing = (
-            None if max_spacing is None else positive_float("max_spacing", max_spacing)
-        )
+        self.max_spacing = optional(positive_float, "max_spacing", max_spacing)
         self.passes = _spacings("passes", passes)
         if self.passes and (self.growth > 0.0 or self.max_spacing is not None):
             raise EchocalValueError(
@@ -326,23 +377,11 @@ class Acquisition(Optimizer):
                 f"with passes {list(self.passes)} they have no effect: give passes=[] to "
                 "search in circles, or leave growth and max_spacing out"
             )
-        if replan is not None and not callable(replan):
-            raise EchocalValueError(f"replan must be a callable or None; got {replan!r}")
-        self.replan = replan
-        if echo_likelihood is not None and not callable(echo_likelihood):
-            raise EchocalValueError(
-                f"echo_likelihood must be a callable or None; got {echo_likelihood!r}"
-            )
-        self.echo_likelihood = echo_likelihood
+        self.replan = optional_callable("replan", replan)
+        self.echo_likelihood = optional_callable("echo_likelihood", echo_likelihood)
         self.posterior = strict_bool("posterior", posterior)
-        if move_time is not None and not callable(move_time):
-            raise EchocalValueError(f"move_time must be a callable or None; got {move_time!r}")
-        self.move_time = move_time
-        self.measurement_price = (
-            None
-            if measurement_price is None
-            else nonnegative_float("measurement_price", measurement_price)
-        )
+        self.move_time = optional_callable("move_time", move_time)
+        self.measurement_price = optional(nonnegative_float, "measurement_price", measurement_price)
         self.search: PosteriorSearch | None = None
         """The Bayesian search once it has taken over from the lattice (None: the lattice)."""
         self._search_asked = False
@@ -373,7 +412,7 @@ class Acquisition(Optimizer):
         self, fine_radius: float, passes: tuple[float, ...]
     ) -> tuple[FloatArray, np.ndarray]:
         """The points to search, in order, shape ``(n, 2)`` [deg], and the ring of each,
-        shape ``(n,)``: :func:`~echocal.calibrate.search_pattern.search_rings` around x0,
+        shape ``(n,)``: :func:`search_rings` around x0,
         within the bounds."""
         rings = search_rings(
             self.x0,
@@ -390,10 +429,8 @@ class Acquisition(Optimizer):
         return pts[inside], ring[inside]
 
     def _replan(self) -> None:
-        """Once x0's first ring has been searched in vain: ask ``replan`` for the passes of
-        the rest of the search; if it gives some, they replace the planned passes, and
-        the fine lattice beyond the first ring unless their first is finer than every
-        planned pass (what was measured stays measured)."""
+        """Once x0's first ring has been searched in vain: the passes ``replan`` gives, if
+        any, replace the planned ones (see ``replan``); what was measured stays measured."""
         first = self._first_ring_size()
         if self.replan is None or self._next < first:
             return
@@ -411,8 +448,8 @@ class Acquisition(Optimizer):
 
     def _start_search(self) -> None:
         """Once x0's first ring has seen no echo: hand the search to the posterior
-        (``posterior``), if the objective gives the echo's likelihood then (asked once),
-        the significances are the detector's and points are asked one at a time."""
+        (``posterior``, a detector, one point per ask, and the echo's likelihood, asked
+        once now)."""
         if (
             not self.posterior
             or self._search_asked
@@ -567,11 +604,11 @@ class Acquisition(Optimizer):
         self._strength_checked = self._echo_confirmed or not known
 
     def _check_local(self, points: FloatArray, values: FloatArray) -> bool:
-        """Whether the local phase's measurements refute the detection it was handed (then
-        the search resumes, see :meth:`_resume`): none of its first :data:`CONFIRM_WITHIN`
-        is significant at ``threshold`` and neither are all of them together (Σg/√n); or,
-        where the echo's likelihood is known, the strongest of its first :data:`ECHO_WITHIN`
-        is weaker than it allows (:meth:`_too_weak`).  Checked once each."""
+        """Whether the local phase's measurements refute the detection it was handed (the
+        search then resumes, :meth:`_resume`): none of its first :data:`CONFIRM_WITHIN`, nor
+        all together (Σg/√n), significant at ``threshold``; or, where the echo's likelihood
+        is known, the strongest of its first :data:`ECHO_WITHIN` too weak
+        (:meth:`_too_weak`).  Checked once each."""
         if self._echo_confirmed and self._strength_checked:
             return False
         sig = self._significances(len(points))
@@ -611,10 +648,8 @@ class Acquisition(Optimizer):
         return models[0].peak_of_significance(significance) < needed
 
     def _resume(self) -> None:
-        """The local phase did not confirm its detection: a false alarm.  The
-        significances of the neighbourhood that passed the test (the points within a
-        lattice spacing of where the local phase started) no longer count towards any
-        test, the local phase's measurements join the search's (its posterior too), and
+        """A false alarm: the significances within a lattice spacing of where the local phase
+        started stop counting, its measurements join the search's (and its posterior), and
         the search goes on from where it stood."""
         self.false_alarms = np.vstack([self.false_alarms, self._handed[None, :]])
         self._g[np.hypot(*(self._x - self._handed).T) <= 1.01 * self.spacing] = 0.0

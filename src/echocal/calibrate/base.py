@@ -1,24 +1,17 @@
 """Ask/tell optimizer base (nevergrad style): the base owns order, counters and NaN policy.
 
-Subclasses implement ``_ask() -> points (k, 2)`` and ``_tell(points, values) -> bool``
-(True when the call completed an iteration, i.e. the iterate may have moved;
-False for setup batches such as SPSA gain calibration or acquisition rings).
-Optionally ``_recommend()`` for a model's or an average's optimum.
+Subclasses implement ``_ask() -> points (k, 2)`` and ``_tell(points, values) -> bool`` (True
+when the call completed an iteration, i.e. the iterate may have moved; False for setup
+batches such as SPSA gain calibration or acquisition rings), optionally ``_recommend()``.
 
-NaN policy
-----------
-A NaN value (a failed measurement) is never handed to a method as a number
-silently: it is counted (``n_nan``), flagged in ``last_nan`` (shape (k,)) and
-replaced by the *worst* value seen so far, capped at 0 (``min(0, min finite
-value)``) — "no evidence of an echo there".  The model-based method uses
-``last_nan`` to leave such points out of its fit altogether.
+NaN policy: a failed measurement is never handed to a method as a number silently: it is
+counted (``n_nan``), flagged in ``last_nan`` (shape (k,)) and replaced by the *worst* value
+seen so far, capped at 0 — "no evidence of an echo there" (the model-based method leaves
+it out of its fit).
 
-Normalization
--------------
-Gains of the thesis (step μ = 0.05) assume pseudo-energy normalized to a peak
-of about 1.  ``normalize`` divides every value handed to a method by a scale:
-``"none"`` (1), ``"first"`` (|first finite non-zero value|, fixed) or ``"max"``
-(running maximum of |values| seen so far, updated before each tell).
+Normalization: the thesis's gains (step μ = 0.05) assume a peak of about 1; ``normalize``
+divides every value handed to a method by ``"none"`` 1, ``"first"`` the first finite
+non-zero |value|, or ``"max"`` the running maximum of |values| (updated before each tell).
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ from echocal.calibrate._options import (
 )
 from echocal.calibrate.acquisition import LOCAL_INPUTS, Acquisition
 from echocal.calibrate.base import Optimizer
-from echocal.calibrate.evidence import judge
+from echocal.calibrate.evidence import UNCERTAINTY_LEVEL, estimate_radius, judge
 from echocal.calibrate.objective import Objective
 from echocal.calibrate.presets import method_options, presets
 from echocal.calibrate.registry import get_method
@@ -36,7 +36,6 @@ from echocal.calibrate.result import (
     UNSUPPORTED_STATUSES,
     CalibrationResult,
 )
-from echocal.calibrate.uncertainty import UNCERTAINTY_LEVEL, estimate_radius
 from echocal.constants import DEFAULT_SETTLE
 from echocal.errors import BudgetExhaustedError, EchocalValueError, UnknownNameError
 from echocal.geometry import angle_between, convert_angles, orientation_normal
@@ -163,38 +162,26 @@ def _record(opt: Optimizer, given: Mapping[str, Any], objective: Objective) -> d
     return out
 
 
-OBJECTIVE_INPUTS = (
-    "noise_sigma",
-    "noise_floor",
-    "noise_model",
-    "lobe_template",
-    "normal_echo",
-    "resolution",
-    "detector",
-    "echo_likelihood",
-    "move_time",
-    "measurement_price",
-)
-"""Acquisition options the driver takes from the objective unless they are given."""
+OBJECTIVE_INPUTS: dict[str, Callable[[Objective], Any]] = {
+    "noise_sigma": lambda o: o.noise_sigma,
+    "noise_floor": lambda o: o.noise_floor,
+    "noise_model": lambda o: o.noise_estimate,
+    "lobe_template": lambda o: o.lobe_template,
+    "normal_echo": lambda o: o.normal_echo,
+    "resolution": lambda o: o.resolution(),
+    "detector": lambda o: o.detections,
+    "echo_likelihood": lambda o: o.echo_likelihood,
+    "move_time": lambda o: o.move_times,
+    "measurement_price": lambda o: o.measurement_price(),
+}
+"""Acquisition options the driver takes from the objective unless they are given, and how:
+its noise level and floor, the live noise estimate, the probe's lobe and best echo, a
+replay's grid step, the echo detector and likelihood, a motion-aware objective's moves."""
 
 
 def _search_inputs(objective: Objective) -> dict[str, Any]:
-    """The :data:`OBJECTIVE_INPUTS` of ``objective``: its noise level and floor, the live
-    noise estimate, the probe's lobe, a replay's grid step, the echo detector, and the
-    moves' times and a measurement's price of a motion-aware objective."""
-    values = (
-        objective.noise_sigma,
-        objective.noise_floor,
-        objective.noise_estimate,
-        objective.lobe_template,
-        objective.normal_echo,
-        objective.resolution(),
-        objective.detections,
-        objective.echo_likelihood,
-        objective.move_times,
-        objective.measurement_price(),
-    )
-    return dict(zip(OBJECTIVE_INPUTS, values, strict=True))
+    """The :data:`OBJECTIVE_INPUTS` of ``objective``."""
+    return {name: get(objective) for name, get in OBJECTIVE_INPUTS.items()}
 
 
 CALLABLE_INPUTS = (

@@ -1,17 +1,17 @@
 """Finite-difference gradient ascent, momentum and Nesterov (thesis eqs. 38–49).
 
-Each iteration measures the 4 points θ ± δ e_i (eqs. 42–45) and estimates the
-gradient by central differences (eqs. 38–39).  Updates:
+Each iteration measures the 4 points θ ± δ e_i (eqs. 42–45) and estimates the gradient by
+central differences (eqs. 38–39).  Updates:
 
 * ``gradient``: θ ← θ + μ ĝ(θ) (eqs. 40–41);
 * ``momentum``: v ← η v + μ ĝ(θ); θ ← θ + v (eqs. 46–47);
-* ``nesterov``: v ← η v + μ ĝ(θ + η v); θ ← θ + v (eqs. 48–49) — the
-  stencil is centred on the look-ahead point θ + η v.
+* ``nesterov``: v ← η v + μ ĝ(θ + η v); θ ← θ + v (eqs. 48–49) — the stencil is centred on
+  the look-ahead point θ + η v.
 
-Gains are scale-free: with ``mu=None`` (default) the step size is calibrated
-on the first gradient so that the first step is ``first_step`` degrees long
-(μ = first_step / |ĝ₀|), whatever the energy unit.  With an explicit ``mu``
-(thesis presets: 0.05) use ``normalize="max"`` so energy is ~1 at the peak.
+Gains are scale-free: with ``mu=None`` (default) the step size is calibrated on the first
+gradient so that the first step is ``first_step`` degrees long (μ = first_step / |ĝ₀|),
+whatever the energy unit.  With an explicit ``mu`` (thesis presets: 0.05) use
+``normalize="max"`` so energy is ~1 at the peak.
 """
 
 from __future__ import annotations

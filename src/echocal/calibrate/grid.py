@@ -1,13 +1,12 @@
 """Exhaustive grid search: the "manual calibration" baseline of the thesis introduction.
 
-The grid spans x0 ± ``span`` [deg] in both angles with spacing ``step``
-[deg] (clipped to the bounds, duplicates removed); each iteration measures
-one row of the grid, and :func:`~echocal.calibrate.calibrate` runs until every
-row is measured (an explicit ``max_iter`` or the budget may stop it earlier,
-with a warning).  ``recommend()`` is the grid node with the highest 3 × 3
-neighbourhood mean (a little smoothing against noise, as an operator looking
-at the whole map would do), falling back to the best single value at the edge
-of a partial grid.
+The grid spans x0 ± ``span`` [deg] in both angles with spacing ``step`` [deg] (clipped to
+the bounds, duplicates removed); each iteration measures one row of the grid, and
+:func:`~echocal.calibrate.calibrate` runs until every row is measured (an explicit
+``max_iter`` or the budget may stop it earlier, with a warning).  ``recommend()`` is the
+grid node with the highest 3 × 3 neighbourhood mean (a little smoothing against noise, as an
+operator looking at the whole map would do), falling back to the best single value at the
+edge of a partial grid.
 """
 
 from __future__ import annotations

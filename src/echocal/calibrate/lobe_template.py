@@ -1,39 +1,63 @@
 """The probe's known lobe as a model of the echo far from its peak: where is the peak, seen
 from the lobe's tail?
 
-A log-quadratic (``local_model``) is right near a lobe's top, but a diffraction lobe's
-tail is not Gaussian: the 12.7 mm 5 MHz probe's pseudo-energy falls to 0.3 of its peak
-0.5° out, to 0.035 at 0.9° and then only slowly (0.016 at 1.4°, 0.01 at 1.8°).  A
-quadratic fitted to tail points sees a lobe twice as broad and puts its peak where it
-is not.
-Given the lobe's shape g(d) (relative metric versus misalignment d from the peak,
-g(0) = 1; from the simulated probe, :meth:`~echocal.calibrate.Objective.lobe_template`)
-the measurements y_i at points x_i are y_i ≈ E₀ g(x_i − c) + noise, whose two unknowns
-— the peak c and its energy E₀ — every point constrains, the tail points included
-(a point in the noise says "the peak is not near here").
+A log-quadratic (``local_model``) is right near a lobe's top, but a diffraction lobe's tail
+is not Gaussian: the 12.7 mm 5 MHz probe's pseudo-energy falls to 0.3 of its peak 0.5° out,
+to 0.035 at 0.9° and then only slowly (0.016 at 1.4°, 0.01 at 1.8°).  A quadratic fitted to
+tail points sees a lobe twice as broad and puts its peak where it is not. Given the lobe's
+shape g(d) (relative metric versus misalignment d from the peak, g(0) = 1; from the
+simulated probe, :meth:`~echocal.calibrate.Objective.lobe_template`) the measurements y_i at
+points x_i are y_i ≈ E₀ g(x_i − c) + noise, whose two unknowns — the peak c and its energy
+E₀ — every point constrains, the tail points included (a point in the noise says "the peak
+is not near here").
 
 :func:`fit_template` finds them by weighted least squares: E₀ is linear (solved in closed
 form for each c) and c is searched on a grid, coarse then fine.
+
+Seen from deep in the tail (a far search's first detection, 4–7° out at 30 dB), one value
+with the peak's known energy says how far the peak is, not in which direction: the peaks
+that fit lie on an arc, and the fit is not significant.  :func:`seek_point` then measures
+where the candidate peaks, each weighted by its likelihood exp(−χ²/2), disagree most about
+the echo (in noise σ, capped at :data:`SEEK_CAP`): each such measurement finds the echo or
+removes the candidates near it.
+
+:class:`TemplateSteps` puts the template into ``model-based``'s steps: fitted to every
+measurement after each tell, its peak is the next point while no measurement lies on the
+main lobe's top (:meth:`LobeTemplate.on_top`: not a near-field ring around it); then the
+flanks around it are measured and the fitted peak is the recommendation, until
+:data:`_QUADRATIC_TOP` measurements lie on the top and the log-quadratic's maximum agrees
+with it (:meth:`TemplateSteps._hand_over`).  A fitted peak is kept unless the data clearly
+prefer another (``fit_template``'s ``previous``): over a ball the 12.7 mm probe's ring at
+about 0.8 of the peak 1.6° out fits a centre across the ring almost as well.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from echocal._curves import first_crossing
 from echocal.calibrate._fd import FloatArray
+from echocal.calibrate.local_model import REFUTE, QuadraticModel
+from echocal.errors import EchocalValueError
 
 __all__ = [
     "COARSE_STEP",
+    "SEEK_CAP",
     "LobeTemplate",
     "TemplateFit",
+    "TemplateSteps",
     "disc_grid",
     "energy_prior",
     "fit_template",
     "peak_scores",
+    "seek_point",
+    "tail_reach",
 ]
 
 COARSE_STEP = 0.2
@@ -54,6 +78,28 @@ with a ring fits a few points on the ring almost as well with its peak across th
 _CANDIDATES = 4
 """Coarse candidates refined on the fine grid: the best few (often neighbours of one
 basin; the tail's mirror images are told apart by the measurement at the chosen peak)."""
+
+
+SEEK_CAP = 10.0
+"""[σ] a predicted echo this far above the noise counts as seen, however strong."""
+_KEEP_LIKELIHOOD = 1e-4
+"""Candidate peaks less likely than this fraction of the best are left out."""
+
+_SEEK_MAX = 8
+"""Seek measurements (:func:`seek_point`) at most, after a
+warm start the template does not fit yet, before the usual steps take over."""
+
+_TEMPLATE_MISFIT = 25.0
+"""A template fit whose χ² per degree of freedom (against the measurement noise) exceeds
+this refutes the template for the run: the log-quadratic alone, as without one (a lobe
+that is not the probe's; fits of the probe's own stay at 1–4)."""
+_QUADRATIC_TOP = 6
+"""Measurements on the lobe's top before the log-quadratic (6 parameters) takes over from
+the template there."""
+
+_AGREE = 0.25
+"""[× the lobe's width] the log-quadratic's maximum and the template's peak agree within
+this distance before the quadratic takes over."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,8 +124,6 @@ class LobeTemplate:
     peak: float | None = None
 
     def __post_init__(self) -> None:
-        from echocal.errors import EchocalValueError
-
         k, n = len(self.directions), len(self.angles)
         if self.values.shape != (k, n) or n < 2 or k < 1:
             raise EchocalValueError(
@@ -277,3 +321,207 @@ def peak_scores(
         penalty = weight * (energy - mean) ** 2
     resid = y[None, :] - energy[:, None] * g
     return (w * resid * resid).sum(axis=1) + penalty, energy, measured, info
+
+
+def tail_reach(template: LobeTemplate, peak: float, sigma: float, level: float = 3.0) -> float:
+    """[deg] the largest misalignment at which the lobe of peak metric ``peak`` is still
+    ``level`` × ``sigma`` (same units) above the noise in its strongest direction: how far
+    from a detection its peak can be."""
+    strongest = template.values.max(axis=0)
+    seen = template.angles[peak * strongest >= level * sigma]
+    return float(seen.max()) if seen.size else 0.0
+
+
+def seek_point(
+    template: LobeTemplate,
+    points: FloatArray,
+    values: FloatArray,
+    sigmas: FloatArray,
+    sigma: float,
+    peak: float,
+    around: FloatArray,
+    radius: float,
+) -> FloatArray | None:
+    """The next point [deg] (2,) of the seek, within ``radius`` [deg] of ``around`` (2,).
+
+    ``points`` [deg] (n, 2), ``values`` (n,) the echo's metric (noise floor removed) and
+    ``sigmas`` (n,) their noise σ (> 0), as for
+    :func:`fit_template`; ``sigma`` the noise σ of a
+    measurement of no echo and ``peak`` the metric at the lobe's peak (same units).  The
+    candidate peaks are a 0.2° grid within ``radius`` of ``around``, the candidate points
+    a 0.4° grid.  None when no candidate peak gives a positive energy."""
+    if not (sigma > 0.0 and peak > 0.0):
+        raise EchocalValueError(
+            f"seek_point needs a noise sigma > 0 and a peak metric > 0; got {sigma!r}, {peak!r}"
+        )
+    ok = np.isfinite(values) & (sigmas > 0.0)
+    x, y, w = points[ok], values[ok], 1.0 / sigmas[ok] ** 2
+    centres = disc_grid(around, radius, COARSE_STEP)
+    chi2, energy, *_ = peak_scores(template, centres, x, y, w, energy_prior(peak))
+    usable = energy > 0.0
+    if not usable.any():
+        return None
+    log_like = np.where(usable, -0.5 * (chi2 - chi2[usable].min()), -np.inf)
+    keep = log_like >= np.log(_KEEP_LIKELIHOOD)
+    weight = np.exp(log_like[keep])
+    weight /= weight.sum()
+    probes = disc_grid(around, radius, 2.0 * COARSE_STEP)
+    predicted = energy[keep] * template(probes[:, None, :] - centres[None, keep, :])
+    z = np.minimum(predicted / sigma, SEEK_CAP)  # (probes, candidates)
+    mean = z @ weight
+    spread = (z * z) @ weight - mean * mean
+    return probes[int(np.argmax(spread))].copy()
+
+
+class TemplateSteps:
+    """The template's steps, for a local method that keeps its measurements in ``_x``
+    [deg] (n, 2) and ``_y`` (n,), its incumbent in ``_incumbent``, its fitted
+    log-quadratic in ``_model``, its value scale in ``_scale``, its fitting space in
+    ``space``, its normalization in ``normalize`` and its largest step in ``max_radius``
+    [deg], and provides ``_floor()``, ``_sigmas(values)``, ``clip(points)``,
+    ``_times_measured(point)`` and ``_supported_max()``."""
+
+    x0: FloatArray
+    _x: FloatArray
+    _y: FloatArray
+    _incumbent: FloatArray
+    _model: QuadraticModel | None
+    _scale: float
+    space: str
+    normalize: str
+    max_radius: float
+
+    if TYPE_CHECKING:  # provided by the method
+
+        def _floor(self) -> float: ...
+
+        def _sigmas(self, values: FloatArray) -> FloatArray | None: ...
+
+        def clip(self, points: ArrayLike) -> FloatArray: ...
+
+        def _times_measured(self, point: FloatArray) -> int: ...
+
+        def _supported_max(self) -> FloatArray | None: ...
+
+    def _init_template_steps(self, lobe_template: Callable[[], LobeTemplate | None] | None) -> None:
+        """No template asked for yet, no fit: ``lobe_template`` (called once, when first
+        needed) gives the probe's lobe or None."""
+        self.lobe_template = lobe_template
+        self._template: LobeTemplate | None = None
+        self._template_asked = False
+        self._tfit: TemplateFit | None = None
+        self._n_top = 0  # measurements on the fitted template's top
+        self._quadratic_on_top = False  # the log-quadratic has taken over from the template
+        self._seeks_left = 0  # seek measurements still allowed (:meth:`_start_seek`)
+
+    def _fit_template(self) -> None:
+        """Fit the probe's lobe template to every measurement (:func:`fit_template`, peaks
+        within ``max_radius`` of the incumbent, the previous fit's peak kept on ties):
+        ``_tfit`` is the fit when its peak is a significant echo (``REFUTE`` standard
+        errors), else None; ``_n_top`` counts the measurements on the lobe's main top.  Log
+        space with a live noise model only; the prior on the peak's energy only when the
+        values keep the objective's units (``normalize="none"``)."""
+        previous = None if self._tfit is None else self._tfit.centre  # kept on ties
+        self._tfit, self._n_top = None, 0
+        if self._quadratic_on_top or self.space != "log" or not len(self._x):
+            return
+        if not self._template_asked:
+            self._template_asked = True
+            self._template = None if self.lobe_template is None else self.lobe_template()
+        template = self._template
+        if template is None:
+            return
+        y = self._y - self._floor()
+        sig = self._sigmas(np.maximum(y, 0.0))
+        if sig is None:
+            return
+        known = template.peak is not None and self.normalize == "none"
+        peak = template.peak / self._scale if known and template.peak is not None else None
+        fit = fit_template(
+            template, self._x, y, sig, self._incumbent, self.max_radius, peak, previous
+        )
+        if fit is None or fit.measured < REFUTE * fit.energy_sigma:  # the data's own evidence
+            return
+        if len(y) >= 7 and fit.chi2 > _TEMPLATE_MISFIT * (len(y) - 3):
+            self._template = None  # refuted: this lobe is not the probe's, for the whole run
+            return
+        self._tfit = fit  # only an accepted fit's peak is kept next time: not one of noise
+        self._n_top = int(np.count_nonzero(template.on_top(self._x - fit.centre)))
+
+    def _seek_template(self) -> LobeTemplate | None:
+        """The template when a seek can use it — the peak's metric known in the objective's
+        units (> 0), the values not normalized, the model in log space, the noise known —
+        else None."""
+        template = self._template
+        if template is None or not (template.peak or 0.0) > 0.0 or self.normalize != "none":
+            return None
+        if self.space != "log" or self._sigmas(np.zeros(1)) is None:
+            return None
+        return template
+
+    def _start_seek(self) -> bool:
+        """For a warm start the template does not fit yet (a detection in the lobe's tail,
+        or a false alarm handed on): seek the peak (:meth:`_seek_step`, at most
+        :data:`_SEEK_MAX` measurements) instead of a design around x0 — True — when
+        :meth:`_seek_template` gives the template; else False."""
+        if self._seek_template() is None:
+            return False
+        self._seeks_left = _SEEK_MAX
+        return True
+
+    def _seek_step(self) -> FloatArray | None:
+        """While seeking and no template fit is accepted: the point [deg] (2,) where the
+        candidate peaks' predicted echoes disagree most (:func:`seek_point`, candidates out
+        to where the lobe's tail is 3 σ above the noise, at least ``max_radius``); else
+        None, and the seek is over for the run — also when that point, as the positioner
+        reaches it, was measured already."""
+        template = self._seek_template()
+        if self._tfit is not None or template is None or template.peak is None:
+            self._seeks_left = 0
+            return None
+        if self._seeks_left <= 0:
+            return None
+        y = self._y - self._floor()
+        sig, noise = self._sigmas(np.maximum(y, 0.0)), self._sigmas(np.zeros(1))
+        if sig is None or noise is None:
+            return None
+        peak = template.peak / self._scale
+        reach = max(self.max_radius, tail_reach(template, peak, float(noise[0])))
+        point = seek_point(template, self._x, y, sig, float(noise[0]), peak, self.x0, reach)
+        if point is None or self._times_measured(point):
+            self._seeks_left = 0
+            return None
+        self._seeks_left -= 1
+        return self.clip(point)
+
+    def _template_step(self) -> FloatArray | None:
+        """While no measurement lies on the lobe's top: the fitted template's peak [deg]
+        (2,) unless measured already; else None (the log-quadratic's steps)."""
+        if self._tfit is None or self._n_top:
+            return None
+        target = self.clip(self._tfit.centre)
+        return None if self._times_measured(target) else target
+
+    def _template_top(self) -> FloatArray | None:
+        """The fitted template's peak [deg] (2,), clipped to the bounds, once a measurement
+        lies on the lobe's top and until the log-quadratic takes over
+        (:meth:`_hand_over`); else None."""
+        if self._tfit is None or not self._n_top:
+            return None
+        return self.clip(self._tfit.centre)
+
+    def _hand_over(self) -> None:
+        """Once :data:`_QUADRATIC_TOP` measurements lie on the lobe's top and the
+        quadratic's maximum (supported or not: over a broad lobe the flank points lie a
+        width out) agrees with the template's peak within :data:`_AGREE` widths, the
+        quadratic takes over for good: the template is not fitted again."""
+        if self._tfit is None or self._template is None or self._n_top < _QUADRATIC_TOP:
+            return
+        xs = self._supported_max()
+        m = self._model
+        if xs is None and m is not None and m.concave:
+            xs = m.argmax()  # flank points only (a broad lobe): none near the maximum yet
+        centre = self.clip(self._tfit.centre)
+        if xs is not None and np.hypot(*(xs - centre)) <= _AGREE * self._template.width:
+            self._quadratic_on_top = True
+            self._tfit, self._n_top = None, 0

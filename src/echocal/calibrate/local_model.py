@@ -1,9 +1,9 @@
 """The local model of ``model-based``: a quadratic of log-energy, its fit and its maximum
 in a trust region (see ``echocal.calibrate.model_based`` for why and how it is used).
 
-- :func:`fit_quadratic`: m(x) = c + bᵀd + ½ dᵀHd (d = x − centre), weighted least squares
-  of log f (weights ∝ f², as var(log f) ≈ σ²/f²) or of f itself, with a weak prior on
-  the curvature and a final exp-fit of f (:func:`_refine_exp_fit`);
+- :func:`fit_quadratic`: m(x) = c + bᵀd + ½ dᵀHd (d = x − centre), weighted least squares of
+  log f (weights ∝ f², as var(log f) ≈ σ²/f²) or of f itself, with a weak prior on the
+  curvature and a final exp-fit of f (:func:`_refine_exp_fit`);
 - :class:`QuadraticModel`: its value, maximum, widths and energy;
 - :func:`trust_region_max`: the model's maximizer in a ball (Levenberg shift);
 - :func:`hexagon`: the rotatable 7-point design.

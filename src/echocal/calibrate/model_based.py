@@ -1,49 +1,35 @@
 """Model-based trust-region ascent: a quadratic model of log-energy fitted to every measurement.
 
-Why log-energy: a beam's pseudo-energy is close to a Gaussian in the two
-angles near its peak, and the log of a Gaussian is *exactly* quadratic, so a
-quadratic model of log f is right over the whole peak, not only at its top.
-With additive noise of fixed σ, var(log y) ≈ σ²/y², so the weighted least
-squares fit uses weights ∝ y² (points at the noise floor weigh ~nothing and
-non-positive values are left out).  The weights are relative, so the method
-is independent of the energy unit; NaN measurements are left out of the fit.
+Near its peak a beam's pseudo-energy is close to a Gaussian in the two angles, whose log is
+exactly quadratic, so a quadratic of log f holds over the whole peak.  With additive noise
+of fixed σ, var(log y) ≈ σ²/y²: the weighted least-squares fit weighs y² (relative, so the
+energy unit does not matter; non-positive and NaN values are left out).
 
-Algorithm (one measurement per iteration after a 7-point initial design):
+One measurement per iteration after the initial design:
 
-1. Design: x0 and a hexagon of radius ``radius`` around it (a rotatable
-   second-order design; skipped where a warm-start ``history`` already covers x0).
-2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) to the points so far within a
-   neighbourhood of the incumbent (``locality``), which halves where a measurement
-   refutes the fit or a ridge's residuals lack fit (a rod's two humps), widens again
-   where too few points remain to fit or to show a peak, is fitted again around a
-   ridge hump's own maximum, and at its smallest follows its fitted maximum
-   (:mod:`~echocal.calibrate.fit_neighbourhood`).
-3. Approach: if the model's maximum x* is not yet inside the trust region
-   around the incumbent (the measured point with the highest *model* value,
-   never the luckiest raw sample), measure the maximizer of m in the ball of
-   radius Δ.  Δ doubles after a successful step to the boundary and halves
-   when the measured value is below the incumbent's model value by more
-   than the estimated noise (2 σ̂ in log units, σ̂ from the fit's residuals,
-   at most ``_MAX_SIGMA_LOG`` once the incumbent is a significant echo) —
-   noise-aware control.
-4. Refine: once x* is inside the trust region and supported by data, the
-   peak's location is best learned from points on its flanks, not its top
-   (the Fisher information of x* from a point at distance r is ∝ r² e^{−r²/w²},
-   largest at r ≈ w).  So new points go on an ellipse ``ring`` × (−H)^{−1/2}
-   around x*, at golden-angle steps in direction.
-5. ``recommend()`` returns x* (the model's maximum) when the model is
-   concave and supported, else the incumbent.
+1. Design: x0 and a hexagon of ``radius`` (skipped where a warm-start ``history`` covers x0).
+2. Fit m(x) = c + bᵀd + ½ dᵀHd (d = x − centre) within a neighbourhood of the incumbent
+   (``locality``): it halves where a measurement refutes the fit or a ridge's residuals
+   lack fit (a rod's two humps), widens again where too few points remain, is refitted
+   around a ridge hump's own maximum, at its smallest follows its fitted maximum, and on a
+   replay spans at least two grid steps.
+3. Approach: while the model's maximum x* lies outside the trust region around the
+   incumbent (the measured point with the highest *model* value), measure m's maximizer in
+   the ball of radius Δ; Δ doubles after a successful step to the boundary and halves when
+   the value falls short of the incumbent's by more than 2 σ̂ (log units, from the fit's
+   residuals, at most :data:`_MAX_SIGMA_LOG` once the incumbent is a significant echo).
+4. Refine: x* is learned best from its flanks (the Fisher information of a point at
+   distance r is ∝ r² e^{−r²/w²}, largest at r ≈ w): points on an ellipse ``ring`` ×
+   (−H)^{−1/2} around x*, at golden-angle steps.
+5. ``recommend()`` is x* when the model is concave and supported, else the incumbent.
 
 With the probe's lobe (``lobe_template``) the steps from the lobe's tail follow the lobe
-instead, and the recommendation is its fitted peak until the quadratic takes over (a
-diffraction lobe's tail is not Gaussian: :mod:`echocal.calibrate.template_steps`).  A warm
-start whose history the template already fits (a far detection handed on by the
-acquisition) steps to the fitted peak at once, without the design hexagon; one it does not
-fit yet (a detection deep in the tail) seeks the peak where the peaks that fit the
-measurements disagree most (:mod:`echocal.calibrate.template_seek`).
-
-``space="linear"`` fits f itself with equal weights instead (for objectives
-that can be negative).
+instead, and the recommendation is its fitted peak until the quadratic takes over
+(:class:`~echocal.calibrate.lobe_template.TemplateSteps`; a diffraction lobe's tail is not
+Gaussian); a warm start deep in the tail seeks the peak
+(:func:`~echocal.calibrate.lobe_template.seek_point`).  On a ridge or a side lobe it
+searches across (:mod:`~echocal.calibrate.ridge_search`).  ``space="linear"`` fits f
+itself with equal weights (for objectives that can be negative).
 """
 
 from __future__ import annotations
@@ -56,11 +42,10 @@ from numpy.typing import ArrayLike
 from echocal._rng import RngLike
 from echocal._validate import one_of
 from echocal.calibrate._fd import FloatArray
-from echocal.calibrate._options import finite_float, in_range, positive_float
+from echocal.calibrate._options import finite_float, in_range, optional, positive_float
 from echocal.calibrate.base import Optimizer
 from echocal.calibrate.evidence import energy_sigma
-from echocal.calibrate.fit_neighbourhood import LACK_OF_FIT_RADIUS, MIN_FIT, FitNeighbourhood
-from echocal.calibrate.lobe_template import LobeTemplate
+from echocal.calibrate.lobe_template import LobeTemplate, TemplateSteps
 from echocal.calibrate.local_model import (
     REFUTE,
     REFUTE_RELATIVE,
@@ -71,8 +56,8 @@ from echocal.calibrate.local_model import (
 )
 from echocal.calibrate.objective import as_points
 from echocal.calibrate.registry import register_method
-from echocal.calibrate.ridge_search import RidgeSearch
-from echocal.calibrate.template_steps import TemplateSteps
+from echocal.calibrate.ridge_search import RidgeSearch, is_ridge
+from echocal.errors import EchocalValueError
 
 __all__ = ["ModelBased", "QuadraticModel", "fit_quadratic", "hexagon", "trust_region_max"]
 
@@ -94,9 +79,24 @@ model's value at the incumbent is a significant echo (``REFUTE`` σ of the measu
 noise): the residuals of a just-refuted model would otherwise pass every step.  In the
 noise (no significant echo) the residuals keep their scale, so the steps explore."""
 
+MIN_FIT = 0.5
+"""[× radius] the smallest fitting neighbourhood (the central peak over a ball is 0.3°
+wide at half its energy, with a dip to 0.32 of it 0.8° out)."""
+_LACK_OF_FIT = 0.999
+"""A fit whose residuals' χ² exceeds this quantile lacks fit: its neighbourhood halves."""
+_LACK_OF_FIT_MIN = 12
+"""Fewer fitted measurements than this are not tested for lack of fit (6 parameters)."""
+LACK_OF_FIT_RADIUS = 1.0
+"""[× radius] lack of fit shrinks the fitting neighbourhood down to this radius, no less."""
+_OFF_CENTRE = 0.2
+"""[× the fitting neighbourhood] a ridge's fitted maximum farther than this from the
+neighbourhood's centre is fitted again around itself."""
+_RECENTRE_STEPS = 2
+"""At most this many fits around the previous fit's maximum per refit."""
+
 
 @register_method("model-based")
-class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
+class ModelBased(TemplateSteps, RidgeSearch, Optimizer):
     """Trust-region ascent on a log-quadratic model of all measurements (1 per iteration).
 
     Parameters
@@ -109,29 +109,21 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     floor : leave out of the log fit points below ``floor`` × the largest value (noise floor).
     history : optional (points (n, 2) [deg], values (n,)) already measured (warm start),
         e.g. by an acquisition phase; the initial design is skipped where these cover x0.
-    noise_floor : [energy units] mean value of pure noise, subtracted before the fit (the
-        echo's energy is the measured energy minus the noise's).  None: taken from
-        ``noise_model`` when given, else 0.
+    noise_floor : [energy units] mean value of pure noise, subtracted before the fit
+        (None: ``noise_model``'s, else 0; at 10 dB left in it broadens log f).
     noise_model : callable returning the objective's live ``(noise_floor, noise_sigma)``
-        (e.g. :meth:`~echocal.calibrate.Objective.noise_estimate`); its floor is used when
-        ``noise_floor`` is None.  At 10 dB SNR the floor is ~10 % of the peak: left in, it
-        makes log f look like a much broader peak than the echo's and the fit wanders.
-    lobe_template : callable returning the probe's lobe (a
-        :class:`~echocal.calibrate.lobe_template.LobeTemplate`) or None, e.g.
-        :meth:`~echocal.calibrate.Objective.lobe_template`; called once, when first
-        needed.  Given one, the steps from the lobe's tail go to the peak of the template
-        fitted to every measurement, until a measurement lies on the lobe's top
-        (:meth:`_template_step`).
+        (e.g. :meth:`~echocal.calibrate.Objective.noise_estimate`).
+    lobe_template : callable returning the probe's
+        :class:`~echocal.calibrate.lobe_template.LobeTemplate` or None (e.g.
+        :meth:`~echocal.calibrate.Objective.lobe_template`; called once, when needed):
+        steps from the lobe's tail go to the fitted template's peak.
     normal_echo : callable returning the echo at the probe's best direction of normal
-        incidence [objective units] or None, e.g.
-        :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when first needed.
-        The optimum's echo is at least that, so a peak refined twice below 0.4 of it that is
-        an echo (≥ 3 σ) is a side lobe, searched along both its axes (see
-        :mod:`~echocal.calibrate.ridge_search`).  Only with ``normalize="none"``.
-    resolution : [deg] the finest detail the objective's values resolve, e.g. a
-        replay's recorded grid step (:meth:`~echocal.calibrate.Objective.resolution`);
-        None: continuous.  Given one, lack of fit is not tested (the interpolation's
-        error lacks fit, not the lobe) and refinement points may go two steps out.
+        incidence [objective units] or None (e.g.
+        :meth:`~echocal.calibrate.Objective.normal_echo`; called once, when needed): a
+        peak refined below 0.4 of it is a side lobe (:mod:`~echocal.calibrate.ridge_search`;
+        ``normalize="none"`` only).
+    resolution : [deg] the finest detail the values resolve, e.g. a replay's grid step
+        (None: continuous): no lack-of-fit test, refinement points up to two steps out.
     """
 
     batch_size = 1
@@ -158,8 +150,8 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
         normalize: str = "none",
     ) -> None:
         super().__init__(x0, bounds=bounds, rng=rng, normalize=normalize)
-        self.resolution = None if resolution is None else positive_float("resolution", resolution)
-        self.noise_floor = None if noise_floor is None else finite_float("noise_floor", noise_floor)
+        self.resolution = optional(positive_float, "resolution", resolution)
+        self.noise_floor = optional(finite_float, "noise_floor", noise_floor)
         self.noise_model = noise_model
         self.normal_echo = normal_echo
         self._init_template_steps(lobe_template)
@@ -180,8 +172,6 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
             hp = as_points("history points", history[0])
             hv = np.asarray(history[1], dtype=np.float64).reshape(-1)
             if hv.shape != (len(hp),):
-                from echocal.errors import EchocalValueError
-
                 raise EchocalValueError(
                     f"history values must have shape ({len(hp)},); got shape {hv.shape}"
                 )
@@ -207,11 +197,8 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
 
     def _initial_design(self) -> FloatArray:
         """x0 and a hexagon of ``radius`` around it — none for a warm start whose history
-        already has 6 points within 2 × radius of x0, or that the lobe's template already
-        fits (a far detection handed on by the acquisition: its fitted peak is the first
-        step).  The template is fitted around x0 here and again around the refit's
-        incumbent by the first model update, which keeps this fit's peak unless the data
-        clearly prefer another."""
+        has 6 points within 2 × radius of x0, or that the lobe's template already fits (its
+        fitted peak is the first step) or will seek (:meth:`_start_seek`)."""
         if len(self._x):
             near = np.hypot(*(self._x - self.x0).T) <= 2.0 * self.radius
             if np.count_nonzero(near) >= 6:
@@ -263,16 +250,12 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     def _refuting_point(
         self, model: QuadraticModel, y_all: FloatArray, local: np.ndarray
     ) -> int | None:
-        """Index of the strongest local measurement that lies clearly above everything
-        the model allows (its maximum in the fitted neighbourhood, or its largest value at
-        a measured point): ``REFUTE`` σ of that measurement's noise, and 5 % — or, when
-        there is none, the strongest local measurement if it stands ``_MISFIT`` times and
-        ``REFUTE`` σ above the model's value at that very point; None when neither holds
-        or the noise is unknown (log space only).
-
-        A quadratic fitted across several lobes (a near-field probe over a ball: a central
-        peak, a dip to 0.32 at 0.8°, a ring at 0.8 of the peak 1.6° out) puts its maximum
-        between them, below the central peak's measured values."""
+        """Index of the strongest local measurement clearly above everything the model
+        allows (its maximum in the fitted neighbourhood or at a measured point): ``REFUTE``
+        σ of its noise and 5 %; else the strongest local measurement if it stands
+        :data:`_MISFIT` times and ``REFUTE`` σ above the model's own value there; else None
+        (also when the noise is unknown; log space only).  A quadratic fitted across
+        several lobes puts its maximum between them, below the central peak's values."""
         if self.space != "log" or not local.any():
             return None
         sig = self._sigmas(np.maximum(y_all, 0.0))
@@ -556,3 +539,81 @@ class ModelBased(TemplateSteps, RidgeSearch, FitNeighbourhood, Optimizer):
     @property
     def iterate(self) -> FloatArray:
         return self.recommend()
+
+    def _lacks_fit(self, model: QuadraticModel, y_all: FloatArray) -> bool:
+        """Whether a ridge's measurements in the fitted neighbourhood scatter about the
+        model clearly more than their noise: χ² of the residuals (each over its σ) above
+        the :data:`_LACK_OF_FIT` quantile with n − 6 degrees of freedom (over a rod a fit 4°
+        around either hump spans both).  Log space with a known noise and a ridge only (a
+        round lobe's diffraction tails fit only roughly); not on a replay, whose
+        interpolation error lacks fit at any scale."""
+        if self.space != "log" or self.resolution is not None or not is_ridge(model):
+            return False
+        local = np.hypot(*(self._x - model.center).T) <= self._fit_radius()
+        n = int(np.count_nonzero(local))
+        sig = self._sigmas(np.maximum(y_all[local], 0.0))
+        if sig is None or n <= _LACK_OF_FIT_MIN:
+            return False
+        resid = (y_all[local] - model.energy(self._x[local])) / sig
+        from scipy.stats import chi2  # lazy: scipy.stats costs a CLI start ~1 CPU-s
+
+        return bool(np.sum(resid**2) > chi2.ppf(_LACK_OF_FIT, n - 6))
+
+    def _fit_around(self, center: FloatArray, y_all: FloatArray) -> QuadraticModel | None:
+        """The quadratic fitted to the measurements (values ``y_all`` (n,), floor removed)
+        within the fitting neighbourhood around ``center`` [deg] (2,); None when too few."""
+        return fit_quadratic(
+            self._x,
+            y_all,
+            center,
+            space=self.space,
+            scale=self.radius,
+            locality=self._fit_radius(),
+            floor=self.floor,
+        )
+
+    def _centred_on_max(self, model: QuadraticModel, y_all: FloatArray) -> QuadraticModel:
+        """``model`` fitted again around its own maximum, in a neighbourhood of the same
+        radius, when that lies more than :data:`_OFF_CENTRE` of it from the centre (at most
+        :data:`_RECENTRE_STEPS` times): a rod's hump is not symmetric, and a neighbourhood
+        centred down one flank puts the maximum towards it.  Only for a ridge (log space)
+        in a neighbourhood of :data:`LACK_OF_FIT_RADIUS` × radius or less, and only while
+        the refit is a ridge; the incumbent stays (:meth:`_follow_max` moves it)."""
+        radius = self._fit_radius()
+        if self.space != "log" or radius > LACK_OF_FIT_RADIUS * self.radius * (1.0 + 1e-9):
+            return model
+        for _ in range(_RECENTRE_STEPS):
+            if not is_ridge(model):
+                return model
+            xs = model.argmax()
+            off = float(np.hypot(*(xs - model.center)))
+            if not np.isfinite(off) or off <= _OFF_CENTRE * radius or off > radius:
+                return model
+            refit = self._fit_around(xs, y_all)
+            if refit is None or not is_ridge(refit):
+                return model
+            model = refit
+        return model
+
+    def _finest(self) -> float:
+        """[deg] the smallest neighbourhood whose shape the objective's values resolve:
+        two of its ``resolution`` steps (0 when continuous)."""
+        return 0.0 if self.resolution is None else 2.0 * self.resolution
+
+    def _follow_max(self, model: QuadraticModel, y_all: FloatArray) -> None:
+        """At the smallest neighbourhood (:data:`MIN_FIT`) only (at any size a noisy maximum
+        drags the centre about): when the model's maximum lies beyond half the neighbourhood
+        from the incumbent, move the incumbent (the next fit's centre) to the measured echo
+        (above ``floor`` of the largest) nearest the maximum, if one lies within half of it
+        — else a neighbourhood shrunk around a flank point keeps its maximum at its edge."""
+        radius = self._fit_radius()
+        if not model.concave or radius > MIN_FIT * self.radius * (1.0 + 1e-9):
+            return
+        xs = model.argmax()
+        if not np.all(np.isfinite(xs)) or np.hypot(*(xs - self._incumbent)) <= 0.5 * radius:
+            return
+        dist = np.hypot(*(self._x - xs).T)
+        echo = (dist <= 0.5 * radius) & (y_all > max(self.floor * float(y_all.max()), 0.0))
+        if echo.any():
+            idx = np.flatnonzero(echo)
+            self._incumbent = self._x[idx[int(np.argmin(dist[idx]))]].copy()

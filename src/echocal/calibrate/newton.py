@@ -1,18 +1,17 @@
 """Newton's method with a finite-difference Hessian (thesis eqs. 58–74, corrected).
 
-Each iteration measures the 9-point stencil around the candidate θ (eqs.
-58–68) and builds ĝ and H with the erratum h22 = (y₊⁽²⁾ − 2y⁽⁰⁾ + y₋⁽²⁾)/δ².
-Maximizing, the step is d = −H⁻¹ĝ, which ascends only where H is negative
-definite.  Elsewhere (``damping="levenberg"``, default) H is shifted to
-H − λI with λ chosen so that the largest eigenvalue becomes −max(|eig|, |ĝ|/max_step):
-an ascent direction of bounded length.  ``damping="gradient"`` instead takes
-a gradient step of length ``max_step``.  θ ← θ + μ d, |μ d| ≤ ``max_step``.
+Each iteration measures the 9-point stencil around the candidate θ (eqs. 58–68) and builds ĝ
+and H with the erratum h22 = (y₊⁽²⁾ − 2y⁽⁰⁾ + y₋⁽²⁾)/δ². Maximizing, the step is d = −H⁻¹ĝ,
+which ascends only where H is negative definite.  Elsewhere (``damping="levenberg"``,
+default) H is shifted to H − λI with λ chosen so that the largest eigenvalue becomes
+−max(|eig|, |ĝ|/max_step): an ascent direction of bounded length.  ``damping="gradient"``
+instead takes a gradient step of length ``max_step``.  θ ← θ + μ d, |μ d| ≤ ``max_step``.
 
-Never stepping downhill silently: the stencil at a new candidate measures
-its centre y⁽⁰⁾; if it is lower than at the current iterate *and* the
-trapezoid estimate ½(ĝ_old + ĝ_new)ᵀs of the change (exact for quadratics) is
-negative, the candidate is rejected: the iterate stays, and the next
-candidate is half the step from it.  Rejections are counted (``n_rejected``).
+Never stepping downhill silently: the stencil at a new candidate measures its centre y⁽⁰⁾;
+if it is lower than at the current iterate *and* the trapezoid estimate ½(ĝ_old + ĝ_new)ᵀs
+of the change (exact for quadratics) is negative, the candidate is rejected: the iterate
+stays, and the next candidate is half the step from it.  Rejections are counted
+(``n_rejected``).
 """
 
 from __future__ import annotations

@@ -1,13 +1,13 @@
 """The calibration objective: measure values at orientation points, count and log everything.
 
-An :class:`Objective` wraps a vectorized "measure the pseudo-energy at these
-angles" function.  It is the single place where measurements are counted,
-logged, limited by a budget and kept inside the positioner's angle bounds, so
-optimizers never have to trust each other's bookkeeping.
+An :class:`Objective` wraps a vectorized "measure the pseudo-energy at these angles"
+function.  It is the single place where measurements are counted, logged, limited by a
+budget and kept inside the positioner's angle bounds, so optimizers never have to trust each
+other's bookkeeping.
 
-Subclasses override one method, :meth:`Objective._evaluate`.  Angles are
-degrees; the two axes are either (azimuth, co-elevation) or (tilt-x, tilt-y)
-— the optimizers do not care which.
+Subclasses override one method, :meth:`Objective._evaluate`.  Angles are degrees; the two
+axes are either (azimuth, co-elevation) or (tilt-x, tilt-y) — the optimizers do not care
+which.
 """
 
 from __future__ import annotations
@@ -21,9 +21,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from echocal._rng import RngLike, as_generator
 from echocal._validate import finite_array, finite_float, nonnegative_float, one_of, positive_int
-from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
-from echocal.calibrate.posterior_search import EchoLikelihood
+from echocal.calibrate.posterior_search import EchoHypotheses, EchoLikelihood
 from echocal.errors import BudgetExhaustedError, EchocalValueError, LimitError
 
 __all__ = [
@@ -159,36 +158,30 @@ class Objective:
         or None when this objective cannot tell (the default)."""
         return None
 
+    # -- what a source may know; the base class (an analytic function) knows none: None --
     def echo_floor(self) -> float | None:
-        """[objective units] a level the echo at the optimum is known to exceed (half a
-        simulator's noiseless echo at normal incidence), so that an estimate below it has
-        found a peak that is not the surface's main lobe (a side lobe, grain noise); None
-        when the objective cannot know it (the default)."""
+        """[objective units] a level the optimum's echo is known to exceed (half a
+        simulator's noiseless echo at normal incidence): an estimate below it found a side
+        lobe or grain noise, not the surface's main lobe."""
         return None
 
     def bench_uncertainty(self) -> float | None:
-        """[deg] the RMS angle between an orientation the positioner is commanded to and
-        the one it reaches, when the source knows it (a simulated bench's positioner);
-        None otherwise (the default).  A calibration cannot resolve the optimum below it."""
+        """[deg] the RMS angle between a commanded and a reached orientation (a simulated
+        bench's positioner): a calibration cannot resolve the optimum below it."""
         return None
 
     def _bench_spent(self) -> float | None:
-        """[s] the bench time the last :meth:`_evaluate` cost, or None when its source
-        does not report one (the default)."""
+        """[s] the bench time the last :meth:`_evaluate` cost."""
         return None
 
     def move_times(self, points: FloatArray) -> FloatArray | None:
-        """[s] the predicted time (motion and settling) to reach each of ``points`` [deg]
-        ``(k, 2)`` from where the positioner is, ``(k,)``, when the objective measures
-        motion-aware and knows its positioner; None otherwise (the default): a method
-        then chooses its points without weighing their moves."""
+        """[s] ``(k,)`` the predicted time (motion and settling) to reach each of ``points``
+        [deg] ``(k, 2)`` from where the positioner is, for a motion-aware objective."""
         return None
 
     def measurement_price(self) -> float | None:
-        """[s] the bench time one point costs apart from its travel (its acquisitions and
-        the positioner's settling), when the objective measures motion-aware and knows
-        its bench; None otherwise (the default).  :meth:`move_times`' moves are weighed
-        against it."""
+        """[s] the bench time of one point apart from its travel (acquisitions, settling),
+        for a motion-aware objective: :meth:`move_times`' moves are weighed against it."""
         return None
 
     # -- public ------------------------------------------------------------------------
@@ -225,47 +218,37 @@ class Objective:
         return None if self._last_significance is None else self._last_significance.copy()
 
     def search_passes(self) -> tuple[float, ...] | None:
-        """[deg] the spacings of a blind search's passes, coarse first, sized from what
-        the objective knows of its probe (see
-        :func:`echocal.measurement.detection_radius.search_passes`), or None when it knows
-        nothing of it (the base class, e.g. an analytic function): the method's defaults
-        apply."""
+        """[deg] the spacings of a blind search's passes, coarse first, sized from the
+        probe (:func:`echocal.measurement.detection_radius.search_passes`); None: the
+        method's defaults."""
         return None
 
     def passes_for_measured_noise(self) -> tuple[float, ...] | None:
-        """[deg] the spacings of a blind search's passes, coarse first, for the echo the
-        objective predicts against the noise measured so far (see
-        :func:`echocal.measurement.detection_radius.passes_for_noise`; the SNR they are
-        sized for is kept in :attr:`search_snr_db`), or None when it predicts none, or
-        one too weak for any blind pass (the base class: an analytic function has no
-        probe)."""
+        """[deg] the passes for the echo predicted against the noise measured so far
+        (:func:`echocal.measurement.detection_radius.passes_for_noise`; its SNR kept in
+        :attr:`search_snr_db`); None when no echo is predicted, or one too weak for any."""
         return None
 
     def echo_likelihood(self) -> EchoLikelihood | EchoHypotheses | None:
-        """How each measurement's echo significance is distributed versus misalignment
-        (:class:`~echocal.calibrate.posterior_search.EchoLikelihood`, or
-        :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over an unknown
-        amplitude), against the noise measured so far, when the objective measures A-scans
-        — for a Bayesian search of a lost echo — else None (the base class: an analytic
-        function has no echo)."""
+        """How each measurement's echo significance is distributed versus misalignment,
+        against the noise measured so far (:mod:`echocal.calibrate.posterior_search`), for
+        a Bayesian search of a lost echo."""
         return None
 
     def lobe_template(self) -> LobeTemplate | None:
-        """The probe's lobe — the metric relative to its peak versus misalignment (see
-        :mod:`echocal.calibrate.lobe_template`) — when the objective knows its probe, else
-        None (the base class: an analytic function has no probe)."""
+        """The probe's lobe: the metric relative to its peak versus misalignment
+        (:mod:`echocal.calibrate.lobe_template`)."""
         return None
 
     def normal_echo(self) -> float | None:
         """[objective units] the noiseless echo at the probe's best direction of normal
-        incidence, when the objective knows its probe and its units: the optimum's echo is
-        at least this strong, so a refined peak far below it is a side lobe.  None (the
-        base class: an analytic function has no probe)."""
+        incidence: the optimum's is at least this, so a refined peak far below is a side
+        lobe."""
         return None
 
     def resolution(self) -> float | None:
-        """[deg] the finest detail the values resolve — a replay's recorded grid step in
-        this objective's angles — or None when they are continuous (the base class)."""
+        """[deg] the finest detail the values resolve (a replay's grid step); None:
+        continuous."""
         return None
 
     def cost(self, n_points: int) -> int:

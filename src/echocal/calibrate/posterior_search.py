@@ -1,60 +1,45 @@
 """Where is a lost echo most likely to be seen next?  A Bayesian search over the optimum.
 
-A blind search on a fixed lattice acts only on detections: a measurement below the
-threshold counts as "nothing here", one above it ends the search.  But a significance of
-2 near the optimum is likelier than far from it, and one of −1 less likely; two
-measurements on a weak echo can be told apart from two on noise.  Given how the probe's
-echo fades with misalignment and how the detector's peak is distributed around it
-(:class:`EchoLikelihood`), every measurement updates a posterior over where the optimum
-is, and the next one goes where a detection is most likely.
+A lattice search acts only on detections; but a significance of 2 near the optimum is
+likelier than far from it, and two measurements on a weak echo can be told apart from two on
+noise.  Every measurement, below the threshold too, updates a posterior over where the
+optimum is, and the next one goes where a detection is most likely.
 
-Model (:class:`PosteriorSearch`).  The optimum c lies within ``max_radius`` of the start
-x0, on a square grid of cells, a priori at a uniform *distance* (a density ∝ 1/ρ per
-area: as likely 2° away as 15°) in a uniform direction, from one of two causes of equal
-weight (:data:`NEAR_WEIGHT`): "x0 is good", within :data:`NEAR_RADIUS` (3°) of it, or
-"anywhere within reach", within ``max_radius``.  The first half keeps a weak echo's
-search around x0 until that disc is covered (a 10 dB echo is seen only 0.55–0.7° away;
-uniform in distance out to 20° alone, the prior put 90 % of its mass beyond 3° and a
-near start's search went out first); a strong echo's quiet first ring empties that disc
-at once, and the search is the far one's.  So the same search serves every SNR.
+Model (:class:`PosteriorSearch`).  The optimum c lies on a square grid of cells within
+``max_radius`` of x0, a priori uniform in *distance* (a density ∝ 1/ρ per area) and
+direction, half of it "x0 is good" (within :data:`NEAR_RADIUS`, :data:`NEAR_WEIGHT`) and
+half "anywhere within reach": a weak echo's search stays around x0 until that disc is
+covered, a strong echo's quiet first ring empties it at once — one search for every SNR. A
+measurement at x observes the matched-filter envelope's peak t over the window (in units of
+the noise's Rayleigh scale σ·gain, recovered from the detector's significance g), the larger
+of the echo's envelope, Rice of the noiseless peak ν(|x − c|) (the lobe profile), and the
+largest noise envelope N elsewhere, P(N ≤ t) = exp(−M t e^{−t²/2}) (Rice's formula, the
+detector's own calibration): f(t | ν) = f_R(t; ν) F_N(t) + F_R(t; ν) f_N(t).  It multiplies
+the posterior at c by f(t | ν(|x − c|)) / f(t | 0) (:class:`EchoLikelihood`). The next point
+maximizes the detection chance Σ_c post(c) P_detect(|x − c|) (the posterior convolved with
+the detection kernel by FFT: the greedy rule of optimal search theory, Koopman; Stone), the
+cell nearest x0 among those within :data:`TIE` of the best (a broad kernel makes the chance
+nearly flat over a band of radii).  The search gives up on the log Bayes factor of "an
+optimum within reach" against "no echo", log Σ_c π(c) Π LR
+(:meth:`PosteriorSearch.log_evidence`, over the optima inside the bounds).
 
-A measurement at x observes the matched-filter envelope's peak t over the window (in
-units of the noise's Rayleigh scale σ·gain; recovered from the significance g the
-detector reports, which is a monotonic function of it), the larger of
-
-* the envelope at the echo, a Rice variable R of the noiseless peak ν(|x − c|) there
-  (the probe's lobe profile) and unit scale, and
-* the largest noise envelope N elsewhere in the window, P(N ≤ t) = exp(−M t e^{−t²/2})
-  (Rice's formula, the detector's own calibration),
-
-so f(t | ν) = f_R(t; ν) F_N(t) + F_R(t; ν) f_N(t), and the measurement multiplies the
-posterior at c by the likelihood ratio f(t | ν(|x − c|)) / f(t | 0) (1 beyond the lobe's
-reach).  The next point is the cell x that maximizes the probability of a detection
-there, Σ_c post(c) · P_detect(|x − c|) — the posterior convolved with the detection
-kernel (by FFT) — the greedy rule of optimal search theory (Koopman; Stone, *Theory of
-Optimal Search*) — and among the cells within :data:`TIE` of that chance, the one
-nearest to x0.  A broad kernel over a prior uniform in distance makes the chance nearly
-flat across a wide band of radii (the 5 MHz probe at 30 dB after a quiet first ring:
-within 5 % from 9° to 13° out), and a search that goes out first leaves gaps inside that
-the slowest runs pay for (far starts at 30 dB, 100 runs: p99 32 measurements to 0.1°
-without the tie rule, 24 with it).  The log Bayes factor "an optimum within
-``max_radius``" against "no echo within reach", log Σ_c π(c) Π LR, says when to give up
-(:meth:`log_evidence`; over the optima inside the bounds, which alone can be measured).
-
-Evidence (a synthetic sensor drawn from this model, checked against the measured
-detection curve of the 5 MHz probe on the wave model: 0.99 / 0.07 against 0.988 / 0.092
-at 2° / 3° and 20 dB; optima at a uniform 5–20° from x0, 1,000 of them; measurements
-to the first g > 4.5): at 20 dB a median 23 / p90 45 / p99 69 against 37 / 76 / 96 for
-the hexagonal pass of 4.17° sized for the echo (ordered ring by ring); at 30 dB 12 / 19 /
-26 against 13 / 23 / 31 (8.61°); at 10 dB (150 optima) 112 / 239 / 360 against 313 /
-658 / 829 (1.33°).  ``auto``'s measured cells are in docs/benchmarks/.
+Unknown amplitude (:class:`EchoHypotheses`, for a recording or a rig, which do not say how
+strong their echo is, nor without a setup the lobe's shape): one :class:`EchoLikelihood` per
+hypothesis, with prior weights; the posterior is over (optimum, hypothesis), the hypotheses
+marginalized.  Assumed: the peak t is against the noise σ the detector measures in the
+A-scans themselves; ν(θ) = A·s(θ), s(0) = 1, isotropic; A uniform in 20·log10 A over
+:data:`AMPLITUDE_DB` (30–60 dB on a 3 dB grid; a weaker echo is not searched for, or the
+search could never give up); s from the setup's physics where the source names one
+(:func:`scaled_lobe`), else a Lorentzian 1 / (1 + (θ/w)²) of unknown width w, uniform in log
+w over :data:`WIDTHS` (:func:`lorentzian_lobes`), which follows a piston probe's diffraction
+lobe, tails included (a lobe without tails, the ray model's, is broader under it than it
+is).  The measurements behind these choices: docs/benchmarks/auto.md.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -65,16 +50,20 @@ from echocal.calibrate._options import positive_float
 from echocal.errors import EchocalValueError
 
 __all__ = [
+    "AMPLITUDE_DB",
     "GIVE_UP_EVIDENCE",
     "MOTION_TIE",
     "NEAR_RADIUS",
     "NEAR_WEIGHT",
     "TIE",
+    "WIDTHS",
+    "EchoHypotheses",
     "EchoLikelihood",
-    "Hypotheses",
     "PosteriorSearch",
+    "lorentzian_lobes",
     "rice_cdf",
     "rice_sf",
+    "scaled_lobe",
 ]
 
 GIVE_UP_EVIDENCE = 1e-3
@@ -104,6 +93,14 @@ _KERNEL_FLOOR = 1e-4
 """Detection probabilities below this are left out of the kernel (its reach)."""
 _PEAK_TABLE = np.linspace(1.0, 64.0, 4096)
 """Normalized peaks t tabulated to recover t from a significance (t ≥ 1, as Rice's law)."""
+
+AMPLITUDE_DB = tuple(float(a) for a in np.arange(30.0, 60.5, 3.0))
+"""[dB] 20·log10 A of the echo's matched-filter peak at the optimum (in units of the
+noise's Rayleigh scale) under each hypothesis, equally likely a priori (module docstring)."""
+WIDTHS = (0.3, 0.6, 1.2, 2.4)
+"""[deg] the Lorentzian lobe's half width w under each hypothesis, equally likely a priori."""
+_LORENTZ_ANGLES = np.arange(0.0, 15.05, 0.1)
+"""[deg] misalignments the Lorentzian lobes are tabulated at (beyond: no echo)."""
 
 
 def rice_cdf(x: ArrayLike, b: ArrayLike) -> FloatArray:
@@ -188,29 +185,122 @@ class EchoLikelihood:
         return rice_sf(self.threshold, self.echo)
 
 
-class Hypotheses(Protocol):
-    """Echo likelihoods under hypotheses on what a source does not say (its amplitude, the
-    lobe's width), with prior weights: what
-    :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` gives."""
+@dataclass(frozen=True, eq=False)
+class EchoHypotheses:
+    """One :class:`EchoLikelihood` per hypothesis on
+    the echo's unknown amplitude (and lobe width), and the hypotheses' prior weights.
 
-    @property
-    def likelihoods(self) -> tuple[EchoLikelihood, ...]:
-        """One likelihood per hypothesis, all on the same angles and threshold."""
-        ...
+    Attributes
+    ----------
+    likelihoods : the hypotheses' likelihoods, shape ``(k,)``; all on the same
+        ``angles``, ``n_cells`` and ``threshold`` (one detector).
+    log_weights : ln of the prior weights, shape ``(k,)`` (normalized here).
+    label : what the hypotheses are (reported with the result).
+    """
 
-    @property
-    def log_weights(self) -> FloatArray:
-        """ln of the hypotheses' prior weights, shape ``(k,)``, normalized."""
-        ...
+    likelihoods: tuple[EchoLikelihood, ...]
+    log_weights: FloatArray
+    label: str = "hypotheses"
+
+    def __post_init__(self) -> None:
+        likes = tuple(self.likelihoods)
+        weights = np.asarray(self.log_weights, dtype=np.float64)
+        if not likes or weights.shape != (len(likes),) or not np.all(np.isfinite(weights)):
+            raise EchocalValueError(
+                f"log_weights must be finite, one per likelihood ({len(likes)}); got shape "
+                f"{weights.shape}"
+            )
+        first = likes[0]
+        for like in likes[1:]:
+            same = (
+                np.array_equal(like.angles, first.angles)
+                and like.n_cells == first.n_cells
+                and like.threshold == first.threshold
+            )
+            if not same:
+                raise EchocalValueError(
+                    "every hypothesis must share the angles, n_cells and threshold (one detector)"
+                )
+        weights = weights - np.logaddexp.reduce(weights)
+        object.__setattr__(self, "likelihoods", likes)
+        object.__setattr__(self, "log_weights", weights)
 
     @property
     def angles(self) -> FloatArray:
-        """[deg] the misalignments the likelihoods are tabulated at, shape ``(n,)``."""
-        ...
+        """[deg] the misalignments every hypothesis is tabulated at, shape ``(n,)``."""
+        return self.likelihoods[0].angles
 
     def detection_probability(self) -> FloatArray:
-        """P(detection) at each angle under the prior, shape ``(n,)``."""
-        ...
+        """P(t > threshold) at the echo's cell under the prior, shape ``(n,)``: the
+        hypotheses' Marcum Q weighted by their prior weights."""
+        weights = np.exp(self.log_weights)
+        return np.asarray(
+            sum(
+                w * like.detection_probability()
+                for w, like in zip(weights, self.likelihoods, strict=True)
+            ),
+            dtype=np.float64,
+        )
+
+
+def _amplitudes(amplitudes_db: ArrayLike) -> FloatArray:
+    """A for each 20·log10 A [dB] of ``amplitudes_db``, shape ``(k,)``."""
+    db = np.asarray(amplitudes_db, dtype=np.float64).reshape(-1)
+    if db.size == 0 or not np.all(np.isfinite(db)):
+        raise EchocalValueError(f"amplitudes_db must be finite dB values; got {db!r}")
+    return np.asarray(10.0 ** (db / 20.0), dtype=np.float64)
+
+
+def scaled_lobe(
+    angles: ArrayLike,
+    shape: ArrayLike,
+    n_cells: float,
+    threshold: float,
+    amplitudes_db: ArrayLike = AMPLITUDE_DB,
+) -> EchoHypotheses:
+    """The hypotheses for a known lobe shape ``shape`` (s(θ) at ``angles`` [deg], shape
+    ``(n,)``, normalized here to 1 at θ = 0) of unknown amplitude: one per 20·log10 A in
+    ``amplitudes_db`` [dB], equally likely; ``n_cells`` and ``threshold`` as
+    :class:`EchoLikelihood`'s (the detector's)."""
+    s = np.asarray(shape, dtype=np.float64)
+    if s.ndim != 1 or not s.size or not s[0] > 0.0:
+        raise EchocalValueError("shape must be 1-D and > 0 at 0 deg (the lobe's peak)")
+    s = s / s[0]
+    amps = _amplitudes(amplitudes_db)
+    likes = tuple(
+        EchoLikelihood(
+            angles=np.asarray(angles, float), echo=a * s, n_cells=n_cells, threshold=threshold
+        )
+        for a in amps
+    )
+    return EchoHypotheses(likes, np.zeros(len(likes)), label="lobe-shape")
+
+
+def lorentzian_lobes(
+    n_cells: float,
+    threshold: float,
+    widths: ArrayLike = WIDTHS,
+    amplitudes_db: ArrayLike = AMPLITUDE_DB,
+) -> EchoHypotheses:
+    """The hypotheses for a lobe of unknown shape: a Lorentzian 1 / (1 + (θ/w)²) for each
+    width w of ``widths`` [deg] times each amplitude of ``amplitudes_db`` [dB], equally
+    likely, tabulated out to 15° (module docstring)."""
+    w = np.asarray(widths, dtype=np.float64).reshape(-1)
+    if w.size == 0 or not np.all(np.isfinite(w) & (w > 0.0)):
+        raise EchocalValueError(f"widths must be finite and > 0 deg; got {w!r}")
+    amps = _amplitudes(amplitudes_db)
+    theta = _LORENTZ_ANGLES
+    likes = tuple(
+        EchoLikelihood(
+            angles=theta,
+            echo=a / (1.0 + (theta / width) ** 2),
+            n_cells=n_cells,
+            threshold=threshold,
+        )
+        for width in w
+        for a in amps
+    )
+    return EchoHypotheses(likes, np.zeros(len(likes)), label="lorentzian")
 
 
 class PosteriorSearch:
@@ -220,11 +310,9 @@ class PosteriorSearch:
     ----------
     centre : [deg] x0, shape ``(2,)``.
     max_radius : [deg] the optimum lies within this distance of ``centre`` (the prior).
-    likelihood : the echo's :class:`EchoLikelihood`, or
-        :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` when its amplitude (and
-        lobe width) are unknown: the posterior is then over the optimum and the
-        hypothesis, every measurement updates each hypothesis's likelihood, and the
-        detection chance and the evidence sum over the hypotheses.
+    likelihood : the echo's :class:`EchoLikelihood`, or :class:`EchoHypotheses` when its
+        amplitude (and lobe width) are unknown: the posterior is then over (optimum,
+        hypothesis), and the detection chance and the evidence sum over the hypotheses.
     bounds : [deg] shape ``(2, 2)``: the next point lies inside, and the evidence counts
         the optima inside (:meth:`log_evidence`).
     near_radius : [deg] the reach of the prior's "x0 is good" half (:data:`NEAR_RADIUS`).
@@ -234,7 +322,7 @@ class PosteriorSearch:
         self,
         centre: FloatArray,
         max_radius: float,
-        likelihood: EchoLikelihood | Hypotheses,
+        likelihood: EchoLikelihood | EchoHypotheses,
         bounds: FloatArray,
         near_radius: float = NEAR_RADIUS,
     ) -> None:
@@ -317,9 +405,6 @@ class PosteriorSearch:
     def log_posterior(self) -> FloatArray:
         """ln of the posterior over the grid's cells (normalized; the hypotheses on the
         echo's amplitude marginalized), shape ``(m, m)``."""
-        if len(self._models) == 1:
-            log_post = self._log_prior + self._log_like[0]
-            return np.asarray(log_post - _logsumexp(log_post), dtype=np.float64)
         return np.asarray(logsumexp(self._log_joint(), axis=0), dtype=np.float64)
 
     def log_evidence(self) -> float:
@@ -327,8 +412,6 @@ class PosteriorSearch:
         restricted to them, w_h the hypotheses' prior weights): the log Bayes factor of a
         measurable optimum drawn from the prior against no echo within reach of any
         measurement."""
-        if len(self._models) == 1:
-            return _logsumexp(self._measurable + self._log_like[0])
         return _logsumexp(self._log_weights[:, None, None] + self._measurable + self._log_like)
 
     def detection_chances(self) -> FloatArray:
@@ -360,18 +443,12 @@ class PosteriorSearch:
         :data:`TIE` of the best chance), the one nearest to the centre — the plain choice.
 
         Given ``move_time`` (points [deg] ``(k, 2)`` → the positioner's time [s] to reach
-        each from where it is, ``(k,)``, or None) and ``price`` [s], the bench time of a
-        measurement apart from its travel (acquisition plus settling), the search trades
-        detection chance for a shorter move only where the move is long against that
-        price: the cell reached soonest among those within :data:`MOTION_TIE` of the best
-        chance replaces the plain choice when it saves more than ``price / MOTION_TIE``
-        of the plain choice's move.  A step that takes it gives up at most a fraction
-        MOTION_TIE of one measurement's chance of a detection, so the walk loses a
-        whole measurement's chance over 1 / MOTION_TIE such steps at the earliest; each
-        of those steps must save the price of as many measurements.  Where every move
-        is short against the price (a search close to where the probe stands) the plain
-        choice stands and the search asks exactly the plain search's points; where the
-        plain choice jumps across a ring of likely optima, the walk goes around it."""
+        each, ``(k,)``, or None) and ``price`` [s], a measurement's bench time apart from
+        its travel: the cell reached soonest among those within :data:`MOTION_TIE` of the
+        best chance replaces the plain choice when it saves more than
+        ``price / MOTION_TIE`` of its move — so over 1 / MOTION_TIE such steps, which lose
+        at most one measurement's chance, the walk saves at least as many measurements'
+        price.  Where every move is short against the price, the plain search's points."""
         chance = self.detection_chances()
         distance = np.where(chance >= (1.0 - TIE) * chance.max(), self._rho, np.inf)
         row, col = np.unravel_index(int(np.argmin(distance)), chance.shape)

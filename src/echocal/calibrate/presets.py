@@ -1,11 +1,10 @@
 """Thesis defaults (Tables 1–7) as named presets.
 
-The thesis's gains (step μ = 0.05, SPSA ε = 0.1, quasi-Newton λ ≤ 0.9) assume
-pseudo-energy normalized to a peak of about 1, so every thesis preset sets
-``normalize="max"`` (values divided by the running maximum of |values|) and
-works on any energy scale.  The thesis does not state the difference step
-δ; the presets keep echocal's defaults (0.25° for FD gradients, 0.5° for the
-FD Hessian).  Values the thesis studied over a range are listed in
+The thesis's gains (step μ = 0.05, SPSA ε = 0.1, quasi-Newton λ ≤ 0.9) assume pseudo-energy
+normalized to a peak of about 1, so every thesis preset sets ``normalize="max"`` (values
+divided by the running maximum of |values|) and works on any energy scale.  The thesis does
+not state the difference step δ; the presets keep echocal's defaults (0.25° for FD
+gradients, 0.5° for the FD Hessian).  Values the thesis studied over a range are listed in
 ``studied``; the preset holds the Table 7 (comparison) value.
 """
 

@@ -1,20 +1,18 @@
 """Quasi-Newton (BFGS) ascent (thesis eqs. 75–78, applied to −f).
 
-Eqs. 76–78 are BFGS for *minimization*; here B approximates the Hessian of
-−f (positive definite), the step is Δθ = μ B⁻¹ ĝ (an ascent direction) and
-the update uses s = Δθ, y = −b with b = ĝ_{k+1} − ĝ_k (eq. 77).  The
-curvature condition yᵀs > 0, i.e. bᵀΔθ < 0, keeps B positive definite; an
-update with bᵀΔθ ≥ 0 is skipped (counted in ``n_skipped``).
+Eqs. 76–78 are BFGS for *minimization*; here B approximates the Hessian of −f (positive
+definite), the step is Δθ = μ B⁻¹ ĝ (an ascent direction) and the update uses s = Δθ, y = −b
+with b = ĝ_{k+1} − ĝ_k (eq. 77).  The curvature condition yᵀs > 0, i.e. bᵀΔθ < 0, keeps B
+positive definite; an update with bᵀΔθ ≥ 0 is skipped (counted in ``n_skipped``).
 
-Start: B₀ = λ I (thesis λ ∈ {0.1, 0.5, 0.8, 0.9} with μ = 0.05 on energy
-normalized to ~1).  With ``lam=None`` (default) λ = |ĝ₀| / first_step, so the
-first step is ``first_step`` degrees long whatever the energy unit.
+Start: B₀ = λ I (thesis λ ∈ {0.1, 0.5, 0.8, 0.9} with μ = 0.05 on energy normalized to ~1).
+With ``lam=None`` (default) λ = |ĝ₀| / first_step, so the first step is ``first_step``
+degrees long whatever the energy unit.
 
-Never stepping downhill: each iteration measures the 4-point FD gradient at
-the candidate; the change of f along the step is estimated by the trapezoid
-rule ½(ĝ_k + ĝ_{k+1})ᵀs (exact for quadratics).  A candidate with a negative
-estimate is rejected: the iterate stays, the (valid) curvature pair still
-updates B, and the next step is at most half as long.
+Never stepping downhill: each iteration measures the 4-point FD gradient at the candidate;
+the change of f along the step is estimated by the trapezoid rule ½(ĝ_k + ĝ_{k+1})ᵀs (exact
+for quadratics).  A candidate with a negative estimate is rejected: the iterate stays, the
+(valid) curvature pair still updates B, and the next step is at most half as long.
 """
 
 from __future__ import annotations

@@ -88,37 +88,27 @@ class CalibrationResult:
     times : [s], shape (n_measurements,) — wall-clock time of each measurement.
     acquisition_measurements : measurements the acquisition phase spent before it found
         the echo and handed over (None without an acquisition phase or if it never did).
-    search_passes : [deg] the spacings of the passes the acquisition searched beyond x0's
-        first ring, coarse first, when it sized them for the echo predicted against the
-        noise that ring measured (``replan``; e.g. (1.33,) for a 10 dB echo of the 12.7 mm
-        5 MHz probe); None when it kept its plan or had none.
-    search_snr_db : [dB] the echo's peak SNR ŝ the objective predicted against that noise,
-        for which ``search_passes`` are sized; None when ``search_passes`` is.
+    search_passes : [deg] the passes the acquisition searched beyond x0's first ring, coarse
+        first, when it sized them for the noise that ring measured (``replan``); else None.
+    search_snr_db : [dB] the echo's peak SNR those passes are sized for; else None.
     posterior_search : the acquisition searched beyond x0's first ring by the posterior
-        over the optimum (:mod:`echocal.calibrate.posterior_search`: ``auto`` on a
-        simulated probe, a recording or a rig), not on passes.
-    final_value : [energy units] the mean of the final measurements at ``x`` (counted in
-        ``n_measurements``; ``final_check`` of them), None when the run did not measure
-        its estimate.
-    bench_time : [s] the bench time of the run's measurements (motion, settling and
-        acquisition, as the source reported them: the simulator's bench model), None
-        when the source reports none (the ideal bench, a recording).
+        over the optimum (:mod:`echocal.calibrate.posterior_search`), not on passes.
+    final_value : [energy units] the mean of the ``final_check`` measurements at ``x``
+        (counted in ``n_measurements``); None when the run did not measure its estimate.
+    bench_time : [s] the bench time (motion, settling, acquisition) of the run's
+        measurements as the source reported it; None when it reports none.
     bench_time_saved : [s] the motion and settling time a motion-aware objective's order
-        saved against the plain order (predicted from the bench's axes), None without one.
+        saved against the plain order; None without one.
     uncertainty : [deg] the radius around ``x`` that holds the optimum with probability
-        ``uncertainty_level``, from the measurements on the lobe's top
-        (``echocal.calibrate.uncertainty``); None when the run found no echo or its
-        estimate is not supported (:data:`UNSUPPORTED_STATUSES`), the noise is unknown or
-        those measurements show no peak.  Measurement noise only: the
-        positioner's error is ``bench_uncertainty``.
+        ``uncertainty_level``, from the measurements on the lobe's top (measurement noise
+        only; ``echocal.calibrate.evidence.estimate_radius``); None when no echo was found,
+        the estimate is not supported (:data:`UNSUPPORTED_STATUSES`), the noise is unknown
+        or those measurements show no peak.
     uncertainty_level : the confidence level of ``uncertainty`` (0.9).
-    false_alarms : detections the local method did not confirm within its first 8
-        measurements (``echocal.calibrate.acquisition.CONFIRM_WITHIN``); the acquisition's
-        search resumed after each.
+    false_alarms : detections the local method did not confirm (the search resumed).
     bench_uncertainty : [deg] the RMS angle between a commanded and a reached orientation
-        of the source's positioner (backlash, steps, repeatability), which the estimate, a
-        commanded orientation, carries besides the measurement noise; None when the source
-        does not know it (the ideal bench, a recording, a rig).
+        of the source's positioner, which the estimate carries besides the measurement
+        noise; None when the source does not know it.
     """
 
     x: FloatArray

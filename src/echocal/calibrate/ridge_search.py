@@ -1,24 +1,16 @@
-"""The search across a ridge of ``model-based``: when the fitted peak is a ridge, look once
-across it for the lobe's true top (a mixin of :class:`~echocal.calibrate.model_based.ModelBased`).
+"""The search across a ridge or a side lobe of ``model-based`` (a mixin of
+:class:`~echocal.calibrate.model_based.ModelBased`).
 
-A large probe in its near field over a ball sees a central peak, a dip and a ring; a
-local model started beyond the dip climbs the ring, on which it is a ridge — steep across,
-flat along — and the centre lies across it.  Once the model has settled on a ridge
-(:data:`_ACROSS_AFTER` refinement steps), points at growing offsets on either side are
-measured (:data:`_ACROSS_STEPS`), re-measured while they stand above the ridge's top, a
-side ended where the lobe has fallen away, and a bump beyond a dip on the line gets a
-small hexagon of its own.
-
-The same search, along both axes, leaves a side lobe: a peak refined for
-:data:`_SIDE_LOBE_AFTER` steps whose echo is far below the echo at normal incidence
-(``normal_echo``, which the optimum's is at least) is not the optimum.  A 12.7 mm probe
-over a rod sees a side maximum 1.6° across the rod at 0.17 of normal incidence's echo
-(a dip to 0.07 between): a start beyond it climbs it, and the search along its axes
-reaches the main lobe (no bump hexagon: the main lobe is 2.5x the side lobe's top or
-more, and refutes the model where the search passes it).
-
-A point of either search that clearly exceeds the top restarts the fit around it from the
-whole neighbourhood; after a search the next waits until the model has settled again.
+A large probe in its near field over a ball sees a central peak, a dip and a ring; a local
+model started beyond the dip climbs the ring, a ridge (steep across, flat along) with the
+centre across it.  Once the model has settled on a ridge, points at growing offsets
+(:data:`_ACROSS_STEPS`) on either side are measured, re-measured while above the ridge's
+top, a side ended where the lobe has fallen away, and a bump beyond a dip gets a small
+hexagon.  The same search along both axes leaves a side lobe: a refined peak whose echo is
+far below the echo at normal incidence (``normal_echo``, which the optimum's is at least;
+over a rod the 12.7 mm probe's side maximum is 0.17 of it, 1.6° across the rod).  A point
+of either search clearly above the top restarts the fit around it; the next search waits
+until the model has settled again.
 """
 
 from __future__ import annotations
@@ -134,15 +126,12 @@ class RidgeSearch:
         self._across_bump = False
 
     def _start_ridge_search(self, m: QuadraticModel, xs: FloatArray) -> bool:
-        """Queue the search across the peak through the model's maximum ``xs`` [deg] (2,)
-        once the model has settled on a ridge (:data:`_ACROSS_AFTER` refinement steps) or
-        on a side lobe (:meth:`_on_side_lobe`, :data:`_SIDE_LOBE_AFTER` steps); True when
-        queued (each once per run, a side lobe's again after a dropped search: see
-        :meth:`_drop_search`).  Before :data:`_ACROSS_AFTER` steps only the side-lobe
-        test is made, so a ridge far below the echo at normal incidence is searched as a
-        side lobe, along both its axes.  A ridge is searched across, a side lobe along both
-        its axes at once (a side lobe fitted nearly round from noisy data has no telling
-        direction; over the rod its steepest is along the rod, the main lobe across)."""
+        """Queue the search through the model's maximum ``xs`` [deg] (2,) once the model has
+        settled on a ridge (:data:`_ACROSS_AFTER` refinement steps: across it) or on a side
+        lobe (:meth:`_on_side_lobe`, :data:`_SIDE_LOBE_AFTER` steps: along both its axes,
+        as a side lobe fitted from noisy data has no telling direction); True when queued.
+        Each once per run, a side lobe's again after a dropped search
+        (:meth:`_drop_search`)."""
         if self._streak < _SIDE_LOBE_AFTER:
             return False
         if not self._across_done and self._streak >= _ACROSS_AFTER and is_ridge(m):
@@ -160,12 +149,10 @@ class RidgeSearch:
         return True
 
     def _drop_search(self) -> None:
-        """Drop the queued points of a search under way: the fit moves to a new centre
-        (a point of the search found a stronger echo, or the data refuted the model).  The
-        next search waits until the model has settled there again; a side lobe's search
-        may then be made again — the peak it finds is tested afresh (a side lobe's model
-        may still be refuted by its own data after two steps).  Each new search needs an echo
-        clearly (4 σ and 5 %) above the last peak's, so they do not repeat without end."""
+        """Drop the queued points of a search under way (the fit moves to a new centre): the
+        next waits until the model has settled again, and a side lobe's may be made again
+        (its peak tested afresh); each needs an echo clearly (4 σ and 5 %) above the last
+        peak's, so they do not repeat without end."""
         if not len(self._across):
             return
         if self._across_side_lobe:
@@ -195,16 +182,11 @@ class RidgeSearch:
     def _across_line(
         self, m: QuadraticModel, xs: FloatArray, axes: tuple[int, ...] = (1,)
     ) -> FloatArray:
-        """The points of a search across the peak through ``xs`` along its steepest
-        direction (``axes`` (1,); (1, 0): and its flattest, interleaved), at the offsets
-        :data:`_ACROSS_STEPS`, nearest first.
-
-        A large probe in its near field over a ball sees a lobe made of a central peak,
-        a dip (0.32 of the peak 0.8° out) and a ring (0.8 of the peak, 1.6° out): a local
-        model started beyond the dip climbs the ring, on which it is a ridge — steep across
-        (the radius), flat along it — and the centre lies across it.  On each axis the side
-        where the data fall below the model (the dip) is searched first, alternating
-        sides."""
+        """The points [deg] (k, 2) of a search across the peak through ``xs`` along its
+        steepest direction (``axes`` (1,); (1, 0): and its flattest, interleaved), at the
+        offsets :data:`_ACROSS_STEPS`, nearest first, alternating sides: on each axis first
+        the side where the data fall below the model (over a ball, the dip before the
+        central peak)."""
         _, vec = np.linalg.eigh(-m.H)  # ascending curvature: vec[:, 1] is the steepest
         y = self._y - self._floor()
         resid = y - m.energy(self._x)

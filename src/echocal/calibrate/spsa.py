@@ -1,25 +1,24 @@
 """SPSA: simultaneous-perturbation stochastic approximation (thesis eqs. 50–57).
 
-Each iteration measures 2 points θ ± c_k Δ_k with Δ_k drawn from the
-*symmetric* ±1 Bernoulli distribution (the thesis's "asymmetric" is an
-erratum), estimates ĝ_i = (y₊ − y₋) / (2 c_k Δ_k,i) and ascends
-θ ← θ + μ_k ĝ with μ_k = ε / (A + k + 1)^ρ and c_k = c′ / (k + 1)^γ.
+Each iteration measures 2 points θ ± c_k Δ_k with Δ_k drawn from the *symmetric* ±1
+Bernoulli distribution (the thesis's "asymmetric" is an erratum), estimates
+ĝ_i = (y₊ − y₋) / (2 c_k Δ_k,i) and ascends θ ← θ + μ_k ĝ with μ_k = ε / (A + k + 1)^ρ and
+c_k = c′ / (k + 1)^γ.
 
-Gain calibration (Spall 1998, "Implementation of the simultaneous
-perturbation algorithm", §III): with ``eps=None`` (default) the optimizer
-first spends ``n_gain_estimates`` SP gradient estimates at x0 (2 measurements
-each, counted like any other, not counted as iterations) and sets
-ε = first_step · (A + 1)^ρ / mean|ĝ|, so the first step is about ``first_step``
-degrees long whatever the energy unit.
+Gain calibration (Spall 1998, "Implementation of the simultaneous perturbation algorithm",
+§III): with ``eps=None`` (default) the optimizer first spends ``n_gain_estimates`` SP
+gradient estimates at x0 (2 measurements each, counted like any other, not counted as
+iterations) and sets ε = first_step · (A + 1)^ρ / mean|ĝ|, so the first step is about
+``first_step`` degrees long whatever the energy unit.
 
 Step bound (Spall 1998, §III, "blocking"/bounding the step): every step is at most
 ``max_step`` degrees long, by default ``first_step``.  Gains calibrated where the echo is
 weak (far from the peak, on noise) are large, and near a narrow peak the gradient is a
-hundred times larger: unbounded, one step flew from 0.1° beside the 5 MHz probe's peak
-to the positioner's limit 25° away (``echocal calibrate --setup immersion-5mhz --method
-spsa --x0=-1,2 --seed 1``); bounded, 12 starts 1–3° off end with a median error of 0.33°
-(all within 0.5°), against 13° unbounded — and the thesis setup's broad lobe is
-unaffected (median 0.105° either way).
+hundred times larger: unbounded, one step flew from 0.1° beside the 5 MHz probe's peak to
+the positioner's limit 25° away (``echocal calibrate --setup immersion-5mhz --method spsa
+--x0=-1,2 --seed 1``); bounded, 12 starts 1–3° off end with a median error of 0.33° (all
+within 0.5°), against 13° unbounded — and the thesis setup's broad lobe is unaffected
+(median 0.105° either way).
 """
 
 from __future__ import annotations

@@ -211,7 +211,7 @@ class LobeProfile:
     def peak_shape(self) -> np.ndarray | None:
         """The profile's peaks averaged over its directions, relative to normal
         incidence's, shape ``(n,)`` (1 at 0°): the lobe's shape for a source whose echo
-        amplitude is unknown (:func:`~echocal.calibrate.echo_hypotheses.scaled_lobe`).
+        amplitude is unknown (:func:`~echocal.calibrate.posterior_search.scaled_lobe`).
         None when the lobe does not peak at normal incidence (as :meth:`echo_likelihood`)."""
         top = float(np.mean(self.peaks[:, 0]))
         if not top > 0.0 or float(self.peaks.max()) > _PEAK_AT_NORMAL * top:

@@ -18,10 +18,9 @@ from numpy.typing import ArrayLike
 
 from echocal._validate import finite_array
 from echocal.ascan import AScan
-from echocal.calibrate.echo_hypotheses import EchoHypotheses
 from echocal.calibrate.lobe_template import LobeTemplate
 from echocal.calibrate.objective import Objective, as_points
-from echocal.calibrate.posterior_search import EchoLikelihood
+from echocal.calibrate.posterior_search import EchoHypotheses, EchoLikelihood
 from echocal.errors import EchocalError, EchocalValueError
 from echocal.geometry import Pose, convert_angles, pose_from_angles
 from echocal.measurement.base import MeasurementSource
@@ -410,11 +409,11 @@ class SourceObjective(Objective):
           calibrated on it, the echo's effective SNR); None where the probe cannot see
           the part or its lobe does not peak at normal incidence.
         * A rig or a recording (any other source): the echo's amplitude in its units is
-          unknown, so :class:`~echocal.calibrate.echo_hypotheses.EchoHypotheses` over it —
+          unknown, so :class:`~echocal.calibrate.posterior_search.EchoHypotheses` over it —
           the lobe's shape from the ``twin``'s physics when there is one
-          (:func:`~echocal.calibrate.echo_hypotheses.scaled_lobe`; None where the twin's
+          (:func:`~echocal.calibrate.posterior_search.scaled_lobe`; None where the twin's
           lobe does not peak at normal incidence), else a Lorentzian of unknown width
-          (:func:`~echocal.calibrate.echo_hypotheses.lorentzian_lobes`) — with the
+          (:func:`~echocal.calibrate.posterior_search.lorentzian_lobes`) — with the
           detector of the A-scans' own sampling and length."""
         if self.gate is not None or self.repeats != 1 or self.parameterization != "tilt":
             return None
@@ -435,7 +434,7 @@ class SourceObjective(Objective):
     def _unknown_amplitude(self, sigma: float) -> EchoHypotheses | None:
         """:meth:`echo_likelihood` for a source whose echo amplitude is unknown (a rig, a
         recording), against per-sample noise σ [a.u.]."""
-        from echocal.calibrate.echo_hypotheses import lorentzian_lobes, scaled_lobe
+        from echocal.calibrate.posterior_search import lorentzian_lobes, scaled_lobe
         from echocal.constants import ECHO_THRESHOLD
 
         scan = self._last_scan
