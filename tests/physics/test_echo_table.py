@@ -72,6 +72,29 @@ def test_nodes_are_computed_once_and_only_where_needed() -> None:
     assert len(set(calls)) == len(calls)
 
 
+def test_an_even_axis_interpolates_across_its_start_from_the_mirrored_nodes() -> None:
+    """Along an even axis the stencil near its start takes the nodes at −v from those at
+    v: exact for spectra even in v of degree ≤ 3 (here 2), even in v to rounding, and no
+    node below the start is ever computed."""
+    calls: list[float] = []
+
+    def node(u: float, v: float) -> tuple[np.ndarray, float]:
+        calls.append(v)
+        k = np.arange(SIZE)
+        return (1.0 + 0.5j * k) * u**3 * v**2 + (2.0 - k) * v**2 + 1j * u, u * v**2
+
+    table = EchoTable(node, TableAxis(-1.0, 0.25, 9), TableAxis(0.0, 0.1, 6, even=True), BINS, SIZE)
+    for u, v in [(0.3, 0.04), (-0.6, 0.13), (0.9, -0.07), (0.2, 0.0), (0.1, -0.5)]:
+        got, side = table(u, v)
+        want, want_side = node(u, abs(v))
+        assert np.abs(got[BINS] - want[BINS]).max() <= 1e-12 * np.abs(want[BINS]).max()
+        assert side == pytest.approx(want_side, rel=1e-12, abs=1e-13)
+        assert np.array_equal(table(u, -v)[0], got)
+    assert min(calls) >= 0.0
+    with pytest.raises(ValueError, match=r"\[-0.5"):
+        table(0.0, -0.6)
+
+
 def test_bad_queries_and_arguments_raise_one_clear_error() -> None:
     table = _table()
     with pytest.raises(ValueError, match="outside the table's range"):

@@ -14,7 +14,8 @@ callers in ``echocal.wave.model``) and the range of frequency bins worth keeping
 (u, v) interpolates the (p + 1) × (p + 1) surrounding nodes, bin by bin, by tensor-product
 Lagrange polynomials of degree p (cubic by default: 4 × 4 nodes), exact for any spectrum
 that is a polynomial of degree ≤ p in u and in v; near the grid's ends the stencil shifts
-inwards (still exact for such polynomials).  A real side value per node (the echo's mean
+inwards (still exact for such polynomials), or on an axis along which the spectrum is
+even, reaches across its start to the mirrored nodes (``TableAxis.even``).  A real side value per node (the echo's mean
 path time) is interpolated alike.
 """
 
@@ -40,11 +41,16 @@ class TableAxis:
     """One axis of an :class:`EchoTable`'s grid: nodes at ``start + k·step``,
     k = 0 … ``count`` − 1 (in the caller's unit of u or v).
 
-    ``count`` may be large: nodes are only computed where queries need them."""
+    ``count`` may be large: nodes are only computed where queries need them.  ``even``:
+    the tabled spectrum is even about ``start`` (a tilt's sign, say); queries may then lie
+    anywhere in [2·start − stop, stop] and the stencil reaches across ``start`` to the
+    mirrored nodes (the node at −k is the node at k), so that interpolation near ``start``
+    is centred, and even, instead of one-sided."""
 
     start: float
     step: float
     count: int
+    even: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.start) and math.isfinite(self.step) and self.step > 0.0):
@@ -56,19 +62,22 @@ class TableAxis:
         return self.start + (self.count - 1) * self.step
 
     def stencil(self, value: float, points: int) -> tuple[int, NDArray[np.float64]]:
-        """The first index of the ``points`` nodes about ``value`` and their Lagrange
-        weights ``(points,)`` (exactly 1 at a node and 0 elsewhere when ``value`` is a node).
+        """The first index of the ``points`` nodes about ``value`` (negative across the
+        start of an ``even`` axis: node −k stands for node k) and their Lagrange weights
+        ``(points,)`` (exactly 1 at a node and 0 elsewhere when ``value`` is a node).
 
-        Raises ValueError if ``value`` lies outside [start, stop] (by more than 10⁻⁹ step)."""
+        Raises ValueError if ``value`` lies outside the axis (by more than 10⁻⁹ step)."""
         x = (value - self.start) / self.step
-        if not (-1e-9 <= x <= self.count - 1 + 1e-9):
+        last = float(self.count - 1)
+        lowest = -last if self.even else 0.0
+        if not (lowest - 1e-9 <= x <= last + 1e-9):
+            low = 2.0 * self.start - self.stop if self.even else self.start
             raise ValueError(
-                f"table query {value!r} lies outside the table's range "
-                f"[{self.start!r}, {self.stop!r}]"
+                f"table query {value!r} lies outside the table's range [{low!r}, {self.stop!r}]"
             )
-        x = min(max(x, 0.0), float(self.count - 1))
+        x = min(abs(x) if self.even else max(x, 0.0), last)  # an even axis: at |v|, exactly
         first = math.floor(x) - (points // 2 - 1)
-        first = min(max(first, 0), self.count - points)
+        first = min(max(first, round(lowest)), self.count - points)
         offsets = [x - (first + m) for m in range(points)]  # x − x_m
         weights = np.ones(points)
         for k in range(points):
@@ -99,7 +108,7 @@ class EchoTable:
     ----------
     node : ``node(u, v) -> (spectrum, side)``, the exact one-sided spectrum ``(size,)``
         (complex) and a real side value (the echo's path time [s], say) at one node; called
-        at most once per node.
+        at most once per node, and never below the start of an ``even`` axis.
     u, v : the grid's axes (:class:`TableAxis`), each with at least ``degree`` + 1 nodes.
     bins : the bins the nodes keep (:func:`significant_bins`); queries return 0 outside.
     size : the full spectrum's length.
@@ -172,7 +181,7 @@ class EchoTable:
             for b in range(points):
                 weight = float(wu[a] * wv[b])
                 if weight != 0.0:  # exactly 0 at the other nodes of a node's own line
-                    spectrum, value = self.node_value(iu + a, iv + b)
+                    spectrum, value = self.node_value(abs(iu + a), abs(iv + b))
                     weights.append(weight)
                     spectra.append(spectrum)
                     sides.append(value)
