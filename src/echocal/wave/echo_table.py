@@ -15,8 +15,8 @@ callers in ``echocal.wave.model``) and the range of frequency bins worth keeping
 Lagrange polynomials of degree p (cubic by default: 4 × 4 nodes), exact for any spectrum
 that is a polynomial of degree ≤ p in u and in v; near the grid's ends the stencil shifts
 inwards (still exact for such polynomials), or on an axis along which the spectrum is
-even, reaches across its start to the mirrored nodes (``TableAxis.even``).  A real side value per node (the echo's mean
-path time) is interpolated alike.
+even, reaches across its start to the mirrored nodes (``TableAxis.even``).  A real side
+value per node (the echo's mean path time) is interpolated alike.
 """
 
 from __future__ import annotations
