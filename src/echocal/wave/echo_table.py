@@ -186,7 +186,8 @@ class EchoTable:
                     spectra.append(spectrum)
                     sides.append(value)
         w = np.asarray(weights)
-        kept = w @ np.asarray(spectra)
+        # real weights on the real view: numpy's mixed real @ complex product is ~2,000× slower
+        kept = (w @ np.asarray(spectra).view(np.float64)).view(np.complex128)
         side = float(w @ np.asarray(sides))
         out = np.zeros(self.size, dtype=np.complex128)
         out[self.bins] = kept
