@@ -12,6 +12,7 @@ table's nodes drawn with seeds not used to choose the table's steps (those were 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -192,3 +193,35 @@ def test_an_echo_the_time_grid_would_cut_takes_the_exact_form() -> None:
     assert table(plane) is None
     spectrum, _ = model.image_spectrum(plane)
     assert np.array_equal(spectrum, model._exact_image_spectrum(plane)[0])
+
+
+def test_nodes_are_kept_on_disk_between_models(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A fresh model of the same setup reads the nodes an earlier one wrote (one file per
+    node) without computing any, and answers the same to the bit; a damaged file is a
+    miss (computed again, the same answer); an unwritable folder is skipped."""
+    monkeypatch.setenv("ECHOCAL_CACHE_DIR", str(tmp_path))
+    plane = _plane(52.3 * MM, math.radians(4.1), 0.7)
+    first, _ = _model(6.35 * MM, 5e6, 50 * MM).image_spectrum(plane)
+    files = sorted((tmp_path / "tables").glob("plane-*.npy"))
+    assert len(files) == 16
+
+    def no_exact(*args: object) -> None:
+        raise AssertionError("a node was computed, not read")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(WaveEchoModel, "_exact_image_spectrum", no_exact)
+        second, _ = _model(6.35 * MM, 5e6, 50 * MM).image_spectrum(plane)
+    assert np.array_equal(first, second)
+
+    files[0].write_bytes(b"not a node")
+    files[1].write_bytes(files[1].read_bytes()[:-40])
+    third, _ = _model(6.35 * MM, 5e6, 50 * MM).image_spectrum(plane)
+    assert np.array_equal(first, third)
+
+    blocked = tmp_path / "file"
+    blocked.write_text("a file where the folder should be")
+    monkeypatch.setenv("ECHOCAL_CACHE_DIR", str(blocked))
+    fourth, _ = _model(6.35 * MM, 5e6, 50 * MM).image_spectrum(plane)
+    assert np.array_equal(first, fourth)

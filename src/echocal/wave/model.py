@@ -57,6 +57,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.fft
@@ -73,6 +74,7 @@ from echocal.wave import image, pairs, sir
 from echocal.wave.echo_table import significant_bins
 from echocal.wave.plane_table import PlaneTable
 from echocal.wave.probe import Aperture
+from echocal.wave.table_cache import array_digest
 from echocal.wave.threads import one_way_grid, two_way_grid
 
 __all__ = ["WaveEchoModel"]
@@ -678,10 +680,27 @@ class WaveEchoModel:
                 dt,
                 n_fft,
                 bins,
+                self._table_identity() if unit or self.reflection is None else None,
             )
         if self.reflection is None:
             tables[True] = tables[False]
         return tables
+
+    def _table_identity(self) -> dict[str, Any]:
+        """What a plane table's node depends on besides its grid and the code (for its disk
+        cache): the probe, the sound speed, the time grid (its step, length, and the
+        fraction of a step by which its first point is off the step's multiples) and the
+        image form's transfer on it (the pulse's spectrum)."""
+        _, dt, _, n_fft = self._grid
+        offset = (self._t0 / dt + 0.5) % 1.0 - 0.5
+        return {
+            "probe": [int(self.probe.kind), *(float(p) for p in self.probe.parameters)],
+            "sound_speed": float(self.sound_speed),
+            "dt": float(dt),
+            "n_fft": int(n_fft),
+            "offset": round(offset, 6),
+            "transfer": array_digest(self._image_transfer),
+        }
 
     def _own_exact(
         self, plane: image.ImagePlane, delay: float

@@ -33,12 +33,17 @@ delay added to every path) is linear in them: conj(coefficient)·e^{−iω·dela
 unit, zero-delay response, which has a table of its own when the model's R(θ) varies with
 each face node's angle (that table then holds R(θ) at each node's angle, exactly as the
 exact form takes it).
+
+**Between processes.** The nodes of a table that the model can name (the unit response,
+or any table of a model without R(θ)) are also kept on disk (``echocal.wave.table_cache``),
+so a later run, or a parallel worker, reads them instead of computing them.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,6 +51,7 @@ from numpy.typing import NDArray
 from echocal.wave import image
 from echocal.wave.echo_table import EchoTable, TableAxis
 from echocal.wave.probe import Aperture
+from echocal.wave.table_cache import DiskNodes
 
 __all__ = ["PlaneTable"]
 
@@ -89,6 +95,10 @@ class PlaneTable:
         grid's length ``n_fft``).
     n_fft : the time grid's length.
     bins : the bins the nodes keep (``echocal.wave.echo_table.significant_bins``).
+    identity : what the exact form's nodes depend on besides this table's grid and the
+        code (JSON-ready: see ``WaveEchoModel._table_identity``), to keep them on disk
+        between processes (``echocal.wave.table_cache``); None: in memory only (a model
+        whose R(θ) is a function the cache cannot name).
     """
 
     def __init__(
@@ -102,6 +112,7 @@ class PlaneTable:
         dt: float,
         n_fft: int,
         bins: slice,
+        identity: dict[str, Any] | None = None,
     ) -> None:
         self._exact = exact
         self._a = probe.radius
@@ -124,7 +135,11 @@ class PlaneTable:
         count = math.ceil(1.0 / (near * inverse_step)) - first + 1
         u = TableAxis(first * inverse_step, inverse_step, count)
         v = TableAxis(0.0, tilt_step, math.ceil(_TILT_LIMIT / tilt_step) + _DEGREE + 1, even=True)
-        self.table = EchoTable(self._node, u, v, bins, self._omega.size, _DEGREE)
+        store = None
+        if identity is not None:
+            grid = {"u": [u.start, u.step], "v": v.step, "bins": [bins.start, bins.stop]}
+            store = DiskNodes("plane", {**identity, **grid})
+        self.table = EchoTable(self._node, u, v, bins, self._omega.size, _DEGREE, store)
 
     def _span(self, h: float, alpha: float) -> tuple[float, float]:
         """[s] bounds on the two-way times of every path from the face to its image across
