@@ -340,6 +340,15 @@ def _direct_sum(
     }
 
 
+def _payback(row: dict[str, float | str]) -> str:
+    """The tilt table's payback cell: "—" off the table, "never" where the exact form is
+    no dearer than the warm table."""
+    if "payback" not in row:
+        return "—"
+    payback = float(row["payback"])
+    return f"{payback:.0f}" if math.isfinite(payback) else "never"
+
+
 def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
     """The tilt table as Markdown."""
     body = []
@@ -360,7 +369,7 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
                 "—" if exact is None else fmt_time(float(exact)),
                 "—" if exact is None else f"{float(exact) / float(r['ray_s']):.1f}x",
                 "—" if exact is None else f"{fmt_time(float(r['cold_s']))} ({r['cold_nodes']:.0f})",
-                "—" if exact is None else f"{float(r['payback']):.0f}",
+                _payback(r),
                 "—" if before is None else fmt_time(float(before)),
                 "—" if before is None else f"{float(before) / float(r['ray_s']):.1f}x",
                 "—" if before is None else f"{r['pairs']:.0f} / {r['face_nodes']:.0f}",
@@ -526,12 +535,12 @@ def main() -> None:
     tabled = [r for r in table if "exact_s" in r]
     if tabled:
         exact_worst = max(float(r["exact_s"]) / float(r["ray_s"]) for r in tabled)
-        payback = max(float(r["payback"]) for r in tabled)
+        payback = max(p for p in (float(r["payback"]) for r in tabled) if math.isfinite(p))
         print(
             f"HEADLINE wave (plane table, warm) / ray at most "
             f"{max(float(r['wave_over_ray']) for r in tabled):.1f}x on planes (exact form "
             f"{exact_worst:.1f}x); a fresh cell's fill is paid back after at most "
-            f"{payback:.0f} A-scans"
+            f"{payback:.0f} A-scans in it (never where the exact form is as cheap)"
         )
     if args.tilts_only:
         if args.json:

@@ -606,7 +606,7 @@ class WaveEchoModel:
         Returns
         -------
         The one-sided spectrum on :attr:`frequencies` and the weighted mean two-way time [s]
-        (as :meth:`spectrum`).  With :attr:`tables` (flat discs and bowls), interpolated in
+        (as :meth:`spectrum`).  With ``tables`` (flat discs and bowls), interpolated in
         the plane's table where it answers (:mod:`echocal.wave.plane_table`).
         """
         table = self._plane_tables.get(coefficient is not None) if self.tables else None

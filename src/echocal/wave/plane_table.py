@@ -86,7 +86,7 @@ class PlaneTable:
 
     Parameters
     ----------
-    exact : the exact form (:data:`ExactForm`) the nodes are computed by.
+    exact : the exact form (``ExactForm``) the nodes are computed by.
     probe : a flat disc or a bowl.
     sound_speed : [m/s].
     shortest_wavelength : [m] at the pulse's highest frequency.
