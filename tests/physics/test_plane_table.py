@@ -28,15 +28,12 @@ MM = 1e-3
 
 
 def _model(
-    radius: float,
-    f0: float,
-    h: float,
-    curvature: float | None = None,
-    fs: float = 100e6,
-    **kw: object,
+    radius: float, f0: float, h: float, curvature: float | None = None, **kw: object
 ) -> WaveEchoModel:
     """A wave model whose window (41 µs at ``fs`` [Hz]) holds the echo of a plane ``h`` [m]
-    away; ``kw`` go to :class:`~echocal.wave.WaveEchoModel`."""
+    away (``fs`` [Hz] in ``kw``, else 100 MHz); the rest of ``kw`` go to
+    :class:`~echocal.wave.WaveEchoModel`."""
+    fs = float(kw.pop("fs", 100e6))  # type: ignore[arg-type]
     start = max(0.0, 2 * h / C - 10e-6)
     window = RecordingWindow(fs=fs, start=start, n_samples=round(4096 * fs / 100e6))
     return WaveEchoModel(

@@ -618,10 +618,7 @@ class WaveEchoModel:
         return self._exact_image_spectrum(plane, coefficient, delay)
 
     def _exact_image_spectrum(
-        self,
-        plane: image.ImagePlane,
-        coefficient: complex | None = None,
-        delay: float = 0.0,
+        self, plane: image.ImagePlane, coefficient: complex | None = None, delay: float = 0.0
     ) -> tuple[NDArray[np.complex128], float]:
         """:meth:`image_spectrum` by the exact form, never the table."""
         if (coefficient is not None or self.reflection is None) and self._pairs_pay(plane):
