@@ -265,6 +265,16 @@ def face_samples(
     return points.copy(), weights.copy()
 
 
+@functools.lru_cache(maxsize=256)
+def _gauss_legendre(n: int) -> tuple[FloatArray, FloatArray]:
+    """The ``n``-point Gauss–Legendre nodes and weights on [−1, 1] (cached: numpy solves an
+    eigenvalue problem each time, 1–2 ms at a few dozen nodes; do not modify)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = False
+    w.flags.writeable = False
+    return x, w
+
+
 @functools.lru_cache(maxsize=64)
 def _face_samples(
     a: float,
@@ -274,7 +284,7 @@ def _face_samples(
     symmetry: tuple[float, float] | None = None,
     bandwidth: float = 0.0,
 ) -> tuple[FloatArray, FloatArray]:
-    x, w = np.polynomial.legendre.leggauss(n_rings)  # on [−1, 1]
+    x, w = _gauss_legendre(n_rings)  # on [−1, 1]
     if curvature is None:
         s = 0.5 * (x + 1.0) * a * a
         rho = np.sqrt(s)
@@ -411,7 +421,7 @@ def face_quadrature(
 def _ring_radii(a: float, n_rings: int) -> FloatArray:
     """[m] the ring radii ``(n_rings,)`` of :func:`face_samples`' rule on a flat disc of
     radius ``a`` [m]: Gauss–Legendre nodes in s = ρ² on [0, a²] (cached: do not modify)."""
-    x, _ = np.polynomial.legendre.leggauss(n_rings)
+    x, _ = _gauss_legendre(n_rings)
     radii: FloatArray = np.sqrt(0.5 * (x + 1.0) * a * a)
     radii.flags.writeable = False
     return radii
