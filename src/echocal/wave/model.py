@@ -53,6 +53,7 @@ lowers the centre frequency as it should.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -69,8 +70,8 @@ from echocal.signal.window import RecordingWindow
 from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
 from echocal.specimen.sphere import Sphere
-from echocal.wave import image, pairs, sir
-from echocal.wave.probe import Aperture
+from echocal.wave import ball_table, image, pairs, sir
+from echocal.wave.probe import Aperture, PistonProbe
 from echocal.wave.threads import one_way_grid, two_way_grid
 
 __all__ = ["WaveEchoModel"]
@@ -203,6 +204,7 @@ class WaveEchoModel:
     reflection: Callable[[FloatArray], NDArray[np.complex128]] | None = None
     spacing: float | None = None
     image_planes: bool = True
+    tables: bool = True
 
     # ------------------------------------------------------------------ derived constants
     @cached_property
@@ -750,6 +752,79 @@ class WaveEchoModel:
             if path_time > 0.0:
                 spectrum *= self.attenuation_factor(self.sound_speed * path_time)
             return self.samples(spectrum)
+        echo = self._ball_echo(shapes, position, frame) if self.tables else None
+        spectrum, t_echo = echo if echo is not None else self.kirchhoff_echo(shapes, position, frame)
+        if t_echo > 0.0:
+            # every contribution arriving at two-way time t has travelled c·t in the medium:
+            # the echo is attenuated over the path c·t of its envelope peak
+            spectrum = spectrum * self.attenuation_factor(self.sound_speed * t_echo)
+        return self.samples(spectrum)
+
+    def _ball_echo(
+        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+    ) -> tuple[NDArray[np.complex128], float] | None:
+        """:meth:`kirchhoff_echo` over a lone ball from its table (``echocal.wave.ball_table``),
+        or None where the exact sum applies (another scene or probe, or a grid that does not
+        hold the whole echo)."""
+        if not isinstance(self.probe, PistonProbe):
+            return None
+        pose = ball_table.ball_pose(shapes, position, frame, self.probe.radius)
+        if pose is None or not self._ball_fits(pose):
+            return None
+        return self._ball_lookup(pose)
+
+    def _ball_bounds(self, pose: ball_table.BallPose) -> tuple[float, float]:
+        """[s] the times before and after τ = 2(D − R)/c that must lie on the grid for the
+        whole echo at ``pose`` to (``ball_table.span``), each widened by the pulse's
+        half-support and four grid steps."""
+        _, dt, _, _ = self._grid
+        cap = self._cap(*ball_table.canonical_pose(pose.radius, pose.distance, pose.angle))
+        assert cap is not None, "ball_pose took it"
+        margin = self.pulse.support + 4.0 * dt
+        early, late = ball_table.span(
+            pose, self.probe.radius, self.probe.depth, self.sound_speed, cap.radius
+        )
+        return early + margin, late + margin
+
+    def _ball_fits(self, pose: ball_table.BallPose) -> bool:
+        """Whether the grid holds the whole echo at ``pose`` (``_ball_bounds``)."""
+        before, after = self._ball_bounds(pose)
+        tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
+        return tau - before >= self._t0 and tau + after <= self._t0 + self.grid_period
+
+    def _ball_node(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
+        """The table's node at ``pose``: :meth:`kirchhoff_echo` at the canonical pose, its
+        window moved so that the whole echo lies on the grid, times e^{i2πf(τ − t₀)}; and
+        its envelope's peak time less τ [s] (0 if the medium is lossless)."""
+        tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
+        before, _ = self._ball_bounds(pose)
+        m, _, pad, _ = self._grid
+        start = tau - before + pad * m / self.window.fs
+        node = dataclasses.replace(
+            self, window=dataclasses.replace(self.window, start=start), tables=False
+        )
+        spectrum, t_echo = node.kirchhoff_echo(
+            *ball_table.canonical_pose(pose.radius, pose.distance, abs(pose.angle))
+        )
+        shift = np.exp(2j * math.pi * self._frequencies * (tau - node._t0))
+        return spectrum * shift, (t_echo - tau if t_echo > 0.0 else 0.0)
+
+    def _ball_lookup(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
+        """PLACEHOLDER: the node at the pose itself, re-modulated."""
+        spectrum, offset = self._ball_node(pose)
+        tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
+        shift = np.exp(-2j * math.pi * self._frequencies * (tau - self._t0))
+        return spectrum * shift, (tau + offset if self.attenuation is not None else 0.0)
+
+    def kirchhoff_echo(
+        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+    ) -> tuple[NDArray[np.complex128], float]:
+        """The Kirchhoff sum's echo spectrum at one pose (:meth:`surface_samples`, R(θ) at
+        each sample's incidence from the face centre, :meth:`spectrum`), before the
+        medium's attenuation, and the time [s] of its envelope's peak (the path c·t it is
+        attenuated over; 0 when the medium is lossless or nothing contributes).
+
+        ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n."""
         points, unit_m, area = self.surface_samples(shapes, position, frame)
         reflection = None
         if self.reflection is not None:
@@ -758,15 +833,11 @@ class WaveEchoModel:
             theta = np.degrees(np.arccos(np.clip(cos_theta, 0.0, 1.0)))
             reflection = np.asarray(self.reflection(theta), dtype=np.complex128)
         spectrum, path_time = self.spectrum(points, unit_m, area, reflection)
-        if self.attenuation is not None and path_time > 0.0:
-            # every contribution arriving at two-way time t has travelled c·t in the medium:
-            # the echo is attenuated over the path c·t of its envelope peak
-            _, dt, _, n_fft = self._grid
-            echo = scipy.fft.irfft(spectrum, n=n_fft)
-            analytic = analytic_signal(echo)
-            t_echo = self._t0 + dt * float(np.argmax(np.abs(analytic)))
-            spectrum *= self.attenuation_factor(self.sound_speed * t_echo)
-        return self.samples(spectrum)
+        if self.attenuation is None or path_time <= 0.0:
+            return spectrum, 0.0
+        _, dt, _, n_fft = self._grid
+        analytic = analytic_signal(scipy.fft.irfft(spectrum, n=n_fft))
+        return spectrum, self._t0 + dt * float(np.argmax(np.abs(analytic)))
 
     def attenuation_factor(self, path: float) -> NDArray[np.float64]:
         """exp(−α(f)·path) of the medium on the grid's frequencies (path [m]); 1 if lossless."""

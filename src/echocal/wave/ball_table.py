@@ -1,0 +1,122 @@
+"""The echo of a lone ball from a table over its two invariants.
+
+A circular piston (flat or a bowl) and a ball are symmetric enough that the whole echo
+spectrum, R(θ) at each surface point's incidence from the face centre included, depends
+on two numbers only: D, the distance from the face centre (a bowl's apex) to the ball's
+centre, and ψ, the angle between the beam axis and the line to the centre.  Any pose
+turns into the canonical one (the ball's centre at the origin, the face centre at
+(0, 0, D), the axis turned by ψ off the line to the centre towards +x) by a rotation
+about the ball's centre and one about the probe's own axis, neither of which changes the
+Kirchhoff integral.
+
+The table's nodes are that canonical pose's echo through the exact Kirchhoff sum
+(``WaveEchoModel.kirchhoff_echo``), demodulated by the two-way delay τ = 2(D − R)/c of the
+path from the face centre to the ball's top (with the grid's first time t₀: the spectrum
+times e^{i2πf(τ − t₀)}), so that what is interpolated varies only as the echo's shape
+does: in ψ like the probe's two-way directivity towards the centre (its lobes about
+λ/(2a) apart in sin ψ), in D by diffraction (the rim's path excess a²/(D − R)).
+The lookup re-modulates with the query's own τ and t₀.
+
+Each node is computed with its recording window moved so that the whole echo (``span``)
+lies on the grid; a query whose grid does not hold the whole echo (the exact sum would
+drop what falls off it) takes the exact sum instead.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from echocal.specimen.base import Shape
+from echocal.specimen.sphere import Sphere
+
+__all__ = ["BallPose", "ball_pose", "canonical_pose", "span"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclasses.dataclass(frozen=True)
+class BallPose:
+    """A probe's pose over a ball, by its invariants.
+
+    Attributes
+    ----------
+    radius : [m] the ball's radius R.
+    distance : [m] D, from the face centre (a bowl's apex) to the ball's centre.
+    angle : [rad] ψ, between the beam axis and the line from the face centre to the centre.
+    """
+
+    radius: float
+    distance: float
+    angle: float
+
+
+def ball_pose(
+    shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray, face_radius: float
+) -> BallPose | None:
+    """The invariants of a pose over one ball whose surface keeps clear of the face by
+    more than ``face_radius`` [m] (the scenes ``WaveEchoModel._cap`` takes), or None.
+
+    ``position`` [m] ``(3,)``: the face centre; ``frame`` ``(3, 3)``: columns x', y', n
+    (the beam along −n)."""
+    if len(shapes) != 1 or not isinstance(shapes[0], Sphere):
+        return None
+    ball = shapes[0]
+    towards = ball.center - position
+    distance = float(np.linalg.norm(towards))
+    if distance <= ball.radius + face_radius:
+        return None
+    cos_angle = float(-(frame[:, 2] @ towards)) / distance
+    return BallPose(float(ball.radius), distance, math.acos(min(1.0, max(-1.0, cos_angle))))
+
+
+def canonical_pose(
+    radius: float, distance: float, angle: float
+) -> tuple[tuple[Shape, ...], FloatArray, FloatArray]:
+    """The canonical scene of a ball of ``radius`` [m]: its centre at the origin, the face
+    centre at (0, 0, ``distance``) [m], the beam axis turned by ``angle`` [rad] from −z
+    towards +x.  Returns (shapes, position ``(3,)``, frame ``(3, 3)``)."""
+    s, c = math.sin(angle), math.cos(angle)
+    frame = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])  # columns x', y', n
+    return (Sphere(center=(0.0, 0.0, 0.0), radius=radius),), np.array([0.0, 0.0, distance]), frame
+
+
+def span(
+    pose: BallPose, face_radius: float, depth: float, sound_speed: float, cap_radius: float
+) -> tuple[float, float]:
+    """[s] bounds on the two-way times of a ball's echo before and after τ = 2(D − R)/c
+    (a face of ``face_radius`` a [m], a bowl ``depth`` [m] deep): (before, after).
+
+    Before: every path from a face point p to the surface is at least |p − C| − R (C the
+    ball's centre), and |p − C| ≥ D·cos ψ for a flat face (where D·sin ψ ≤ a; else
+    √(D² + a² − 2aD·sin ψ)), D − √(a² + depth²) for a bowl.  After: the cap's samples
+    (``WaveEchoModel._cap``: the fan's rays through a disc of ``cap_radius``/2 [m] about
+    the face centre from an apex D − R behind it) lie at most L from the face centre, L
+    where the fan's outermost ray meets the ball (its limb if that ray misses), so every
+    path is at most L + √(a² + depth²)."""
+    big_r, d = pose.radius, pose.distance
+    reach = math.hypot(face_radius, depth)
+    if depth > 0.0:
+        nearest = d - reach
+    else:
+        lateral = d * math.sin(pose.angle)
+        rho = min(face_radius, lateral)
+        nearest = math.sqrt(max(0.0, d * d + rho * rho - 2.0 * rho * lateral))
+    top = d - big_r
+    # the outermost ray in the cap's frame: from (0, 0, −top) through (cap_radius/2, 0, 0);
+    # the ball's centre at (0, 0, d)
+    slope = 0.5 * cap_radius / top  # dx/dz
+    norm = math.sqrt(1.0 + slope * slope)
+    ux, uz = slope / norm, 1.0 / norm
+    # |(0, 0, −top) + t (ux, 0, uz) − (0, 0, d)|² = R²
+    b = -(top + d) * uz
+    disc = b * b - ((top + d) ** 2 - big_r * big_r)
+    if disc < 0.0:
+        far = math.sqrt(d * d - big_r * big_r)  # the limb
+    else:
+        t = -b - math.sqrt(disc)
+        far = math.hypot(t * ux, -top + t * uz)
+    return 2.0 * (d - nearest) / sound_speed, 2.0 * (far + reach - top) / sound_speed
