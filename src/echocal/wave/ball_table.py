@@ -32,10 +32,20 @@ from numpy.typing import NDArray
 
 from echocal.specimen.base import Shape
 from echocal.specimen.sphere import Sphere
+from echocal.wave.echo_table import TableAxis
 
-__all__ = ["BallPose", "ball_pose", "canonical_pose", "span"]
+__all__ = ["BallPose", "axes", "ball_pose", "canonical_pose", "span"]
 
-FloatArray = NDArray[np.float64]
+ANGLE_STEP = 1.0 / 7.0
+"""ψ's step [rad] in units of λ_hi/(2a) (λ_hi at the pulse's highest frequency, a the face's
+radius): the scale on which the two-way directivity towards the centre varies."""
+DISTANCE_PHASE_STEP = 0.3
+"""ln D's step in units of (R + a)/(k_hi·a²) (k_hi = 2π/λ_hi, R the ball's radius): the rim's
+path excess over the centre's, a²/(2D) each way, turns its two-way phase by at most this
+[rad] per step at the nearest pose the table holds, D = R + a, and less farther out."""
+DISTANCE_STEP = 0.02
+"""ln D's largest step: the echo's amplitude and shape change with D by diffraction, as
+powers of D, interpolated far below 10⁻³ by a cubic over 2 % steps."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,6 +81,25 @@ def ball_pose(
         return None
     cos_angle = float(-(frame[:, 2] @ towards)) / distance
     return BallPose(float(ball.radius), distance, math.acos(min(1.0, max(-1.0, cos_angle))))
+
+
+def axes(
+    radius: float, face_radius: float, depth: float, shortest_wavelength: float
+) -> tuple[TableAxis, TableAxis]:
+    """The table's axes for a ball of ``radius`` R [m] under a face of ``face_radius`` a
+    [m] (a bowl ``depth`` [m] deep), λ_hi = ``shortest_wavelength`` [m]: u = ln(D/1 m) from
+    just above ln(R + √(a² + depth²)) (the nearest pose ``WaveEchoModel._cap`` takes) to
+    ln 100 (``DISTANCE_STEP``, ``DISTANCE_PHASE_STEP``), v = ψ [rad] from 0 (even: the
+    echo at −ψ is the one at ψ) past π (``ANGLE_STEP``)."""
+    reach = math.hypot(face_radius, depth)
+    nearest = radius + reach
+    k_hi = 2.0 * math.pi / shortest_wavelength
+    du = min(DISTANCE_STEP, DISTANCE_PHASE_STEP * nearest / (k_hi * face_radius * face_radius))
+    dv = ANGLE_STEP * shortest_wavelength / (2.0 * face_radius)
+    start = math.log(nearest) + 1e-9
+    u = TableAxis(start=start, step=du, count=max(4, math.ceil((math.log(100.0) - start) / du)))
+    v = TableAxis(start=0.0, step=dv, count=math.ceil(math.pi / dv) + 1, even=True)
+    return u, v
 
 
 def canonical_pose(

@@ -71,6 +71,7 @@ from echocal.specimen.base import Shape
 from echocal.specimen.casting import _cast_soa
 from echocal.specimen.sphere import Sphere
 from echocal.wave import ball_table, image, pairs, sir
+from echocal.wave.echo_table import EchoTable, significant_bins
 from echocal.wave.probe import Aperture, PistonProbe
 from echocal.wave.threads import one_way_grid, two_way_grid
 
@@ -128,6 +129,9 @@ leak falls as exp(−(2kσ sin θ)²/2), where a sin² taper's falls only as its
 sin² taper over 25 % of the cap gave 7.6× the echo's peak at 10°)."""
 _CAP_SIGMAS = 5.0
 """The cap's fan ends this many σ past its fully lit core (the weight 3·10⁻⁷ there)."""
+_TABLE_CUT = 1e-6
+"""A table's nodes keep the bins where the pulse's spectrum is at least this fraction of its
+peak (``echocal.wave.echo_table.significant_bins``)."""
 _FOOTPRINT_RAYS = 32
 """Rays on each of the footprint's two rings (rim and half radius) that must all hit the
 same plane for the image form."""
@@ -771,6 +775,9 @@ class WaveEchoModel:
         pose = ball_table.ball_pose(shapes, position, frame, self.probe.radius)
         if pose is None or not self._ball_fits(pose):
             return None
+        table = self._ball_table(pose.radius)
+        if not table.u.start <= math.log(pose.distance) <= table.u.stop:
+            return None  # nearer the face than the table's nodes can be, or very far
         return self._ball_lookup(pose)
 
     def _ball_bounds(self, pose: ball_table.BallPose) -> tuple[float, float]:
@@ -809,12 +816,37 @@ class WaveEchoModel:
         shift = np.exp(2j * math.pi * self._frequencies * (tau - node._t0))
         return spectrum * shift, (t_echo - tau if t_echo > 0.0 else 0.0)
 
+    @cached_property
+    def _ball_tables(self) -> dict[float, EchoTable]:
+        """The ball's tables (``echocal.wave.ball_table``), one per ball radius [m]."""
+        return {}
+
+    def _ball_table(self, radius: float) -> EchoTable:
+        """The table of a ball of ``radius`` [m] under this model's probe: u = ln(D/1 m),
+        v = ψ [rad] (even) (``ball_table.axes``), built on first use."""
+        table = self._ball_tables.get(radius)
+        if table is None:
+            assert isinstance(self.probe, PistonProbe), "_ball_echo checked it"
+            u, v = ball_table.axes(
+                radius, self.probe.radius, self.probe.depth, self._shortest_wavelength
+            )
+
+            def node(log_distance: float, angle: float) -> tuple[NDArray[np.complex128], float]:
+                return self._ball_node(ball_table.BallPose(radius, math.exp(log_distance), angle))
+
+            bins = significant_bins(np.abs(self.pulse.spectrum(self._frequencies)), _TABLE_CUT)
+            table = EchoTable(node, u, v, bins, self._frequencies.size)
+            self._ball_tables[radius] = table
+        return table
+
     def _ball_lookup(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
-        """PLACEHOLDER: the node at the pose itself, re-modulated."""
-        spectrum, offset = self._ball_node(pose)
+        """:meth:`kirchhoff_echo` at ``pose`` from the ball's table, re-modulated by
+        e^{−i2πf(τ − t₀)}, and the envelope's peak time [s] (0 if the medium is lossless)."""
+        table = self._ball_table(pose.radius)
+        spectrum, offset = table(math.log(pose.distance), pose.angle)
         tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
-        shift = np.exp(-2j * math.pi * self._frequencies * (tau - self._t0))
-        return spectrum * shift, (tau + offset if self.attenuation is not None else 0.0)
+        spectrum *= np.exp(-2j * math.pi * self._frequencies * (tau - self._t0))
+        return spectrum, (tau + offset if self.attenuation is not None else 0.0)
 
     def kirchhoff_echo(
         self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
