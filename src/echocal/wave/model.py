@@ -132,6 +132,12 @@ _CAP_SIGMAS = 5.0
 _TABLE_CUT = 1e-6
 """A table's nodes keep the bins where the pulse's spectrum is at least this fraction of its
 peak (``echocal.wave.echo_table.significant_bins``)."""
+_TABLE_REFINE = 0.7
+"""A ball's table computes its nodes with the surface samples this fraction of the spacing
+rules apart: at the rules' own spacing (1.5 times the two-way Nyquist spacing over the
+cap) the sum's aliasing error changes with the lattice's scale, hence from pose to pose, by
+up to a few tenths of a percent of the echo's peak (4 mm probe, 1.3° off a 28 mm ball:
+interpolating over 4 × 4 nodes made 0.32 %); at 0.7 of it 0.018 % (and 0.035 % at 0.5)."""
 _FOOTPRINT_RAYS = 32
 """Rays on each of the footprint's two rings (rim and half radius) that must all hit the
 same plane for the image form."""
@@ -696,9 +702,14 @@ class WaveEchoModel:
         return self._image_transfer / pairs.smoothing(self._frequencies, dt)
 
     def surface_samples(
-        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
+        self,
+        shapes: tuple[Shape, ...],
+        position: FloatArray,
+        frame: FloatArray,
+        refine: float = 1.0,
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Surface samples seen by the probe at one pose, in the aperture frame.
+        """Surface samples seen by the probe at one pose, in the aperture frame, ``refine``
+        times as far apart as the spacing rules (or ``spacing``) ask.
 
         Returns
         -------
@@ -717,7 +728,7 @@ class WaveEchoModel:
             spacing = self._sample_spacing(shapes, sin_axis)
             if self.spacing is None and not all(shape.kind == "plane" for shape in shapes):
                 spacing = min(spacing, self._curved_spacing(shapes, position, frame, distance))
-        origins, dirs, solid_angle, apex = self._fan(distance, spacing, cap)
+        origins, dirs, solid_angle, apex = self._fan(distance, refine * spacing, cap)
         o, d = self._to_world(origins, dirs, position, frame)
         t, normal, _ = _cast_soa(shapes, o, d)
         hit = np.isfinite(t)
@@ -800,21 +811,33 @@ class WaveEchoModel:
         return tau - before >= self._t0 and tau + after <= self._t0 + self.grid_period
 
     def _ball_node(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
-        """The table's node at ``pose``: :meth:`kirchhoff_echo` at the canonical pose, its
-        window moved so that the whole echo lies on the grid, times e^{i2πf(τ − t₀)}; and
-        its envelope's peak time less τ [s] (0 if the medium is lossless)."""
+        """The table's node at ``pose``: the Kirchhoff sum's echo at the canonical pose
+        (:meth:`kirchhoff_echo`), its window moved so that the whole echo lies on the grid,
+        times e^{i2πf(τ − t₀)}, averaged over two grids one step Δ_g apart; and its
+        envelope's peak time less τ [s] (0 if the medium is lossless).
+
+        The two-way deposit bins each one-way SIR from half the grid's first time, so the
+        sum's small aliasing error repeats when the grid moves by 2Δ_g and changes sign,
+        to first order, when it moves by Δ_g (a 3 mm probe 45 mm above a 29 mm ball, 5°
+        off it: 0.87 % of the echo's peak between the two): the mean of the two leaves
+        the nodes smooth in D and ψ, where the grid's phase τ − t₀ would vary from node to
+        node."""
         tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
         before, _ = self._ball_bounds(pose)
-        m, _, pad, _ = self._grid
-        start = tau - before + pad * m / self.window.fs
-        node = dataclasses.replace(
-            self, window=dataclasses.replace(self.window, start=start), tables=False
-        )
-        spectrum, t_echo = node.kirchhoff_echo(
-            *ball_table.canonical_pose(pose.radius, pose.distance, abs(pose.angle))
-        )
-        shift = np.exp(2j * math.pi * self._frequencies * (tau - node._t0))
-        return spectrum * shift, (t_echo - tau if t_echo > 0.0 else 0.0)
+        m, dt, pad, _ = self._grid
+        scene = ball_table.canonical_pose(pose.radius, pose.distance, abs(pose.angle))
+        samples = self._kirchhoff_samples(*scene, refine=_TABLE_REFINE)
+        spectrum = np.zeros_like(self._frequencies, dtype=np.complex128)
+        offset = 0.0
+        for step in (0, 1):
+            start = tau - before + (pad - step) * m / self.window.fs
+            node = dataclasses.replace(
+                self, window=dataclasses.replace(self.window, start=start), tables=False
+            )
+            part, t_echo = node._kirchhoff_spectrum(*samples)
+            spectrum += 0.5 * part * np.exp(2j * math.pi * self._frequencies * (tau - node._t0))
+            offset += 0.5 * (t_echo - tau if t_echo > 0.0 else 0.0)
+        return spectrum, offset
 
     @cached_property
     def _ball_tables(self) -> dict[float, EchoTable]:
@@ -857,13 +880,34 @@ class WaveEchoModel:
         attenuated over; 0 when the medium is lossless or nothing contributes).
 
         ``position`` [m] ``(3,)``; ``frame`` ``(3, 3)``, columns x', y', n."""
-        points, unit_m, area = self.surface_samples(shapes, position, frame)
+        return self._kirchhoff_spectrum(*self._kirchhoff_samples(shapes, position, frame))
+
+    def _kirchhoff_samples(
+        self,
+        shapes: tuple[Shape, ...],
+        position: FloatArray,
+        frame: FloatArray,
+        refine: float = 1.0,
+    ) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.complex128] | None]:
+        """:meth:`surface_samples` (``refine``) and R(θ) at each (None without a reflection
+        law)."""
+        points, unit_m, area = self.surface_samples(shapes, position, frame, refine)
         reflection = None
         if self.reflection is not None:
             r = np.linalg.norm(points, axis=0)
             cos_theta = np.abs(np.sum(unit_m * points, axis=0)) / np.maximum(r, 1e-300)
             theta = np.degrees(np.arccos(np.clip(cos_theta, 0.0, 1.0)))
             reflection = np.asarray(self.reflection(theta), dtype=np.complex128)
+        return points, unit_m, area, reflection
+
+    def _kirchhoff_spectrum(
+        self,
+        points: FloatArray,
+        unit_m: FloatArray,
+        area: FloatArray,
+        reflection: NDArray[np.complex128] | None,
+    ) -> tuple[NDArray[np.complex128], float]:
+        """:meth:`kirchhoff_echo` of given samples (:meth:`_kirchhoff_samples`)."""
         spectrum, path_time = self.spectrum(points, unit_m, area, reflection)
         if self.attenuation is None or path_time <= 0.0:
             return spectrum, 0.0
