@@ -15,7 +15,9 @@ thread), the others as wall-clock medians (``_common.measure``):
    (where the beam stays on the plate at 30°) and 50 mm above a 25 mm ball; where the
    image form applies also the wave model with the face rule only (the pair rule off), and
    on ``immersion-5mhz`` the compiled direct double Rayleigh sum (``_rayleigh_compiled``,
-   numba) at the same distance and incidence, and |V(5 MHz)| from both;
+   numba) at the same distance and incidence, and |V(5 MHz)| from both; over the ball the
+   wave column is the exact Kirchhoff sum (``tables=False``) and the table's columns the
+   default model: a warm query, and a fresh model's first query with the nodes it fills;
 2. one noiseless A-scan of ``immersion-5mhz`` near the optimum on the wave model against
    the ray model, its stages, and the Kirchhoff sum over the lit surface;
 3. the wave model against the compiled direct double Rayleigh sum for a piston over a
@@ -222,8 +224,10 @@ def tilt_table(
         for tilt in TILTS_DEG:
             frames = orientation_frame(np.array([azimuth]), np.array([coelevation + tilt]))
             t_ray = _cpu_per_call(lambda r=ray, p=pos, f=frames: r.ideal_samples(p, f), min_seconds)
+            over_ball = label.endswith("sphere")
+            exact = _exact_sum(wave) if over_ball else wave
             t_wave = _cpu_per_call(
-                lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
+                lambda w=exact, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
             )
             row: dict[str, float | str] = {
                 "setup": label,
@@ -232,6 +236,8 @@ def tilt_table(
                 "wave_s": t_wave,
                 "wave_over_ray": t_wave / t_ray,
             }
+            if over_ball:
+                row.update(_ball_table_costs(wave, pos, frames, min_seconds, t_ray, t_wave))
             plane = model.image_plane(shapes, position, frames[0], edges=True)  # as A-scans
             if plane is not None:
                 row["face_nodes"] = float(_face_nodes(model, plane))
@@ -246,6 +252,41 @@ def tilt_table(
                 row.update(_direct_sum(model, plane, n_freq, direct))
             rows.append(row)
     return rows
+
+
+def _exact_sum(setup: Any) -> Any:
+    """A copy of the wave ``setup`` whose model takes the exact Kirchhoff sum over a ball
+    (``WaveEchoModel(tables=False)``): the column before the ball's table."""
+    copy = dataclasses.replace(setup)
+    copy.__dict__["wave_model"] = dataclasses.replace(setup.wave_model, tables=False)
+    return copy
+
+
+def _ball_table_costs(
+    wave: Any,
+    positions: np.ndarray,
+    frames: np.ndarray,
+    min_seconds: float,
+    t_ray: float,
+    t_exact: float,
+) -> dict[str, float]:
+    """CPU time [s] of the ball's table (``echocal.wave.ball_table``) at one pose: its first
+    query on a fresh model (filling its nodes), how many nodes that filled, then a warm
+    query (per A-scan), and how many A-scans at the exact sum's cost the fill costs."""
+    fresh = dataclasses.replace(wave)  # a new model: empty tables
+    start = time.process_time()
+    fresh.ideal_samples(positions, frames)
+    first = time.process_time() - start
+    tables = fresh.wave_model._ball_tables
+    nodes = sum(table.nodes_filled for table, _ in tables.values())
+    warm = _cpu_per_call(lambda: fresh.ideal_samples(positions, frames), min_seconds)
+    return {
+        "table_s": warm,
+        "table_over_ray": warm / t_ray,
+        "table_first_s": first,
+        "table_nodes": float(nodes),
+        "table_payback": first / max(t_exact - warm, 1e-12),
+    }
 
 
 SETUP_KEYS = ("immersion-5mhz", "plate", "sphere")
@@ -312,6 +353,7 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         agree = (
             "—" if direct is None else f"{float(r['v5_wave']):.4g} / {float(r['v5_direct']):.4g}"
         )
+        table = r.get("table_s")
         body.append(
             [
                 r["setup"],
@@ -319,6 +361,12 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
                 fmt_time(float(r["ray_s"])),
                 fmt_time(float(r["wave_s"])),
                 f"{float(r['wave_over_ray']):.1f}x",
+                "—" if table is None else fmt_time(float(table)),
+                "—" if table is None else f"{float(r['table_over_ray']):.1f}x",
+                "—"
+                if table is None
+                else f"{fmt_time(float(r['table_first_s']))} / {r['table_nodes']:.0f}",
+                "—" if table is None else f"{float(r['table_payback']):.0f}",
                 "—" if before is None else fmt_time(float(before)),
                 "—" if before is None else f"{float(before) / float(r['ray_s']):.1f}x",
                 "—" if before is None else f"{r['pairs']:.0f} / {r['face_nodes']:.0f}",
@@ -333,6 +381,10 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         "ray (CPU)",
         "wave (CPU)",
         "wave / ray",
+        "table (CPU, warm)",
+        "table / ray",
+        "first query (CPU) / nodes",
+        "A-scans to pay it back",
         "wave, face rule (CPU)",
         "face rule / ray",
         "pairs / face nodes",
@@ -477,6 +529,16 @@ def main() -> None:
     print(tilt_markdown(table))
     worst = max(float(r["wave_over_ray"]) for r in table)
     print(f"HEADLINE wave / ray CPU time at 0-30 deg, both setups: at most {worst:.1f}x")
+    balls = [r for r in table if "table_s" in r]
+    if balls:
+        print(
+            "HEADLINE over the ball, the table (warm) / ray: at most "
+            f"{max(float(r['table_over_ray']) for r in balls):.1f}x (the exact sum at most "
+            f"{max(float(r['wave_over_ray']) for r in balls):.0f}x); a first query "
+            f"{fmt_time(min(float(r['table_first_s']) for r in balls))}–"
+            f"{fmt_time(max(float(r['table_first_s']) for r in balls))} CPU, paid back after "
+            f"{max(float(r['table_payback']) for r in balls):.0f} A-scans at most"
+        )
     if args.tilts_only:
         if args.json:
             args.json.write_text(json.dumps(result, indent=2, default=float), encoding="utf-8")

@@ -34,18 +34,47 @@ from echocal.specimen.base import Shape
 from echocal.specimen.sphere import Sphere
 from echocal.wave.echo_table import TableAxis
 
-__all__ = ["BallPose", "axes", "ball_pose", "canonical_pose", "span"]
+__all__ = [
+    "BallPose",
+    "axes",
+    "ball_pose",
+    "canonical_pose",
+    "distance_coordinate",
+    "distance_from_coordinate",
+    "span",
+]
 
 ANGLE_STEP = 1.0 / 7.0
 """ψ's step [rad] in units of λ_hi/(2a) (λ_hi at the pulse's highest frequency, a the face's
 radius): the scale on which the two-way directivity towards the centre varies."""
 DISTANCE_PHASE_STEP = 0.3
-"""ln D's step in units of (R + a)/(k_hi·a²) (k_hi = 2π/λ_hi, R the ball's radius): the rim's
-path excess over the centre's, a²/(2D) each way, turns its two-way phase by at most this
-[rad] per step at the nearest pose the table holds, D = R + a, and less farther out."""
+"""Near the ball, the step of the top's distance h = D − R is at most this [rad] over
+k_hi·a²/h² (k_hi = 2π/λ_hi, a the face's radius): the rim's two-way path excess over the
+face centre's, at most a²/h (the plane's), turns its phase by at most this per step."""
 DISTANCE_STEP = 0.02
-"""ln D's largest step: the echo's amplitude and shape change with D by diffraction, as
-powers of D, interpolated far below 10⁻³ by a cubic over 2 % steps."""
+"""Farther out, h's step is at most this fraction of h: the echo's amplitude and shape
+change with h by diffraction, as powers of h."""
+
+
+def distance_coordinate(top: float, knee: float) -> float:
+    """The table's u at the top's distance h = ``top`` [m]: ln(h/1 m) − h*/h, h* = ``knee``
+    [m] (``axes``).  Uniform steps ε in u are steps ε·h²/(h + h*) in h: the phase rule's
+    ε·h²/h* nearer than h*, ε·h beyond it."""
+    return math.log(top) - knee / top
+
+
+def distance_from_coordinate(u: float, knee: float) -> float:
+    """[m] the h whose ``distance_coordinate`` is ``u``: Newton's method on x = ln h, where
+    u(x) = x − h*·e^{−x} is increasing and concave, so that after the first step from
+    above the root (never below u) it climbs to it monotonically, to machine precision."""
+    x = max(u, math.log(knee)) + 1.0  # ln h, above the root
+    for _ in range(100):
+        h = math.exp(x)
+        step = (x - knee / h - u) / (1.0 + knee / h)
+        x -= step
+        if abs(step) < 1e-15 * max(1.0, abs(x)):
+            break
+    return math.exp(x)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,22 +113,23 @@ def ball_pose(
 
 
 def axes(
-    radius: float, face_radius: float, depth: float, shortest_wavelength: float
-) -> tuple[TableAxis, TableAxis]:
-    """The table's axes for a ball of ``radius`` R [m] under a face of ``face_radius`` a
-    [m] (a bowl ``depth`` [m] deep), λ_hi = ``shortest_wavelength`` [m]: u = ln(D/1 m) from
-    just above ln(R + √(a² + depth²)) (the nearest pose ``WaveEchoModel._cap`` takes) to
-    ln 100 (``DISTANCE_STEP``, ``DISTANCE_PHASE_STEP``), v = ψ [rad] from 0 (even: the
-    echo at −ψ is the one at ψ) past π (``ANGLE_STEP``)."""
-    reach = math.hypot(face_radius, depth)
-    nearest = radius + reach
+    face_radius: float, depth: float, shortest_wavelength: float
+) -> tuple[TableAxis, TableAxis, float]:
+    """A ball's table's axes under a face of ``face_radius`` a [m] (a bowl ``depth`` [m]
+    deep), λ_hi = ``shortest_wavelength`` [m]: u = ``distance_coordinate`` of the top's
+    distance h = D − R from just above √(a² + depth²) (the nearest pose
+    ``WaveEchoModel._cap`` takes) to 100 m, its knee h* = ``DISTANCE_STEP``·k_hi·a² /
+    ``DISTANCE_PHASE_STEP``; v = ψ [rad] from 0 (even: the echo at −ψ is the one at ψ) past
+    π (``ANGLE_STEP``).  Returns (u, v, h*)."""
+    nearest = math.hypot(face_radius, depth) * (1.0 + 1e-9)
     k_hi = 2.0 * math.pi / shortest_wavelength
-    du = min(DISTANCE_STEP, DISTANCE_PHASE_STEP * nearest / (k_hi * face_radius * face_radius))
+    knee = DISTANCE_STEP * k_hi * face_radius * face_radius / DISTANCE_PHASE_STEP
+    start = distance_coordinate(nearest, knee)
+    count = math.ceil((distance_coordinate(100.0, knee) - start) / DISTANCE_STEP) + 1
+    u = TableAxis(start=start, step=DISTANCE_STEP, count=max(4, count))
     dv = ANGLE_STEP * shortest_wavelength / (2.0 * face_radius)
-    start = math.log(nearest) + 1e-9
-    u = TableAxis(start=start, step=du, count=max(4, math.ceil((math.log(100.0) - start) / du)))
     v = TableAxis(start=0.0, step=dv, count=math.ceil(math.pi / dv) + 1, even=True)
-    return u, v
+    return u, v, knee
 
 
 def canonical_pose(

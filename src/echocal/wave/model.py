@@ -786,8 +786,9 @@ class WaveEchoModel:
         pose = ball_table.ball_pose(shapes, position, frame, self.probe.radius)
         if pose is None or not self._ball_fits(pose):
             return None
-        table = self._ball_table(pose.radius)
-        if not table.u.start <= math.log(pose.distance) <= table.u.stop:
+        table, knee = self._ball_table(pose.radius)
+        u = ball_table.distance_coordinate(pose.distance - pose.radius, knee)
+        if not table.u.start <= u <= table.u.stop:
             return None  # nearer the face than the table's nodes can be, or very far
         return self._ball_lookup(pose)
 
@@ -840,34 +841,37 @@ class WaveEchoModel:
         return spectrum, offset
 
     @cached_property
-    def _ball_tables(self) -> dict[float, EchoTable]:
+    def _ball_tables(self) -> dict[float, tuple[EchoTable, float]]:
         """The ball's tables (``echocal.wave.ball_table``), one per ball radius [m]."""
         return {}
 
-    def _ball_table(self, radius: float) -> EchoTable:
-        """The table of a ball of ``radius`` [m] under this model's probe: u = ln(D/1 m),
-        v = ψ [rad] (even) (``ball_table.axes``), built on first use."""
-        table = self._ball_tables.get(radius)
-        if table is None:
+    def _ball_table(self, radius: float) -> tuple[EchoTable, float]:
+        """The table of a ball of ``radius`` [m] under this model's probe and its knee h*
+        [m] (``ball_table.axes``: u from the top's distance h = D − R, v = ψ [rad]), built
+        on first use."""
+        entry = self._ball_tables.get(radius)
+        if entry is None:
             assert isinstance(self.probe, PistonProbe), "_ball_echo checked it"
-            u, v = ball_table.axes(
-                radius, self.probe.radius, self.probe.depth, self._shortest_wavelength
+            u, v, knee = ball_table.axes(
+                self.probe.radius, self.probe.depth, self._shortest_wavelength
             )
 
-            def node(log_distance: float, angle: float) -> tuple[NDArray[np.complex128], float]:
-                return self._ball_node(ball_table.BallPose(radius, math.exp(log_distance), angle))
+            def node(coordinate: float, angle: float) -> tuple[NDArray[np.complex128], float]:
+                top = ball_table.distance_from_coordinate(coordinate, knee)
+                return self._ball_node(ball_table.BallPose(radius, radius + top, angle))
 
             bins = significant_bins(np.abs(self.pulse.spectrum(self._frequencies)), _TABLE_CUT)
-            table = EchoTable(node, u, v, bins, self._frequencies.size)
-            self._ball_tables[radius] = table
-        return table
+            entry = (EchoTable(node, u, v, bins, self._frequencies.size), knee)
+            self._ball_tables[radius] = entry
+        return entry
 
     def _ball_lookup(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
         """:meth:`kirchhoff_echo` at ``pose`` from the ball's table, re-modulated by
         e^{−i2πf(τ − t₀)}, and the envelope's peak time [s] (0 if the medium is lossless)."""
-        table = self._ball_table(pose.radius)
-        spectrum, offset = table(math.log(pose.distance), pose.angle)
-        tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
+        table, knee = self._ball_table(pose.radius)
+        top = pose.distance - pose.radius
+        spectrum, offset = table(ball_table.distance_coordinate(top, knee), pose.angle)
+        tau = 2.0 * top / self.sound_speed
         spectrum *= np.exp(-2j * math.pi * self._frequencies * (tau - self._t0))
         return spectrum, (tau + offset if self.attenuation is not None else 0.0)
 
