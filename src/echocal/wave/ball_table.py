@@ -113,18 +113,22 @@ def ball_pose(
 
 
 def axes(
-    face_radius: float, depth: float, shortest_wavelength: float
+    face_radius: float, depth: float, shortest_wavelength: float, anchor: float
 ) -> tuple[TableAxis, TableAxis, float]:
     """A ball's table's axes under a face of ``face_radius`` a [m] (a bowl ``depth`` [m]
     deep), λ_hi = ``shortest_wavelength`` [m]: u = ``distance_coordinate`` of the top's
     distance h = D − R from just above √(a² + depth²) (the nearest pose
     ``WaveEchoModel._cap`` takes) to 100 m, its knee h* = ``DISTANCE_STEP``·k_hi·a² /
-    ``DISTANCE_PHASE_STEP``; v = ψ [rad] from 0 (even: the echo at −ψ is the one at ψ) past
-    π (``ANGLE_STEP``).  Returns (u, v, h*)."""
+    ``DISTANCE_PHASE_STEP``, with a node at h = ``anchor`` [m] (the first query's: every
+    later one from the same position, as the orientations of a lobe or a calibration,
+    needs the nodes of that line only); v = ψ [rad] from 0 (even: the echo at −ψ is the one
+    at ψ) past π (``ANGLE_STEP``).  Returns (u, v, h*)."""
     nearest = math.hypot(face_radius, depth) * (1.0 + 1e-9)
     k_hi = 2.0 * math.pi / shortest_wavelength
     knee = DISTANCE_STEP * k_hi * face_radius * face_radius / DISTANCE_PHASE_STEP
-    start = distance_coordinate(nearest, knee)
+    lowest = distance_coordinate(nearest, knee)
+    on = distance_coordinate(max(anchor, nearest), knee)
+    start = on - math.floor((on - lowest) / DISTANCE_STEP) * DISTANCE_STEP
     count = math.ceil((distance_coordinate(100.0, knee) - start) / DISTANCE_STEP) + 1
     u = TableAxis(start=start, step=DISTANCE_STEP, count=max(4, count))
     dv = ANGLE_STEP * shortest_wavelength / (2.0 * face_radius)

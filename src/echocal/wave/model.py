@@ -786,7 +786,7 @@ class WaveEchoModel:
         pose = ball_table.ball_pose(shapes, position, frame, self.probe.radius)
         if pose is None or not self._ball_fits(pose):
             return None
-        table, knee = self._ball_table(pose.radius)
+        table, knee = self._ball_table(pose.radius, pose.distance - pose.radius)
         u = ball_table.distance_coordinate(pose.distance - pose.radius, knee)
         if not table.u.start <= u <= table.u.stop:
             return None  # nearer the face than the table's nodes can be, or very far
@@ -845,15 +845,15 @@ class WaveEchoModel:
         """The ball's tables (``echocal.wave.ball_table``), one per ball radius [m]."""
         return {}
 
-    def _ball_table(self, radius: float) -> tuple[EchoTable, float]:
+    def _ball_table(self, radius: float, top: float) -> tuple[EchoTable, float]:
         """The table of a ball of ``radius`` [m] under this model's probe and its knee h*
         [m] (``ball_table.axes``: u from the top's distance h = D − R, v = ψ [rad]), built
-        on first use."""
+        on first use with a node at h = ``top`` [m]."""
         entry = self._ball_tables.get(radius)
         if entry is None:
             assert isinstance(self.probe, PistonProbe), "_ball_echo checked it"
             u, v, knee = ball_table.axes(
-                self.probe.radius, self.probe.depth, self._shortest_wavelength
+                self.probe.radius, self.probe.depth, self._shortest_wavelength, top
             )
 
             def node(coordinate: float, angle: float) -> tuple[NDArray[np.complex128], float]:
@@ -868,8 +868,8 @@ class WaveEchoModel:
     def _ball_lookup(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
         """:meth:`kirchhoff_echo` at ``pose`` from the ball's table, re-modulated by
         e^{−i2πf(τ − t₀)}, and the envelope's peak time [s] (0 if the medium is lossless)."""
-        table, knee = self._ball_table(pose.radius)
         top = pose.distance - pose.radius
+        table, knee = self._ball_table(pose.radius, top)
         spectrum, offset = table(ball_table.distance_coordinate(top, knee), pose.angle)
         tau = 2.0 * top / self.sound_speed
         spectrum *= np.exp(-2j * math.pi * self._frequencies * (tau - self._t0))
