@@ -65,9 +65,9 @@ HOLDOUT = [
     # (probe radius [m], ball radius [m], height [m], lateral [m], tilt [deg])
     (float(a), float(r), float(h), float(x), float(t))
     for a, r, h, x, t in zip(
-        *np.random.default_rng(SEED).uniform(
-            [1.5e-3, 0.020, 0.015, -3e-3, 0.0], [4.5e-3, 0.040, 0.060, 3e-3, 6.0], (6, 5)
-        ).T,
+        *np.random.default_rng(SEED)
+        .uniform([1.5e-3, 0.020, 0.015, -3e-3, 0.0], [4.5e-3, 0.040, 0.060, 3e-3, 6.0], (6, 5))
+        .T,
         strict=True,
     )
 ]
@@ -101,11 +101,13 @@ def _anchor_half_a_step_away(
 def test_the_table_is_the_converged_sum_off_its_nodes(
     a: float, radius: float, height: float, lateral: float, tilt: float
 ) -> None:
-    """Within 0.4 % of the echo's peak of the converged Kirchhoff sum (measured 0.09, 0.08,
-    0.07, 0.05, 0.24 and 0.02 %; the sum at the rules' own spacing, what the model takes
-    with the table off, is 1.3, 0.81, 0.15, 0.16, 0.42 and 0.31 % off it here: the table's
-    nodes sample the cap at 0.7 of that spacing, ``_TABLE_REFINE``).  The ball's physics
-    tests allow 1 % at 0–5° (tests/physics/test_ball.py)."""
+    """Within 0.5 % of the echo's peak of the converged Kirchhoff sum, the pose midway
+    between nodes in u (measured 0.10, 0.08, 0.07, 0.05, 0.34 and 0.02 %; the converged
+    sum agrees with itself at 0.5 of the rules' spacing to 0.01–0.12 %, to 0.31 % at the
+    fifth pose).  The sum at the rules' own spacing, what the model takes with the table
+    off, is 1.3, 0.81, 0.15, 0.17, 0.35 and 0.31 % off it here: the table's nodes sample the
+    cap at 0.7 of that spacing (``_TABLE_REFINE``).  The ball's physics tests allow 1 % at
+    0–5° (tests/physics/test_ball.py)."""
     model = _model(a, height)
     ball = (Sphere(center=(0.0, 0.0, -radius), radius=radius),)
     position, frame = _pose(tilt, lateral, height)
@@ -113,7 +115,7 @@ def test_the_table_is_the_converged_sum_off_its_nodes(
     got = model.ascans(ball, position, frame)[0]
     assert model._ball_tables[radius][0].nodes_filled > 4, "the table answered"
     want = _converged(dataclasses.replace(model, tables=False), ball, position, frame)
-    assert _gated_error(model, got, want, height) < 4e-3
+    assert _gated_error(model, got, want, height) < 5e-3
 
 
 @pytest.mark.slow
@@ -141,7 +143,13 @@ def test_the_table_is_nearer_physical_optics_than_the_sum_it_replaces(case: int)
     df = 50e3
     f = np.arange(0.8e6, 10.5e6, df)
     v = ref.pulse_echo_ball_kirchhoff(a, f, top, radius, psi, t_echo + 3.5e-6, C)
-    want = 2.0 * df * np.real(np.exp(2j * np.pi * np.outer(t[gate], f)) @ (model.pulse.spectrum(f) * np.conj(v)))
+    want = (
+        2.0
+        * df
+        * np.real(
+            np.exp(2j * np.pi * np.outer(t[gate], f)) @ (model.pulse.spectrum(f) * np.conj(v))
+        )
+    )
     peak = float(np.abs(want).max())
     table_error = float(np.abs(got[gate] - want).max()) / peak
     exact_error = float(np.abs(exact[gate] - want).max()) / peak

@@ -44,6 +44,8 @@ __all__ = [
     "span",
 ]
 
+FloatArray = NDArray[np.float64]
+
 ANGLE_STEP = 1.0 / 7.0
 """ψ's step [rad] in units of λ_hi/(2a) (λ_hi at the pulse's highest frequency, a the face's
 radius): the scale on which the two-way directivity towards the centre varies."""

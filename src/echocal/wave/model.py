@@ -768,7 +768,9 @@ class WaveEchoModel:
                 spectrum *= self.attenuation_factor(self.sound_speed * path_time)
             return self.samples(spectrum)
         echo = self._ball_echo(shapes, position, frame) if self.tables else None
-        spectrum, t_echo = echo if echo is not None else self.kirchhoff_echo(shapes, position, frame)
+        spectrum, t_echo = (
+            echo if echo is not None else self.kirchhoff_echo(shapes, position, frame)
+        )
         if t_echo > 0.0:
             # every contribution arriving at two-way time t has travelled c·t in the medium:
             # the echo is attenuated over the path c·t of its envelope peak
@@ -825,7 +827,7 @@ class WaveEchoModel:
         node."""
         tau = 2.0 * (pose.distance - pose.radius) / self.sound_speed
         before, _ = self._ball_bounds(pose)
-        m, dt, pad, _ = self._grid
+        m, _, pad, _ = self._grid
         scene = ball_table.canonical_pose(pose.radius, pose.distance, abs(pose.angle))
         samples = self._kirchhoff_samples(*scene, refine=_TABLE_REFINE)
         spectrum = np.zeros_like(self._frequencies, dtype=np.complex128)
