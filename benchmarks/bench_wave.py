@@ -271,21 +271,33 @@ def _ball_table_costs(
     t_exact: float,
 ) -> dict[str, float]:
     """CPU time [s] of the ball's table (``echocal.wave.ball_table``) at one pose: its first
-    query on a fresh model (filling its nodes), how many nodes that filled, then a warm
-    query (per A-scan), and how many A-scans at the exact sum's cost the fill costs."""
+    query on a fresh model (filling its nodes: the table's distance grid holds the first
+    query's, so 1–4 nodes), how many nodes that filled, a warm query (per A-scan), how many
+    A-scans at the exact sum's cost the fill costs; and the first query from a position
+    1 mm aside (its distance and angle between nodes: up to 16 new nodes)."""
     fresh = dataclasses.replace(wave)  # a new model: empty tables
+    tables = fresh.wave_model._ball_tables
+
+    def filled() -> int:
+        return sum(table.nodes_filled for table, _ in tables.values())
+
     start = time.process_time()
     fresh.ideal_samples(positions, frames)
     first = time.process_time() - start
-    tables = fresh.wave_model._ball_tables
-    nodes = sum(table.nodes_filled for table, _ in tables.values())
+    nodes = filled()
     warm = _cpu_per_call(lambda: fresh.ideal_samples(positions, frames), min_seconds)
+    aside = positions + np.array([[1e-3, 0.0, 0.0]])
+    start = time.process_time()
+    fresh.ideal_samples(aside, frames)
+    other = time.process_time() - start
     return {
         "table_s": warm,
         "table_over_ray": warm / t_ray,
         "table_first_s": first,
         "table_nodes": float(nodes),
         "table_payback": first / max(t_exact - warm, 1e-12),
+        "table_aside_s": other,
+        "table_aside_nodes": float(filled() - nodes),
     }
 
 
@@ -367,6 +379,9 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
                 if table is None
                 else f"{fmt_time(float(r['table_first_s']))} / {r['table_nodes']:.0f}",
                 "—" if table is None else f"{float(r['table_payback']):.0f}",
+                "—"
+                if table is None
+                else f"{fmt_time(float(r['table_aside_s']))} / {r['table_aside_nodes']:.0f}",
                 "—" if before is None else fmt_time(float(before)),
                 "—" if before is None else f"{float(before) / float(r['ray_s']):.1f}x",
                 "—" if before is None else f"{r['pairs']:.0f} / {r['face_nodes']:.0f}",
@@ -385,6 +400,7 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         "table / ray",
         "first query (CPU) / nodes",
         "A-scans to pay it back",
+        "1 mm aside: first query / nodes",
         "wave, face rule (CPU)",
         "face rule / ray",
         "pairs / face nodes",
