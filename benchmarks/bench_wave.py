@@ -15,9 +15,11 @@ thread), the others as wall-clock medians (``_common.measure``):
    (where the beam stays on the plate at 30°) and 50 mm above a 25 mm ball; where the
    image form applies also the wave model with the face rule only (the pair rule off), and
    on ``immersion-5mhz`` the compiled direct double Rayleigh sum (``_rayleigh_compiled``,
-   numba) at the same distance and incidence, and |V(5 MHz)| from both; over the ball the
-   wave column is the exact Kirchhoff sum (``tables=False``) and the table's columns the
-   default model: a warm query, and a fresh model's first query with the nodes it fills;
+   numba) at the same distance and incidence, and |V(5 MHz)| from both; on planes the
+   model reads its plane table (warm), over the ball its ball table (warm), beside the
+   exact form or sum (the tables off), the first A-scan of a fresh table (the nodes it
+   fills) and how many A-scans pay that back, and over the ball the first A-scan from a
+   position 1 mm aside (its distance and angle between nodes);
 2. one noiseless A-scan of ``immersion-5mhz`` near the optimum on the wave model against
    the ray model, its stages, and the Kirchhoff sum over the lit surface;
 3. the wave model against the compiled direct double Rayleigh sum for a piston over a
@@ -224,10 +226,8 @@ def tilt_table(
         for tilt in TILTS_DEG:
             frames = orientation_frame(np.array([azimuth]), np.array([coelevation + tilt]))
             t_ray = _cpu_per_call(lambda r=ray, p=pos, f=frames: r.ideal_samples(p, f), min_seconds)
-            over_ball = label.endswith("sphere")
-            exact = _exact_sum(wave) if over_ball else wave
             t_wave = _cpu_per_call(
-                lambda w=exact, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
+                lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
             )
             row: dict[str, float | str] = {
                 "setup": label,
@@ -236,15 +236,19 @@ def tilt_table(
                 "wave_s": t_wave,
                 "wave_over_ray": t_wave / t_ray,
             }
-            if over_ball:
-                row.update(_ball_table_costs(wave, pos, frames, min_seconds, t_ray, t_wave))
             plane = model.image_plane(shapes, position, frames[0], edges=True)  # as A-scans
+            if plane is not None and model._plane_tables:
+                row.update(_cold(wave, pos, frames, t_wave, min_seconds))
+            elif label.endswith("sphere"):
+                row.update(_cold(wave, pos, frames, t_wave, min_seconds))
+                row.update(_aside(wave, pos, frames))
             if plane is not None:
                 row["face_nodes"] = float(_face_nodes(model, plane))
                 row["pairs"] = float(_pairs(model, plane)) if model._pairs_pay(plane) else 0.0
+                exact = _exact_setup(wave)
                 with _face_rule():
                     row["wave_face_s"] = _cpu_per_call(
-                        lambda w=wave, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
+                        lambda w=exact, p=pos, f=frames: w.ideal_samples(p, f), min_seconds
                     )
             with_direct = label == "immersion-5mhz" and tilt <= max_direct_tilt
             if plane is not None and with_direct:
@@ -254,50 +258,58 @@ def tilt_table(
     return rows
 
 
-def _exact_sum(setup: Any) -> Any:
-    """A copy of the wave ``setup`` whose model takes the exact Kirchhoff sum over a ball
-    (``WaveEchoModel(tables=False)``): the column before the ball's table."""
-    copy = dataclasses.replace(setup)
-    copy.__dict__["wave_model"] = dataclasses.replace(setup.wave_model, tables=False)
-    return copy
+def _exact_setup(setup: Any) -> Any:
+    """A copy of ``setup`` whose wave model takes the exact form and sum at every pose (its
+    tables off)."""
+    exact = dataclasses.replace(setup)
+    exact.__dict__["wave_model"] = dataclasses.replace(setup.wave_model, tables=False)
+    return exact
 
 
-def _ball_table_costs(
-    wave: Any,
-    positions: np.ndarray,
-    frames: np.ndarray,
-    min_seconds: float,
-    t_ray: float,
-    t_exact: float,
+def _nodes_filled(model: WaveEchoModel) -> int:
+    """How many nodes ``model``'s plane and ball tables hold."""
+    planes = {id(t): t.table.nodes_filled for t in model._plane_tables.values()}
+    balls = sum(table.nodes_filled for table, _ in model._ball_tables.values())
+    return sum(planes.values()) + balls
+
+
+def _cold(
+    wave: Any, pos: np.ndarray, frames: np.ndarray, t_warm: float, min_seconds: float
 ) -> dict[str, float]:
-    """CPU time [s] of the ball's table (``echocal.wave.ball_table``) at one pose: its first
-    query on a fresh model (filling its nodes: the table's distance grid holds the first
-    query's, so 1–4 nodes), how many nodes that filled, a warm query (per A-scan), how many
-    A-scans at the exact sum's cost the fill costs; and the first query from a position
-    1 mm aside (its distance and angle between nodes: up to 16 new nodes)."""
-    fresh = dataclasses.replace(wave)  # a new model: empty tables
-    tables = fresh.wave_model._ball_tables
-
-    def filled() -> int:
-        return sum(table.nodes_filled for table, _ in tables.values())
-
+    """The tables' costs at one pose: the exact form's (or sum's) A-scan (``exact_s``), the
+    first A-scan of a fresh model (``cold_s``: the nodes it fills, ``cold_nodes``, at
+    about ``node_s`` each) and how many A-scans at new poses of the same cells pay the
+    fill back against the exact form (``payback``: (cold − warm)/(exact − warm))."""
+    exact = _exact_setup(wave)
+    t_exact = _cpu_per_call(lambda: exact.ideal_samples(pos, frames), min_seconds)
+    fresh = dataclasses.replace(wave)
     start = time.process_time()
-    fresh.ideal_samples(positions, frames)
-    first = time.process_time() - start
-    nodes = filled()
-    warm = _cpu_per_call(lambda: fresh.ideal_samples(positions, frames), min_seconds)
-    aside = positions + np.array([[1e-3, 0.0, 0.0]])
-    start = time.process_time()
-    fresh.ideal_samples(aside, frames)
-    other = time.process_time() - start
+    fresh.ideal_samples(pos, frames)
+    t_cold = time.process_time() - start
+    nodes = _nodes_filled(fresh.wave_model)
+    saving = t_exact - t_warm
     return {
-        "table_s": warm,
-        "table_over_ray": warm / t_ray,
-        "table_first_s": first,
-        "table_nodes": float(nodes),
-        "table_payback": first / max(t_exact - warm, 1e-12),
-        "table_aside_s": other,
-        "table_aside_nodes": float(filled() - nodes),
+        "exact_s": t_exact,
+        "cold_s": t_cold,
+        "cold_nodes": float(nodes),
+        "node_s": (t_cold - t_warm) / max(nodes, 1),
+        "payback": (t_cold - t_warm) / saving if saving > 0.0 else math.inf,
+    }
+
+
+def _aside(wave: Any, pos: np.ndarray, frames: np.ndarray) -> dict[str, float]:
+    """Over the ball, after one A-scan of a fresh model (its table's distance grid then
+    holds that pose's distance: 1–4 nodes), the first A-scan from a position 1 mm aside,
+    whose distance and angle lie between nodes (``aside_s``; ``aside_nodes`` new nodes,
+    up to 16)."""
+    fresh = dataclasses.replace(wave)
+    fresh.ideal_samples(pos, frames)
+    nodes = _nodes_filled(fresh.wave_model)
+    start = time.process_time()
+    fresh.ideal_samples(pos + np.array([[1e-3, 0.0, 0.0]]), frames)
+    return {
+        "aside_s": time.process_time() - start,
+        "aside_nodes": float(_nodes_filled(fresh.wave_model) - nodes),
     }
 
 
@@ -356,6 +368,15 @@ def _direct_sum(
     }
 
 
+def _payback(row: dict[str, float | str]) -> str:
+    """The tilt table's payback cell: "—" off the table, "never" where the exact form is
+    no dearer than the warm table."""
+    if "payback" not in row:
+        return "—"
+    payback = float(row["payback"])
+    return f"{payback:.0f}" if math.isfinite(payback) else "never"
+
+
 def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
     """The tilt table as Markdown."""
     body = []
@@ -365,7 +386,8 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         agree = (
             "—" if direct is None else f"{float(r['v5_wave']):.4g} / {float(r['v5_direct']):.4g}"
         )
-        table = r.get("table_s")
+        exact = r.get("exact_s")
+        aside = r.get("aside_s")
         body.append(
             [
                 r["setup"],
@@ -373,15 +395,11 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
                 fmt_time(float(r["ray_s"])),
                 fmt_time(float(r["wave_s"])),
                 f"{float(r['wave_over_ray']):.1f}x",
-                "—" if table is None else fmt_time(float(table)),
-                "—" if table is None else f"{float(r['table_over_ray']):.1f}x",
-                "—"
-                if table is None
-                else f"{fmt_time(float(r['table_first_s']))} / {r['table_nodes']:.0f}",
-                "—" if table is None else f"{float(r['table_payback']):.0f}",
-                "—"
-                if table is None
-                else f"{fmt_time(float(r['table_aside_s']))} / {r['table_aside_nodes']:.0f}",
+                "—" if exact is None else fmt_time(float(exact)),
+                "—" if exact is None else f"{float(exact) / float(r['ray_s']):.1f}x",
+                "—" if exact is None else f"{fmt_time(float(r['cold_s']))} ({r['cold_nodes']:.0f})",
+                _payback(r),
+                "—" if aside is None else f"{fmt_time(float(aside))} ({r['aside_nodes']:.0f})",
                 "—" if before is None else fmt_time(float(before)),
                 "—" if before is None else f"{float(before) / float(r['ray_s']):.1f}x",
                 "—" if before is None else f"{r['pairs']:.0f} / {r['face_nodes']:.0f}",
@@ -396,11 +414,11 @@ def tilt_markdown(rows: list[dict[str, float | str]]) -> str:
         "ray (CPU)",
         "wave (CPU)",
         "wave / ray",
-        "table (CPU, warm)",
-        "table / ray",
-        "first query (CPU) / nodes",
-        "A-scans to pay it back",
-        "1 mm aside: first query / nodes",
+        "exact form or sum (CPU)",
+        "exact / ray",
+        "first A-scan, fresh table (nodes)",
+        "A-scans to pay the fill back",
+        "1 mm aside: first A-scan (nodes)",
         "wave, face rule (CPU)",
         "face rule / ray",
         "pairs / face nodes",
@@ -545,15 +563,26 @@ def main() -> None:
     print(tilt_markdown(table))
     worst = max(float(r["wave_over_ray"]) for r in table)
     print(f"HEADLINE wave / ray CPU time at 0-30 deg, both setups: at most {worst:.1f}x")
-    balls = [r for r in table if "table_s" in r]
+    tabled = [r for r in table if "exact_s" in r and "aside_s" not in r]
+    if tabled:
+        exact_worst = max(float(r["exact_s"]) / float(r["ray_s"]) for r in tabled)
+        payback = max(p for p in (float(r["payback"]) for r in tabled) if math.isfinite(p))
+        print(
+            f"HEADLINE wave (plane table, warm) / ray at most "
+            f"{max(float(r['wave_over_ray']) for r in tabled):.1f}x on planes (exact form "
+            f"{exact_worst:.1f}x); a fresh cell's fill is paid back after at most "
+            f"{payback:.0f} A-scans in it (never where the exact form is as cheap)"
+        )
+    balls = [r for r in table if "aside_s" in r]
     if balls:
         print(
             "HEADLINE over the ball, the table (warm) / ray: at most "
-            f"{max(float(r['table_over_ray']) for r in balls):.1f}x (the exact sum at most "
-            f"{max(float(r['wave_over_ray']) for r in balls):.0f}x); a first query "
-            f"{fmt_time(min(float(r['table_first_s']) for r in balls))}–"
-            f"{fmt_time(max(float(r['table_first_s']) for r in balls))} CPU, paid back after "
-            f"{max(float(r['table_payback']) for r in balls):.0f} A-scans at most"
+            f"{max(float(r['wave_over_ray']) for r in balls):.1f}x (the exact sum at most "
+            f"{max(float(r['exact_s']) / float(r['ray_s']) for r in balls):.0f}x); a fresh "
+            f"table's first A-scan {fmt_time(min(float(r['cold_s']) for r in balls))}–"
+            f"{fmt_time(max(float(r['cold_s']) for r in balls))} CPU, paid back after "
+            f"{max(float(r['payback']) for r in balls):.0f} A-scans at most; from 1 mm "
+            f"aside {fmt_time(max(float(r['aside_s']) for r in balls))} at most"
         )
     if args.tilts_only:
         if args.json:

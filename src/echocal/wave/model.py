@@ -58,6 +58,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.fft
@@ -72,7 +73,9 @@ from echocal.specimen.casting import _cast_soa
 from echocal.specimen.sphere import Sphere
 from echocal.wave import ball_table, image, pairs, sir
 from echocal.wave.echo_table import EchoTable, significant_bins
+from echocal.wave.plane_table import PlaneTable
 from echocal.wave.probe import Aperture, PistonProbe
+from echocal.wave.table_cache import array_digest
 from echocal.wave.threads import one_way_grid, two_way_grid
 
 __all__ = ["WaveEchoModel"]
@@ -129,9 +132,10 @@ leak falls as exp(−(2kσ sin θ)²/2), where a sin² taper's falls only as its
 sin² taper over 25 % of the cap gave 7.6× the echo's peak at 10°)."""
 _CAP_SIGMAS = 5.0
 """The cap's fan ends this many σ past its fully lit core (the weight 3·10⁻⁷ there)."""
-_TABLE_CUT = 1e-6
-"""A table's nodes keep the bins where the pulse's spectrum is at least this fraction of its
-peak (``echocal.wave.echo_table.significant_bins``)."""
+_TABLE_CUT = 1e-9
+"""The tables keep the bins where the echo's transfer (the image form's W(f)·2πf/sinc³,
+the Kirchhoff sum's W(f)·(2πf)²/sinc⁶) is at least this fraction of its largest
+(``echocal.wave.echo_table.significant_bins``)."""
 _TABLE_REFINE = 0.7
 """A ball's table computes its nodes with the surface samples this fraction of the spacing
 rules apart: at the rules' own spacing (1.5 times the two-way Nyquist spacing over the
@@ -204,6 +208,12 @@ class WaveEchoModel:
     image_planes : over a plane that fills the beam, integrate over the probe's mirror
         image instead of the lit surface (:mod:`echocal.wave.image`: exact, 4–8× cheaper);
         False forces the Kirchhoff sum everywhere (for comparisons).
+    tables : under a flat disc or a bowl, read the image form's echo from a table over the
+        plane's distance and tilt, filled lazily with the exact form and interpolated
+        (:mod:`echocal.wave.plane_table`), and a lone ball's Kirchhoff sum from one over
+        the distance to its centre and the axis's angle off it (``echocal.wave.ball_table``);
+        False: the exact form and sum at every pose (for comparisons, and for poses of a
+        setup seen once).
     """
 
     probe: Aperture
@@ -606,8 +616,24 @@ class WaveEchoModel:
         Returns
         -------
         The one-sided spectrum on :attr:`frequencies` and the weighted mean two-way time [s]
-        (as :meth:`spectrum`).
+        (as :meth:`spectrum`).  With ``tables`` (flat discs and bowls), interpolated in
+        the plane's table where it answers (:mod:`echocal.wave.plane_table`).
         """
+        table = self._plane_tables.get(coefficient is not None) if self.tables else None
+        if table is not None:
+            unit = 1.0 if coefficient is None else coefficient
+            answer = table(plane, unit, delay)
+            if answer is not None:
+                return answer
+        return self._exact_image_spectrum(plane, coefficient, delay)
+
+    def _exact_image_spectrum(
+        self,
+        plane: image.ImagePlane,
+        coefficient: complex | None = None,
+        delay: float = 0.0,
+    ) -> tuple[NDArray[np.complex128], float]:
+        """:meth:`image_spectrum` by the exact form, never the table."""
         if (coefficient is not None or self.reflection is None) and self._pairs_pay(plane):
             return self._pair_spectrum(plane, 1.0 if coefficient is None else coefficient, delay)
         points, weights = self.image_nodes(plane)
@@ -642,6 +668,61 @@ class WaveEchoModel:
                 path_time = swt / sw
             spectrum += factor * scipy.fft.rfft(grid)
         return spectrum * self._image_transfer, path_time
+
+    @cached_property
+    def _plane_tables(self) -> dict[bool, PlaneTable]:
+        """The plane's tables (:mod:`echocal.wave.plane_table`), by whether they hold the
+        unit response (an interior's coefficient and delay applied to it) or the model's
+        own R(θ) (one table when R is 1); empty for a rectangle."""
+        if self.probe.kind == sir.RECT:
+            return {}
+        _, dt, _, n_fft = self._grid
+        bins = significant_bins(np.abs(self._image_transfer), _TABLE_CUT)
+        tables: dict[bool, PlaneTable] = {}
+        for unit in (False, True) if self.reflection is not None else (False,):
+            tables[unit] = PlaneTable(
+                self._unit_exact if unit else self._own_exact,
+                self.probe,
+                self.sound_speed,
+                self._shortest_wavelength,
+                self._frequencies,
+                self._t0,
+                dt,
+                n_fft,
+                bins,
+                self._table_identity() if unit or self.reflection is None else None,
+            )
+        if self.reflection is None:
+            tables[True] = tables[False]
+        return tables
+
+    def _table_identity(self) -> dict[str, Any]:
+        """What a plane table's node depends on besides its grid and the code (for its disk
+        cache): the probe, the sound speed, the time grid (its step, length, and the
+        fraction of a step by which its first point is off the step's multiples) and the
+        image form's transfer on it (the pulse's spectrum)."""
+        _, dt, _, n_fft = self._grid
+        offset = (self._t0 / dt + 0.5) % 1.0 - 0.5
+        return {
+            "probe": [int(self.probe.kind), *(float(p) for p in self.probe.parameters)],
+            "sound_speed": float(self.sound_speed),
+            "dt": float(dt),
+            "n_fft": int(n_fft),
+            "offset": round(offset, 6),
+            "transfer": array_digest(self._image_transfer),
+        }
+
+    def _own_exact(
+        self, plane: image.ImagePlane, delay: float
+    ) -> tuple[NDArray[np.complex128], float]:
+        """The exact form with the model's own R(θ), ``delay`` [s] on every path."""
+        return self._exact_image_spectrum(plane, None, delay)
+
+    def _unit_exact(
+        self, plane: image.ImagePlane, delay: float
+    ) -> tuple[NDArray[np.complex128], float]:
+        """The exact form with the coefficient 1, ``delay`` [s] on every path."""
+        return self._exact_image_spectrum(plane, 1.0, delay)
 
     def _plane_bandwidth(self, plane: image.ImagePlane) -> float:
         """[rad/m] :func:`echocal.wave.image.angular_bandwidth` at ``plane``."""
@@ -862,7 +943,7 @@ class WaveEchoModel:
                 top = ball_table.distance_from_coordinate(coordinate, knee)
                 return self._ball_node(ball_table.BallPose(radius, radius + top, angle))
 
-            bins = significant_bins(np.abs(self.pulse.spectrum(self._frequencies)), _TABLE_CUT)
+            bins = significant_bins(np.abs(self._transfer), _TABLE_CUT)
             entry = (EchoTable(node, u, v, bins, self._frequencies.size), knee)
             self._ball_tables[radius] = entry
         return entry
