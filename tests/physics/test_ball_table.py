@@ -198,3 +198,30 @@ def test_the_exact_sum_answers_where_the_table_cannot() -> None:
     model = _model(1.5e-3, height)
     model.ascans(two, position, frame)
     assert not model._ball_tables
+
+
+def test_nodes_are_kept_on_disk_between_models(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A fresh model of the same setup reads the nodes an earlier one wrote (one file per
+    node) without computing any, and answers the same to the bit; a damaged file is a
+    miss (computed again, the same answer)."""
+    monkeypatch.setenv("ECHOCAL_CACHE_DIR", str(tmp_path))
+    height = 0.03
+    ball = (Sphere(center=(0.0, 0.0, -0.025), radius=0.025),)
+    position, frame = _pose(2.5, 0.0, height)
+    first = _model(1.5e-3, height).ascans(ball, position, frame)
+    files = sorted((tmp_path / "tables").glob("ball-*.npy"))
+    assert len(files) == 4  # on the first query's line of distance: 4 angles
+
+    def no_node(*args: object) -> None:
+        raise AssertionError("a node was computed, not read")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(WaveEchoModel, "_ball_node", no_node)
+        second = _model(1.5e-3, height).ascans(ball, position, frame)
+    assert np.array_equal(first, second)
+
+    files[0].write_bytes(b"not a node")
+    third = _model(1.5e-3, height).ascans(ball, position, frame)
+    assert np.array_equal(first, third)

@@ -75,7 +75,7 @@ from echocal.wave import ball_table, image, pairs, sir
 from echocal.wave.echo_table import EchoTable, significant_bins
 from echocal.wave.plane_table import PlaneTable
 from echocal.wave.probe import Aperture, PistonProbe
-from echocal.wave.table_cache import array_digest
+from echocal.wave.table_cache import DiskNodes, array_digest
 from echocal.wave.threads import one_way_grid, two_way_grid
 
 __all__ = ["WaveEchoModel"]
@@ -944,9 +944,34 @@ class WaveEchoModel:
                 return self._ball_node(ball_table.BallPose(radius, radius + top, angle))
 
             bins = significant_bins(np.abs(self._transfer), _TABLE_CUT)
-            entry = (EchoTable(node, u, v, bins, self._frequencies.size), knee)
+            store = None
+            if self.reflection is None:  # an R(θ) law is a function: no content to key on
+                grid = {"radius": radius, "u": [u.start, u.step, knee], "v": v.step}
+                identity = {**self._ball_identity(), **grid, "bins": [bins.start, bins.stop]}
+                store = DiskNodes("ball", identity)
+            table = EchoTable(node, u, v, bins, self._frequencies.size, store=store)
+            entry = (table, knee)
             self._ball_tables[radius] = entry
         return entry
+
+    def _ball_identity(self) -> dict[str, Any]:
+        """What a ball table's node depends on besides its grid and the code (for its disk
+        cache): the probe, the sound speed, the time grid (sampling rate, step, length; the
+        node's window is placed from the pose alone), the pulse's support and the sum's
+        transfer on the grid (the pulse's spectrum), and whether the medium is lossy (the
+        node's envelope time)."""
+        _, dt, _, n_fft = self._grid
+        return {
+            "probe": [int(self.probe.kind), *(float(p) for p in self.probe.parameters)],
+            "sound_speed": float(self.sound_speed),
+            "fs": float(self.window.fs),
+            "dt": float(dt),
+            "n_fft": int(n_fft),
+            "support": float(self.pulse.support),
+            "transfer": array_digest(self._transfer),
+            "spacing": self.spacing,
+            "lossy": self.attenuation is not None,
+        }
 
     def _ball_lookup(self, pose: ball_table.BallPose) -> tuple[NDArray[np.complex128], float]:
         """:meth:`kirchhoff_echo` at ``pose`` from the ball's table, re-modulated by
