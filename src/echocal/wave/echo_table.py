@@ -120,6 +120,8 @@ def significant_bins(magnitude: NDArray[np.float64], cut: float) -> slice:
 class EchoTable:
     """A spectrum over a uniform 2-D grid of two invariants (u, v), filled lazily and
     interpolated by tensor-product Lagrange polynomials (see the module docstring).
+    Calling the table at (u, v) returns the interpolated spectrum ``(size,)`` and side
+    value; a query outside the grid raises ValueError.
 
     Parameters
     ----------
@@ -133,9 +135,6 @@ class EchoTable:
         nodes per query); at least 1.
     store : where nodes are also kept between processes (:class:`NodeStore`), or None:
         a node found there is not computed again, a computed one is saved there.
-
-    Calling the table at (u, v) returns the interpolated spectrum ``(size,)`` and side
-    value; a query outside the grid raises ValueError.
     """
 
     def __init__(
