@@ -290,7 +290,7 @@ def _no_disk_nodes() -> Iterator[None]:
 def _nodes_filled(model: WaveEchoModel) -> int:
     """How many nodes ``model``'s plane and ball tables hold."""
     planes = {id(t): t.table.nodes_filled for t in model._plane_tables.values()}
-    balls = sum(table.nodes_filled for table, _ in model._ball_tables.tables.values())
+    balls = sum(table.nodes_filled for table, _ in model._ball_tables.values())
     return sum(planes.values()) + balls
 
 

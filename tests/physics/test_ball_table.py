@@ -106,14 +106,14 @@ def test_the_table_is_the_converged_sum_off_its_nodes(
     sum agrees with itself at 0.5 of the rules' spacing to 0.01–0.12 %, to 0.31 % at the
     fifth pose).  The sum at the rules' own spacing, what the model takes with the table
     off, is 1.3, 0.81, 0.15, 0.17, 0.35 and 0.31 % off it here: the table's nodes sample the
-    cap at 0.7 of that spacing (``ball_table.NODE_REFINE``).  The ball's physics tests allow 1 % at
+    cap at 0.7 of that spacing (``_TABLE_REFINE``).  The ball's physics tests allow 1 % at
     0–5° (tests/physics/test_ball.py)."""
     model = _model(a, height)
     ball = (Sphere(center=(0.0, 0.0, -radius), radius=radius),)
     position, frame = _pose(tilt, lateral, height)
     _anchor_half_a_step_away(model, ball, position, frame)
     got = model.ascans(ball, position, frame)[0]
-    assert model._ball_tables.tables[radius][0].nodes_filled > 4, "the table answered"
+    assert model._ball_tables[radius][0].nodes_filled > 4, "the table answered"
     want = _converged(dataclasses.replace(model, tables=False), ball, position, frame)
     assert _gated_error(model, got, want, height) < 5e-3
 
@@ -188,16 +188,16 @@ def test_the_exact_sum_answers_where_the_table_cannot() -> None:
         cut.ascans(ball, position, frame),
         dataclasses.replace(cut, tables=False).ascans(ball, position, frame),
     )
-    assert not cut._ball_tables.tables
+    assert not cut._ball_tables
     square = dataclasses.replace(
         _model(1.5e-3, height), probe=RectangularProbe(half_width=1.5e-3, half_height=1.5e-3)
     )
     square.ascans(ball, position, frame)
-    assert not square._ball_tables.tables
+    assert not square._ball_tables
     two = (*ball, Sphere(center=(0.05, 0.0, -0.025), radius=0.01))
     model = _model(1.5e-3, height)
     model.ascans(two, position, frame)
-    assert not model._ball_tables.tables
+    assert not model._ball_tables
 
 
 def test_nodes_are_kept_on_disk_between_models(
@@ -218,7 +218,7 @@ def test_nodes_are_kept_on_disk_between_models(
         raise AssertionError("a node was computed, not read")
 
     with monkeypatch.context() as patch:
-        patch.setattr(ball_table.BallTables, "node", no_node)
+        patch.setattr(WaveEchoModel, "_ball_node", no_node)
         second = _model(1.5e-3, height).ascans(ball, position, frame)
     assert np.array_equal(first, second)
 

@@ -26,23 +26,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from echocal.specimen.base import Shape
 from echocal.specimen.sphere import Sphere
-from echocal.wave.echo_table import TABLE_CUT, EchoTable, TableAxis, significant_bins
-from echocal.wave.probe import PistonProbe
-from echocal.wave.table_cache import DiskNodes, array_digest
-
-if TYPE_CHECKING:
-    from echocal.wave.model import WaveEchoModel
+from echocal.wave.echo_table import TableAxis
 
 __all__ = [
     "BallPose",
-    "BallTables",
     "axes",
     "ball_pose",
     "canonical_pose",
@@ -192,148 +185,3 @@ def span(
         t = -b - math.sqrt(disc)
         far = math.hypot(t * ux, -top + t * uz)
     return 2.0 * (d - nearest) / sound_speed, 2.0 * (far + reach - top) / sound_speed
-
-
-NODE_REFINE = 0.7
-"""A ball's table computes its nodes with the surface samples this fraction of the spacing
-rules apart: at the rules' own spacing (1.5 times the two-way Nyquist spacing over the
-cap) the sum's aliasing error changes with the lattice's scale, hence from pose to pose, by
-up to a few tenths of a percent of the echo's peak (4 mm probe, 1.3° off a 28 mm ball:
-interpolating over 4 × 4 nodes made 0.32 %); at 0.7 of it 0.018 % (and 0.035 % at 0.5)."""
-
-
-class BallTables:
-    """A :class:`~echocal.wave.model.WaveEchoModel`'s ball tables, one per ball radius
-    (``tables``: radius [m] → the :class:`~echocal.wave.echo_table.EchoTable` and its knee
-    h* [m]), each built on first use; :meth:`echo` answers a pose from them."""
-
-    def __init__(self, model: WaveEchoModel) -> None:
-        self._model = model
-        self.tables: dict[float, tuple[EchoTable, float]] = {}
-
-    def echo(
-        self, shapes: tuple[Shape, ...], position: FloatArray, frame: FloatArray
-    ) -> tuple[NDArray[np.complex128], float] | None:
-        """``WaveEchoModel.kirchhoff_echo`` over a lone ball from its table,
-        or None where the exact sum applies (another scene or probe, or a grid that does not
-        hold the whole echo)."""
-        model = self._model
-        if not isinstance(model.probe, PistonProbe):
-            return None
-        pose = ball_pose(shapes, position, frame, model.probe.radius)
-        if pose is None or not self._fits(pose):
-            return None
-        table, knee = self._table(pose.radius, pose.distance - pose.radius)
-        u = distance_coordinate(pose.distance - pose.radius, knee)
-        if not table.u.start <= u <= table.u.stop:
-            return None  # nearer the face than the table's nodes can be, or very far
-        return self._lookup(pose)
-
-    def _bounds(self, pose: BallPose) -> tuple[float, float]:
-        """[s] the times before and after τ = 2(D − R)/c that must lie on the grid for the
-        whole echo at ``pose`` to (``span``), each widened by the pulse's
-        half-support and four grid steps."""
-        model = self._model
-        _, dt, _, _ = model._grid
-        cap = model._cap(*canonical_pose(pose.radius, pose.distance, pose.angle))
-        assert cap is not None, "ball_pose took it"
-        margin = model.pulse.support + 4.0 * dt
-        early, late = span(
-            pose, model.probe.radius, model.probe.depth, model.sound_speed, cap.radius
-        )
-        return early + margin, late + margin
-
-    def _fits(self, pose: BallPose) -> bool:
-        """Whether the grid holds the whole echo at ``pose`` (``_bounds``)."""
-        model = self._model
-        before, after = self._bounds(pose)
-        tau = 2.0 * (pose.distance - pose.radius) / model.sound_speed
-        return tau - before >= model._t0 and tau + after <= model._t0 + model.grid_period
-
-    def node(self, pose: BallPose) -> tuple[NDArray[np.complex128], float]:
-        """The table's node at ``pose``: the Kirchhoff sum's echo at the canonical pose
-        (``WaveEchoModel.kirchhoff_echo``), its window moved so that the whole echo lies on
-        the grid, times e^{i2πf(τ − t₀)}, averaged over two grids one step Δ_g apart; and its
-        envelope's peak time less τ [s] (0 if the medium is lossless).
-
-        The two-way deposit bins each one-way SIR from half the grid's first time, so the
-        sum's small aliasing error repeats when the grid moves by 2Δ_g and changes sign,
-        to first order, when it moves by Δ_g (a 3 mm probe 45 mm above a 29 mm ball, 5°
-        off it: 0.87 % of the echo's peak between the two): the mean of the two leaves
-        the nodes smooth in D and ψ, where the grid's phase τ − t₀ would vary from node to
-        node."""
-        model = self._model
-        tau = 2.0 * (pose.distance - pose.radius) / model.sound_speed
-        before, _ = self._bounds(pose)
-        m, _, pad, _ = model._grid
-        scene = canonical_pose(pose.radius, pose.distance, abs(pose.angle))
-        samples = model._kirchhoff_samples(*scene, refine=NODE_REFINE)
-        spectrum = np.zeros_like(model._frequencies, dtype=np.complex128)
-        offset = 0.0
-        for step in (0, 1):
-            start = tau - before + (pad - step) * m / model.window.fs
-            node = dataclasses.replace(
-                model, window=dataclasses.replace(model.window, start=start), tables=False
-            )
-            part, t_echo = node._kirchhoff_spectrum(*samples)
-            spectrum += 0.5 * part * np.exp(2j * math.pi * model._frequencies * (tau - node._t0))
-            offset += 0.5 * (t_echo - tau if t_echo > 0.0 else 0.0)
-        return spectrum, offset
-
-    def _table(self, radius: float, top: float) -> tuple[EchoTable, float]:
-        """The table of a ball of ``radius`` [m] under this model's probe and its knee h*
-        [m] (``axes``: u from the top's distance h = D − R, v = ψ [rad]), built
-        on first use with a node at h = ``top`` [m]."""
-        model = self._model
-        entry = self.tables.get(radius)
-        if entry is None:
-            assert isinstance(model.probe, PistonProbe), "echo checked it"
-            u, v, knee = axes(
-                model.probe.radius, model.probe.depth, model._shortest_wavelength, top
-            )
-
-            def node(coordinate: float, angle: float) -> tuple[NDArray[np.complex128], float]:
-                top = distance_from_coordinate(coordinate, knee)
-                return self.node(BallPose(radius, radius + top, angle))
-
-            bins = significant_bins(np.abs(model._transfer), TABLE_CUT)
-            store = None
-            if model.reflection is None:  # an R(θ) law is a function: no content to key on
-                grid = {"radius": radius, "u": [u.start, u.step, knee], "v": v.step}
-                identity = {**self._identity(), **grid, "bins": [bins.start, bins.stop]}
-                store = DiskNodes("ball", identity)
-            table = EchoTable(node, u, v, bins, model._frequencies.size, store=store)
-            entry = (table, knee)
-            self.tables[radius] = entry
-        return entry
-
-    def _identity(self) -> dict[str, Any]:
-        """What a ball table's node depends on besides its grid and the code (for its disk
-        cache): the probe, the sound speed, the time grid (sampling rate, step, length; the
-        node's window is placed from the pose alone), the pulse's support and the sum's
-        transfer on the grid (the pulse's spectrum), and whether the medium is lossy (the
-        node's envelope time)."""
-        model = self._model
-        _, dt, _, n_fft = model._grid
-        return {
-            "probe": [int(model.probe.kind), *(float(p) for p in model.probe.parameters)],
-            "sound_speed": float(model.sound_speed),
-            "fs": float(model.window.fs),
-            "dt": float(dt),
-            "n_fft": int(n_fft),
-            "support": float(model.pulse.support),
-            "transfer": array_digest(model._transfer),
-            "spacing": model.spacing,
-            "lossy": model.attenuation is not None,
-        }
-
-    def _lookup(self, pose: BallPose) -> tuple[NDArray[np.complex128], float]:
-        """``WaveEchoModel.kirchhoff_echo`` at ``pose`` from the ball's table, re-modulated by
-        e^{−i2πf(τ − t₀)}, and the envelope's peak time [s] (0 if the medium is lossless)."""
-        model = self._model
-        top = pose.distance - pose.radius
-        table, knee = self._table(pose.radius, top)
-        spectrum, offset = table(distance_coordinate(top, knee), pose.angle)
-        tau = 2.0 * top / model.sound_speed
-        spectrum *= np.exp(-2j * math.pi * model._frequencies * (tau - model._t0))
-        return spectrum, (tau + offset if model.attenuation is not None else 0.0)

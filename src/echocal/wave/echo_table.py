@@ -29,14 +29,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["TABLE_CUT", "EchoTable", "NodeStore", "TableAxis", "significant_bins"]
+__all__ = ["EchoTable", "NodeStore", "TableAxis", "significant_bins"]
 
 ComplexArray = NDArray[np.complex128]
-
-TABLE_CUT = 1e-9
-"""The tables keep the bins where the echo's transfer (the image form's W(f)·2πf/sinc³,
-the Kirchhoff sum's W(f)·(2πf)²/sinc⁶) is at least this fraction of its largest
-(:func:`significant_bins`)."""
 NodeFunction = Callable[[float, float], tuple[ComplexArray, float]]
 """``node(u, v) -> (spectrum, side)``: the full one-sided spectrum ``(size,)`` and a real
 side value at one grid node."""
